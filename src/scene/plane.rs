@@ -1,0 +1,74 @@
+//! Minimal plane geometry needed to validate polygons (the full geometry stage comes later in
+//! the flow and builds on validated input).
+use nalgebra::Vector2;
+
+/// Shoelace signed area, m²; positive for counter-clockwise.
+pub fn polygon_signed_area(v: &[Vector2<f64>]) -> f64 {
+    let n = v.len();
+    let mut s = 0.0;
+    for i in 0..n {
+        let a = v[i];
+        let b = v[(i + 1) % n];
+        s += a.x * b.y - b.x * a.y;
+    }
+    0.5 * s
+}
+
+fn orient(a: Vector2<f64>, b: Vector2<f64>, c: Vector2<f64>) -> f64 {
+    (b - a).perp(&(c - a))
+}
+
+/// True when segments `ab` and `cd` cross at a point interior to both (a proper crossing),
+/// with `tol` the tolerance on the orientation tests (m²).
+pub fn segments_cross(a: Vector2<f64>, b: Vector2<f64>, c: Vector2<f64>, d: Vector2<f64>, tol: f64) -> bool {
+    let o1 = orient(a, b, c);
+    let o2 = orient(a, b, d);
+    let o3 = orient(c, d, a);
+    let o4 = orient(c, d, b);
+    ((o1 > tol && o2 < -tol) || (o1 < -tol && o2 > tol)) && ((o3 > tol && o4 < -tol) || (o3 < -tol && o4 > tol))
+}
+
+/// True when segments touch or cross anywhere (used for self-intersection of non-adjacent edges).
+pub fn segments_touch(a: Vector2<f64>, b: Vector2<f64>, c: Vector2<f64>, d: Vector2<f64>, tol: f64) -> bool {
+    let o1 = orient(a, b, c);
+    let o2 = orient(a, b, d);
+    let o3 = orient(c, d, a);
+    let o4 = orient(c, d, b);
+    if segments_cross(a, b, c, d, tol) {
+        return true;
+    }
+    let on = |p: Vector2<f64>, q: Vector2<f64>, r: Vector2<f64>, o: f64| {
+        o.abs() <= tol
+            && r.x >= p.x.min(q.x) - tol.sqrt()
+            && r.x <= p.x.max(q.x) + tol.sqrt()
+            && r.y >= p.y.min(q.y) - tol.sqrt()
+            && r.y <= p.y.max(q.y) + tol.sqrt()
+    };
+    on(a, b, c, o1) || on(a, b, d, o2) || on(c, d, a, o3) || on(c, d, b, o4)
+}
+
+/// Signed depth of `p` inside the counter-clockwise polygon `poly` (m): positive inside (the
+/// distance to the nearest edge), negative or zero outside.
+pub fn inside_depth(p: Vector2<f64>, poly: &[Vector2<f64>]) -> f64 {
+    let n = poly.len();
+    let mut inside = false;
+    let mut dmin = f64::INFINITY;
+    for i in 0..n {
+        let a = poly[i];
+        let b = poly[(i + 1) % n];
+        if (a.y > p.y) != (b.y > p.y) {
+            let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+            if p.x < x {
+                inside = !inside;
+            }
+        }
+        let ab = b - a;
+        let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
+        dmin = dmin.min((a + ab * t - p).norm());
+    }
+    if inside {
+        dmin
+    } else {
+        -dmin
+    }
+}

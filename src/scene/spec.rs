@@ -1,0 +1,175 @@
+//! The scene file as written by users (`ashlar.scene/1`, FORMAT.md §1): plain serde types.
+//!
+//! Every struct rejects unknown fields so a typo is an error, not a silently ignored setting.
+//! Validation into the engine's model happens in [`super::validate`].
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSpec {
+    pub format: String,
+    #[serde(default)]
+    pub name: Option<String>,
+    /// m/s², acting in −y.
+    #[serde(default)]
+    pub gravity: Option<f64>,
+    pub materials: BTreeMap<String, MaterialSpec>,
+    pub joints: BTreeMap<String, JointSpec>,
+    pub blocks: Vec<BlockSpec>,
+    #[serde(default)]
+    pub interfaces: Option<InterfacesSpec>,
+    #[serde(default)]
+    pub excitation: Option<ExcitationSpec>,
+    #[serde(default)]
+    pub initial: Vec<InitialSpec>,
+    #[serde(default)]
+    pub control: ControlSpec,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum PlaneKind {
+    #[default]
+    Stress,
+    Strain,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// kg/m³ (per unit thickness: 2D blocks are slices 1 m thick).
+    pub density: f64,
+    /// Pa.
+    pub young_modulus: f64,
+    pub poisson_ratio: f64,
+    #[serde(default)]
+    pub plane: PlaneKind,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointSpec {
+    /// degrees.
+    pub friction_angle: f64,
+    /// Pa.
+    #[serde(default)]
+    pub cohesion: f64,
+    /// Pa.
+    #[serde(default)]
+    pub tensile_strength: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BlockModel {
+    /// 6 unknowns: u0, v0, r0, εx, εy, γxy.
+    Deformable,
+    /// 3 unknowns: u0, v0, r0.
+    Rigid,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BlockSpec {
+    pub id: String,
+    pub material: String,
+    #[serde(default)]
+    pub fixed: bool,
+    pub vertices: Vec<[f64; 2]>,
+    #[serde(default)]
+    pub block_model: Option<BlockModel>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct InterfacesSpec {
+    #[serde(default)]
+    pub default: Option<String>,
+    #[serde(default)]
+    pub pairs: Vec<InterfacePairSpec>,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct InterfacePairSpec {
+    pub blocks: [String; 2],
+    pub joint: String,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ExcitationSpec {
+    BaseAcceleration,
+    DrivenBlock { block: String },
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialSpec {
+    pub block: String,
+    /// m/s.
+    #[serde(default)]
+    pub velocity: [f64; 2],
+    /// rad/s, counter-clockwise positive.
+    #[serde(default)]
+    pub angular_velocity: f64,
+}
+
+/// `penalty_stiffness`: a number (N/m) or `"auto"`.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum PenaltySpec {
+    Value(f64),
+    Keyword(PenaltyKeyword),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PenaltyKeyword {
+    Auto,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Integrator {
+    /// Newmark β = 1/2, γ = 1 (Shi's original; dissipative).
+    Dda,
+    /// Newmark β = 1/4, γ = 1/2 (energy conserving).
+    Trapezoidal,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ContactSolver {
+    Penalty,
+    Dual,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ModelChoice {
+    Dda,
+    Auto,
+    Rocking,
+    Sliding,
+}
+
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControlSpec {
+    pub duration: Option<f64>,
+    pub time_step: Option<f64>,
+    pub adaptive_time_step: Option<bool>,
+    pub max_displacement_ratio: Option<f64>,
+    pub penalty_stiffness: Option<PenaltySpec>,
+    pub dynamic_factor: Option<f64>,
+    pub kinetic_damping_rate: Option<f64>,
+    pub integrator: Option<Integrator>,
+    pub contact_solver: Option<ContactSolver>,
+    pub block_model: Option<BlockModel>,
+    pub model: Option<ModelChoice>,
+    pub output_interval: Option<f64>,
+    /// Extension: hard cap on the number of steps (protects against runaway runs).
+    pub max_steps: Option<u64>,
+}
