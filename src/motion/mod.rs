@@ -5,6 +5,9 @@
 //! All values inside are SI (m/s², m/s, m); the original units are kept for reporting.
 use serde::{Deserialize, Serialize};
 
+mod json;
+pub use json::from_json;
+
 /// Units a record may come in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub enum Units {
