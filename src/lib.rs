@@ -5,6 +5,8 @@
 //! `motion` feeds assembly, `record` and `analysis` sit on top of `simulation`,
 //! `service` drives `analysis`, and `cli` (behind `main.rs`) is thin.
 pub mod analysis;
+pub mod cli;
 pub mod motion;
 pub mod record;
 pub mod scene;
+pub mod service;

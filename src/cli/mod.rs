@@ -1,0 +1,31 @@
+//! Command line: a thin layer that parses arguments and calls `analysis` / `service`.
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+#[derive(Debug, Parser)]
+#[command(name = "ashlar", version, about = "Seismic analysis of historical structures (2D DDA)")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Serve the HTTP API.
+    Serve(crate::service::ServeArgs),
+}
+
+/// Run the CLI; errors go to stderr as one clear line.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Serve(args) => crate::service::serve_cli(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(msg) => {
+            eprintln!("ashlar: {msg}");
+            ExitCode::FAILURE
+        }
+    }
+}
