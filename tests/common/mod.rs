@@ -66,3 +66,16 @@ pub fn displacement(sim: &Simulation, b: usize) -> [f64; 2] {
     let g = &sim.geoms[b];
     [g.centroid.x - g.initial_centroid.x, g.centroid.y - g.initial_centroid.y]
 }
+
+/// Run until `t_end` or until `stop(sim)` is true; returns whether it stopped early.
+pub fn run_until(sim: &mut Simulation, t_end: f64, mut stop: impl FnMut(&Simulation) -> bool) -> bool {
+    while sim.time < t_end - 1e-12 {
+        if let Err(e) = sim.step(t_end - sim.time) {
+            panic!("simulation failed: {e}");
+        }
+        if stop(sim) {
+            return true;
+        }
+    }
+    false
+}
