@@ -297,8 +297,12 @@ impl Simulation {
             }
         }
         let tol = self.params.penetration_ratio * self.max_step_displacement();
+        // Penetration that deepens by more than the tolerance within one step means a vertex
+        // overshot its edge (a time-step problem); a deep but steady penetration is the
+        // spring's compliance (a penalty problem) and is reported, not cut.
         for (k, c) in self.contacts.contacts.iter().enumerate() {
-            if c.state.is_closed() && -c.gap > tol && self.dt * self.params.cut_factor > self.params.min_dt {
+            let deepened = -c.gap - (-c.g0).max(0.0);
+            if c.state.is_closed() && deepened > tol && self.dt * self.params.cut_factor > self.params.min_dt {
                 return Some(Some(k));
             }
         }
@@ -376,7 +380,7 @@ impl Simulation {
             None => ("?".into(), "?".into()),
         };
         if let Some(c) = contact.and_then(|k| self.contacts.contacts.get(k)) {
-            if c.state.is_closed() && -c.gap > self.params.penetration_ratio * self.max_step_displacement() {
+            if c.state.is_closed() && -c.gap - (-c.g0).max(0.0) > self.params.penetration_ratio * self.max_step_displacement() {
                 return SimError::Penetration { time: self.time, depth: -c.gap, block_a: a, block_b: b };
             }
         }

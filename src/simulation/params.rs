@@ -19,7 +19,7 @@ pub struct SimParams {
     /// Growth of Δt per accepted step back towards `control.time_step`: +10 % a step recovers
     /// a 0.3 cut in 13 steps without provoking an immediate new cut.
     pub growth: f64,
-    /// Largest penetration tolerated after a step, as a fraction of the largest step
+    /// Largest growth of a penetration within one step, as a fraction of the largest step
     /// displacement (Shi's g2 · half size): 0.3 keeps blocks from passing vertices through edges.
     pub penetration_ratio: f64,
     /// Below this Δt (s) penetration no longer triggers cuts; it is reported instead.
