@@ -68,7 +68,8 @@ fn truncated_files() {
     // Header cut.
     expect_error(load("head.at2", "PEER\nX\n"), "head.at2", Some(2), &["truncated", "4 header lines"]);
     // COSMOS cut inside the real header.
-    let v2: Vec<&str> = original("synthetic.v2").lines().collect::<Vec<_>>();
+    let v2_text = original("synthetic.v2");
+    let v2: Vec<&str> = v2_text.lines().collect();
     let cut = v2[..30].join("\n");
     expect_error(load("cut.v2", &cut), "cut.v2", Some(30), &["truncated", "real-header"]);
     // COSMOS cut inside the data.

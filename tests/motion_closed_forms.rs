@@ -41,8 +41,8 @@ fn peak_velocity_and_displacement_of_pulses() {
 
 /// Arias intensity of n full cycles of A sin ωt: π/(2g) · A² nT/2. The trapezoidal rule is exact
 /// (to rounding) for a trigonometric polynomial over whole periods, so 1e-9 for both the analytic
-/// pulse and a sampled sine. CAV = 4nA/ω (tolerance 1e-4: trapezoids of |sin| at the zero
-/// crossings). D5–95 = 9T for 10 cycles exactly (at 0.5 and 9.5 cycles the oscillating part of
+/// pulse and a sampled sine. CAV = 4nA/ω (tolerance 2e-4: the trapezoidal rule on each
+/// half-wave of |sin| underestimates by (ω dt)²/12 = 1.3e-4 at 160 samples a period). D5–95 = 9T for 10 cycles exactly (at 0.5 and 9.5 cycles the oscillating part of
 /// the cumulative integral vanishes); tolerance 1e-4 for the linear interpolation inside a step.
 #[test]
 fn arias_cav_and_significant_duration_of_sines() {
@@ -54,7 +54,7 @@ fn arias_cav_and_significant_duration_of_sines() {
         let im = report(&sampled_sine(a, t, n, 160));
         assert!(rel(im.arias_intensity, expected) < 1e-9, "sampled n={n}: {} vs {expected}", im.arias_intensity);
         let cav = 4.0 * n as f64 * a / (2.0 * PI / t);
-        assert!(rel(im.cav, cav) < 1e-4, "CAV n={n}: {} vs {cav}", im.cav);
+        assert!(rel(im.cav, cav) < 2e-4, "CAV n={n}: {} vs {cav}", im.cav);
     }
     let im = report(&sampled_sine(a, t, 10, 160));
     assert!(rel(im.significant_duration_5_95, 9.0 * t) < 1e-4, "D5-95 {}", im.significant_duration_5_95);
@@ -184,23 +184,27 @@ fn resampling_is_linear_interpolation() {
     assert!((r.disp[8] - s.disp[4]).abs() < 1e-12 && (r.vel[8] - s.vel[4]).abs() < 1e-12);
 }
 
-/// Linear baseline on a real record: the final displacement is zero, acceleration unchanged,
-/// and what `Signal::eval` returns (the driven block's input) is the corrected displacement.
+/// Linear baseline on a real record with a typical raw-record offset (0.01 m/s² added to the
+/// Kobe record, which drifts 8 m over its 41 s): the final displacement is zero, acceleration
+/// unchanged, and what `Signal::eval` returns (the driven block's input) is the corrected
+/// displacement.
 #[test]
 fn linear_baseline_on_a_record() {
-    use motion::{Baseline, LoadParams, ProcessParams};
+    use motion::{Baseline, ProcessParams, RecordKind};
     let path = std::path::Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/fixtures/motion/ground-motions/kobe-1995-nishi-akashi-000.csv"
     ));
     let raw = motion::load_path(path).expect("record");
-    let p = LoadParams { process: ProcessParams { baseline: Baseline::Linear, ..Default::default() }, ..Default::default() };
-    let gm = motion::load_path_with(path, &p).expect("record");
-    let end = gm.duration().expect("finite");
-    let (_, _, d_end) = gm.horizontal.eval(end);
-    assert!(d_end.abs() < 1e-12, "final displacement {d_end}");
-    let (_, _, d_raw) = raw.horizontal.eval(end);
-    assert!(d_raw.abs() > 1e-3, "the raw record drifts ({d_raw} m), so the test means something");
-    let (Signal::Sampled(a), Signal::Sampled(b)) = (&raw.horizontal, &gm.horizontal) else { unreachable!() };
-    assert_eq!(a.accel, b.accel);
+    let Signal::Sampled(s) = &raw.horizontal else { unreachable!() };
+    let offset: Vec<f64> = s.accel.iter().map(|a| a + 0.01).collect();
+    let drifting = ProcessParams::default().apply("kobe+offset", RecordKind::Raw, s.dt, offset.clone()).expect("raw");
+    let end = drifting.duration();
+    assert!(drifting.eval(end).2 > 1.0, "the offset record drifts, so the test means something");
+    let p = ProcessParams { baseline: Baseline::Linear, ..Default::default() };
+    let fixed = Signal::Sampled(p.apply("kobe+offset", RecordKind::Raw, s.dt, offset.clone()).expect("raw"));
+    let (_, _, d_end) = fixed.eval(end);
+    assert!(d_end.abs() < 1e-9, "final displacement {d_end}");
+    let Signal::Sampled(f) = &fixed else { unreachable!() };
+    assert_eq!(f.accel, offset);
 }

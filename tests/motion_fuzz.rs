@@ -54,7 +54,8 @@ proptest! {
             if b.is_empty() { break; }
             let i = at.index(b.len());
             // Bias replacements toward the characters that matter to the parsers.
-            let byte = b"0123456789.-+eEDN :,=\n\r()"[byte as usize % 26];
+            const SET: &[u8] = b"0123456789.-+eEDN :,=\n\r()";
+            let byte = SET[byte as usize % SET.len()];
             match op {
                 0 => b[i] = byte,
                 1 => b.insert(i, byte),

@@ -21,6 +21,10 @@ fn arr(v: &Value, key: &str) -> Vec<f64> {
 
 fn check(name: &str, what: &str, got: f64, want: f64, tol: f64) {
     let r = (got - want).abs() / want.abs();
+    if !what.starts_with("PSA") {
+        // The figures quoted in docs/motion.md: `cargo test --test motion_golden -- --nocapture`.
+        println!("{name:42} {what:16} ashlar {got:12.6} reference {want:12.6} relative {r:.1e}");
+    }
     assert!(r <= tol, "{name}: {what} {got} vs reference {want} (relative {r:.2e} > {tol})");
 }
 
@@ -48,9 +52,18 @@ fn scalar_measures_match_eqsig_and_numpy() {
     }
 }
 
-/// PSA against pyrotd's frequency-domain oscillators (a different method: Fourier interpolation
-/// of the record instead of piecewise-linear) and eqsig's Nigam–Jennings recurrence (the same
-/// method, other code). 1 % over the whole 0.01–10 s range.
+/// PSA against pyrotd's frequency-domain oscillators (Fourier interpolation of the record) and
+/// eqsig's Nigam–Jennings recurrence (the same method as ashlar, other code, peaks read at the
+/// samples only), both including the free vibration after the record.
+///
+/// Tolerances, from the known differences between the methods:
+/// - pyrotd, T ≥ 10 dt: 1 % + (π dt/T)²/3. Linear interpolation between samples (ashlar's and the
+///   solver's convention) low-passes the record by sinc²(f dt) ≈ 1 − (π f dt)²/3 against
+///   Fourier interpolation, which is 3.3 % at T = 10 dt and below 0.4 % beyond 30 dt. Below 10 dt
+///   the samples do not determine the signal between them and the methods differ by up to 10 %
+///   (documented in docs/motion.md), so that band is not compared.
+/// - eqsig, T ≥ 30 dt: 1 %. Its peaks are read at the samples, which misses the true peak by up to
+///   1 − cos(π dt/T) ≤ 0.55 % there.
 #[test]
 fn response_spectrum_matches_pyrotd_and_eqsig() {
     let g = golden();
@@ -65,14 +78,32 @@ fn response_spectrum_matches_pyrotd_and_eqsig() {
         let rotd = arr(r, "psa_pyrotd");
         let nj = arr(r, "psa_nigam_jennings");
         let dt = f(r, "dt");
+        let mut compared = 0;
         for i in 0..periods.len() {
-            let what = format!("PSA({:.4} s) vs pyrotd", periods[i]);
-            check(name, &what, im.spectrum.psa[i], rotd[i], 0.01);
-            // eqsig replaces periods below 6 dt by the PGA; compare the recurrence above that.
-            if periods[i] >= 6.0 * dt {
-                let what = format!("PSA({:.4} s) vs eqsig Nigam-Jennings", periods[i]);
-                check(name, &what, im.spectrum.psa[i], nj[i], 0.01);
+            let t = periods[i];
+            if t >= 10.0 * dt {
+                let tol = 0.01 + (std::f64::consts::PI * dt / t).powi(2) / 3.0;
+                check(name, &format!("PSA({t:.4} s) vs pyrotd"), im.spectrum.psa[i], rotd[i], tol);
+                compared += 1;
             }
+            if t >= 30.0 * dt {
+                check(name, &format!("PSA({t:.4} s) vs eqsig"), im.spectrum.psa[i], nj[i], 0.01);
+            }
+        }
+        assert!(compared >= 66, "{name}: only {compared} periods compared");
+        // Largest relative differences by band, quoted in docs/motion.md.
+        for (lo, hi) in [(0.0, 10.0), (10.0, 30.0), (30.0, f64::INFINITY)] {
+            let band = |refv: &[f64]| {
+                (0..periods.len())
+                    .filter(|&i| periods[i] >= lo * dt && periods[i] < hi * dt)
+                    .map(|i| (im.spectrum.psa[i] - refv[i]).abs() / refv[i])
+                    .fold(0.0_f64, f64::max)
+            };
+            println!(
+                "{name:42} PSA, T/dt in [{lo}, {hi}): max relative difference pyrotd {:.1e}, eqsig {:.1e}",
+                band(&rotd),
+                band(&nj)
+            );
         }
     }
 }

@@ -235,8 +235,8 @@ fn fft(re: &mut [f64], im: &mut [f64]) {
 /// at t = 0, by the exact recurrence for piecewise-linear excitation (Nigam & Jennings 1969;
 /// Chopra, Dynamics of Structures §5.2). Each record step is split into substeps so that an
 /// oscillator period spans at least 20 of them: the recurrence stays exact for the same
-/// piecewise-linear input, and the peak between record samples is not missed. The response
-/// after the record ends (free vibration) is not included, as in common practice.
+/// piecewise-linear input, and the peak between record samples is not missed. The free vibration
+/// after the record ends is included (for long periods the peak can come after the shaking).
 pub fn response_spectrum(a: &[f64], dt: f64, periods: &[f64], damping: f64) -> Vec<f64> {
     periods.iter().map(|&t| oscillator_peak(a, dt, t, damping) * (2.0 * std::f64::consts::PI / t).powi(2)).collect()
 }
@@ -260,6 +260,13 @@ pub fn oscillator_peak(a: &[f64], dt: f64, period: f64, z: f64) -> f64 {
             v = vn;
             peak = peak.max(u.abs());
         }
+    }
+    // Free vibration after the record: the envelope only decays, so one period holds its peak.
+    for _ in 0..((period / h).ceil() as usize).min(1_000_000) {
+        let un = c.a * u + c.b * v;
+        v = c.a2 * u + c.b2 * v;
+        u = un;
+        peak = peak.max(u.abs());
     }
     peak
 }
