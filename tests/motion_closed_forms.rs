@@ -3,7 +3,8 @@
 //! (rigid limit → PGA, undamped and damped resonance), exact integration, scaling, resampling,
 //! and the zero-phase high-pass and baseline options on a real record.
 use ashlar::motion::{
-    self, oscillator_peak, report, report_with, GroundMotion, ReportParams, Sampled, Signal, STANDARD_GRAVITY,
+    self, oscillator_peak, report, report_with, GroundMotion, ReportParams, Sampled, Signal,
+    STANDARD_GRAVITY,
 };
 use std::f64::consts::PI;
 
@@ -12,14 +13,21 @@ fn rel(a: f64, b: f64) -> f64 {
 }
 
 fn pulse(shape_phase: f64, amplitude: f64, period: f64, cycles: f64) -> GroundMotion {
-    GroundMotion::horizontal(Signal::Pulse { amplitude, period, cycles, phase: shape_phase })
+    GroundMotion::horizontal(Signal::Pulse {
+        amplitude,
+        period,
+        cycles,
+        phase: shape_phase,
+    })
 }
 
 /// A sampled sine a(t) = A sin(2π t / T) over n full cycles, `per` samples a period.
 fn sampled_sine(amplitude: f64, period: f64, cycles: usize, per: usize) -> GroundMotion {
     let dt = period / per as f64;
     let n = cycles * per + 1;
-    let a = (0..n).map(|i| amplitude * (2.0 * PI * i as f64 * dt / period).sin()).collect();
+    let a = (0..n)
+        .map(|i| amplitude * (2.0 * PI * i as f64 * dt / period).sin())
+        .collect();
     GroundMotion::horizontal(Signal::Sampled(Sampled::new(dt, a)))
 }
 
@@ -32,11 +40,24 @@ fn peak_velocity_and_displacement_of_pulses() {
     let (a, t, n) = (2.0, 0.5, 3.0);
     let w = 2.0 * PI / t;
     let im = report(&pulse(PI / 2.0, a, t, n));
-    assert!(rel(im.pgv, a / w) < 1e-4, "cosine PGV {} vs A/ω {}", im.pgv, a / w);
+    assert!(
+        rel(im.pgv, a / w) < 1e-4,
+        "cosine PGV {} vs A/ω {}",
+        im.pgv,
+        a / w
+    );
     assert!(rel(im.pga, a) < 1e-12, "cosine PGA");
     let im = report(&pulse(0.0, a, t, n));
-    assert!(rel(im.pgv, 2.0 * a / w) < 1e-4, "sine PGV {} vs 2A/ω", im.pgv);
-    assert!(rel(im.pgd, a * n * t / w) < 1e-4, "sine PGD {} vs A nT/ω", im.pgd);
+    assert!(
+        rel(im.pgv, 2.0 * a / w) < 1e-4,
+        "sine PGV {} vs 2A/ω",
+        im.pgv
+    );
+    assert!(
+        rel(im.pgd, a * n * t / w) < 1e-4,
+        "sine PGD {} vs A nT/ω",
+        im.pgd
+    );
 }
 
 /// Arias intensity of n full cycles of A sin ωt: π/(2g) · A² nT/2. The trapezoidal rule is exact
@@ -50,14 +71,26 @@ fn arias_cav_and_significant_duration_of_sines() {
     for n in [4usize, 10] {
         let expected = PI / (2.0 * STANDARD_GRAVITY) * a * a * n as f64 * t / 2.0;
         let im = report(&pulse(0.0, a, t, n as f64));
-        assert!(rel(im.arias_intensity, expected) < 1e-9, "pulse n={n}: {} vs {expected}", im.arias_intensity);
+        assert!(
+            rel(im.arias_intensity, expected) < 1e-9,
+            "pulse n={n}: {} vs {expected}",
+            im.arias_intensity
+        );
         let im = report(&sampled_sine(a, t, n, 160));
-        assert!(rel(im.arias_intensity, expected) < 1e-9, "sampled n={n}: {} vs {expected}", im.arias_intensity);
+        assert!(
+            rel(im.arias_intensity, expected) < 1e-9,
+            "sampled n={n}: {} vs {expected}",
+            im.arias_intensity
+        );
         let cav = 4.0 * n as f64 * a / (2.0 * PI / t);
         assert!(rel(im.cav, cav) < 2e-4, "CAV n={n}: {} vs {cav}", im.cav);
     }
     let im = report(&sampled_sine(a, t, 10, 160));
-    assert!(rel(im.significant_duration_5_95, 9.0 * t) < 1e-4, "D5-95 {}", im.significant_duration_5_95);
+    assert!(
+        rel(im.significant_duration_5_95, 9.0 * t) < 1e-4,
+        "D5-95 {}",
+        im.significant_duration_5_95
+    );
 }
 
 /// Mean period of a pure 2 Hz sine of 40 cycles: the Fourier energy sits at 2 Hz with leakage of
@@ -71,8 +104,17 @@ fn mean_period_of_a_sine() {
 /// A steady sine is measured over `steady_duration`: its Arias intensity grows linearly.
 #[test]
 fn steady_sine_uses_the_report_duration() {
-    let gm = GroundMotion::horizontal(Signal::Sine { amplitude: 1.0, frequency: 2.0 });
-    let im = report_with(&gm, &ReportParams { steady_duration: 5.0, ..ReportParams::default() });
+    let gm = GroundMotion::horizontal(Signal::Sine {
+        amplitude: 1.0,
+        frequency: 2.0,
+    });
+    let im = report_with(
+        &gm,
+        &ReportParams {
+            steady_duration: 5.0,
+            ..ReportParams::default()
+        },
+    );
     let expected = PI / (2.0 * STANDARD_GRAVITY) * 5.0 / 2.0;
     assert!(rel(im.arias_intensity, expected) < 1e-9 && rel(im.duration, 5.0) < 1e-12);
 }
@@ -84,7 +126,12 @@ fn spectrum_tends_to_pga_at_short_periods() {
     let gm = sampled_sine(2.0, 1.0, 5, 200);
     let im = report(&gm);
     assert_eq!(im.spectrum.periods[0], 0.01);
-    assert!(rel(im.spectrum.psa[0], im.pga) < 0.005, "PSA(0.01) {} vs PGA {}", im.spectrum.psa[0], im.pga);
+    assert!(
+        rel(im.spectrum.psa[0], im.pga) < 0.005,
+        "PSA(0.01) {} vs PGA {}",
+        im.spectrum.psa[0],
+        im.pga
+    );
     assert!((im.spectrum.periods[99] - 10.0).abs() < 1e-9);
 }
 
@@ -96,14 +143,26 @@ fn spectrum_tends_to_pga_at_short_periods() {
 fn resonance_amplification() {
     let (a, t, n) = (1.5, 0.4, 5usize);
     let gm = sampled_sine(a, t, n, 200);
-    let Signal::Sampled(s) = &gm.horizontal else { unreachable!() };
+    let Signal::Sampled(s) = &gm.horizontal else {
+        unreachable!()
+    };
     let w = 2.0 * PI / t;
     let psa = oscillator_peak(&s.accel, s.dt, t, 0.0) * w * w;
-    assert!(rel(psa, PI * n as f64 * a) < 1e-3, "undamped PSA {psa} vs {}", PI * n as f64 * a);
+    assert!(
+        rel(psa, PI * n as f64 * a) < 1e-3,
+        "undamped PSA {psa} vs {}",
+        PI * n as f64 * a
+    );
     let gm = sampled_sine(a, t, 40, 200);
-    let Signal::Sampled(s) = &gm.horizontal else { unreachable!() };
+    let Signal::Sampled(s) = &gm.horizontal else {
+        unreachable!()
+    };
     let psa = oscillator_peak(&s.accel, s.dt, t, 0.05) * w * w;
-    assert!(rel(psa, a / 0.1) < 5e-3, "damped PSA {psa} vs A/(2ζ) {}", a / 0.1);
+    assert!(
+        rel(psa, a / 0.1) < 5e-3,
+        "damped PSA {psa} vs A/(2ζ) {}",
+        a / 0.1
+    );
 }
 
 /// Sampled integration is exact for piecewise-linear acceleration: a ramp a = c·t gives
@@ -115,12 +174,21 @@ fn sampled_integration_is_exact() {
     let s = Sampled::new(dt, (0..101).map(|i| c * i as f64 * dt).collect());
     for &t in &[0.0, 0.0051, 0.4, 0.777, 1.3] {
         let (a, v, d) = s.eval(t);
-        assert!((a - c * t).abs() < 1e-12 && (v - c * t * t / 2.0).abs() < 1e-12 && (d - c * t.powi(3) / 6.0).abs() < 1e-12, "t={t}");
+        assert!(
+            (a - c * t).abs() < 1e-12
+                && (v - c * t * t / 2.0).abs() < 1e-12
+                && (d - c * t.powi(3) / 6.0).abs() < 1e-12,
+            "t={t}"
+        );
     }
     let end = s.duration();
     let (a, v, d) = s.eval(end + 0.5);
     let v_end = c * end * end / 2.0;
-    assert!(a == 0.0 && (v - v_end).abs() < 1e-12 && (d - (c * end.powi(3) / 6.0 + v_end * 0.5)).abs() < 1e-12);
+    assert!(
+        a == 0.0
+            && (v - v_end).abs() < 1e-12
+            && (d - (c * end.powi(3) / 6.0 + v_end * 0.5)).abs() < 1e-12
+    );
 }
 
 /// Pulses are integrated exactly: d' = v and v' = a by central differences (h = 1e-5 s, error
@@ -128,14 +196,25 @@ fn sampled_integration_is_exact() {
 #[test]
 fn pulse_integrals_are_consistent() {
     for phase in [0.0, 0.3, PI / 2.0] {
-        let sig = Signal::Pulse { amplitude: 4.0, period: 0.7, cycles: 1.5, phase };
+        let sig = Signal::Pulse {
+            amplitude: 4.0,
+            period: 0.7,
+            cycles: 1.5,
+            phase,
+        };
         let h = 1e-5;
         for &t in &[0.1, 0.5, 0.9, 1.2, 2.0] {
             let (a, v, _) = sig.eval(t);
             let (_, vp, dp) = sig.eval(t + h);
             let (_, vm, dm) = sig.eval(t - h);
-            assert!(((vp - vm) / (2.0 * h) - a).abs() < 1e-5, "v' = a at {t}, phase {phase}");
-            assert!(((dp - dm) / (2.0 * h) - v).abs() < 1e-6, "d' = v at {t}, phase {phase}");
+            assert!(
+                ((vp - vm) / (2.0 * h) - a).abs() < 1e-5,
+                "v' = a at {t}, phase {phase}"
+            );
+            assert!(
+                ((dp - dm) / (2.0 * h) - v).abs() < 1e-6,
+                "d' = v at {t}, phase {phase}"
+            );
         }
         let end = 0.7 * 1.5;
         let (_, v0, d0) = sig.eval(end - 1e-9);
@@ -196,15 +275,30 @@ fn linear_baseline_on_a_record() {
         "/tests/fixtures/motion/ground-motions/kobe-1995-nishi-akashi-000.csv"
     ));
     let raw = motion::load_path(path).expect("record");
-    let Signal::Sampled(s) = &raw.horizontal else { unreachable!() };
+    let Signal::Sampled(s) = &raw.horizontal else {
+        unreachable!()
+    };
     let offset: Vec<f64> = s.accel.iter().map(|a| a + 0.01).collect();
-    let drifting = ProcessParams::default().apply("kobe+offset", RecordKind::Raw, s.dt, offset.clone()).expect("raw");
+    let drifting = ProcessParams::default()
+        .apply("kobe+offset", RecordKind::Raw, s.dt, offset.clone())
+        .expect("raw");
     let end = drifting.duration();
-    assert!(drifting.eval(end).2 > 1.0, "the offset record drifts, so the test means something");
-    let p = ProcessParams { baseline: Baseline::Linear, ..Default::default() };
-    let fixed = Signal::Sampled(p.apply("kobe+offset", RecordKind::Raw, s.dt, offset.clone()).expect("raw"));
+    assert!(
+        drifting.eval(end).2 > 1.0,
+        "the offset record drifts, so the test means something"
+    );
+    let p = ProcessParams {
+        baseline: Baseline::Linear,
+        ..Default::default()
+    };
+    let fixed = Signal::Sampled(
+        p.apply("kobe+offset", RecordKind::Raw, s.dt, offset.clone())
+            .expect("raw"),
+    );
     let (_, _, d_end) = fixed.eval(end);
     assert!(d_end.abs() < 1e-9, "final displacement {d_end}");
-    let Signal::Sampled(f) = &fixed else { unreachable!() };
+    let Signal::Sampled(f) = &fixed else {
+        unreachable!()
+    };
     assert_eq!(f.accel, offset);
 }

@@ -5,7 +5,9 @@ use ashlar::motion::{self, GroundMotion, LoadParams, RecordKind, Signal, Units, 
 use std::path::{Path, PathBuf};
 
 fn fixture(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/motion").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/motion")
+        .join(name)
 }
 
 fn sampled(gm: &GroundMotion) -> &motion::Sampled {
@@ -29,7 +31,12 @@ fn shared_records_match_the_readme_table() {
         ("friuli-1976-tolmezzo-000.at2", 7269, 0.005, 0.351),
         ("northridge-1994-mulholland-009.at2", 2999, 0.01, 0.416),
         ("irpinia-1980-sturno-223.at2", 16392, 0.0024, 0.232),
-        ("imperial-valley-1979-el-centro-6-233.csv", 7807, 0.005, 0.442),
+        (
+            "imperial-valley-1979-el-centro-6-233.csv",
+            7807,
+            0.005,
+            0.442,
+        ),
         ("loma-prieta-1989-capitola-000.at2", 7991, 0.005, 0.529),
         ("kobe-1995-nishi-akashi-000.csv", 4096, 0.01, 0.509),
     ];
@@ -39,11 +46,21 @@ fn shared_records_match_the_readme_table() {
         assert_eq!(s.accel.len(), npts, "{name}: samples");
         assert!((s.dt - dt).abs() < 1e-9 * dt, "{name}: dt {} vs {dt}", s.dt);
         let pga = gm.pga() / STANDARD_GRAVITY;
-        assert!((pga - pga_g).abs() <= 0.0005, "{name}: PGA {pga:.5} g vs table {pga_g} g");
+        assert!(
+            (pga - pga_g).abs() <= 0.0005,
+            "{name}: PGA {pga:.5} g vs table {pga_g} g"
+        );
         assert_eq!(gm.meta.original_units, Units::G, "{name}");
         let im = motion::report(&gm);
-        assert!((im.pga_original_units - pga).abs() < 1e-12, "{name}: PGA in original units");
-        assert!(gm.provenance.contains(name), "{name}: provenance {:?}", gm.provenance);
+        assert!(
+            (im.pga_original_units - pga).abs() < 1e-12,
+            "{name}: PGA in original units"
+        );
+        assert!(
+            gm.provenance.contains(name),
+            "{name}: provenance {:?}",
+            gm.provenance
+        );
     }
 }
 
@@ -59,7 +76,10 @@ fn check_synthetic(name: &str, units: Units, scale: f64, dt: f64, tol: f64, kind
     for (i, a) in s.accel.iter().enumerate() {
         let expected = scale * synthetic(i);
         let got = a / units.to_si();
-        assert!((got - expected).abs() <= tol, "{name}: sample {i}: {got} vs {expected}");
+        assert!(
+            (got - expected).abs() <= tol,
+            "{name}: sample {i}: {got} vs {expected}"
+        );
     }
 }
 
@@ -67,38 +87,80 @@ fn check_synthetic(name: &str, units: Units, scale: f64, dt: f64, tol: f64, kind
 /// Tolerance: 4 significant digits printed → 5e-5 relative of values up to 0.09 g.
 #[test]
 fn at2_old_header_fortran_numbers() {
-    check_synthetic("old_style.at2", Units::G, 1e-3, 0.01, 5e-6, RecordKind::Processed);
+    check_synthetic(
+        "old_style.at2",
+        Units::G,
+        1e-3,
+        0.01,
+        5e-6,
+        RecordKind::Processed,
+    );
 }
 
 /// NGA-West2 header with a trailing comma, CRLF line ends, 5E15.7. Tolerance: 8 digits.
 #[test]
 fn at2_new_header_crlf() {
-    check_synthetic("new_style.at2", Units::G, 1e-3, 0.01, 1e-9, RecordKind::Processed);
+    check_synthetic(
+        "new_style.at2",
+        Units::G,
+        1e-3,
+        0.01,
+        1e-9,
+        RecordKind::Processed,
+    );
 }
 
 /// Semicolons, `# units: cm/s2` comment, a header without units. Tolerance: 5 decimals.
 #[test]
 fn csv_units_from_comment() {
-    check_synthetic("semicolon_units_comment.csv", Units::CentimetresPerSecond2, 1.0, 0.02, 5e-6, RecordKind::Unknown);
+    check_synthetic(
+        "semicolon_units_comment.csv",
+        Units::CentimetresPerSecond2,
+        1.0,
+        0.02,
+        5e-6,
+        RecordKind::Unknown,
+    );
 }
 
 /// COSMOS V2: 13 text lines, 100-value headers, Δt = 5 ms at real index 61, F10.5 fields that
 /// touch, a velocity block after the acceleration that must be ignored. Tolerance: 5 decimals.
 #[test]
 fn cosmos_v2_touching_fields() {
-    check_synthetic("synthetic.v2", Units::CentimetresPerSecond2, 10.0, 0.005, 5e-6, RecordKind::Processed);
+    check_synthetic(
+        "synthetic.v2",
+        Units::CentimetresPerSecond2,
+        10.0,
+        0.005,
+        5e-6,
+        RecordKind::Processed,
+    );
 }
 
 /// COSMOS V1 (uncorrected → raw), `units=cm/s^2 (4)`, 10F8.3 touching fields. Tolerance: 3 decimals.
 #[test]
 fn cosmos_v1_is_raw() {
-    check_synthetic("synthetic.v1", Units::CentimetresPerSecond2, 10.0, 0.005, 5e-4, RecordKind::Raw);
+    check_synthetic(
+        "synthetic.v1",
+        Units::CentimetresPerSecond2,
+        10.0,
+        0.005,
+        5e-4,
+        RecordKind::Raw,
+    );
 }
 
 /// ESM ASCII with the full header; PROCESSING names a procedure → processed. Tolerance: 7 digits.
 #[test]
 fn esm_full_header() {
-    check_synthetic("synthetic.asc", Units::CentimetresPerSecond2, 1.0, 0.01, 1e-4, RecordKind::Processed);
+    check_synthetic(
+        "synthetic.asc",
+        Units::CentimetresPerSecond2,
+        1.0,
+        0.01,
+        1e-4,
+        RecordKind::Processed,
+    );
 }
 
 /// The same AT2 text embedded in FORMAT.md §2 JSON reads to the same record, and JSON errors
@@ -151,10 +213,16 @@ fn caller_units() {
     std::fs::create_dir_all(&dir).expect("tmp");
     let path = dir.join("plain.csv");
     std::fs::write(&path, "time,acc\n0,1\n0.01,2\n0.02,-3\n").expect("write");
-    let p = LoadParams { units: Some(Units::CentimetresPerSecond2), ..LoadParams::default() };
+    let p = LoadParams {
+        units: Some(Units::CentimetresPerSecond2),
+        ..LoadParams::default()
+    };
     let gm = motion::load_path_with(&path, &p).expect("units given");
     assert!((gm.pga() - 0.03).abs() < 1e-15);
-    let p = LoadParams { units: Some(Units::MetresPerSecond2), ..LoadParams::default() };
+    let p = LoadParams {
+        units: Some(Units::MetresPerSecond2),
+        ..LoadParams::default()
+    };
     let e = motion::load_path_with(&fixture("synthetic.v2"), &p).expect_err("conflict");
     assert!(e.to_string().contains("units conflict"), "{e}");
 }

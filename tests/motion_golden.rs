@@ -6,17 +6,27 @@ use serde_json::Value;
 use std::path::Path;
 
 fn golden() -> Value {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/motion/golden_reference.json"))
-        .expect("golden file");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/motion/golden_reference.json"
+    ))
+    .expect("golden file");
     serde_json::from_str(&text).expect("golden json")
 }
 
 fn f(v: &Value, key: &str) -> f64 {
-    v[key].as_f64().unwrap_or_else(|| panic!("golden value {key}"))
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("golden value {key}"))
 }
 
 fn arr(v: &Value, key: &str) -> Vec<f64> {
-    v[key].as_array().unwrap_or_else(|| panic!("golden array {key}")).iter().filter_map(Value::as_f64).collect()
+    v[key]
+        .as_array()
+        .unwrap_or_else(|| panic!("golden array {key}"))
+        .iter()
+        .filter_map(Value::as_f64)
+        .collect()
 }
 
 fn check(name: &str, what: &str, got: f64, want: f64, tol: f64) {
@@ -25,13 +35,21 @@ fn check(name: &str, what: &str, got: f64, want: f64, tol: f64) {
         // The figures quoted in docs/motion.md: `cargo test --test motion_golden -- --nocapture`.
         println!("{name:42} {what:16} ashlar {got:12.6} reference {want:12.6} relative {r:.1e}");
     }
-    assert!(r <= tol, "{name}: {what} {got} vs reference {want} (relative {r:.2e} > {tol})");
+    assert!(
+        r <= tol,
+        "{name}: {what} {got} vs reference {want} (relative {r:.2e} > {tol})"
+    );
 }
 
-const RECORDS: [&str; 2] = ["northridge-1994-mulholland-009.at2", "imperial-valley-1979-el-centro-6-233.csv"];
+const RECORDS: [&str; 2] = [
+    "northridge-1994-mulholland-009.at2",
+    "imperial-valley-1979-el-centro-6-233.csv",
+];
 
 fn load(name: &str) -> motion::GroundMotion {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/motion/ground-motions").join(name);
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/motion/ground-motions")
+        .join(name);
     motion::load_path(&p).expect(name)
 }
 
@@ -45,10 +63,28 @@ fn scalar_measures_match_eqsig_and_numpy() {
         check(name, "PGA", im.pga, f(r, "pga"), 1e-9);
         check(name, "PGV", im.pgv, f(r, "pgv"), 0.01);
         check(name, "PGD", im.pgd, f(r, "pgd"), 0.01);
-        check(name, "Arias intensity", im.arias_intensity, f(r, "arias_intensity"), 0.01);
+        check(
+            name,
+            "Arias intensity",
+            im.arias_intensity,
+            f(r, "arias_intensity"),
+            0.01,
+        );
         check(name, "CAV", im.cav, f(r, "cav"), 0.01);
-        check(name, "D5-95", im.significant_duration_5_95, f(r, "significant_duration_5_95"), 0.01);
-        check(name, "mean period", im.mean_period, f(r, "mean_period"), 0.01);
+        check(
+            name,
+            "D5-95",
+            im.significant_duration_5_95,
+            f(r, "significant_duration_5_95"),
+            0.01,
+        );
+        check(
+            name,
+            "mean period",
+            im.mean_period,
+            f(r, "mean_period"),
+            0.01,
+        );
     }
 }
 
@@ -83,11 +119,23 @@ fn response_spectrum_matches_pyrotd_and_eqsig() {
             let t = periods[i];
             if t >= 10.0 * dt {
                 let tol = 0.01 + (std::f64::consts::PI * dt / t).powi(2) / 3.0;
-                check(name, &format!("PSA({t:.4} s) vs pyrotd"), im.spectrum.psa[i], rotd[i], tol);
+                check(
+                    name,
+                    &format!("PSA({t:.4} s) vs pyrotd"),
+                    im.spectrum.psa[i],
+                    rotd[i],
+                    tol,
+                );
                 compared += 1;
             }
             if t >= 30.0 * dt {
-                check(name, &format!("PSA({t:.4} s) vs eqsig"), im.spectrum.psa[i], nj[i], 0.01);
+                check(
+                    name,
+                    &format!("PSA({t:.4} s) vs eqsig"),
+                    im.spectrum.psa[i],
+                    nj[i],
+                    0.01,
+                );
             }
         }
         assert!(compared >= 66, "{name}: only {compared} periods compared");
@@ -117,12 +165,18 @@ fn highpass_matches_scipy() {
     for name in RECORDS {
         let r = &g["records"][name]["highpass_0.1hz_order4"];
         let gm = load(name);
-        let Signal::Sampled(s) = &gm.horizontal else { unreachable!() };
+        let Signal::Sampled(s) = &gm.horizontal else {
+            unreachable!()
+        };
         let y = highpass_zero_phase(&s.accel, s.dt, 0.1, 4);
         let pga_ref = f(r, "pga");
         for (k, want) in arr(r, "samples_every_500").iter().enumerate() {
             let got = y[500 * k];
-            assert!((got - want).abs() < 1e-6 * pga_ref, "{name}: sample {}: {got} vs {want}", 500 * k);
+            assert!(
+                (got - want).abs() < 1e-6 * pga_ref,
+                "{name}: sample {}: {got} vs {want}",
+                500 * k
+            );
         }
         let fs = Sampled::new(s.dt, y);
         let peak = |x: &[f64]| x.iter().fold(0.0_f64, |m, v| m.max(v.abs()));

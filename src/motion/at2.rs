@@ -38,11 +38,23 @@ pub fn parse(origin: &str, content: &str) -> Result<RawRecord, MotionError> {
         return Err(MotionError::new(
             origin,
             Some(last),
-            format!("truncated record: the header says NPTS = {npts} but the file ends after {} values", values.len()),
+            format!(
+                "truncated record: the header says NPTS = {npts} but the file ends after {} values",
+                values.len()
+            ),
         ));
     }
-    let description = format!("{} {}", lines[1].1.trim(), lines[0].1.trim()).trim().to_string();
-    let rec = RawRecord { dt, values, units, kind: RecordKind::Processed, format: "at2", description };
+    let description = format!("{} {}", lines[1].1.trim(), lines[0].1.trim())
+        .trim()
+        .to_string();
+    let rec = RawRecord {
+        dt,
+        values,
+        units,
+        kind: RecordKind::Processed,
+        format: "at2",
+        description,
+    };
     rec.check(origin)?;
     Ok(rec)
 }
@@ -71,17 +83,31 @@ fn header_units(origin: &str, line: &str) -> Result<Units, MotionError> {
 fn npts_dt(origin: &str, line: &str) -> Result<(usize, f64), MotionError> {
     let upper = line.to_ascii_uppercase();
     let bad = |what: String| MotionError::new(origin, Some(4), what);
-    let (n_text, dt_text) = if let (Some(n_at), Some(dt_at)) = (upper.find("NPTS="), upper.find("DT=")) {
-        (field_after(&upper, n_at + 5), field_after(&upper, dt_at + 3))
-    } else if upper.contains("NPTS") {
-        let mut toks = upper.split(|c: char| c.is_whitespace() || c == ',').filter(|t| !t.is_empty());
-        (toks.next().unwrap_or("").to_string(), toks.next().unwrap_or("").to_string())
-    } else {
-        return Err(bad(format!("expected {HEADER_HELP}, found {:?}", line.trim())));
-    };
-    let npts: usize = n_text
-        .parse()
-        .map_err(|_| bad(format!("NPTS must be a whole number, found {n_text:?} (expected {HEADER_HELP})")))?;
+    let (n_text, dt_text) =
+        if let (Some(n_at), Some(dt_at)) = (upper.find("NPTS="), upper.find("DT=")) {
+            (
+                field_after(&upper, n_at + 5),
+                field_after(&upper, dt_at + 3),
+            )
+        } else if upper.contains("NPTS") {
+            let mut toks = upper
+                .split(|c: char| c.is_whitespace() || c == ',')
+                .filter(|t| !t.is_empty());
+            (
+                toks.next().unwrap_or("").to_string(),
+                toks.next().unwrap_or("").to_string(),
+            )
+        } else {
+            return Err(bad(format!(
+                "expected {HEADER_HELP}, found {:?}",
+                line.trim()
+            )));
+        };
+    let npts: usize = n_text.parse().map_err(|_| {
+        bad(format!(
+            "NPTS must be a whole number, found {n_text:?} (expected {HEADER_HELP})"
+        ))
+    })?;
     let dt = text::number(origin, 4, &dt_text, "the time step DT in s")?;
     if dt <= 0.0 {
         return Err(bad(format!("DT must be > 0 s, got {dt}")));
@@ -91,7 +117,12 @@ fn npts_dt(origin: &str, line: &str) -> Result<(usize, f64), MotionError> {
 
 /// The token after `at`, up to a comma or whitespace.
 fn field_after(s: &str, at: usize) -> String {
-    s[at..].trim_start().split(|c: char| c.is_whitespace() || c == ',').next().unwrap_or("").to_string()
+    s[at..]
+        .trim_start()
+        .split(|c: char| c.is_whitespace() || c == ',')
+        .next()
+        .unwrap_or("")
+        .to_string()
 }
 
 #[cfg(test)]
@@ -100,9 +131,18 @@ mod tests {
 
     #[test]
     fn both_header_styles() {
-        assert_eq!(npts_dt("t", "NPTS=   7269, DT=   0.0050 SEC,").expect("new"), (7269, 0.005));
-        assert_eq!(npts_dt("t", "NPTS= 12, DT= .0100 SEC").expect("new"), (12, 0.01));
-        assert_eq!(npts_dt("t", "   4000    0.0050    NPTS, DT").expect("old"), (4000, 0.005));
+        assert_eq!(
+            npts_dt("t", "NPTS=   7269, DT=   0.0050 SEC,").expect("new"),
+            (7269, 0.005)
+        );
+        assert_eq!(
+            npts_dt("t", "NPTS= 12, DT= .0100 SEC").expect("new"),
+            (12, 0.01)
+        );
+        assert_eq!(
+            npts_dt("t", "   4000    0.0050    NPTS, DT").expect("old"),
+            (4000, 0.005)
+        );
         assert!(npts_dt("t", "4000 0.005").is_err());
         assert!(npts_dt("t", "NPTS= 10, DT= 0.0 SEC").is_err());
     }

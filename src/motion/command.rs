@@ -2,8 +2,8 @@
 //! optionally write the response spectrum as SVG. The CLI wires `Command::Motion(MotionArgs)`
 //! to `run`.
 use super::{
-    load_path_with, report_with, spectrum_svg, Baseline, HighPass, LoadParams, ProcessParams, ReportParams, Units,
-    STANDARD_GRAVITY,
+    load_path_with, report_with, spectrum_svg, Baseline, HighPass, LoadParams, ProcessParams,
+    ReportParams, Units, STANDARD_GRAVITY,
 };
 use std::path::PathBuf;
 
@@ -49,15 +49,24 @@ pub fn run(args: &MotionArgs) -> Result<(), String> {
 pub fn report_json(args: &MotionArgs) -> Result<String, String> {
     let units = match &args.units {
         None => None,
-        Some(u) => Some(Units::parse(u).ok_or_else(|| format!("--units {u:?}: expected g, m/s2 or cm/s2 (gal)"))?),
+        Some(u) => Some(
+            Units::parse(u)
+                .ok_or_else(|| format!("--units {u:?}: expected g, m/s2 or cm/s2 (gal)"))?,
+        ),
     };
     let baseline = match args.baseline.as_str() {
         "none" => Baseline::None,
         "linear" => Baseline::Linear,
         other => return Err(format!("--baseline {other:?}: expected none or linear")),
     };
-    let highpass = args.highpass.map(|corner_hz| HighPass { corner_hz, order: args.order });
-    let params = LoadParams { units, process: ProcessParams { highpass, baseline } };
+    let highpass = args.highpass.map(|corner_hz| HighPass {
+        corner_hz,
+        order: args.order,
+    });
+    let params = LoadParams {
+        units,
+        process: ProcessParams { highpass, baseline },
+    };
     let mut gm = load_path_with(&args.record, &params).map_err(|e| e.to_string())?;
     if let Some(f) = args.scale {
         if !f.is_finite() {
@@ -71,9 +80,16 @@ pub fn report_json(args: &MotionArgs) -> Result<String, String> {
     if !(0.0..1.0).contains(&args.damping) {
         return Err(format!("--damping {}: must be in [0, 1)", args.damping));
     }
-    let im = report_with(&gm, &ReportParams { damping: args.damping, ..ReportParams::default() });
+    let im = report_with(
+        &gm,
+        &ReportParams {
+            damping: args.damping,
+            ..ReportParams::default()
+        },
+    );
     if let Some(path) = &args.svg {
-        std::fs::write(path, spectrum_svg(&im)).map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
+        std::fs::write(path, spectrum_svg(&im))
+            .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
     }
     serde_json::to_string_pretty(&im).map_err(|e| e.to_string())
 }
@@ -87,6 +103,8 @@ pub fn parse_pga(text: &str) -> Result<f64, String> {
     };
     match num.trim().parse::<f64>() {
         Ok(v) if v.is_finite() && v >= 0.0 => Ok(v * k),
-        _ => Err(format!("--pga {text:?}: expected a non-negative number in m/s² or with a g suffix (0.3g)")),
+        _ => Err(format!(
+            "--pga {text:?}: expected a non-negative number in m/s² or with a g suffix (0.3g)"
+        )),
     }
 }

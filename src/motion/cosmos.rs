@@ -38,7 +38,11 @@ impl<'a> Cursor<'a> {
 
 /// Parse COSMOS V1/V2 text.
 pub fn parse(origin: &str, content: &str) -> Result<RawRecord, MotionError> {
-    let mut cur = Cursor { origin, lines: text::numbered_lines(content).collect(), at: 0 };
+    let mut cur = Cursor {
+        origin,
+        lines: text::numbered_lines(content).collect(),
+        at: 0,
+    };
     let (_, first) = cur.next("the first text-header line")?;
     let kind = volume_kind(origin, first)?;
     let ntext = text_line_count(origin, first)?;
@@ -57,19 +61,29 @@ pub fn parse(origin: &str, content: &str) -> Result<RawRecord, MotionError> {
         return Err(MotionError::new(
             origin,
             Some(dno),
-            format!("expected the acceleration data line `N acceleration pts, ...`, found {:?}", dline.trim()),
+            format!(
+                "expected the acceleration data line `N acceleration pts, ...`, found {:?}",
+                dline.trim()
+            ),
         ));
     }
     let npts = leading_count(origin, dno, dline, "acceleration pts")?;
     if npts == 0 {
-        return Err(MotionError::new(origin, Some(dno), "empty record: 0 acceleration points"));
+        return Err(MotionError::new(
+            origin,
+            Some(dno),
+            "empty record: 0 acceleration points",
+        ));
     }
     let units = data_units(origin, dno, dline, &ints)?;
     let dt = sample_interval(origin, &reals)?;
     let format = FixedFormat::find(dline);
     let mut values = Vec::with_capacity(npts);
     while values.len() < npts {
-        let (no, line) = cur.next(&format!("acceleration value {} of {npts}", values.len() + 1))?;
+        let (no, line) = cur.next(&format!(
+            "acceleration value {} of {npts}",
+            values.len() + 1
+        ))?;
         let before = values.len();
         match format {
             Some(f) => {
@@ -80,15 +94,38 @@ pub fn parse(origin: &str, content: &str) -> Result<RawRecord, MotionError> {
             None => values.extend(text::numbers_in_line(origin, no, line)?),
         }
         if values.len() == before && !line.trim().is_empty() {
-            return Err(MotionError::new(origin, Some(no), "expected acceleration values"));
+            return Err(MotionError::new(
+                origin,
+                Some(no),
+                "expected acceleration values",
+            ));
         }
         if values.len() > npts {
-            return Err(MotionError::new(origin, Some(no), format!("more values than the {npts} points announced")));
+            return Err(MotionError::new(
+                origin,
+                Some(no),
+                format!("more values than the {npts} points announced"),
+            ));
         }
     }
-    let description = cur.lines.get(4).map(|l| l.1.trim().to_string()).unwrap_or_default();
-    let format_name = if kind == RecordKind::Processed { "cosmos-v2" } else { "cosmos-v1" };
-    let rec = RawRecord { dt, values, units, kind, format: format_name, description };
+    let description = cur
+        .lines
+        .get(4)
+        .map(|l| l.1.trim().to_string())
+        .unwrap_or_default();
+    let format_name = if kind == RecordKind::Processed {
+        "cosmos-v2"
+    } else {
+        "cosmos-v1"
+    };
+    let rec = RawRecord {
+        dt,
+        values,
+        units,
+        kind,
+        format: format_name,
+        description,
+    };
     rec.check(origin)?;
     Ok(rec)
 }
@@ -104,18 +141,35 @@ fn volume_kind(origin: &str, first: &str) -> Result<RecordKind, MotionError> {
         ));
     }
     if lower.contains("raw acceleration counts") {
-        return Err(MotionError::new(origin, Some(1), "a V0 file of raw counts: convert it to a V1 or V2 volume first"));
+        return Err(MotionError::new(
+            origin,
+            Some(1),
+            "a V0 file of raw counts: convert it to a V1 or V2 volume first",
+        ));
     }
-    Ok(if lower.contains("uncorrected") || lower.contains("raw") { RecordKind::Raw } else { RecordKind::Processed })
+    Ok(if lower.contains("uncorrected") || lower.contains("raw") {
+        RecordKind::Raw
+    } else {
+        RecordKind::Processed
+    })
 }
 
 /// `with 13 text lines` on line 1.
 fn text_line_count(origin: &str, first: &str) -> Result<usize, MotionError> {
     let lower = first.to_ascii_lowercase();
-    let bad = || MotionError::new(origin, Some(1), "expected `(Format v01.20 with N text lines)` on line 1");
+    let bad = || {
+        MotionError::new(
+            origin,
+            Some(1),
+            "expected `(Format v01.20 with N text lines)` on line 1",
+        )
+    };
     let end = lower.find("text line").ok_or_else(bad)?;
     let before = lower[..end].trim_end();
-    let start = before.rfind(|c: char| !c.is_ascii_digit()).map(|i| i + 1).unwrap_or(0);
+    let start = before
+        .rfind(|c: char| !c.is_ascii_digit())
+        .map(|i| i + 1)
+        .unwrap_or(0);
     let n: usize = before[start..].parse().map_err(|_| bad())?;
     if n == 0 || n > 1000 {
         return Err(bad());
@@ -125,11 +179,25 @@ fn text_line_count(origin: &str, first: &str) -> Result<usize, MotionError> {
 
 /// The integer at the start of a block line (`100 Integer-header values ...`).
 fn leading_count(origin: &str, no: usize, line: &str, what: &str) -> Result<usize, MotionError> {
-    let bad = || MotionError::new(origin, Some(no), format!("expected `N {what} ...`, found {:?}", line.trim()));
-    if !line.to_ascii_lowercase().contains(&what.to_ascii_lowercase()[..what.len().min(12)]) {
+    let bad = || {
+        MotionError::new(
+            origin,
+            Some(no),
+            format!("expected `N {what} ...`, found {:?}", line.trim()),
+        )
+    };
+    if !line
+        .to_ascii_lowercase()
+        .contains(&what.to_ascii_lowercase()[..what.len().min(12)])
+    {
         return Err(bad());
     }
-    let n: usize = line.split_whitespace().next().ok_or_else(bad)?.parse().map_err(|_| bad())?;
+    let n: usize = line
+        .split_whitespace()
+        .next()
+        .ok_or_else(bad)?
+        .parse()
+        .map_err(|_| bad())?;
     if n > 100_000_000 {
         return Err(bad());
     }
@@ -146,7 +214,9 @@ fn block(cur: &mut Cursor<'_>, name: &str, marker: &str) -> Result<Vec<(f64, usi
         .find(" on ")
         .and_then(|i| lower[i + 4..].split_whitespace().next())
         .and_then(|t| t.parse().ok())
-        .ok_or_else(|| MotionError::new(origin, Some(no), format!("expected `{marker} on L lines`")))?;
+        .ok_or_else(|| {
+            MotionError::new(origin, Some(no), format!("expected `{marker} on L lines`"))
+        })?;
     let format = FixedFormat::find(line);
     let mut values = Vec::with_capacity(count);
     for _ in 0..nlines {
@@ -165,14 +235,22 @@ fn block(cur: &mut Cursor<'_>, name: &str, marker: &str) -> Result<Vec<(f64, usi
         return Err(MotionError::new(
             origin,
             Some(no),
-            format!("the {name} announces {count} values on {nlines} lines but holds {}", values.len()),
+            format!(
+                "the {name} announces {count} values on {nlines} lines but holds {}",
+                values.len()
+            ),
         ));
     }
     Ok(values)
 }
 
 /// Units from `units=cm/sec2(04)` on the data line, else the integer-header code.
-fn data_units(origin: &str, no: usize, line: &str, ints: &[(f64, usize)]) -> Result<Units, MotionError> {
+fn data_units(
+    origin: &str,
+    no: usize,
+    line: &str,
+    ints: &[(f64, usize)],
+) -> Result<Units, MotionError> {
     let lower = line.to_ascii_lowercase();
     if let Some(i) = lower.find("units=") {
         let rest = &line[i + 6..];
@@ -183,14 +261,22 @@ fn data_units(origin: &str, no: usize, line: &str, ints: &[(f64, usize)]) -> Res
         Some(&(c, _)) if c == 4.0 => Ok(Units::CentimetresPerSecond2),
         Some(&(c, _)) if c == 2.0 => Ok(Units::G),
         Some(&(c, l)) => Err(text::unknown_units(origin, Some(l), &format!("code {c}"))),
-        None => Err(MotionError::new(origin, Some(no), "unknown units: no `units=` on the data line")),
+        None => Err(MotionError::new(
+            origin,
+            Some(no),
+            "unknown units: no `units=` on the data line",
+        )),
     }
 }
 
 /// Real-header value 61, ms → s.
 fn sample_interval(origin: &str, reals: &[(f64, usize)]) -> Result<f64, MotionError> {
     let &(ms, line) = reals.get(DT_MS_INDEX).ok_or_else(|| {
-        MotionError::new(origin, None, format!("the real header has no value {DT_MS_INDEX} (sample interval, ms)"))
+        MotionError::new(
+            origin,
+            None,
+            format!("the real header has no value {DT_MS_INDEX} (sample interval, ms)"),
+        )
     })?;
     if !(ms > 0.0) {
         return Err(MotionError::new(

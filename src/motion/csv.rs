@@ -45,7 +45,10 @@ pub fn parse(origin: &str, content: &str, units: Option<Units>) -> Result<RawRec
             return Err(MotionError::new(
                 origin,
                 Some(no),
-                format!("expected 2 columns (time, acceleration), found {}", fields.len()),
+                format!(
+                    "expected 2 columns (time, acceleration), found {}",
+                    fields.len()
+                ),
             ));
         }
         times.push((text::number(origin, no, fields[0], "a time in s")?, no));
@@ -75,13 +78,23 @@ pub fn parse(origin: &str, content: &str, units: Option<Units>) -> Result<RawRec
     if t0 != 0.0 {
         description.push_str(&format!(" (first sample at t = {t0} s taken as t = 0)"));
     }
-    let rec = RawRecord { dt, values, units, kind: RecordKind::Unknown, format: "csv", description };
+    let rec = RawRecord {
+        dt,
+        values,
+        units,
+        kind: RecordKind::Unknown,
+        format: "csv",
+        description,
+    };
     rec.check(origin)?;
     Ok(rec)
 }
 
 fn detect_separator(line: &str) -> char {
-    [',', ';', '\t'].into_iter().find(|c| line.contains(*c)).unwrap_or(' ')
+    [',', ';', '\t']
+        .into_iter()
+        .find(|c| line.contains(*c))
+        .unwrap_or(' ')
 }
 
 fn split(line: &str, sep: char) -> Vec<&str> {
@@ -95,19 +108,30 @@ fn split(line: &str, sep: char) -> Vec<&str> {
 /// `# units: g` or `# units = cm/s2`.
 fn comment_units(origin: &str, no: usize, comment: &str) -> Result<Option<Units>, MotionError> {
     let lower = comment.trim().to_ascii_lowercase();
-    let Some(rest) = lower.strip_prefix("units") else { return Ok(None) };
+    let Some(rest) = lower.strip_prefix("units") else {
+        return Ok(None);
+    };
     let rest = rest.trim_start();
-    let Some(name) = rest.strip_prefix(':').or_else(|| rest.strip_prefix('=')) else { return Ok(None) };
-    text::parse_units(name).map(Some).ok_or_else(|| text::unknown_units(origin, Some(no), name))
+    let Some(name) = rest.strip_prefix(':').or_else(|| rest.strip_prefix('=')) else {
+        return Ok(None);
+    };
+    text::parse_units(name)
+        .map(Some)
+        .ok_or_else(|| text::unknown_units(origin, Some(no), name))
 }
 
 /// Units named in a column header: inside brackets, after the last `_`, or the whole name.
 fn column_units(name: &str) -> Option<Units> {
-    let inner = name
-        .find(['(', '['])
-        .and_then(|i| name[i + 1..].find([')', ']']).map(|j| &name[i + 1..i + 1 + j]));
+    let inner = name.find(['(', '[']).and_then(|i| {
+        name[i + 1..]
+            .find([')', ']'])
+            .map(|j| &name[i + 1..i + 1 + j])
+    });
     let suffix = name.rfind('_').map(|i| &name[i + 1..]);
-    [inner, suffix, Some(name)].into_iter().flatten().find_map(text::parse_units)
+    [inner, suffix, Some(name)]
+        .into_iter()
+        .flatten()
+        .find_map(text::parse_units)
 }
 
 /// The time step of a uniform time column, or an error naming the first line off the grid.
@@ -115,7 +139,11 @@ fn uniform_step(origin: &str, times: &[(f64, usize)]) -> Result<f64, MotionError
     match times {
         [] => return Err(MotionError::new(origin, None, "empty record: no data rows")),
         [(_, no)] => {
-            return Err(MotionError::new(origin, Some(*no), "a single sample: the time step cannot be inferred"))
+            return Err(MotionError::new(
+                origin,
+                Some(*no),
+                "a single sample: the time step cannot be inferred",
+            ))
         }
         _ => {}
     }
@@ -124,7 +152,10 @@ fn uniform_step(origin: &str, times: &[(f64, usize)]) -> Result<f64, MotionError
             return Err(MotionError::new(
                 origin,
                 Some(w[1].1),
-                format!("time must increase: {} s follows {} s (time step ≤ 0)", w[1].0, w[0].0),
+                format!(
+                    "time must increase: {} s follows {} s (time step ≤ 0)",
+                    w[1].0, w[0].0
+                ),
             ));
         }
     }
@@ -158,7 +189,10 @@ mod tests {
     #[test]
     fn units_from_column_names() {
         assert_eq!(column_units("accel_g"), Some(Units::G));
-        assert_eq!(column_units("acc (cm/s2)"), Some(Units::CentimetresPerSecond2));
+        assert_eq!(
+            column_units("acc (cm/s2)"),
+            Some(Units::CentimetresPerSecond2)
+        );
         assert_eq!(column_units("a [m/s^2]"), Some(Units::MetresPerSecond2));
         assert_eq!(column_units("acceleration"), None);
     }

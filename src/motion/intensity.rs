@@ -23,7 +23,13 @@ pub struct ReportParams {
 
 impl Default for ReportParams {
     fn default() -> Self {
-        Self { damping: 0.05, period_range: (0.01, 10.0), periods: 100, analytic_dt: 0.001, steady_duration: 10.0 }
+        Self {
+            damping: 0.05,
+            period_range: (0.01, 10.0),
+            periods: 100,
+            analytic_dt: 0.001,
+            steady_duration: 10.0,
+        }
     }
 }
 
@@ -92,16 +98,27 @@ pub fn report_with(gm: &GroundMotion, p: &ReportParams) -> IntensityMeasures {
         pgd: peak(&d),
         arias_intensity: arias.last().copied().unwrap_or(0.0),
         significant_duration_5_95: significant_duration(&arias, dt, 0.05, 0.95),
-        cav: a.windows(2).map(|w| 0.5 * dt * (w[0].abs() + w[1].abs())).sum(),
+        cav: a
+            .windows(2)
+            .map(|w| 0.5 * dt * (w[0].abs() + w[1].abs()))
+            .sum(),
         mean_period: mean_period(&a, dt),
-        spectrum: Spectrum { damping: p.damping, periods, psa },
+        spectrum: Spectrum {
+            damping: p.damping,
+            periods,
+            psa,
+        },
         provenance: gm.provenance.clone(),
     }
 }
 
 /// (dt, a, v, d) of a signal on a uniform grid: the record's own samples and exact integrals,
 /// or the analytic signal evaluated exactly every `analytic_dt`.
-fn sampled_series(sig: &Signal, scale: f64, p: &ReportParams) -> (f64, Vec<f64>, Vec<f64>, Vec<f64>) {
+fn sampled_series(
+    sig: &Signal,
+    scale: f64,
+    p: &ReportParams,
+) -> (f64, Vec<f64>, Vec<f64>, Vec<f64>) {
     let sc = |x: &[f64]| x.iter().map(|y| y * scale).collect::<Vec<_>>();
     match sig {
         Signal::Zero => (0.0, vec![], vec![], vec![]),
@@ -110,7 +127,11 @@ fn sampled_series(sig: &Signal, scale: f64, p: &ReportParams) -> (f64, Vec<f64>,
             let length = sig.duration().unwrap_or(p.steady_duration);
             let n = (length / p.analytic_dt).round().max(1.0) as usize;
             let dt = length / n as f64;
-            let (mut a, mut v, mut d) = (Vec::with_capacity(n + 1), Vec::with_capacity(n + 1), Vec::with_capacity(n + 1));
+            let (mut a, mut v, mut d) = (
+                Vec::with_capacity(n + 1),
+                Vec::with_capacity(n + 1),
+                Vec::with_capacity(n + 1),
+            );
             for i in 0..=n {
                 // The pulse's end sample is evaluated just inside so it keeps its value.
                 let t = (i as f64 * dt).min(length * (1.0 - 1e-15));
@@ -130,7 +151,9 @@ pub fn log_periods(lo: f64, hi: f64, n: usize) -> Vec<f64> {
         return vec![lo];
     }
     let r = (hi / lo).ln();
-    (0..n).map(|i| lo * (r * i as f64 / (n - 1) as f64).exp()).collect()
+    (0..n)
+        .map(|i| lo * (r * i as f64 / (n - 1) as f64).exp())
+        .collect()
 }
 
 /// Cumulative Arias intensity π/(2g) ∫₀ᵗ a² dt (trapezoidal), m/s, at each sample.
@@ -161,7 +184,11 @@ pub fn significant_duration(cum: &[f64], dt: f64, lo: f64, hi: f64) -> f64 {
             return 0.0;
         }
         let (c0, c1) = (cum[i - 1], cum[i]);
-        let frac = if c1 > c0 { (target - c0) / (c1 - c0) } else { 0.0 };
+        let frac = if c1 > c0 {
+            (target - c0) / (c1 - c0)
+        } else {
+            0.0
+        };
         (i as f64 - 1.0 + frac) * dt
     };
     crossing(hi) - crossing(lo)
@@ -238,7 +265,10 @@ fn fft(re: &mut [f64], im: &mut [f64]) {
 /// piecewise-linear input, and the peak between record samples is not missed. The free vibration
 /// after the record ends is included (for long periods the peak can come after the shaking).
 pub fn response_spectrum(a: &[f64], dt: f64, periods: &[f64], damping: f64) -> Vec<f64> {
-    periods.iter().map(|&t| oscillator_peak(a, dt, t, damping) * (2.0 * std::f64::consts::PI / t).powi(2)).collect()
+    periods
+        .iter()
+        .map(|&t| oscillator_peak(a, dt, t, damping) * (2.0 * std::f64::consts::PI / t).powi(2))
+        .collect()
 }
 
 /// max |u| of one oscillator of period `t` (s) and damping ratio `z` (< 1).
@@ -294,8 +324,13 @@ impl Recurrence {
         Self {
             a: e * (z / sq * s + c),
             b: e * s / wd,
-            c: (2.0 * z / (w * h) + e * (((1.0 - 2.0 * z * z) / (wd * h) - z / sq) * s - (1.0 + 2.0 * z / (w * h)) * c)) / k,
-            d: (1.0 - 2.0 * z / (w * h) + e * ((2.0 * z * z - 1.0) / (wd * h) * s + 2.0 * z / (w * h) * c)) / k,
+            c: (2.0 * z / (w * h)
+                + e * (((1.0 - 2.0 * z * z) / (wd * h) - z / sq) * s
+                    - (1.0 + 2.0 * z / (w * h)) * c))
+                / k,
+            d: (1.0 - 2.0 * z / (w * h)
+                + e * ((2.0 * z * z - 1.0) / (wd * h) * s + 2.0 * z / (w * h) * c))
+                / k,
             a2: -e * w / sq * s,
             b2: e * (c - z / sq * s),
             c2: (-1.0 / h + e * ((w / sq + z / (h * sq)) * s + c / h)) / k,
@@ -332,22 +367,54 @@ pub fn spectrum_svg(im: &IntensityMeasures) -> String {
     while dec <= hi * 1.0001 {
         if dec >= lo * 0.9999 {
             let xd = x(dec);
-            s += &format!("<line x1=\"{xd:.1}\" y1=\"{t}\" x2=\"{xd:.1}\" y2=\"{}\" stroke=\"#ddd\"/>\n", t + ph);
-            s += &format!("<text x=\"{xd:.1}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n", t + ph + 16.0, fmt(dec));
+            s += &format!(
+                "<line x1=\"{xd:.1}\" y1=\"{t}\" x2=\"{xd:.1}\" y2=\"{}\" stroke=\"#ddd\"/>\n",
+                t + ph
+            );
+            s += &format!(
+                "<text x=\"{xd:.1}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n",
+                t + ph + 16.0,
+                fmt(dec)
+            );
         }
         dec *= 10.0;
     }
     for i in 0..=5 {
         let a = ymax * i as f64 / 5.0;
         let yy = y(a);
-        s += &format!("<line x1=\"{l}\" y1=\"{yy:.1}\" x2=\"{}\" y2=\"{yy:.1}\" stroke=\"#ddd\"/>\n", l + pw);
-        s += &format!("<text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>\n", l - 6.0, yy + 4.0, fmt(a));
-        s += &format!("<text x=\"{}\" y=\"{:.1}\">{}</text>\n", l + pw + 6.0, yy + 4.0, fmt(a / STANDARD_GRAVITY));
+        s += &format!(
+            "<line x1=\"{l}\" y1=\"{yy:.1}\" x2=\"{}\" y2=\"{yy:.1}\" stroke=\"#ddd\"/>\n",
+            l + pw
+        );
+        s += &format!(
+            "<text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>\n",
+            l - 6.0,
+            yy + 4.0,
+            fmt(a)
+        );
+        s += &format!(
+            "<text x=\"{}\" y=\"{:.1}\">{}</text>\n",
+            l + pw + 6.0,
+            yy + 4.0,
+            fmt(a / STANDARD_GRAVITY)
+        );
     }
     s += &format!("<rect x=\"{l}\" y=\"{t}\" width=\"{pw}\" height=\"{ph}\" fill=\"none\" stroke=\"black\"/>\n");
-    let pts: Vec<String> = sp.periods.iter().zip(&sp.psa).map(|(p, a)| format!("{:.1},{:.1}", x(*p), y(*a))).collect();
-    s += &format!("<polyline fill=\"none\" stroke=\"#c0392b\" stroke-width=\"2\" points=\"{}\"/>\n", pts.join(" "));
-    s += &format!("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">period (s)</text>\n", l + pw / 2.0, h - 10.0);
+    let pts: Vec<String> = sp
+        .periods
+        .iter()
+        .zip(&sp.psa)
+        .map(|(p, a)| format!("{:.1},{:.1}", x(*p), y(*a)))
+        .collect();
+    s += &format!(
+        "<polyline fill=\"none\" stroke=\"#c0392b\" stroke-width=\"2\" points=\"{}\"/>\n",
+        pts.join(" ")
+    );
+    s += &format!(
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">period (s)</text>\n",
+        l + pw / 2.0,
+        h - 10.0
+    );
     s += &format!(
         "<text transform=\"translate(18,{}) rotate(-90)\" text-anchor=\"middle\">PSA (m/s²)</text>\n",
         t + ph / 2.0
@@ -364,7 +431,11 @@ pub fn spectrum_svg(im: &IntensityMeasures) -> String {
 /// The smallest of 1, 2, 2.5, 5 × 10ᵏ at or above x.
 fn nice_ceiling(x: f64) -> f64 {
     let e = 10f64.powf(x.log10().floor());
-    [1.0, 2.0, 2.5, 5.0, 10.0].iter().map(|m| m * e).find(|v| *v >= x * (1.0 - 1e-12)).unwrap_or(10.0 * e)
+    [1.0, 2.0, 2.5, 5.0, 10.0]
+        .iter()
+        .map(|m| m * e)
+        .find(|v| *v >= x * (1.0 - 1e-12))
+        .unwrap_or(10.0 * e)
 }
 
 fn fmt(v: f64) -> String {
@@ -373,7 +444,10 @@ fn fmt(v: f64) -> String {
 }
 
 fn xml_escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 #[cfg(test)]
@@ -395,7 +469,9 @@ mod tests {
             let t = i as f64 * h;
             let wd = w * (1.0 - z * z).sqrt();
             let exact = -a / (w * w)
-                * (1.0 - (-z * w * t).exp() * ((wd * t).cos() + z / (1.0 - z * z).sqrt() * (wd * t).sin()));
+                * (1.0
+                    - (-z * w * t).exp()
+                        * ((wd * t).cos() + z / (1.0 - z * z).sqrt() * (wd * t).sin()));
             assert!((u - exact).abs() < 1e-12, "step {i}: {u} vs {exact}");
         }
     }
@@ -418,7 +494,12 @@ mod tests {
 
     #[test]
     fn svg_is_well_formed_enough() {
-        let gm = GroundMotion::horizontal(Signal::Pulse { amplitude: 3.0, period: 0.5, cycles: 2.0, phase: 0.0 });
+        let gm = GroundMotion::horizontal(Signal::Pulse {
+            amplitude: 3.0,
+            period: 0.5,
+            cycles: 2.0,
+            phase: 0.0,
+        });
         let im = report(&gm);
         let svg = spectrum_svg(&im);
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));

@@ -16,11 +16,14 @@ mod json;
 mod process;
 mod text;
 pub use intensity::{
-    cumulative_arias, log_periods, mean_period, oscillator_peak, report, report_with, response_spectrum,
-    significant_duration, spectrum_svg, IntensityMeasures, ReportParams, Spectrum,
+    cumulative_arias, log_periods, mean_period, oscillator_peak, report, report_with,
+    response_spectrum, significant_duration, spectrum_svg, IntensityMeasures, ReportParams,
+    Spectrum,
 };
 pub use json::{from_json, from_json_with};
-pub use process::{highpass_gain, highpass_zero_phase, remove_linear_drift, Baseline, HighPass, ProcessParams};
+pub use process::{
+    highpass_gain, highpass_zero_phase, remove_linear_drift, Baseline, HighPass, ProcessParams,
+};
 pub use text::{RawRecord, RecordKind};
 
 /// Units a record may come in.
@@ -77,7 +80,11 @@ pub struct MotionError {
 
 impl MotionError {
     pub fn new(source: impl Into<String>, line: Option<usize>, message: impl Into<String>) -> Self {
-        Self { origin: source.into(), line, message: message.into() }
+        Self {
+            origin: source.into(),
+            line,
+            message: message.into(),
+        }
     }
 }
 
@@ -107,7 +114,12 @@ impl Sampled {
             vel[i] = vel[i - 1] + 0.5 * dt * (a0 + a1);
             disp[i] = disp[i - 1] + dt * vel[i - 1] + dt * dt * (a0 / 3.0 + a1 / 6.0);
         }
-        Self { dt, accel, vel, disp }
+        Self {
+            dt,
+            accel,
+            vel,
+            disp,
+        }
     }
 
     pub fn duration(&self) -> f64 {
@@ -180,9 +192,17 @@ pub enum Signal {
     Zero,
     Sampled(Sampled),
     /// a(t) = amplitude · sin(2π t / period + phase) for 0 ≤ t ≤ cycles · period, zero after.
-    Pulse { amplitude: f64, period: f64, cycles: f64, phase: f64 },
+    Pulse {
+        amplitude: f64,
+        period: f64,
+        cycles: f64,
+        phase: f64,
+    },
     /// a(t) = amplitude · sin(2π f t) for all t ≥ 0.
-    Sine { amplitude: f64, frequency: f64 },
+    Sine {
+        amplitude: f64,
+        frequency: f64,
+    },
 }
 
 impl Signal {
@@ -192,7 +212,12 @@ impl Signal {
         match self {
             Signal::Zero => 0.0,
             Signal::Sampled(s) => s.accel_at(t),
-            Signal::Pulse { amplitude, period, cycles, phase } => {
+            Signal::Pulse {
+                amplitude,
+                period,
+                cycles,
+                phase,
+            } => {
                 let w = 2.0 * std::f64::consts::PI / period;
                 if t >= 0.0 && t <= cycles * period {
                     amplitude * (w * t + phase).sin()
@@ -200,7 +225,10 @@ impl Signal {
                     0.0
                 }
             }
-            Signal::Sine { amplitude, frequency } => {
+            Signal::Sine {
+                amplitude,
+                frequency,
+            } => {
                 if t >= 0.0 {
                     amplitude * (2.0 * std::f64::consts::PI * frequency * t).sin()
                 } else {
@@ -216,17 +244,30 @@ impl Signal {
         match self {
             Signal::Zero => (0.0, 0.0, 0.0),
             Signal::Sampled(s) => s.eval(t),
-            Signal::Pulse { amplitude, period, cycles, phase } => {
+            Signal::Pulse {
+                amplitude,
+                period,
+                cycles,
+                phase,
+            } => {
                 let w = 2.0 * std::f64::consts::PI / period;
                 let end = cycles * period;
                 let te = t.clamp(0.0, end);
                 let a = self.accel(t);
                 let v = amplitude / w * (phase.cos() - (w * te + phase).cos());
-                let d = amplitude / w * te * phase.cos() - amplitude / (w * w) * ((w * te + phase).sin() - phase.sin());
-                let (v, d) = if t > end { (v, d + v * (t - end)) } else { (v, d) };
+                let d = amplitude / w * te * phase.cos()
+                    - amplitude / (w * w) * ((w * te + phase).sin() - phase.sin());
+                let (v, d) = if t > end {
+                    (v, d + v * (t - end))
+                } else {
+                    (v, d)
+                };
                 (a, v, d)
             }
-            Signal::Sine { amplitude, frequency } => {
+            Signal::Sine {
+                amplitude,
+                frequency,
+            } => {
                 let w = 2.0 * std::f64::consts::PI * frequency;
                 let t = t.max(0.0);
                 (
@@ -252,7 +293,12 @@ impl Signal {
         match self {
             Signal::Zero => 0.0,
             Signal::Sampled(s) => s.accel.iter().fold(0.0, |m, a| m.max(a.abs())),
-            Signal::Pulse { amplitude, cycles, phase, .. } => {
+            Signal::Pulse {
+                amplitude,
+                cycles,
+                phase,
+                ..
+            } => {
                 // |sin| reaches 1 inside the window if a crest (phase angle π/2 + kπ) falls in
                 // [phase, phase + 2π·cycles]; otherwise the peak is at an end of the window.
                 let (start, stop) = (*phase, phase + 2.0 * std::f64::consts::PI * cycles);
@@ -307,16 +353,29 @@ impl GroundMotion {
         let analytic = matches!(signal, Signal::Pulse { .. } | Signal::Sine { .. });
         let meta = RecordMeta {
             original_units: Units::MetresPerSecond2,
-            kind: if analytic { RecordKind::Analytic } else { RecordKind::Unknown },
+            kind: if analytic {
+                RecordKind::Analytic
+            } else {
+                RecordKind::Unknown
+            },
             ..RecordMeta::default()
         };
-        Self { horizontal: signal, vertical: Signal::Zero, scale: 1.0, provenance: "analytic".into(), meta }
+        Self {
+            horizontal: signal,
+            vertical: Signal::Zero,
+            scale: 1.0,
+            provenance: "analytic".into(),
+            meta,
+        }
     }
 
     /// Ground acceleration [ax, ay] at t, m/s². O(1), no allocation (called every solver step).
     #[inline]
     pub fn acceleration(&self, t: f64) -> [f64; 2] {
-        [self.scale * self.horizontal.accel(t), self.scale * self.vertical.accel(t)]
+        [
+            self.scale * self.horizontal.accel(t),
+            self.scale * self.vertical.accel(t),
+        ]
     }
 
     /// Ground (acceleration, velocity, displacement), each [x, y], at t.
@@ -386,7 +445,12 @@ impl Format {
     }
 
     /// Parse text in this format.
-    pub fn parse(self, origin: &str, content: &str, units: Option<Units>) -> Result<RawRecord, MotionError> {
+    pub fn parse(
+        self,
+        origin: &str,
+        content: &str,
+        units: Option<Units>,
+    ) -> Result<RawRecord, MotionError> {
         let rec = match self {
             Format::At2 => at2::parse(origin, content)?,
             Format::Csv => csv::parse(origin, content, units)?,
@@ -398,7 +462,11 @@ impl Format {
                 return Err(MotionError::new(
                     origin,
                     None,
-                    format!("units conflict: the file says {} but {} was given", rec.units.name(), u.name()),
+                    format!(
+                        "units conflict: the file says {} but {} was given",
+                        rec.units.name(),
+                        u.name()
+                    ),
                 ));
             }
         }
@@ -407,13 +475,31 @@ impl Format {
 }
 
 /// Turn a parsed record into a processed horizontal ground motion.
-pub fn from_raw(origin: &str, rec: RawRecord, process: &ProcessParams) -> Result<GroundMotion, MotionError> {
+pub fn from_raw(
+    origin: &str,
+    rec: RawRecord,
+    process: &ProcessParams,
+) -> Result<GroundMotion, MotionError> {
     rec.check(origin)?;
     let k = rec.units.to_si();
-    let sampled = process.apply(origin, rec.kind, rec.dt, rec.values.iter().map(|v| v * k).collect())?;
+    let sampled = process.apply(
+        origin,
+        rec.kind,
+        rec.dt,
+        rec.values.iter().map(|v| v * k).collect(),
+    )?;
     let mut gm = GroundMotion::horizontal(Signal::Sampled(sampled));
-    gm.meta = RecordMeta { original_units: rec.units, kind: rec.kind, format: rec.format.into(), processing: *process };
-    gm.provenance = format!("{origin} ({}{})", rec.format, describe(&rec.description, process));
+    gm.meta = RecordMeta {
+        original_units: rec.units,
+        kind: rec.kind,
+        format: rec.format.into(),
+        processing: *process,
+    };
+    gm.provenance = format!(
+        "{origin} ({}{})",
+        rec.format,
+        describe(&rec.description, process)
+    );
     Ok(gm)
 }
 
@@ -441,7 +527,11 @@ pub fn load_path(path: &Path) -> Result<GroundMotion, MotionError> {
 pub fn load_path_with(path: &Path, params: &LoadParams) -> Result<GroundMotion, MotionError> {
     let origin = path.display().to_string();
     params.process.validate(&origin)?;
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
     let format = match ext.as_str() {
         "at2" => Some(Format::At2),
         "csv" | "txt" => Some(Format::Csv),
@@ -456,15 +546,21 @@ pub fn load_path_with(path: &Path, params: &LoadParams) -> Result<GroundMotion, 
             ))
         }
     };
-    let bytes = std::fs::read(path).map_err(|e| MotionError::new(&origin, None, format!("cannot read: {e}")))?;
+    let bytes = std::fs::read(path)
+        .map_err(|e| MotionError::new(&origin, None, format!("cannot read: {e}")))?;
     // Lossy: header text in Latin-1 (station names) must not stop a read; a replaced byte inside
     // a numeric field still fails with its line.
     let content = String::from_utf8_lossy(&bytes);
     let mut gm = match format {
-        Some(f) => from_raw(&origin, f.parse(&origin, &content, params.units)?, &params.process)?,
+        Some(f) => from_raw(
+            &origin,
+            f.parse(&origin, &content, params.units)?,
+            &params.process,
+        )?,
         None => {
-            let value: serde_json::Value = serde_json::from_str(&content)
-                .map_err(|e| MotionError::new(&origin, Some(e.line()), format!("invalid JSON: {e}")))?;
+            let value: serde_json::Value = serde_json::from_str(&content).map_err(|e| {
+                MotionError::new(&origin, Some(e.line()), format!("invalid JSON: {e}"))
+            })?;
             from_json_with(&value, &params.process).map_err(|e| MotionError {
                 origin: format!("{origin}: {}", e.origin),
                 ..e

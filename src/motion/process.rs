@@ -51,17 +51,31 @@ impl ProcessParams {
     pub fn validate(&self, origin: &str) -> Result<(), MotionError> {
         if let Some(hp) = self.highpass {
             if !(hp.corner_hz.is_finite() && hp.corner_hz > 0.0) {
-                return Err(MotionError::new(origin, None, format!("high-pass corner must be > 0 Hz, got {}", hp.corner_hz)));
+                return Err(MotionError::new(
+                    origin,
+                    None,
+                    format!("high-pass corner must be > 0 Hz, got {}", hp.corner_hz),
+                ));
             }
             if !(1..=12).contains(&hp.order) {
-                return Err(MotionError::new(origin, None, format!("high-pass order must be 1..=12, got {}", hp.order)));
+                return Err(MotionError::new(
+                    origin,
+                    None,
+                    format!("high-pass order must be 1..=12, got {}", hp.order),
+                ));
             }
         }
         Ok(())
     }
 
     /// Turn an acceleration series (m/s²) into a `Sampled` signal.
-    pub fn apply(&self, origin: &str, kind: RecordKind, dt: f64, accel: Vec<f64>) -> Result<Sampled, MotionError> {
+    pub fn apply(
+        &self,
+        origin: &str,
+        kind: RecordKind,
+        dt: f64,
+        accel: Vec<f64>,
+    ) -> Result<Sampled, MotionError> {
         self.validate(origin)?;
         let accel = match self.highpass {
             None => accel,
@@ -131,7 +145,10 @@ fn butterworth_highpass(corner_hz: f64, dt: f64, order: usize) -> Vec<Biquad> {
     }
     if order % 2 == 1 {
         let a0 = 1.0 + k;
-        sections.push(Biquad { b: [1.0 / a0, -1.0 / a0, 0.0], a: [(k - 1.0) / a0, 0.0] });
+        sections.push(Biquad {
+            b: [1.0 / a0, -1.0 / a0, 0.0],
+            a: [(k - 1.0) / a0, 0.0],
+        });
     }
     sections
 }
@@ -184,7 +201,9 @@ mod tests {
         for (f, order) in [(0.2, 4), (0.5, 4), (1.0, 3), (4.0, 4)] {
             let fc = 0.5;
             let n = (400.0 / f / dt) as usize;
-            let x: Vec<f64> = (0..n).map(|i| (2.0 * std::f64::consts::PI * f * i as f64 * dt).sin()).collect();
+            let x: Vec<f64> = (0..n)
+                .map(|i| (2.0 * std::f64::consts::PI * f * i as f64 * dt).sin())
+                .collect();
             let y = highpass_zero_phase(&x, dt, fc, order);
             let g = highpass_gain(f, dt, fc, order);
             let mid = n / 2;
@@ -197,14 +216,23 @@ mod tests {
                 c += y[i] * w.cos();
             }
             let amp = 2.0 * (s * s + c * c).sqrt() / span as f64;
-            assert!((amp - g).abs() < 1e-3 * g.max(1e-3) + 1e-6, "f={f}: amplitude {amp} vs gain {g}");
-            assert!(c.abs() < 1e-3 * s.abs().max(1e-9) + 1e-9, "f={f}: phase shift (cos part {c})");
+            assert!(
+                (amp - g).abs() < 1e-3 * g.max(1e-3) + 1e-6,
+                "f={f}: amplitude {amp} vs gain {g}"
+            );
+            assert!(
+                c.abs() < 1e-3 * s.abs().max(1e-9) + 1e-9,
+                "f={f}: phase shift (cos part {c})"
+            );
         }
     }
 
     #[test]
     fn linear_baseline_zeroes_final_displacement_and_keeps_acceleration() {
-        let s0 = Sampled::new(0.01, (0..500).map(|i| 0.1 + (i as f64 * 0.05).sin()).collect());
+        let s0 = Sampled::new(
+            0.01,
+            (0..500).map(|i| 0.1 + (i as f64 * 0.05).sin()).collect(),
+        );
         let mut s = s0.clone();
         remove_linear_drift(&mut s);
         assert!(s.disp[s.disp.len() - 1].abs() < 1e-12);

@@ -39,7 +39,11 @@ pub struct RawRecord {
 /// reports those as non-finite).
 pub fn parse_fortran(tok: &str) -> Option<f64> {
     let t = tok.trim();
-    if t.is_empty() || !t.bytes().all(|b| b.is_ascii_digit() || b"+-.eEdD".contains(&b)) {
+    if t.is_empty()
+        || !t
+            .bytes()
+            .all(|b| b.is_ascii_digit() || b"+-.eEdD".contains(&b))
+    {
         return None;
     }
     if !t.bytes().any(|b| b.is_ascii_digit()) {
@@ -72,7 +76,10 @@ pub fn number(origin: &str, line: usize, tok: &str, expected: &str) -> Result<f6
 /// follow an exponent letter.
 pub fn numbers_in_line(origin: &str, line: usize, text: &str) -> Result<Vec<f64>, MotionError> {
     let mut out = Vec::new();
-    for tok in text.split(|c: char| c.is_whitespace() || c == ',').filter(|t| !t.is_empty()) {
+    for tok in text
+        .split(|c: char| c.is_whitespace() || c == ',')
+        .filter(|t| !t.is_empty())
+    {
         if let Some(v) = parse_fortran(tok) {
             if !v.is_finite() {
                 return Err(bad_number(origin, line, tok, "a finite number"));
@@ -129,18 +136,33 @@ impl FixedFormat {
             None => spec,
         };
         let letter = spec.find(|c: char| matches!(c, 'f' | 'e' | 'i' | 'g' | 'd'))?;
-        let per_line = if letter == 0 { 1 } else { spec[..letter].trim().parse().ok()? };
+        let per_line = if letter == 0 {
+            1
+        } else {
+            spec[..letter].trim().parse().ok()?
+        };
         let after = &spec[letter + 1..];
-        let wend = after.find(|c: char| !c.is_ascii_digit()).unwrap_or(after.len());
+        let wend = after
+            .find(|c: char| !c.is_ascii_digit())
+            .unwrap_or(after.len());
         let width: usize = after[..wend].parse().ok()?;
         (per_line > 0 && width > 0 && per_line <= 100 && width <= 100)
             .then_some(Self { per_line, width })
     }
 
     /// Split a data line into its fields (fields may touch; a short last line is allowed).
-    pub fn fields<'a>(&self, origin: &str, line: usize, text: &'a str) -> Result<Vec<&'a str>, MotionError> {
+    pub fn fields<'a>(
+        &self,
+        origin: &str,
+        line: usize,
+        text: &'a str,
+    ) -> Result<Vec<&'a str>, MotionError> {
         if !text.is_ascii() {
-            return Err(MotionError::new(origin, Some(line), "non-ASCII character in a fixed-width data line"));
+            return Err(MotionError::new(
+                origin,
+                Some(line),
+                "non-ASCII character in a fixed-width data line",
+            ));
         }
         let text = text.trim_end();
         let mut out = Vec::new();
@@ -157,7 +179,10 @@ impl FixedFormat {
             return Err(MotionError::new(
                 origin,
                 Some(line),
-                format!("more than {} fields of width {} on a data line", self.per_line, self.width),
+                format!(
+                    "more than {} fields of width {} on a data line",
+                    self.per_line, self.width
+                ),
             ));
         }
         Ok(out)
@@ -167,8 +192,18 @@ impl FixedFormat {
 /// Interpret a unit name as written in file headers: `g`, `m/s^2`, `m/s2`, `cm/s^2`,
 /// `cm/sec2`, `cm/s/s`, `gal`. `None` when unknown.
 pub fn parse_units(text: &str) -> Option<Units> {
-    let mut s: String = text.to_ascii_lowercase().chars().filter(|c| !c.is_whitespace()).collect();
-    for (from, to) in [("**2", "2"), ("^2", "2"), ("²", "2"), ("/sec", "/s"), ("/s/s", "/s2")] {
+    let mut s: String = text
+        .to_ascii_lowercase()
+        .chars()
+        .filter(|c| !c.is_whitespace())
+        .collect();
+    for (from, to) in [
+        ("**2", "2"),
+        ("^2", "2"),
+        ("²", "2"),
+        ("/sec", "/s"),
+        ("/s/s", "/s2"),
+    ] {
         s = s.replace(from, to);
     }
     match s.as_str() {
@@ -186,7 +221,10 @@ pub fn unknown_units(origin: &str, line: Option<usize>, text: &str) -> MotionErr
     MotionError::new(
         origin,
         line,
-        format!("unknown units {:?}; expected g, m/s2 or cm/s2 (gal)", text.trim()),
+        format!(
+            "unknown units {:?}; expected g, m/s2 or cm/s2 (gal)",
+            text.trim()
+        ),
     )
 }
 
@@ -195,13 +233,25 @@ impl RawRecord {
     /// (Finite values and the sample count are checked while parsing, where the line is known.)
     pub fn check(&self, origin: &str) -> Result<(), MotionError> {
         if !(self.dt.is_finite() && self.dt > 0.0) {
-            return Err(MotionError::new(origin, None, format!("time step must be > 0 s, got {}", self.dt)));
+            return Err(MotionError::new(
+                origin,
+                None,
+                format!("time step must be > 0 s, got {}", self.dt),
+            ));
         }
         if self.values.is_empty() {
-            return Err(MotionError::new(origin, None, "empty record: no acceleration samples"));
+            return Err(MotionError::new(
+                origin,
+                None,
+                "empty record: no acceleration samples",
+            ));
         }
         if let Some(i) = self.values.iter().position(|v| !v.is_finite()) {
-            return Err(MotionError::new(origin, None, format!("sample {i} is not a finite number")));
+            return Err(MotionError::new(
+                origin,
+                None,
+                format!("sample {i} is not a finite number"),
+            ));
         }
         Ok(())
     }
@@ -209,7 +259,9 @@ impl RawRecord {
 
 /// The lines of a text with 1-based numbers, tolerant of `\r\n`.
 pub fn numbered_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
-    text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
+    text.lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
 }
 
 #[cfg(test)]
@@ -231,16 +283,34 @@ mod tests {
         let v = numbers_in_line("t", 1, "-0.00003-0.00004 1.0E-02-3.0E-02").expect("parses");
         assert_eq!(v, vec![-0.00003, -0.00004, 1.0e-2, -3.0e-2]);
         let e = numbers_in_line("t", 7, "1.0 NaN").expect_err("NaN rejected");
-        assert!(e.to_string().contains("line 7") && e.to_string().contains("non-finite"), "{e}");
+        assert!(
+            e.to_string().contains("line 7") && e.to_string().contains("non-finite"),
+            "{e}"
+        );
     }
 
     #[test]
     fn fixed_width_fields_may_touch() {
-        let f = FixedFormat::find("  12 acceleration pts, units=cm/s^2 (4),Format=(10F8.5)").expect("format");
-        assert_eq!(f, FixedFormat { per_line: 10, width: 8 });
-        let fields = f.fields("t", 1, "-0.00003-0.00004 0.00001").expect("fields");
+        let f = FixedFormat::find("  12 acceleration pts, units=cm/s^2 (4),Format=(10F8.5)")
+            .expect("format");
+        assert_eq!(
+            f,
+            FixedFormat {
+                per_line: 10,
+                width: 8
+            }
+        );
+        let fields = f
+            .fields("t", 1, "-0.00003-0.00004 0.00001")
+            .expect("fields");
         assert_eq!(fields, vec!["-0.00003", "-0.00004", "0.00001"]);
-        assert_eq!(FixedFormat::parse("1p6e13.5"), Some(FixedFormat { per_line: 6, width: 13 }));
+        assert_eq!(
+            FixedFormat::parse("1p6e13.5"),
+            Some(FixedFormat {
+                per_line: 6,
+                width: 13
+            })
+        );
     }
 
     #[test]
