@@ -258,8 +258,8 @@ fn data_units(
         return text::parse_units(name).ok_or_else(|| text::unknown_units(origin, Some(no), name));
     }
     match ints.get(UNITS_CODE_INDEX) {
-        Some(&(c, _)) if c == 4.0 => Ok(Units::CentimetresPerSecond2),
-        Some(&(c, _)) if c == 2.0 => Ok(Units::G),
+        Some(&(4.0, _)) => Ok(Units::CentimetresPerSecond2),
+        Some(&(2.0, _)) => Ok(Units::G),
         Some(&(c, l)) => Err(text::unknown_units(origin, Some(l), &format!("code {c}"))),
         None => Err(MotionError::new(
             origin,
@@ -278,7 +278,7 @@ fn sample_interval(origin: &str, reals: &[(f64, usize)]) -> Result<f64, MotionEr
             format!("the real header has no value {DT_MS_INDEX} (sample interval, ms)"),
         )
     })?;
-    if !(ms > 0.0) {
+    if ms.is_nan() || ms <= 0.0 {
         return Err(MotionError::new(
             origin,
             Some(line),
