@@ -108,11 +108,19 @@ pub fn parse(origin: &str, content: &str) -> Result<RawRecord, MotionError> {
             ));
         }
     }
-    let description = cur
+    let mut description = cur
         .lines
         .get(4)
         .map(|l| l.1.trim().to_string())
         .unwrap_or_default();
+    // Multi-channel files (CESMD free-field .v2) repeat the layout per channel; say which was read.
+    let channels = 1 + cur.lines[cur.at..]
+        .iter()
+        .filter(|(_, l)| l.to_ascii_lowercase().contains("acceleration pts"))
+        .count();
+    if channels > 1 {
+        description.push_str(&format!(" (channel 1 of {channels})"));
+    }
     let format_name = if kind == RecordKind::Processed {
         "cosmos-v2"
     } else {
