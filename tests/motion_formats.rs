@@ -226,3 +226,25 @@ fn caller_units() {
     let e = motion::load_path_with(&fixture("synthetic.v2"), &p).expect_err("conflict");
     assert!(e.to_string().contains("units conflict"), "{e}");
 }
+
+/// A multi-channel COSMOS file (two channels, as CESMD free-field files hold three) reads the
+/// first channel and says so in the provenance.
+#[test]
+fn cosmos_multichannel_reads_first_channel() {
+    let one = std::fs::read_to_string(fixture("synthetic.v2")).expect("fixture");
+    let two = one.replace("0.00000 612.79882", "0.00000 999.00000");
+    let dir = std::env::temp_dir().join(format!("ashlar-motion-multi-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let path = dir.join("two.v2");
+    std::fs::write(&path, format!("{one}{two}")).expect("write");
+    let gm = motion::load_path(&path).expect("two channels");
+    assert!(
+        (sampled(&gm).accel[1] / 0.01 - 612.79882).abs() < 1e-9,
+        "first channel's values"
+    );
+    assert!(
+        gm.provenance.contains("channel 1 of 2"),
+        "{}",
+        gm.provenance
+    );
+}

@@ -108,11 +108,19 @@ pub fn parse(origin: &str, content: &str) -> Result<RawRecord, MotionError> {
             ));
         }
     }
-    let description = cur
+    let mut description = cur
         .lines
         .get(4)
         .map(|l| l.1.trim().to_string())
         .unwrap_or_default();
+    // Multi-channel files (CESMD free-field .v2) repeat the layout per channel; say which was read.
+    let channels = 1 + cur.lines[cur.at..]
+        .iter()
+        .filter(|(_, l)| l.to_ascii_lowercase().contains("acceleration pts"))
+        .count();
+    if channels > 1 {
+        description.push_str(&format!(" (channel 1 of {channels})"));
+    }
     let format_name = if kind == RecordKind::Processed {
         "cosmos-v2"
     } else {
@@ -258,8 +266,8 @@ fn data_units(
         return text::parse_units(name).ok_or_else(|| text::unknown_units(origin, Some(no), name));
     }
     match ints.get(UNITS_CODE_INDEX) {
-        Some(&(c, _)) if c == 4.0 => Ok(Units::CentimetresPerSecond2),
-        Some(&(c, _)) if c == 2.0 => Ok(Units::G),
+        Some(&(4.0, _)) => Ok(Units::CentimetresPerSecond2),
+        Some(&(2.0, _)) => Ok(Units::G),
         Some(&(c, l)) => Err(text::unknown_units(origin, Some(l), &format!("code {c}"))),
         None => Err(MotionError::new(
             origin,
@@ -278,7 +286,7 @@ fn sample_interval(origin: &str, reals: &[(f64, usize)]) -> Result<f64, MotionEr
             format!("the real header has no value {DT_MS_INDEX} (sample interval, ms)"),
         )
     })?;
-    if !(ms > 0.0) {
+    if ms.is_nan() || ms <= 0.0 {
         return Err(MotionError::new(
             origin,
             Some(line),

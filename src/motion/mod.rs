@@ -130,7 +130,7 @@ impl Sampled {
     #[inline]
     fn locate(&self, t: f64) -> Option<(usize, f64)> {
         let n = self.accel.len();
-        if n < 2 || !(t >= 0.0) {
+        if n < 2 || t.is_nan() || t < 0.0 {
             return None;
         }
         let x = t / self.dt;
@@ -157,7 +157,7 @@ impl Sampled {
         if n == 0 {
             return (0.0, 0.0, 0.0);
         }
-        if !(t > 0.0) {
+        if t.is_nan() || t <= 0.0 {
             let a0 = if t == 0.0 { self.accel[0] } else { 0.0 };
             return (a0, self.vel[0], self.disp[0]);
         }

@@ -135,7 +135,7 @@ impl FixedFormat {
             Some(i) => &spec[i + 1..],
             None => spec,
         };
-        let letter = spec.find(|c: char| matches!(c, 'f' | 'e' | 'i' | 'g' | 'd'))?;
+        let letter = spec.find(['f', 'e', 'i', 'g', 'd'])?;
         let per_line = if letter == 0 {
             1
         } else {
