@@ -1,4 +1,6 @@
 //! Command line: a thin layer that parses arguments and calls `analysis` / `service`.
+mod run;
+
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
@@ -11,6 +13,12 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Run a scene under a ground motion; writes summary.json, histories.csv, trajectory.mcap.
+    Run(run::RunArgs),
+    /// Search the PGA threshold at which a damage criterion is met.
+    Pga(run::PgaArgs),
+    /// Print a record's intensity measures as JSON.
+    Motion(crate::motion::command::MotionArgs),
     /// Serve the HTTP API.
     Serve(crate::service::ServeArgs),
 }
@@ -19,6 +27,9 @@ pub enum Command {
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Run(args) => run::run(&args),
+        Command::Pga(args) => run::pga(&args),
+        Command::Motion(args) => crate::motion::command::run(&args),
         Command::Serve(args) => crate::service::serve_cli(args),
     };
     match result {
