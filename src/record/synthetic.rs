@@ -9,7 +9,7 @@ use super::{BlockFrame, BlockMotionState, Frame, FrameBlockKind, GroundFrame, Re
 use std::collections::BTreeMap;
 
 /// |rotation| beyond which a block counts as toppled (FORMAT.md: 30°), rad.
-pub const TOPPLE_ROTATION: f64 = 0.5236;
+pub const TOPPLE_ROTATION: f64 = std::f64::consts::FRAC_PI_6;
 
 /// A rocking square (side `side`, m) on a fixed base, with a sliding block beside it, repeated
 /// `copies` times along x (2 m apart) to make bigger scenes.
@@ -219,8 +219,8 @@ const PI: f64 = std::f64::consts::PI;
 pub fn sin_cos(x: f64) -> (f64, f64) {
     // π/2 split (fdlibm's constants): HI has 33 significant bits, so k · HI is exact for
     // |k| < 2^20 and x − k · HI loses nothing; LO = π/2 − HI to double precision.
-    const HI: f64 = 1.570_796_326_734_125_614_17;
-    const LO: f64 = 6.077_100_506_506_192_249_32e-11;
+    const HI: f64 = 1.570_796_326_734_125_6;
+    const LO: f64 = 6.077_100_506_506_192e-11;
     let k = (x / HI).round();
     let r = (x - k * HI) - k * LO;
     let r2 = r * r;
