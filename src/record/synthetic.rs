@@ -76,16 +76,17 @@ impl RockingSquare {
             block_kinds.extend([FrameBlockKind::Free, FrameBlockKind::Free]);
         }
         let history_blocks = (1..block_ids.len()).collect();
-        // Fixed strings (no crate version): the golden digest must not move with a release.
+        // The keys `analysis::run` writes; fixed values (no crate version) so that the golden
+        // digest does not move with a release.
         let metadata = BTreeMap::from([
             ("scene".to_string(), format!("{self:?}")),
             (
-                "motion".to_string(),
+                "motion_provenance".to_string(),
                 "synthetic: closed-form rocking and sliding".to_string(),
             ),
-            ("scale".to_string(), "1".to_string()),
+            ("motion_scale".to_string(), "1".to_string()),
             ("solver".to_string(), "none (closed form)".to_string()),
-            ("version".to_string(), "synthetic".to_string()),
+            ("code_version".to_string(), "synthetic".to_string()),
         ]);
         RecordHeader {
             block_ids,
