@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Independent check of an ashlar trajectory recording with the `mcap` reader from PyPI.
 
-    pip install "mcap>=1.1,<2"
+    pip install "mcap>=1.6,<2"
     python3 scripts/check_mcap.py trajectory.mcap [--frames N] [--csv histories.csv]
 
 Reads the file twice, with the indexed (seeking) reader and with a linear stream reader that

@@ -9,7 +9,7 @@ use super::{BlockFrame, BlockMotionState, Frame, FrameBlockKind, GroundFrame, Re
 use std::collections::BTreeMap;
 
 /// |rotation| beyond which a block counts as toppled (FORMAT.md: 30°), rad.
-pub const TOPPLE_ROTATION: f64 = 0.5236;
+pub const TOPPLE_ROTATION: f64 = std::f64::consts::FRAC_PI_6;
 
 /// A rocking square (side `side`, m) on a fixed base, with a sliding block beside it, repeated
 /// `copies` times along x (2 m apart) to make bigger scenes.
@@ -76,16 +76,17 @@ impl RockingSquare {
             block_kinds.extend([FrameBlockKind::Free, FrameBlockKind::Free]);
         }
         let history_blocks = (1..block_ids.len()).collect();
-        // Fixed strings (no crate version): the golden digest must not move with a release.
+        // The keys `analysis::run` writes; fixed values (no crate version) so that the golden
+        // digest does not move with a release.
         let metadata = BTreeMap::from([
             ("scene".to_string(), format!("{self:?}")),
             (
-                "motion".to_string(),
+                "motion_provenance".to_string(),
                 "synthetic: closed-form rocking and sliding".to_string(),
             ),
-            ("scale".to_string(), "1".to_string()),
+            ("motion_scale".to_string(), "1".to_string()),
             ("solver".to_string(), "none (closed form)".to_string()),
-            ("version".to_string(), "synthetic".to_string()),
+            ("code_version".to_string(), "synthetic".to_string()),
         ]);
         RecordHeader {
             block_ids,
@@ -219,8 +220,8 @@ const PI: f64 = std::f64::consts::PI;
 pub fn sin_cos(x: f64) -> (f64, f64) {
     // π/2 split (fdlibm's constants): HI has 33 significant bits, so k · HI is exact for
     // |k| < 2^20 and x − k · HI loses nothing; LO = π/2 − HI to double precision.
-    const HI: f64 = 1.570_796_326_734_125_614_17;
-    const LO: f64 = 6.077_100_506_506_192_249_32e-11;
+    const HI: f64 = 1.570_796_326_734_125_6;
+    const LO: f64 = 6.077_100_506_506_192e-11;
     let k = (x / HI).round();
     let r = (x - k * HI) - k * LO;
     let r2 = r * r;
