@@ -25,20 +25,20 @@
 //!    "sliding and toppling"; the dynamic analysis shows it slides only.)
 //! 3. *Pure toppling* about O with O stuck (Yeung's dynamic criterion): at the onset (ω = 0)
 //!    the moment about O gives the clockwise angular acceleration
-//!      θ̈ = m G (h sin ψ − w cos ψ)/(2 I_O) = 3 G sin(ψ − δ)/(2L),
+//!    θ̈ = m G (h sin ψ − w cos ψ)/(2 I_O) = 3 G sin(ψ − δ)/(2L),
 //!    positive iff ψ > δ. The centroid then accelerates θ̈·(h/2, w/2); Newton's law for C gives
 //!    the contact force at O: friction F = m(θ̈ h/2 − G sin ψ) (along x), normal
 //!    N = m(G cos ψ + θ̈ w/2). The corner sticks iff |F| ≤ N tan φ, which with t = tan δ,
 //!    T = tan ψ reads
-//!      tan φ ≥ f(ψ, δ) = [(4t² + 1)T + 3t] / [(t² + 4) + 3tT].
+//!    tan φ ≥ f(ψ, δ) = [(4t² + 1)T + 3t] / [(t² + 4) + 3tT].
 //!    At ψ = δ, f = tan ψ (the static boundary); for ψ > δ, tan δ < f < tan ψ: the block can
 //!    topple without slipping even where ψ > φ, which is Yeung's correction. Hence
 //!    **toppling** iff ψ > δ and tan φ ≥ f(ψ, δ).
 //! 4. Otherwise, ψ > δ and δ ≤ φ < atan f: the corner slips while the block pivots on it
 //!    (**sliding and toppling**). With only O in contact and Coulomb friction μN up-slope, the
 //!    moment about C is N(μh − w)/2 clockwise, positive iff φ > δ, and
-//!      θ̈ = 6 G cos ψ (μh − w) / (L² − 3w(μh − w)),  corner slip acceleration
-//!      a_O = G sin ψ − μ(G cos ψ + θ̈ w/2) − θ̈ h/2,
+//!    θ̈ = 6 G cos ψ (μh − w) / (L² − 3w(μh − w)),  corner slip acceleration
+//!    a_O = G sin ψ − μ(G cos ψ + θ̈ w/2) − θ̈ h/2,
 //!    which vanishes exactly at φ = atan f (checked by a test below: the two derivations meet).
 //!
 //! # Classifying the simulation's first motion
@@ -170,11 +170,19 @@ fn cases(per_mode: usize) -> Vec<Case> {
         if psi > 70.0 {
             continue;
         }
-        let Some(mode) = robust_mode(psi.to_radians(), delta.to_radians(), phi.to_radians()) else { continue };
+        let Some(mode) = robust_mode(psi.to_radians(), delta.to_radians(), phi.to_radians()) else {
+            continue;
+        };
         let slot = mode as usize;
         if count[slot] < per_mode {
             count[slot] += 1;
-            out.push(Case { alpha, k, delta, phi, expected: mode });
+            out.push(Case {
+                alpha,
+                k,
+                delta,
+                phi,
+                expected: mode,
+            });
         }
     }
     out
@@ -194,7 +202,11 @@ fn simulate(case: &Case) -> (Mode, f64, f64, f64) {
         { "id": "block", "material": "stone", "block_model": "rigid",
           "vertices": [p(0.0, 0.0), p(w, 0.0), p(w, h), p(0.0, h)] },
     ]);
-    let scene = parse(&scene_json(blocks, case.phi, json!({ "time_step": 1e-3, "duration": T_MAX })));
+    let scene = parse(&scene_json(
+        blocks,
+        case.phi,
+        json!({ "time_step": 1e-3, "duration": T_MAX }),
+    ));
     // Constant horizontal ground acceleration −k·g for longer than the run (1 s).
     let motion = if case.k == 0.0 {
         GroundMotion::none()
@@ -232,10 +244,16 @@ fn reference_chart_derivations_agree_at_their_boundaries() {
             let (psi, delta) = (f64::to_radians(psi_deg), f64::to_radians(delta_deg));
             let phi_y = yeung_f(psi, delta).atan();
             let (a_o, _) = sliding_toppling_onset(psi, delta, phi_y, G);
-            assert!(a_o.abs() < 1e-9 * G, "ψ={psi_deg} δ={delta_deg}: a_O = {a_o} at Yeung's boundary");
+            assert!(
+                a_o.abs() < 1e-9 * G,
+                "ψ={psi_deg} δ={delta_deg}: a_O = {a_o} at Yeung's boundary"
+            );
             let (_, l_theta) = sliding_toppling_onset(psi, delta, delta, G);
             assert!(l_theta.abs() < 1e-9 * G, "rotation at φ = δ: {l_theta}");
-            assert!(phi_y > delta && phi_y < psi, "Yeung's boundary lies between δ and ψ");
+            assert!(
+                phi_y > delta && phi_y < psi,
+                "Yeung's boundary lies between δ and ψ"
+            );
         }
         let t = f64::to_radians(psi_deg);
         assert!((yeung_f(t, t) - t.tan()).abs() < 1e-12);
@@ -249,11 +267,22 @@ fn first_motion_matches_the_chart_in_every_case() {
     let mut wrong = Vec::new();
     let mut static_chart_differs = 0;
     for c in &cases {
-        let (psi, delta, phi) = (c.psi().to_radians(), c.delta.to_radians(), c.phi.to_radians());
+        let (psi, delta, phi) = (
+            c.psi().to_radians(),
+            c.delta.to_radians(),
+            c.phi.to_radians(),
+        );
         if c.expected == Mode::SlidingToppling {
-            let (a_o, l_theta) = sliding_toppling_onset(psi, delta, phi, G * (1.0 + c.k * c.k).sqrt());
-            assert!(a_o > 0.0 && l_theta > 0.0, "{c:?}: inconsistent onset {a_o} {l_theta}");
-            assert!(a_o.min(l_theta) / a_o.max(l_theta) > 0.3, "{c:?}: one component too weak for the classifier");
+            let (a_o, l_theta) =
+                sliding_toppling_onset(psi, delta, phi, G * (1.0 + c.k * c.k).sqrt());
+            assert!(
+                a_o > 0.0 && l_theta > 0.0,
+                "{c:?}: inconsistent onset {a_o} {l_theta}"
+            );
+            assert!(
+                a_o.min(l_theta) / a_o.max(l_theta) > 0.3,
+                "{c:?}: one component too weak for the classifier"
+            );
         }
         // For the record: how many cases the classic static chart (ψ vs φ, ψ vs δ) gets wrong.
         let classic = match (psi > phi, psi > delta) {
@@ -289,5 +318,9 @@ fn first_motion_matches_the_chart_in_every_case() {
         cases.len() - wrong.len(),
         wrong.len()
     );
-    assert!(wrong.is_empty(), "first motion disagrees with the chart:\n{}", wrong.join("\n"));
+    assert!(
+        wrong.is_empty(),
+        "first motion disagrees with the chart:\n{}",
+        wrong.join("\n")
+    );
 }
