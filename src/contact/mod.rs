@@ -105,6 +105,8 @@ pub struct Contact {
     /// For sliding contacts: elastic shear displacement kept in the shear spring (m), so that
     /// re-sticking starts from the Coulomb force rather than from zero.
     pub slide_offset: f64,
+    /// State changes within the current open–close loop (cycle detection).
+    pub flips: u32,
 }
 
 /// All contacts of the scene, carried from step to step.
@@ -210,6 +212,7 @@ fn new_contact(cand: &Candidate) -> Contact {
         gap: cand.gap,
         slip: 0.0,
         slide_offset: 0.0,
+        flips: 0,
     }
 }
 

@@ -191,7 +191,9 @@ impl Simulation {
             let Some(bad_contact) = trouble else { break };
             cuts += 1;
             self.stats.time_step_cuts += 1;
-            if cuts > self.params.max_cuts {
+            // Cutting below min_dt means the step cannot be resolved: fail with a diagnostic
+            // instead of creeping forward at a vanishing step.
+            if cuts > self.params.max_cuts || dt * self.params.cut_factor < self.params.min_dt {
                 return Err(self.not_converged(cuts, dt, bad_contact));
             }
             dt *= self.params.cut_factor;

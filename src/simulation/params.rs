@@ -22,7 +22,8 @@ pub struct SimParams {
     /// Largest growth of a penetration within one step, as a fraction of the largest step
     /// displacement (Shi's g2 · half size): 0.3 keeps blocks from passing vertices through edges.
     pub penetration_ratio: f64,
-    /// Below this Δt (s) penetration no longer triggers cuts; it is reported instead.
+    /// Smallest Δt (s) a cut may reach: below it the step fails with a typed diagnostic (a
+    /// run crawling at nanosecond steps is a hang, not an answer).
     pub min_dt: f64,
 }
 
