@@ -12,6 +12,10 @@ pub struct SpringParams {
     pub normal: f64,
     /// Shear penalty stiffness, N/m.
     pub shear: f64,
+    /// Gap hysteresis, m: a closed contact opens only beyond +tol, an open one closes only
+    /// below −tol, so joints at a round-off gap (blocks side by side) do not flip each
+    /// iteration.
+    pub gap_tolerance: f64,
 }
 
 /// Friction data of a contact's joint.

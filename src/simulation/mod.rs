@@ -134,8 +134,13 @@ impl Simulation {
             hi = hi.sup(&b);
         }
         let model_half_size = 0.5 * (hi - lo).norm();
+        let smallest_free_block = dofs.block_of.iter().map(|&b| geoms[b].half_size).fold(f64::INFINITY, f64::min);
         let penalty = resolve_penalty(scene);
-        let springs = SpringParams { normal: penalty, shear: penalty * params.shear_ratio };
+        let springs = SpringParams {
+            normal: penalty,
+            shear: penalty * params.shear_ratio,
+            gap_tolerance: params.gap_tolerance_ratio * smallest_free_block,
+        };
         let dt = scene.control.time_step;
         Self {
             scene: scene.clone(),

@@ -25,6 +25,10 @@ pub struct SimParams {
     /// Smallest Δt (s) a cut may reach: below it the step fails with a typed diagnostic (a
     /// run crawling at nanosecond steps is a hang, not an answer).
     pub min_dt: f64,
+    /// Length tolerance of the open–close tests (gap hysteresis, slip onset) as a fraction of
+    /// the smallest free block's half size: 1e-10 is far above round-off in coordinates
+    /// (~1e-16 of the model size) and far below any gap or slip a user could observe.
+    pub gap_tolerance_ratio: f64,
 }
 
 impl Default for SimParams {
@@ -39,6 +43,7 @@ impl Default for SimParams {
             growth: 1.1,
             penetration_ratio: 0.3,
             min_dt: 1e-9,
+            gap_tolerance_ratio: 1e-10,
         }
     }
 }

@@ -119,7 +119,8 @@ fn update_state(
     // A bonded joint holds tension up to its tensile strength.
     let tension_allowance = if c.bonded { law.tensile_strength * c.length / springs.normal } else { 0.0 };
     let old = c.state;
-    let new = if g > tension_allowance {
+    let opening_gap = if old.is_closed() { tension_allowance + springs.gap_tolerance } else { -springs.gap_tolerance };
+    let new = if g > opening_gap {
         c.normal_force = 0.0;
         c.shear_force = 0.0;
         ContactState::Open
@@ -135,7 +136,10 @@ fn update_state(
             ContactState::Locked => {
                 let f = -springs.shear * s;
                 c.shear_force = f;
-                if f.abs() > limit * (1.0 + h) + f64::MIN_POSITIVE {
+                // Slip needs the shear displacement to exceed the elastic limit by more than
+                // the length tolerance too: joints with no normal load (limit ≈ 0) would
+                // otherwise slip on round-off shear.
+                if f.abs() > limit * (1.0 + h) + springs.shear * springs.gap_tolerance {
                     ContactState::Sliding { dir: s.signum() }
                 } else {
                     ContactState::Locked
@@ -150,7 +154,7 @@ fn update_state(
                 } else if limit <= 0.0 {
                     // No friction: the slip direction is irrelevant and must not count as a change.
                     ContactState::Sliding { dir: if c.slip != 0.0 { c.slip.signum() } else { dir } }
-                } else if c.slip * dir < -h * limit / springs.shear {
+                } else if c.slip * dir < -(h * limit / springs.shear + springs.gap_tolerance) {
                     ContactState::Locked
                 } else {
                     ContactState::Sliding { dir }
@@ -168,7 +172,7 @@ fn update_state(
     let mut friction_moved = false;
     if let ContactState::Sliding { .. } = new {
         let n = c.normal_force.max(0.0);
-        friction_moved = matches!(old, ContactState::Sliding { .. }) && (n - c.friction_normal).abs() > friction_tol * n.max(c.friction_normal) + 1e-9;
+        friction_moved = matches!(old, ContactState::Sliding { .. }) && (n - c.friction_normal).abs() > friction_tol * (n.max(c.friction_normal) + springs.normal * springs.gap_tolerance);
         // The friction force depends on the normal force it helps to determine (a pivoting,
         // sliding corner): plain fixed-point iteration can oscillate, so after the first
         // iterations the update is relaxed by half, which converges for slopes in (−3, 1).
