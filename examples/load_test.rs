@@ -311,7 +311,7 @@ fn main() -> Result<(), String> {
         std::fs::remove_dir_all(data).ok();
     }
     let p99 = percentile(&busy, 99.0);
-    if !lost.is_empty() || ids.len() != o.jobs || busy.is_empty() || !(p99 < 50.0) {
+    if !lost.is_empty() || ids.len() != o.jobs || busy.is_empty() || p99.is_nan() || p99 >= 50.0 {
         return Err(format!(
             "FAILED: {} lost, {} of {} accepted, healthz p99 {p99:.2} ms over {} busy samples (target < 50 ms)",
             lost.len(),

@@ -31,7 +31,7 @@ fn spec_operations(yaml: &str) -> BTreeSet<(String, String)> {
                 continue;
             }
             if let Some(m) = rest.strip_prefix("  ") {
-                let key = m.trim_end().trim_end_matches(':');
+                let key = m.split(':').next().unwrap_or("").trim();
                 if !m.starts_with(' ')
                     && [
                         "get", "put", "post", "delete", "patch", "head", "options", "trace",

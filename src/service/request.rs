@@ -270,7 +270,7 @@ fn scene_and_motion(
         }
     };
     let frames = (duration / scene.control.output_interval).ceil();
-    if !(frames <= limits.max_total_steps as f64) {
+    if frames.is_nan() || frames > limits.max_total_steps as f64 {
         return Err(ApiError::limit_exceeded(
             "/scene/control/output_interval",
             format!(
@@ -281,7 +281,7 @@ fn scene_and_motion(
         ));
     }
     let steps = (duration / scene.control.time_step).ceil();
-    if !(steps <= limits.max_total_steps as f64) {
+    if steps.is_nan() || steps > limits.max_total_steps as f64 {
         return Err(ApiError::limit_exceeded(
             "/scene/control/duration",
             format!(
@@ -517,8 +517,7 @@ mod tests {
         };
         // 1 s at 1 ms = 1000 steps > 999.
         let e = parse_run(&json!({"scene": scene()}), &l)
-            .err()
-            .expect("over the step limit");
+            .expect_err("over the step limit");
         assert_eq!(e.kind, "limit-exceeded");
         assert_eq!(e.pointer.as_deref(), Some("/scene/control/duration"));
         assert!(parse_run(

@@ -539,12 +539,13 @@ mod tests {
         let (s, dir) = temp_store();
         let a = job(JobKind::Run);
         s.insert(&a).expect("insert");
+        // max_attempts = 3: the first two crashes requeue, the third fails the job.
         for _ in 0..2 {
             s.claim().expect("claim").expect("job");
-            assert_eq!(s.recover(2).expect("recover"), (1, 0));
+            assert_eq!(s.recover(3).expect("recover"), (1, 0));
         }
         s.claim().expect("claim").expect("job");
-        assert_eq!(s.recover(2).expect("recover"), (0, 1));
+        assert_eq!(s.recover(3).expect("recover"), (0, 1));
         let r = s.get(a.id).expect("get").expect("exists");
         assert_eq!(r.status, JobStatus::Failed);
         assert!(r.error.unwrap_or_default().contains("3 times"));

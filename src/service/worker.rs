@@ -262,10 +262,15 @@ impl Pool {
         let mut handles = Vec::new();
         for k in 0..core.params.workers {
             let c = core.clone();
+            // Counted before the thread starts, so /healthz never sees a pool still spinning up.
+            core.workers_alive.fetch_add(1, Ordering::SeqCst);
             let h = std::thread::Builder::new()
                 .name(format!("ashlar-worker-{k}"))
                 .spawn(move || worker_loop(&c))
-                .map_err(|e| format!("starting worker thread: {e}"))?;
+                .map_err(|e| {
+                    core.workers_alive.fetch_sub(1, Ordering::SeqCst);
+                    format!("starting worker thread: {e}")
+                })?;
             handles.push(h);
         }
         Ok(Self { core, handles })
@@ -299,7 +304,6 @@ impl Pool {
 }
 
 fn worker_loop(core: &Core) {
-    core.workers_alive.fetch_add(1, Ordering::SeqCst);
     while !core.shutting_down.load(Ordering::SeqCst) {
         match core.store.claim() {
             Ok(Some(job)) => {
