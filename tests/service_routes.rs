@@ -317,6 +317,11 @@ async fn bad_requests_get_problems_naming_the_field() {
             "/motion/wobble",
         ),
         (
+            json!({"scene": scene, "motion": {"horizontal": {"sine": {"amplitude": 1, "frequency": 1}},
+                   "scale": {"target_pga": 1.0, "units": null}}}),
+            "/motion/scale/units",
+        ),
+        (
             {
                 let mut s = scene.clone();
                 s["control"] = json!({});

@@ -193,6 +193,12 @@ fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), ApiError> {
             ));
         }
     }
+    if let Some(scale) = motion.and_then(|m| m.get("scale")).and_then(Value::as_object) {
+        if let Some((k, _)) = scale.iter().find(|(_, v)| v.is_null()) {
+            let p = format!("/motion/scale/{k}");
+            return Err(ApiError::invalid_field(p.clone(), format!("{p}: must not be null (leave it out instead)")));
+        }
+    }
     for name in ["horizontal", "vertical"] {
         let Some(c) = motion.and_then(|m| m.get(name)).and_then(Value::as_object) else {
             continue;

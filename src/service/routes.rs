@@ -275,8 +275,8 @@ async fn submit_pga(
     submit(s, headers, body, JobKind::PgaSearch).await
 }
 
-fn job_json(j: &JobRecord) -> Value {
-    let mut v = json!({
+fn job_json(j: &JobRecord) -> String {
+    let v = json!({
         "id": j.id,
         "kind": j.kind,
         "status": j.status,
@@ -290,23 +290,36 @@ fn job_json(j: &JobRecord) -> Value {
         "error": j.error,
         "links": links(j.kind, j.id),
     });
-    let key = if j.kind == JobKind::Run {
-        "summary"
-    } else {
-        "result"
-    };
-    v[key] = j.result.clone().unwrap_or(Value::Null);
-    v
+    let key = if j.kind == JobKind::Run { "summary" } else { "result" };
+    with_raw_field(&v, key, j.result.as_deref())
+}
+
+/// Serialise `obj` with one more member whose value is JSON text spliced in verbatim (the
+/// stored summary, so its numbers reach the client exactly as the runner produced them).
+fn with_raw_field(obj: &Value, key: &str, raw: Option<&str>) -> String {
+    let text = obj.to_string();
+    let raw = raw.filter(|r| serde_json::from_str::<serde::de::IgnoredAny>(r).is_ok()).unwrap_or("null");
+    match text.strip_suffix('}') {
+        Some(head) if head.len() > 1 => format!("{head},{}:{raw}}}", Value::from(key)),
+        Some(_) => format!("{{{}:{raw}}}", Value::from(key)),
+        None => text,
+    }
+}
+
+fn json_response(status: StatusCode, body: String) -> Response {
+    let mut r = (status, body).into_response();
+    r.headers_mut().insert(header::CONTENT_TYPE, HeaderValue::from_static("application/json"));
+    r
 }
 
 async fn get_job(State(s): State<AppState>, id: Result<Path<String>, PathRejection>) -> ApiResult {
     let j = load(&s, parse_id(id)?, JobKind::Run).await?;
-    Ok(axum::Json(job_json(&j)).into_response())
+    Ok(json_response(StatusCode::OK, job_json(&j)))
 }
 
 async fn get_pga(State(s): State<AppState>, id: Result<Path<String>, PathRejection>) -> ApiResult {
     let j = load(&s, parse_id(id)?, JobKind::PgaSearch).await?;
-    Ok(axum::Json(job_json(&j)).into_response())
+    Ok(json_response(StatusCode::OK, job_json(&j)))
 }
 
 async fn cancel(s: AppState, id: Result<Path<String>, PathRejection>, kind: JobKind) -> ApiResult {
@@ -342,7 +355,7 @@ async fn cancel(s: AppState, id: Result<Path<String>, PathRejection>, kind: JobK
         }
     };
     let j = load(&s, id, kind).await?;
-    Ok((status, axum::Json(job_json(&j))).into_response())
+    Ok(json_response(status, job_json(&j)))
 }
 
 async fn cancel_job(
@@ -635,6 +648,15 @@ async fn openapi() -> Response {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn raw_fields_are_spliced_verbatim() {
+        let obj = json!({"id": 1});
+        assert_eq!(with_raw_field(&obj, "summary", Some("{\"x\":0.41000000000000003}")), r#"{"id":1,"summary":{"x":0.41000000000000003}}"#);
+        assert_eq!(with_raw_field(&obj, "summary", None), r#"{"id":1,"summary":null}"#);
+        assert_eq!(with_raw_field(&obj, "summary", Some("{broken")), r#"{"id":1,"summary":null}"#);
+        assert_eq!(with_raw_field(&json!({}), "k", Some("[1]")), r#"{"k":[1]}"#);
+    }
 
     #[test]
     fn byte_ranges() {

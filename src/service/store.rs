@@ -95,8 +95,10 @@ pub struct JobRecord {
     pub motion: serde_json::Value,
     /// Simulated time / duration, 0..1.
     pub progress: f64,
-    /// `summary.json` of a run or `result.json` of a PGA search, once done.
-    pub result: Option<serde_json::Value>,
+    /// `summary.json` of a run or `result.json` of a PGA search, once done, as the JSON text
+    /// the runner's value serialised to. Kept as text and served verbatim: re-parsing it with
+    /// serde_json's default float parser could move a number by one ULP.
+    pub result: Option<String>,
     /// Why the job failed (a message for the user; internals are logged, not stored here).
     pub error: Option<String>,
     pub cancel_requested: bool,
@@ -316,7 +318,7 @@ fn row_to_record(row: &rusqlite::Row<'_>) -> rusqlite::Result<Result<JobRecord, 
             request: json_col(Some(request), "request")?.unwrap_or_default(),
             motion: json_col(Some(motion), "motion")?.unwrap_or_default(),
             progress,
-            result: json_col(result, "result")?,
+            result,
             error,
             cancel_requested: cancel != 0,
             attempts: u32::try_from(attempts).unwrap_or(u32::MAX),
@@ -615,7 +617,7 @@ mod tests {
         let r = s.get(a.id).expect("get").expect("job");
         assert_eq!(r.status, JobStatus::Succeeded);
         assert_eq!(r.progress, 1.0);
-        assert_eq!(r.result, Some(serde_json::json!({"ok": true})));
+        assert_eq!(r.result.as_deref(), Some(r#"{"ok":true}"#));
         assert!(r.finished_ms.is_some());
         std::fs::remove_dir_all(dir).ok();
     }
