@@ -5,8 +5,14 @@
 //! `motion` feeds assembly, `record` and `analysis` sit on top of `simulation`,
 //! `service` drives `analysis`, and `cli` (behind `main.rs`) is thin.
 pub mod analysis;
+pub mod assembly;
 pub mod cli;
+pub mod contact;
+pub mod geometry;
+pub mod integrate;
 pub mod motion;
 pub mod record;
 pub mod scene;
 pub mod service;
+pub mod simulation;
+pub mod solve;

@@ -1,9 +1,16 @@
-//! One run of a scene under a ground motion, with outputs written to a directory.
+//! One run of a scene under a ground motion: drives the simulation to the end, records frames
+//! (histories, trajectory), classifies the outcome and writes `summary.json` (FORMAT.md §3).
+use crate::contact::{ContactState, Mobility};
 use crate::motion::GroundMotion;
-use crate::scene::Scene;
+use crate::record::histories::HistoryWriter;
+use crate::record::mcap::{McapParams, McapRecorder};
+use crate::record::{BlockFrame, BlockMotionState, Frame, FrameBlockKind, GroundFrame, RecordHeader};
+use crate::scene::{ModelChoice, Scene};
+use crate::simulation::{SimParams, Simulation};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
 
 /// Per-block results (FORMAT.md §3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -19,7 +26,7 @@ pub struct BlockSummary {
     pub final_rotation: f64,
     /// |final rotation| > 30°.
     pub toppled: bool,
-    /// m, path length of sliding along contacts.
+    /// m, accumulated slip of the block's sliding contacts.
     pub sliding_distance: f64,
 }
 
@@ -29,7 +36,7 @@ pub struct Diagnostics {
     /// N/m, the value used (resolved when "auto").
     pub penalty_stiffness: f64,
     pub time_step_cuts: u64,
-    /// m, deepest penetration seen.
+    /// m, deepest penetration seen after a converged step.
     pub max_penetration: f64,
     pub open_close_iterations_mean: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -59,7 +66,7 @@ pub struct Summary {
     pub control: serde_json::Value,
 }
 
-/// Hooks a caller (CLI, service worker) passes to a run.
+/// Hooks a caller (CLI, service worker, PGA search) passes to a run.
 #[derive(Default)]
 pub struct RunOptions<'a> {
     /// Where `summary.json`, `histories.csv` and `trajectory.mcap` go; `None` writes nothing.
@@ -72,6 +79,11 @@ pub struct RunOptions<'a> {
     pub history_blocks: Option<Vec<String>>,
     /// Skip writing `trajectory.mcap`.
     pub no_trajectory: bool,
+    /// Stop early once this returns true for the running summary (PGA search: the criterion
+    /// is decided). The summary then has `stopped_reason: "decided"`.
+    pub stop_when: Option<&'a (dyn Fn(&Tracker) -> bool + Sync)>,
+    /// Engine knobs (defaults when `None`).
+    pub sim_params: Option<SimParams>,
 }
 
 /// How a run can fail (the message names where).
@@ -92,8 +104,349 @@ pub struct RunOutcome {
     pub cancelled: bool,
 }
 
-/// Run `scene` under `motion`. Provisional until the engine lands: fails with a clear error.
+/// Thresholds of the outcome classification. Each default says why.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FailureParams {
+    /// |rotation| beyond which a block has toppled: FORMAT.md fixes 30°.
+    pub toppled_rotation: f64,
+    /// Sliding distance (m) that counts as sliding: 1 mm is above the contact springs'
+    /// elastic slip and below any displacement an archaeologist would record.
+    pub sliding_distance: f64,
+    /// Fraction of free blocks that must topple or slide for "collapse".
+    pub collapse_fraction: f64,
+    /// Angular speed (rad/s) above which a block is drawn as rocking.
+    pub rocking_speed: f64,
+}
+
+impl Default for FailureParams {
+    fn default() -> Self {
+        Self { toppled_rotation: 30f64.to_radians(), sliding_distance: 1e-3, collapse_fraction: 0.5, rocking_speed: 1e-2 }
+    }
+}
+
+/// Running per-block extremes, updated after every step.
+#[derive(Debug, Clone, Default)]
+pub struct Tracker {
+    /// Scene indices of the free blocks, in scene order.
+    pub free: Vec<usize>,
+    pub max_displacement: Vec<f64>,
+    pub max_rotation: Vec<f64>,
+    pub sliding_distance: Vec<f64>,
+    pub final_displacement: Vec<[f64; 2]>,
+    pub final_rotation: Vec<f64>,
+    pub ids: Vec<String>,
+}
+
+impl Tracker {
+    fn new(sim: &Simulation) -> Self {
+        let free: Vec<usize> = (0..sim.geoms.len()).filter(|&b| sim.mobility[b] == Mobility::Free).collect();
+        let n = free.len();
+        Self {
+            ids: free.iter().map(|&b| sim.scene.blocks[b].id.clone()).collect(),
+            free,
+            max_displacement: vec![0.0; n],
+            max_rotation: vec![0.0; n],
+            sliding_distance: vec![0.0; n],
+            final_displacement: vec![[0.0; 2]; n],
+            final_rotation: vec![0.0; n],
+        }
+    }
+
+    fn update(&mut self, sim: &Simulation) {
+        for (k, &b) in self.free.iter().enumerate() {
+            let g = &sim.geoms[b];
+            let d = g.centroid - g.initial_centroid;
+            self.final_displacement[k] = [d.x, d.y];
+            self.final_rotation[k] = g.rotation;
+            self.max_displacement[k] = self.max_displacement[k].max(d.norm());
+            self.max_rotation[k] = self.max_rotation[k].max(g.rotation.abs());
+        }
+        // Slip of sliding contacts, charged to the block(s) that carry unknowns; the largest
+        // slip of a block's contacts in the step (contacts of one face slide together).
+        let mut step_slip = vec![0.0f64; sim.geoms.len()];
+        for c in &sim.contacts.contacts {
+            if let ContactState::Sliding { .. } = c.state {
+                let s = c.slip.abs();
+                step_slip[c.vertex_block] = step_slip[c.vertex_block].max(s);
+                step_slip[c.edge_block] = step_slip[c.edge_block].max(s);
+            }
+        }
+        for (k, &b) in self.free.iter().enumerate() {
+            self.sliding_distance[k] += step_slip[b];
+        }
+    }
+
+    /// Index among free blocks of a block id.
+    pub fn index_of(&self, id: &str) -> Option<usize> {
+        self.ids.iter().position(|i| i == id)
+    }
+}
+
+/// Resolve the run's duration (s).
+pub fn duration(scene: &Scene, motion: &GroundMotion) -> Result<f64, RunError> {
+    match (scene.control.duration, motion.duration()) {
+        (Some(d), _) => Ok(d),
+        (None, Some(r)) => Ok(r + 2.0),
+        (None, None) => Err(RunError::Invalid("control.duration: required when the ground motion has no record length".into())),
+    }
+}
+
+/// Which model runs, and why.
+fn choose_model(scene: &Scene) -> Result<(String, String), RunError> {
+    match scene.control.model {
+        ModelChoice::Dda => Ok(("dda".into(), "control.model is \"dda\": the full DDA engine".into())),
+        ModelChoice::Auto => Ok((
+            "dda".into(),
+            "control.model is \"auto\": no reduced model is available in this version, so the full DDA engine ran".into(),
+        )),
+        ModelChoice::Rocking | ModelChoice::Sliding => Err(RunError::Invalid(
+            "control.model: the reduced \"rocking\" and \"sliding\" models are not available in this version; use \"dda\" or \"auto\"".into(),
+        )),
+    }
+}
+
+struct Writers {
+    histories: Option<HistoryWriter<std::io::BufWriter<std::fs::File>>>,
+    mcap: Option<McapRecorder>,
+}
+
+impl Writers {
+    fn open(out: Option<&Path>, header: &RecordHeader, no_trajectory: bool) -> Result<Self, RunError> {
+        let Some(dir) = out else { return Ok(Self { histories: None, mcap: None }) };
+        std::fs::create_dir_all(dir).map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
+        let histories = Some(HistoryWriter::create(&dir.join("histories.csv"), header).map_err(|e| RunError::Io(e.to_string()))?);
+        let mcap = if no_trajectory {
+            None
+        } else {
+            Some(McapRecorder::create(&dir.join("trajectory.mcap"), header, &McapParams::default()).map_err(|e| RunError::Io(e.to_string()))?)
+        };
+        Ok(Self { histories, mcap })
+    }
+
+    fn write(&mut self, frame: &Frame) -> Result<(), RunError> {
+        if let Some(h) = &mut self.histories {
+            h.write_frame(frame).map_err(|e| RunError::Io(e.to_string()))?;
+        }
+        if let Some(m) = &mut self.mcap {
+            m.write_frame(frame).map_err(|e| RunError::Io(e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    fn finish(self) -> Result<(), RunError> {
+        if let Some(h) = self.histories {
+            h.finish().map_err(|e| RunError::Io(e.to_string()))?;
+        }
+        if let Some(m) = self.mcap {
+            m.finish().map_err(|e| RunError::Io(e.to_string()))?;
+        }
+        Ok(())
+    }
+}
+
+/// Run `scene` under `motion`.
 pub fn run(scene: &Scene, motion: &GroundMotion, opts: &RunOptions) -> Result<RunOutcome, RunError> {
-    let _ = (scene, motion, opts);
-    Err(RunError::Simulation("the engine is not wired yet".into()))
+    let wall = Instant::now();
+    let (model, model_reason) = choose_model(scene)?;
+    let duration = duration(scene, motion)?;
+    let params = opts.sim_params.unwrap_or_default();
+    let failure = FailureParams::default();
+    let mut sim = Simulation::new(scene, motion, params);
+    let header = header(&sim, motion, opts)?;
+    let mut writers = Writers::open(opts.out_dir, &header, opts.no_trajectory)?;
+    let mut tracker = Tracker::new(&sim);
+    let interval = scene.control.output_interval;
+    let mut frame_index: u64 = 0;
+    writers.write(&frame(&sim, &failure))?;
+    let mut stopped_reason = None;
+    let mut cancelled = false;
+    let mut failure_msg = None;
+    while sim.time < duration - 1e-12 {
+        if opts.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            cancelled = true;
+            stopped_reason = Some("cancelled".to_string());
+            break;
+        }
+        if sim.stats.steps >= scene.control.max_steps {
+            stopped_reason = Some(format!("step budget of {} steps reached (control.max_steps)", scene.control.max_steps));
+            break;
+        }
+        let next_frame = ((frame_index + 1) as f64 * interval).min(duration);
+        if let Err(e) = sim.step(next_frame - sim.time) {
+            failure_msg = Some(e.to_string());
+            break;
+        }
+        if let Some(b) = sim.first_non_finite_block() {
+            failure_msg = Some(format!("non-finite state at t = {:.6} s in block {:?}; reduce the time step or the penalty stiffness", sim.time, scene.blocks[b].id));
+            break;
+        }
+        tracker.update(&sim);
+        if sim.time >= next_frame - 1e-9 * interval {
+            frame_index += 1;
+            writers.write(&frame(&sim, &failure))?;
+            if let Some(p) = opts.progress {
+                p((sim.time / duration).min(1.0));
+            }
+        }
+        if opts.stop_when.is_some_and(|f| f(&tracker)) {
+            stopped_reason = Some("decided".to_string());
+            break;
+        }
+    }
+    writers.finish()?;
+    if let Some(msg) = failure_msg {
+        return Err(RunError::Simulation(msg));
+    }
+    let summary = summarize(&sim, &tracker, motion, &failure, wall.elapsed().as_secs_f64(), stopped_reason, model, model_reason, duration);
+    if let Some(dir) = opts.out_dir {
+        let text = serde_json::to_string_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;
+        std::fs::write(dir.join("summary.json"), text + "\n").map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
+    }
+    Ok(RunOutcome { summary, cancelled })
+}
+
+fn header(sim: &Simulation, motion: &GroundMotion, opts: &RunOptions) -> Result<RecordHeader, RunError> {
+    let scene = &sim.scene;
+    let history_blocks = match &opts.history_blocks {
+        None => (0..scene.blocks.len()).filter(|&b| sim.mobility[b] == Mobility::Free).collect(),
+        Some(ids) => ids
+            .iter()
+            .map(|id| {
+                scene
+                    .block_index(id)
+                    .filter(|&b| sim.mobility[b] == Mobility::Free)
+                    .ok_or_else(|| RunError::Invalid(format!("history block {id:?}: no free block with that id")))
+            })
+            .collect::<Result<Vec<_>, _>>()?,
+    };
+    let mut metadata = std::collections::BTreeMap::new();
+    metadata.insert("scene".into(), serde_json::to_string(&scene.spec).unwrap_or_default());
+    metadata.insert("motion_provenance".into(), motion.provenance.clone());
+    metadata.insert("motion_scale".into(), format!("{}", motion.scale));
+    metadata.insert("pga_m_s2".into(), format!("{}", motion.pga()));
+    metadata.insert("solver".into(), serde_json::to_string(&scene.control).unwrap_or_default());
+    metadata.insert("penalty_stiffness".into(), format!("{}", sim.springs.normal));
+    metadata.insert("code_version".into(), env!("CARGO_PKG_VERSION").into());
+    Ok(RecordHeader {
+        block_ids: scene.blocks.iter().map(|b| b.id.clone()).collect(),
+        block_kinds: sim
+            .mobility
+            .iter()
+            .map(|m| match m {
+                Mobility::Fixed => FrameBlockKind::Fixed,
+                Mobility::Driven => FrameBlockKind::Driven,
+                Mobility::Free => FrameBlockKind::Free,
+            })
+            .collect(),
+        history_blocks,
+        metadata,
+    })
+}
+
+fn frame(sim: &Simulation, failure: &FailureParams) -> Frame {
+    let mut sliding = vec![false; sim.geoms.len()];
+    for c in &sim.contacts.contacts {
+        if let ContactState::Sliding { .. } = c.state {
+            sliding[c.vertex_block] = true;
+            sliding[c.edge_block] = true;
+        }
+    }
+    let blocks = sim
+        .geoms
+        .iter()
+        .enumerate()
+        .map(|(b, g)| {
+            let d = g.centroid - g.initial_centroid;
+            let v = sim.block_velocity(b);
+            let state = if sim.mobility[b] != Mobility::Free {
+                BlockMotionState::AtRest
+            } else if g.rotation.abs() > failure.toppled_rotation {
+                BlockMotionState::Toppled
+            } else if v[2].abs() > failure.rocking_speed {
+                BlockMotionState::Rocking
+            } else if sliding[b] {
+                BlockMotionState::Sliding
+            } else {
+                BlockMotionState::AtRest
+            };
+            BlockFrame {
+                x: d.x,
+                y: d.y,
+                rotation: g.rotation,
+                vx: v[0],
+                vy: v[1],
+                angular_velocity: v[2],
+                state,
+                outline: g.vertices.iter().map(|p| [p.x, p.y]).collect(),
+            }
+        })
+        .collect();
+    let gs = sim.motion.state(sim.time);
+    Frame { time: sim.time, blocks, ground: GroundFrame { acceleration: gs[0], velocity: gs[1], displacement: gs[2] } }
+}
+
+/// Classify the outcome from the per-block results.
+pub fn failure_mode(blocks: &[BlockSummary], failure: &FailureParams) -> &'static str {
+    let n = blocks.len().max(1) as f64;
+    let toppled = blocks.iter().filter(|b| b.toppled).count();
+    let slid = blocks.iter().filter(|b| b.sliding_distance > failure.sliding_distance).count();
+    let moved = blocks.iter().filter(|b| b.toppled || b.sliding_distance > failure.sliding_distance).count();
+    if blocks.len() > 1 && moved as f64 / n > failure.collapse_fraction && toppled > 0 {
+        "collapse"
+    } else if toppled > 0 && blocks.iter().any(|b| b.toppled && b.sliding_distance > failure.sliding_distance) {
+        "sliding_toppling"
+    } else if toppled > 0 {
+        "toppling"
+    } else if slid > 0 {
+        "sliding"
+    } else {
+        "stable"
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn summarize(
+    sim: &Simulation,
+    tr: &Tracker,
+    motion: &GroundMotion,
+    failure: &FailureParams,
+    wall: f64,
+    stopped_reason: Option<String>,
+    model: String,
+    model_reason: String,
+    duration: f64,
+) -> Summary {
+    let blocks: Vec<BlockSummary> = (0..tr.free.len())
+        .map(|k| BlockSummary {
+            id: tr.ids[k].clone(),
+            max_displacement: tr.max_displacement[k],
+            final_displacement: tr.final_displacement[k],
+            max_rotation: tr.max_rotation[k],
+            final_rotation: tr.final_rotation[k],
+            toppled: tr.final_rotation[k].abs() > failure.toppled_rotation,
+            sliding_distance: tr.sliding_distance[k],
+        })
+        .collect();
+    let st = &sim.stats;
+    Summary {
+        completed: stopped_reason.is_none() && sim.time >= duration - 1e-9,
+        simulated_time: sim.time,
+        steps: st.steps,
+        wall_time_s: wall,
+        pga: motion.pga(),
+        failure_mode: failure_mode(&blocks, failure).into(),
+        blocks,
+        diagnostics: Diagnostics {
+            penalty_stiffness: sim.springs.normal,
+            time_step_cuts: st.time_step_cuts,
+            max_penetration: st.max_penetration,
+            open_close_iterations_mean: if st.steps > 0 { st.open_close_iterations as f64 / st.steps as f64 } else { 0.0 },
+            min_time_step: (st.steps > 0).then_some(st.min_dt),
+            max_time_step: (st.steps > 0).then_some(st.max_dt),
+        },
+        model,
+        model_reason,
+        stopped_reason,
+        control: serde_json::to_value(&sim.scene.control).unwrap_or_default(),
+    }
 }

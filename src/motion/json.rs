@@ -1,30 +1,66 @@
-//! Ground motion as JSON (FORMAT.md §2). Provisional minimal reader: samples, pulses and sines;
-//! file formats embedded as `{"format": ..., "content": ...}` are added by the records work.
+//! Ground motion as JSON (FORMAT.md §2): embedded records (`{"format", "content", "units"}`),
+//! uniform samples, analytic pulses and steady sines, and the common scale. Extension: a sampled
+//! component may carry `"processing": {"highpass": {"corner_hz", "order"}, "baseline": "linear"}`.
 use super::*;
 
 /// Parse a FORMAT.md §2 ground-motion object.
 pub fn from_json(value: &serde_json::Value) -> Result<GroundMotion, MotionError> {
-    let obj = value
-        .as_object()
-        .ok_or_else(|| MotionError::new("motion", None, "expected an object with \"horizontal\", \"vertical\", \"scale\""))?;
+    from_json_with(value, &ProcessParams::default())
+}
+
+/// `from_json` with processing applied to sampled components that do not name their own.
+pub fn from_json_with(
+    value: &serde_json::Value,
+    process: &ProcessParams,
+) -> Result<GroundMotion, MotionError> {
+    let obj = value.as_object().ok_or_else(|| {
+        MotionError::new(
+            "motion",
+            None,
+            "expected an object with \"horizontal\", \"vertical\", \"scale\"",
+        )
+    })?;
     for k in obj.keys() {
         if !matches!(k.as_str(), "horizontal" | "vertical" | "scale") {
-            return Err(MotionError::new(format!("motion.{k}"), None, "unknown field"));
+            return Err(MotionError::new(
+                format!("motion.{k}"),
+                None,
+                "unknown field",
+            ));
         }
     }
-    let comp = |name: &str| -> Result<Signal, MotionError> {
+    let comp = |name: &str| -> Result<(Signal, RecordMeta, String), MotionError> {
         match obj.get(name) {
-            None | Some(serde_json::Value::Null) => Ok(Signal::Zero),
-            Some(v) => component(&format!("motion.{name}"), v),
+            None | Some(serde_json::Value::Null) => {
+                Ok((Signal::Zero, RecordMeta::default(), "none".into()))
+            }
+            Some(v) => component(&format!("motion.{name}"), v, process),
         }
     };
-    let mut gm = GroundMotion { horizontal: comp("horizontal")?, vertical: comp("vertical")?, scale: 1.0, provenance: "json".into() };
+    let (horizontal, meta, provenance) = comp("horizontal")?;
+    let (vertical, _, _) = comp("vertical")?;
+    let mut gm = GroundMotion {
+        horizontal,
+        vertical,
+        scale: 1.0,
+        provenance,
+        meta,
+    };
     if let Some(s) = obj.get("scale").filter(|s| !s.is_null()) {
-        let scale: ScaleSpec = serde_json::from_value(s.clone()).map_err(|e| MotionError::new("motion.scale", None, e.to_string()))?;
+        let scale: ScaleSpec = serde_json::from_value(s.clone())
+            .map_err(|e| MotionError::new("motion.scale", None, e.to_string()))?;
         match (scale.factor, scale.target_pga) {
             (Some(f), None) if f.is_finite() => gm.scale = f,
-            (None, Some(x)) if x.is_finite() && x >= 0.0 => gm = gm.scaled_to_pga(x * scale.units.unwrap_or(Units::MetresPerSecond2).to_si()),
-            _ => return Err(MotionError::new("motion.scale", None, "give exactly one finite \"factor\" or a non-negative \"target_pga\"")),
+            (None, Some(x)) if x.is_finite() && x >= 0.0 => {
+                gm = gm.scaled_to_pga(x * scale.units.unwrap_or(Units::MetresPerSecond2).to_si())
+            }
+            _ => {
+                return Err(MotionError::new(
+                    "motion.scale",
+                    None,
+                    "give exactly one finite \"factor\" or a non-negative \"target_pga\"",
+                ))
+            }
         }
     }
     Ok(gm)
@@ -45,6 +81,16 @@ struct SamplesSpec {
     dt: f64,
     #[serde(default)]
     units: Units,
+    processing: Option<ProcessParams>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RecordSpec {
+    format: String,
+    content: String,
+    units: Option<Units>,
+    processing: Option<ProcessParams>,
 }
 
 #[derive(Deserialize)]
@@ -78,26 +124,83 @@ fn one() -> f64 {
     1.0
 }
 
-fn component(path: &str, v: &serde_json::Value) -> Result<Signal, MotionError> {
+fn component(
+    path: &str,
+    v: &serde_json::Value,
+    process: &ProcessParams,
+) -> Result<(Signal, RecordMeta, String), MotionError> {
     let bad = |e: serde_json::Error| MotionError::new(path, None, e.to_string());
+    let analytic = |units: Units, format: &str| RecordMeta {
+        original_units: units,
+        kind: RecordKind::Analytic,
+        format: format.into(),
+        processing: ProcessParams::default(),
+    };
     if let Some(p) = v.get("pulse") {
         let p: PulseSpec = serde_json::from_value(p.clone()).map_err(bad)?;
-        if !(p.period > 0.0 && p.period.is_finite() && p.cycles > 0.0 && p.cycles.is_finite() && p.amplitude.is_finite() && p.phase.is_finite()) {
-            return Err(MotionError::new(format!("{path}.pulse"), None, "amplitude and phase must be finite, period and cycles > 0"));
+        if !(p.period > 0.0
+            && p.period.is_finite()
+            && p.cycles > 0.0
+            && p.cycles.is_finite()
+            && p.amplitude.is_finite()
+            && p.phase.is_finite())
+        {
+            return Err(MotionError::new(
+                format!("{path}.pulse"),
+                None,
+                "amplitude and phase must be finite, period and cycles > 0",
+            ));
         }
         let phase = match p.shape.as_str() {
             "sine" => p.phase,
             "cosine" => p.phase + std::f64::consts::FRAC_PI_2,
-            other => return Err(MotionError::new(format!("{path}.pulse.shape"), None, format!("unknown shape {other:?} (sine, cosine)"))),
+            other => {
+                return Err(MotionError::new(
+                    format!("{path}.pulse.shape"),
+                    None,
+                    format!("unknown shape {other:?} (sine, cosine)"),
+                ))
+            }
         };
-        return Ok(Signal::Pulse { amplitude: p.amplitude * p.units.to_si(), period: p.period, cycles: p.cycles, phase });
+        let sig = Signal::Pulse {
+            amplitude: p.amplitude * p.units.to_si(),
+            period: p.period,
+            cycles: p.cycles,
+            phase,
+        };
+        let prov = format!(
+            "{} pulse, {} {} over {} s x {} cycles",
+            p.shape,
+            p.amplitude,
+            p.units.name(),
+            p.period,
+            p.cycles
+        );
+        return Ok((sig, analytic(p.units, "pulse"), prov));
     }
     if let Some(s) = v.get("sine") {
         let s: SineSpec = serde_json::from_value(s.clone()).map_err(bad)?;
         if !(s.amplitude.is_finite() && s.frequency > 0.0 && s.frequency.is_finite()) {
-            return Err(MotionError::new(format!("{path}.sine"), None, "amplitude must be finite and frequency > 0"));
+            return Err(MotionError::new(
+                format!("{path}.sine"),
+                None,
+                "amplitude must be finite and frequency > 0",
+            ));
         }
-        return Ok(Signal::Sine { amplitude: s.amplitude * s.units.to_si(), frequency: s.frequency });
+        let prov = format!(
+            "steady sine, {} {} at {} Hz",
+            s.amplitude,
+            s.units.name(),
+            s.frequency
+        );
+        return Ok((
+            Signal::Sine {
+                amplitude: s.amplitude * s.units.to_si(),
+                frequency: s.frequency,
+            },
+            analytic(s.units, "sine"),
+            prov,
+        ));
     }
     if v.get("samples").is_some() {
         let s: SamplesSpec = serde_json::from_value(v.clone()).map_err(bad)?;
@@ -105,10 +208,40 @@ fn component(path: &str, v: &serde_json::Value) -> Result<Signal, MotionError> {
             return Err(MotionError::new(format!("{path}.dt"), None, "must be > 0"));
         }
         if s.samples.is_empty() {
-            return Err(MotionError::new(format!("{path}.samples"), None, "empty record"));
+            return Err(MotionError::new(
+                format!("{path}.samples"),
+                None,
+                "empty record",
+            ));
         }
-        let k = s.units.to_si();
-        return Ok(Signal::Sampled(Sampled::new(s.dt, s.samples.iter().map(|a| a * k).collect())));
+        let raw = RawRecord {
+            dt: s.dt,
+            values: s.samples,
+            units: s.units,
+            kind: RecordKind::Unknown,
+            format: "samples",
+            description: String::new(),
+        };
+        let gm = from_raw(path, raw, s.processing.as_ref().unwrap_or(process))?;
+        return Ok((gm.horizontal, gm.meta, gm.provenance));
     }
-    Err(MotionError::new(path, None, "expected one of {\"format\",\"content\"}, {\"samples\",\"dt\"}, {\"pulse\"}, {\"sine\"}"))
+    if v.get("format").is_some() || v.get("content").is_some() {
+        let r: RecordSpec = serde_json::from_value(v.clone()).map_err(bad)?;
+        let format = Format::from_name(&r.format).ok_or_else(|| {
+            MotionError::new(
+                format!("{path}.format"),
+                None,
+                format!("unknown format {:?} (at2, csv, cosmos, esm)", r.format),
+            )
+        })?;
+        let origin = format!("{path}.content");
+        let raw = format.parse(&origin, &r.content, r.units)?;
+        let gm = from_raw(&origin, raw, r.processing.as_ref().unwrap_or(process))?;
+        return Ok((gm.horizontal, gm.meta, gm.provenance));
+    }
+    Err(MotionError::new(
+        path,
+        None,
+        "expected one of {\"format\",\"content\"}, {\"samples\",\"dt\"}, {\"pulse\"}, {\"sine\"}",
+    ))
 }

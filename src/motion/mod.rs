@@ -4,9 +4,27 @@
 //! Sign convention: horizontal acceleration positive along +x, vertical positive along +y.
 //! All values inside are SI (m/s², m/s, m); the original units are kept for reporting.
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 
+mod at2;
+pub mod command;
+mod cosmos;
+mod csv;
+mod esm;
+mod intensity;
 mod json;
-pub use json::from_json;
+mod process;
+mod text;
+pub use intensity::{
+    cumulative_arias, log_periods, mean_period, oscillator_peak, report, report_with,
+    response_spectrum, significant_duration, spectrum_svg, IntensityMeasures, ReportParams,
+    Spectrum,
+};
+pub use json::{from_json, from_json_with};
+pub use process::{
+    highpass_gain, highpass_zero_phase, remove_linear_drift, Baseline, HighPass, ProcessParams,
+};
+pub use text::{RawRecord, RecordKind};
 
 /// Units a record may come in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -25,6 +43,21 @@ pub enum Units {
 pub const STANDARD_GRAVITY: f64 = 9.80665;
 
 impl Units {
+    /// The FORMAT.md name ("g", "m/s2", "cm/s2").
+    pub fn name(self) -> &'static str {
+        match self {
+            Units::G => "g",
+            Units::MetresPerSecond2 => "m/s2",
+            Units::CentimetresPerSecond2 => "cm/s2",
+        }
+    }
+
+    /// Parse a unit name as users and file headers write it (`g`, `m/s2`, `m/s^2`, `cm/s2`,
+    /// `cm/sec2`, `gal`).
+    pub fn parse(text: &str) -> Option<Units> {
+        text::parse_units(text)
+    }
+
     /// Factor converting a value in these units to m/s².
     pub fn to_si(self) -> f64 {
         match self {
@@ -47,18 +80,25 @@ pub struct MotionError {
 
 impl MotionError {
     pub fn new(source: impl Into<String>, line: Option<usize>, message: impl Into<String>) -> Self {
-        Self { origin: source.into(), line, message: message.into() }
+        Self {
+            origin: source.into(),
+            line,
+            message: message.into(),
+        }
     }
 }
 
 /// A uniformly sampled acceleration record with its exact integrals under linear interpolation.
+/// Between samples the acceleration is linear (this is also how the solver resamples it);
+/// after the last sample it is zero and the ground keeps its final velocity.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sampled {
     /// s.
     pub dt: f64,
     /// m/s².
     pub accel: Vec<f64>,
-    /// m/s at each sample (exact integral of the piecewise-linear acceleration, v(0) = 0).
+    /// m/s at each sample (exact integral of the piecewise-linear acceleration, v(0) = 0
+    /// unless a baseline correction shifted it).
     pub vel: Vec<f64>,
     /// m at each sample (exact integral, d(0) = 0).
     pub disp: Vec<f64>,
@@ -74,33 +114,75 @@ impl Sampled {
             vel[i] = vel[i - 1] + 0.5 * dt * (a0 + a1);
             disp[i] = disp[i - 1] + dt * vel[i - 1] + dt * dt * (a0 / 3.0 + a1 / 6.0);
         }
-        Self { dt, accel, vel, disp }
+        Self {
+            dt,
+            accel,
+            vel,
+            disp,
+        }
     }
 
     pub fn duration(&self) -> f64 {
         self.dt * (self.accel.len().saturating_sub(1)) as f64
     }
 
+    /// Index of the step holding t and the offset into it, or `None` outside [0, duration).
+    #[inline]
+    fn locate(&self, t: f64) -> Option<(usize, f64)> {
+        let n = self.accel.len();
+        if n < 2 || !(t >= 0.0) {
+            return None;
+        }
+        let x = t / self.dt;
+        if x >= (n - 1) as f64 {
+            return None;
+        }
+        let i = x as usize;
+        Some((i, t - i as f64 * self.dt))
+    }
+
+    /// Acceleration at t (linear between samples, zero outside the record). O(1).
+    #[inline]
+    pub fn accel_at(&self, t: f64) -> f64 {
+        match self.locate(t) {
+            Some((i, s)) => self.accel[i] + (self.accel[i + 1] - self.accel[i]) * s / self.dt,
+            None if t == self.duration() => self.accel.last().copied().unwrap_or(0.0),
+            None => 0.0,
+        }
+    }
+
     /// (a, v, d) at time t: linear acceleration between samples, zero acceleration after the end.
     pub fn eval(&self, t: f64) -> (f64, f64, f64) {
         let n = self.accel.len();
-        if n == 0 || t <= 0.0 {
-            return (if n > 0 && t == 0.0 { self.accel[0] } else { 0.0 }, 0.0, 0.0);
+        if n == 0 {
+            return (0.0, 0.0, 0.0);
         }
-        let x = t / self.dt;
-        let i = x.floor() as usize;
-        if i + 1 >= n {
+        if !(t > 0.0) {
+            let a0 = if t == 0.0 { self.accel[0] } else { 0.0 };
+            return (a0, self.vel[0], self.disp[0]);
+        }
+        let Some((i, s)) = self.locate(t) else {
             let tl = t - self.duration();
             let v = self.vel[n - 1];
-            return (0.0, v, self.disp[n - 1] + v * tl);
-        }
-        let s = t - i as f64 * self.dt;
+            let a = if tl == 0.0 { self.accel[n - 1] } else { 0.0 };
+            return (a, v, self.disp[n - 1] + v * tl);
+        };
         let (a0, a1) = (self.accel[i], self.accel[i + 1]);
         let slope = (a1 - a0) / self.dt;
         let a = a0 + slope * s;
         let v = self.vel[i] + a0 * s + 0.5 * slope * s * s;
         let d = self.disp[i] + self.vel[i] * s + 0.5 * a0 * s * s + slope * s * s * s / 6.0;
         (a, v, d)
+    }
+
+    /// The record resampled at a new interval by linear interpolation (what the solver sees),
+    /// over the same duration.
+    pub fn resampled(&self, dt: f64) -> Sampled {
+        if !(dt > 0.0 && dt.is_finite()) || self.accel.is_empty() {
+            return self.clone();
+        }
+        let n = (self.duration() / dt + 1e-9).floor() as usize + 1;
+        Sampled::new(dt, (0..n).map(|k| self.accel_at(k as f64 * dt)).collect())
     }
 }
 
@@ -110,32 +192,89 @@ pub enum Signal {
     Zero,
     Sampled(Sampled),
     /// a(t) = amplitude · sin(2π t / period + phase) for 0 ≤ t ≤ cycles · period, zero after.
-    Pulse { amplitude: f64, period: f64, cycles: f64, phase: f64 },
+    Pulse {
+        amplitude: f64,
+        period: f64,
+        cycles: f64,
+        phase: f64,
+    },
     /// a(t) = amplitude · sin(2π f t) for all t ≥ 0.
-    Sine { amplitude: f64, frequency: f64 },
+    Sine {
+        amplitude: f64,
+        frequency: f64,
+    },
 }
 
 impl Signal {
+    /// Acceleration alone at t, m/s² (the solver's hot path: no integrals computed).
+    #[inline]
+    pub fn accel(&self, t: f64) -> f64 {
+        match self {
+            Signal::Zero => 0.0,
+            Signal::Sampled(s) => s.accel_at(t),
+            Signal::Pulse {
+                amplitude,
+                period,
+                cycles,
+                phase,
+            } => {
+                let w = 2.0 * std::f64::consts::PI / period;
+                if t >= 0.0 && t <= cycles * period {
+                    amplitude * (w * t + phase).sin()
+                } else {
+                    0.0
+                }
+            }
+            Signal::Sine {
+                amplitude,
+                frequency,
+            } => {
+                if t >= 0.0 {
+                    amplitude * (2.0 * std::f64::consts::PI * frequency * t).sin()
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+
     /// (acceleration, velocity, displacement) at t, with v(0) = d(0) = 0. Analytic signals are
     /// integrated exactly.
     pub fn eval(&self, t: f64) -> (f64, f64, f64) {
         match self {
             Signal::Zero => (0.0, 0.0, 0.0),
             Signal::Sampled(s) => s.eval(t),
-            Signal::Pulse { amplitude, period, cycles, phase } => {
+            Signal::Pulse {
+                amplitude,
+                period,
+                cycles,
+                phase,
+            } => {
                 let w = 2.0 * std::f64::consts::PI / period;
                 let end = cycles * period;
                 let te = t.clamp(0.0, end);
-                let a = if t >= 0.0 && t <= end { amplitude * (w * t + phase).sin() } else { 0.0 };
+                let a = self.accel(t);
                 let v = amplitude / w * (phase.cos() - (w * te + phase).cos());
-                let d = amplitude / w * te * phase.cos() - amplitude / (w * w) * ((w * te + phase).sin() - phase.sin());
-                let (v, d) = if t > end { (v, d + v * (t - end)) } else { (v, d) };
+                let d = amplitude / w * te * phase.cos()
+                    - amplitude / (w * w) * ((w * te + phase).sin() - phase.sin());
+                let (v, d) = if t > end {
+                    (v, d + v * (t - end))
+                } else {
+                    (v, d)
+                };
                 (a, v, d)
             }
-            Signal::Sine { amplitude, frequency } => {
+            Signal::Sine {
+                amplitude,
+                frequency,
+            } => {
                 let w = 2.0 * std::f64::consts::PI * frequency;
                 let t = t.max(0.0);
-                (amplitude * (w * t).sin(), amplitude / w * (1.0 - (w * t).cos()), amplitude / w * t - amplitude / (w * w) * (w * t).sin())
+                (
+                    self.accel(t),
+                    amplitude / w * (1.0 - (w * t).cos()),
+                    amplitude / w * t - amplitude / (w * w) * (w * t).sin(),
+                )
             }
         }
     }
@@ -154,32 +293,35 @@ impl Signal {
         match self {
             Signal::Zero => 0.0,
             Signal::Sampled(s) => s.accel.iter().fold(0.0, |m, a| m.max(a.abs())),
-            Signal::Pulse { amplitude, period, cycles, phase } => {
-                // Sample densely plus the analytic maxima inside the window.
-                let n = 2000;
-                let end = cycles * period;
-                let w = 2.0 * std::f64::consts::PI / period;
-                let mut m: f64 = 0.0;
-                for k in 0..=n {
-                    let t = end * k as f64 / n as f64;
-                    m = m.max((amplitude * (w * t + phase).sin()).abs());
-                }
-                let mut k = ((phase - std::f64::consts::FRAC_PI_2) / std::f64::consts::PI).floor() - 1.0;
-                loop {
-                    let t = (std::f64::consts::FRAC_PI_2 + k * std::f64::consts::PI - phase) / w;
-                    if t > end {
-                        break;
-                    }
-                    if t >= 0.0 {
-                        m = m.max(amplitude.abs());
-                    }
-                    k += 1.0;
-                }
-                m
+            Signal::Pulse {
+                amplitude,
+                cycles,
+                phase,
+                ..
+            } => {
+                // |sin| reaches 1 inside the window if a crest (phase angle π/2 + kπ) falls in
+                // [phase, phase + 2π·cycles]; otherwise the peak is at an end of the window.
+                let (start, stop) = (*phase, phase + 2.0 * std::f64::consts::PI * cycles);
+                let k = ((start - std::f64::consts::FRAC_PI_2) / std::f64::consts::PI).ceil();
+                let crest = std::f64::consts::FRAC_PI_2 + k * std::f64::consts::PI;
+                let ends = start.sin().abs().max(stop.sin().abs());
+                amplitude.abs() * if crest <= stop { 1.0 } else { ends }
             }
             Signal::Sine { amplitude, .. } => amplitude.abs(),
         }
     }
+}
+
+/// What is known about where a ground motion came from, for reports.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct RecordMeta {
+    /// Units of the horizontal record as given (values inside are SI regardless).
+    pub original_units: Units,
+    pub kind: RecordKind,
+    /// Format of the horizontal component ("at2", "csv", "cosmos-v2", "esm", "samples", "pulse", ...).
+    pub format: String,
+    /// Processing applied on reading.
+    pub processing: ProcessParams,
 }
 
 /// Horizontal and vertical ground motion with a common scale factor.
@@ -191,22 +333,49 @@ pub struct GroundMotion {
     pub scale: f64,
     /// Where the record came from (file name, format), for reports.
     pub provenance: String,
+    /// Original units, record kind and processing of the horizontal component.
+    pub meta: RecordMeta,
 }
 
 impl GroundMotion {
     /// No shaking at all (a scene under gravity alone).
     pub fn none() -> Self {
-        Self { horizontal: Signal::Zero, vertical: Signal::Zero, scale: 1.0, provenance: "none".into() }
+        Self {
+            horizontal: Signal::Zero,
+            vertical: Signal::Zero,
+            scale: 1.0,
+            provenance: "none".into(),
+            meta: RecordMeta::default(),
+        }
     }
 
     pub fn horizontal(signal: Signal) -> Self {
-        Self { horizontal: signal, vertical: Signal::Zero, scale: 1.0, provenance: "analytic".into() }
+        let analytic = matches!(signal, Signal::Pulse { .. } | Signal::Sine { .. });
+        let meta = RecordMeta {
+            original_units: Units::MetresPerSecond2,
+            kind: if analytic {
+                RecordKind::Analytic
+            } else {
+                RecordKind::Unknown
+            },
+            ..RecordMeta::default()
+        };
+        Self {
+            horizontal: signal,
+            vertical: Signal::Zero,
+            scale: 1.0,
+            provenance: "analytic".into(),
+            meta,
+        }
     }
 
-    /// Ground acceleration [ax, ay] at t, m/s².
+    /// Ground acceleration [ax, ay] at t, m/s². O(1), no allocation (called every solver step).
     #[inline]
     pub fn acceleration(&self, t: f64) -> [f64; 2] {
-        [self.scale * self.horizontal.eval(t).0, self.scale * self.vertical.eval(t).0]
+        [
+            self.scale * self.horizontal.accel(t),
+            self.scale * self.vertical.accel(t),
+        ]
     }
 
     /// Ground (acceleration, velocity, displacement), each [x, y], at t.
@@ -230,6 +399,13 @@ impl GroundMotion {
         self.scale.abs() * self.horizontal.peak()
     }
 
+    /// A copy with both components multiplied by `factor` (on top of any existing scale).
+    pub fn scaled(&self, factor: f64) -> Self {
+        let mut out = self.clone();
+        out.scale *= factor;
+        out
+    }
+
     /// A copy scaled so that the horizontal PGA equals `target` (m/s²).
     pub fn scaled_to_pga(&self, target: f64) -> Self {
         let peak = self.horizontal.peak();
@@ -237,4 +413,162 @@ impl GroundMotion {
         out.scale = if peak > 0.0 { target / peak } else { 0.0 };
         out
     }
+}
+
+/// Options for reading a record file.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LoadParams {
+    /// Units for formats that may not name them (CSV); must agree with the file when it does.
+    pub units: Option<Units>,
+    pub process: ProcessParams,
+}
+
+/// Record formats by name (the JSON `format` field) or file extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    At2,
+    Csv,
+    Cosmos,
+    Esm,
+}
+
+impl Format {
+    /// From a JSON `format` value.
+    pub fn from_name(name: &str) -> Option<Format> {
+        match name.to_ascii_lowercase().as_str() {
+            "at2" | "peer" => Some(Format::At2),
+            "csv" => Some(Format::Csv),
+            "cosmos" | "v1" | "v2" => Some(Format::Cosmos),
+            "esm" | "itaca" => Some(Format::Esm),
+            _ => None,
+        }
+    }
+
+    /// Parse text in this format.
+    pub fn parse(
+        self,
+        origin: &str,
+        content: &str,
+        units: Option<Units>,
+    ) -> Result<RawRecord, MotionError> {
+        let rec = match self {
+            Format::At2 => at2::parse(origin, content)?,
+            Format::Csv => csv::parse(origin, content, units)?,
+            Format::Cosmos => cosmos::parse(origin, content)?,
+            Format::Esm => esm::parse(origin, content)?,
+        };
+        if let (Some(u), false) = (units, self == Format::Csv) {
+            if u != rec.units {
+                return Err(MotionError::new(
+                    origin,
+                    None,
+                    format!(
+                        "units conflict: the file says {} but {} was given",
+                        rec.units.name(),
+                        u.name()
+                    ),
+                ));
+            }
+        }
+        Ok(rec)
+    }
+}
+
+/// Turn a parsed record into a processed horizontal ground motion.
+pub fn from_raw(
+    origin: &str,
+    rec: RawRecord,
+    process: &ProcessParams,
+) -> Result<GroundMotion, MotionError> {
+    rec.check(origin)?;
+    let k = rec.units.to_si();
+    let sampled = process.apply(
+        origin,
+        rec.kind,
+        rec.dt,
+        rec.values.iter().map(|v| v * k).collect(),
+    )?;
+    let mut gm = GroundMotion::horizontal(Signal::Sampled(sampled));
+    gm.meta = RecordMeta {
+        original_units: rec.units,
+        kind: rec.kind,
+        format: rec.format.into(),
+        processing: *process,
+    };
+    gm.provenance = format!(
+        "{origin} ({}{})",
+        rec.format,
+        describe(&rec.description, process)
+    );
+    Ok(gm)
+}
+
+fn describe(description: &str, p: &ProcessParams) -> String {
+    let mut s = String::new();
+    if !description.is_empty() {
+        s += &format!(": {description}");
+    }
+    if let Some(hp) = p.highpass {
+        s += &format!("; high-pass {} Hz order {}", hp.corner_hz, hp.order);
+    }
+    if p.baseline == Baseline::Linear {
+        s += "; linear baseline";
+    }
+    s
+}
+
+/// Read a record file by extension: `.at2`, `.csv`, `.v1`/`.v2` (COSMOS), `.asc` (ESM), `.json`
+/// (a FORMAT.md §2 object). Errors name the file and line.
+pub fn load_path(path: &Path) -> Result<GroundMotion, MotionError> {
+    load_path_with(path, &LoadParams::default())
+}
+
+/// `load_path` with units for unit-less CSV files and processing options.
+pub fn load_path_with(path: &Path, params: &LoadParams) -> Result<GroundMotion, MotionError> {
+    let origin = path.display().to_string();
+    params.process.validate(&origin)?;
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    let format = match ext.as_str() {
+        "at2" => Some(Format::At2),
+        "csv" | "txt" => Some(Format::Csv),
+        "v1" | "v2" | "v1c" | "v2c" => Some(Format::Cosmos),
+        "asc" => Some(Format::Esm),
+        "json" => None,
+        _ => {
+            return Err(MotionError::new(
+                origin,
+                None,
+                format!("unknown record extension {ext:?}; expected .at2, .csv, .v1, .v2 (COSMOS), .asc (ESM) or .json"),
+            ))
+        }
+    };
+    let bytes = std::fs::read(path)
+        .map_err(|e| MotionError::new(&origin, None, format!("cannot read: {e}")))?;
+    // Lossy: header text in Latin-1 (station names) must not stop a read; a replaced byte inside
+    // a numeric field still fails with its line.
+    let content = String::from_utf8_lossy(&bytes);
+    let mut gm = match format {
+        Some(f) => from_raw(
+            &origin,
+            f.parse(&origin, &content, params.units)?,
+            &params.process,
+        )?,
+        None => {
+            let value: serde_json::Value = serde_json::from_str(&content).map_err(|e| {
+                MotionError::new(&origin, Some(e.line()), format!("invalid JSON: {e}"))
+            })?;
+            from_json_with(&value, &params.process).map_err(|e| MotionError {
+                origin: format!("{origin}: {}", e.origin),
+                ..e
+            })?
+        }
+    };
+    if format.is_none() {
+        gm.provenance = format!("{origin} ({})", gm.provenance);
+    }
+    Ok(gm)
 }

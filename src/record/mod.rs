@@ -67,3 +67,15 @@ pub struct RecordHeader {
     /// `ashlar.run` metadata: scene JSON, motion provenance and scale, solver settings, version.
     pub metadata: std::collections::BTreeMap<String, String>,
 }
+
+pub mod error;
+pub mod foxglove;
+pub mod histories;
+pub mod mcap;
+pub mod messages;
+pub mod synthetic;
+pub mod triangulate;
+
+pub use error::RecordError;
+pub use histories::HistoryWriter;
+pub use mcap::{McapParams, McapRecorder, McapStats};

@@ -3,6 +3,7 @@
 //!
 //! Conventions fixed here for the whole engine: SI units, y up, gravity along −y,
 //! polygons stored counter-clockwise, rotations counter-clockwise positive (radians).
+pub mod generate;
 mod plane;
 pub mod spec;
 mod validate;

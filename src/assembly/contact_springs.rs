@@ -1,0 +1,98 @@
+//! Contact springs of Shi's penalty method: a normal spring for every closed contact, a shear
+//! spring for locked ones, and Coulomb friction (with cohesion while bonded) as point loads on
+//! sliding ones. Driven blocks' prescribed displacements enter the gap constants.
+use super::{BlockSystem, Dofs};
+use crate::contact::{Contact, ContactState};
+use crate::geometry::{Mat6, Vec6};
+
+/// Spring constants and friction of the contacts, per contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpringParams {
+    /// Normal penalty stiffness, N/m.
+    pub normal: f64,
+    /// Shear penalty stiffness, N/m.
+    pub shear: f64,
+}
+
+/// Friction data of a contact's joint.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointLaw {
+    /// tan φ.
+    pub tan_phi: f64,
+    /// Pa.
+    pub cohesion: f64,
+    /// Pa.
+    pub tensile_strength: f64,
+}
+
+/// Prescribed displacement increment of a block over the step (driven blocks), m; zero for
+/// blocks with unknowns or fixed blocks.
+pub type Prescribed = [f64; 2];
+
+/// Gap and shear constants including prescribed motion of driven blocks.
+#[inline]
+pub fn constants(c: &Contact, prescribed: &[Prescribed]) -> (f64, f64) {
+    let ui = prescribed[c.vertex_block];
+    let uj = prescribed[c.edge_block];
+    let du = [ui[0] - uj[0], ui[1] - uj[1]];
+    let g = c.g0 + c.n.x * du[0] + c.n.y * du[1];
+    let s = c.s0 + c.t.x * du[0] + c.t.y * du[1];
+    (g, s)
+}
+
+/// Coulomb limit of the shear force of a contact, N (≥ 0).
+#[inline]
+pub fn shear_limit(c: &Contact, law: &JointLaw, normal_force: f64) -> f64 {
+    let coh = if c.bonded { law.cohesion * c.length } else { 0.0 };
+    (normal_force.max(0.0) * law.tan_phi + coh).max(0.0)
+}
+
+/// Add the springs and friction loads of every closed contact to the system.
+pub fn add_contacts(
+    sys: &mut BlockSystem,
+    dofs: &Dofs,
+    contacts: &[Contact],
+    laws: &[JointLaw],
+    springs: &SpringParams,
+    prescribed: &[Prescribed],
+) {
+    for (c, law) in contacts.iter().zip(laws) {
+        if !c.state.is_closed() {
+            continue;
+        }
+        let fi = dofs.free_index[c.vertex_block];
+        let fj = dofs.free_index[c.edge_block];
+        let (g0, s0) = constants(c, prescribed);
+        add_spring(sys, fi, fj, &c.e_i, &c.e_j, springs.normal, g0);
+        match c.state {
+            ContactState::Locked => add_spring(sys, fi, fj, &c.f_i, &c.f_j, springs.shear, s0),
+            ContactState::Sliding { dir } => {
+                let f = dir * shear_limit(c, law, c.friction_normal);
+                if let Some(a) = fi {
+                    sys.rhs[a] -= c.f_i * f;
+                }
+                if let Some(b) = fj {
+                    sys.rhs[b] += c.f_j * f;
+                }
+            }
+            ContactState::Open => {}
+        }
+    }
+}
+
+/// Spring of stiffness `k` on the measure `m = m0 + a·D_i − b·D_j`: energy k/2·m².
+#[inline]
+fn add_spring(sys: &mut BlockSystem, fi: Option<usize>, fj: Option<usize>, a: &Vec6, b: &Vec6, k: f64, m0: f64) {
+    if let Some(i) = fi {
+        sys.diag[i] += (a * a.transpose()) * k;
+        sys.rhs[i] -= a * (k * m0);
+    }
+    if let Some(j) = fj {
+        sys.diag[j] += (b * b.transpose()) * k;
+        sys.rhs[j] += b * (k * m0);
+    }
+    if let (Some(i), Some(j)) = (fi, fj) {
+        let kij: Mat6 = (a * b.transpose()) * (-k);
+        sys.add_block(i, j, &kij);
+    }
+}

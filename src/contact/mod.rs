@@ -1,0 +1,253 @@
+//! Contact: which vertices touch which edges, and in what state. Third stage of the flow:
+//! reads the current [`BlockGeometry`] of every block, produces [`Contact`]s that `assembly`
+//! turns into springs and that `solve::open_close` updates.
+//!
+//! Call order each step: [`ContactSet::detect`] (broad + narrow phase, carrying states over
+//! from the previous step), then [`ContactSet::linearize`] (per-step contact geometry).
+//!
+//! Conventions: a contact joins vertex `P` of the *vertex block* `i` to edge `AB` of the
+//! *edge block* `j`. `n` is the edge's outward unit normal (pointing out of block `j`), `t` the
+//! unit edge direction A→B (counter-clockwise). The gap `g = n·(P − A)` is positive when open,
+//! negative when penetrating (penetration depth −g). Normal force `N` is compressive-positive.
+mod broad_phase;
+mod vertex_edge;
+
+pub use broad_phase::BroadPhase;
+pub use vertex_edge::{candidate, Candidate};
+
+use crate::geometry::{displacement_matrix, BlockGeometry, Vec6};
+use nalgebra::Vector2;
+use std::collections::HashMap;
+
+/// State of a contact spring pair.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ContactState {
+    /// No springs.
+    Open,
+    /// Normal and shear springs (stick).
+    Locked,
+    /// Normal spring plus Coulomb friction. `dir` = ±1 is the sign of the vertex's slip relative
+    /// to the edge along `t`; friction on the vertex block acts along −dir·t.
+    Sliding { dir: f64 },
+}
+
+impl ContactState {
+    pub fn is_closed(self) -> bool {
+        !matches!(self, ContactState::Open)
+    }
+}
+
+/// Whether a block carries unknowns, follows the ground, or never moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mobility {
+    Fixed,
+    Driven,
+    Free,
+}
+
+/// Tuning knobs of contact detection.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactParams {
+    /// Search distance as a multiple of the largest displacement allowed in one step: Shi's 2.5
+    /// keeps every contact that can close within the step in the candidate list.
+    pub search_factor: f64,
+    /// Angle tolerance (rad) of the entrance criterion: edges within this of parallel still
+    /// count as "not entering" so flat-on-flat contacts are found despite round-off.
+    pub angle_tolerance: f64,
+}
+
+impl Default for ContactParams {
+    fn default() -> Self {
+        Self { search_factor: 2.5, angle_tolerance: 1.0e-3 }
+    }
+}
+
+/// One vertex–edge contact with everything needed to linearize it in the current step.
+#[derive(Debug, Clone)]
+pub struct Contact {
+    pub vertex_block: usize,
+    pub vertex: usize,
+    pub edge_block: usize,
+    /// Edge k runs from vertex k to vertex k+1 of the edge block.
+    pub edge: usize,
+    pub state: ContactState,
+    /// Shear-spring reference point on the edge, as a fraction of its length from A.
+    pub ref_xi: f64,
+    /// Joint bond intact (cohesion and tensile strength act until it breaks).
+    pub bonded: bool,
+    /// Tributary contact length, m (for cohesion and tensile strength per unit thickness).
+    pub length: f64,
+    // Per-step linearization (m, dimensionless):
+    pub n: Vector2<f64>,
+    pub t: Vector2<f64>,
+    /// Gap at the step start, m.
+    pub g0: f64,
+    /// Shear displacement of the vertex from the reference point at the step start, m.
+    pub s0: f64,
+    /// Position of the vertex's projection on the edge at the step start (fraction).
+    pub xi: f64,
+    /// Normal gap gradients: g = g0 + e_i·D_i − e_j·D_j.
+    pub e_i: Vec6,
+    pub e_j: Vec6,
+    /// Shear gradients: s = s0 + f_i·D_i − f_j·D_j.
+    pub f_i: Vec6,
+    pub f_j: Vec6,
+    /// Normal force from the last solve, N (compression positive).
+    pub normal_force: f64,
+    /// Normal force used for the Coulomb friction of a sliding contact in the current solve, N.
+    pub friction_normal: f64,
+    /// Shear force on the vertex block along t, N.
+    pub shear_force: f64,
+    /// Gap after the last solve, m.
+    pub gap: f64,
+    /// Slip along t during the last solve, m.
+    pub slip: f64,
+    /// For sliding contacts: elastic shear displacement kept in the shear spring (m), so that
+    /// re-sticking starts from the Coulomb force rather than from zero.
+    pub slide_offset: f64,
+}
+
+/// All contacts of the scene, carried from step to step.
+#[derive(Debug, Default)]
+pub struct ContactSet {
+    pub contacts: Vec<Contact>,
+    broad: BroadPhase,
+    /// Scratch: previous contacts by key, reused each step.
+    previous: HashMap<(u32, u32, u32, u32), usize>,
+    scratch: Vec<Contact>,
+    candidates: Vec<Candidate>,
+}
+
+impl ContactSet {
+    /// Find contacts for the current geometry. `search` is the search distance (m); contacts
+    /// found again keep their state, reference point and bond.
+    pub fn detect(
+        &mut self,
+        geoms: &[BlockGeometry],
+        mobility: &[Mobility],
+        search: f64,
+        params: &ContactParams,
+        first_step: bool,
+        bond: impl Fn(usize, usize) -> bool,
+    ) {
+        self.previous.clear();
+        for (k, c) in self.contacts.iter().enumerate() {
+            self.previous.insert(key(c.vertex_block, c.vertex, c.edge_block, c.edge), k);
+        }
+        self.broad.update(geoms, mobility, search);
+        self.scratch.clear();
+        for &(a, b) in self.broad.pairs() {
+            self.candidates.clear();
+            vertex_edge::pair_candidates(geoms, a, b, search, params, &mut self.candidates);
+            vertex_edge::pair_candidates(geoms, b, a, search, params, &mut self.candidates);
+            vertex_edge::drop_mirrored_vertex_pairs(geoms, &mut self.candidates, search);
+            for cand in &self.candidates {
+                let k = key(cand.vertex_block, cand.vertex, cand.edge_block, cand.edge);
+                let c = match self.previous.get(&k) {
+                    Some(&p) => {
+                        let old = &self.contacts[p];
+                        Contact {
+                            ref_xi: old.ref_xi,
+                            state: old.state,
+                            bonded: old.bonded,
+                            normal_force: old.normal_force,
+                            friction_normal: old.friction_normal,
+                            slide_offset: old.slide_offset,
+                            ..new_contact(cand)
+                        }
+                    }
+                    None => {
+                        let mut c = new_contact(cand);
+                        // A contact touching at the start is closed from the outset so the
+                        // scene starts in equilibrium rather than falling into its springs.
+                        if cand.gap <= 0.0 {
+                            c.state = ContactState::Locked;
+                        }
+                        c.bonded = first_step && cand.gap <= search * 1e-3 && bond(cand.vertex_block, cand.edge_block);
+                        c
+                    }
+                };
+                self.scratch.push(c);
+            }
+        }
+        std::mem::swap(&mut self.contacts, &mut self.scratch);
+    }
+
+    /// Compute the per-step linearization of every contact from the geometry at the step start.
+    pub fn linearize(&mut self, geoms: &[BlockGeometry]) {
+        for c in &mut self.contacts {
+            linearize_one(c, geoms);
+        }
+    }
+}
+
+fn key(a: usize, b: usize, c: usize, d: usize) -> (u32, u32, u32, u32) {
+    (a as u32, b as u32, c as u32, d as u32)
+}
+
+fn new_contact(cand: &Candidate) -> Contact {
+    Contact {
+        vertex_block: cand.vertex_block,
+        vertex: cand.vertex,
+        edge_block: cand.edge_block,
+        edge: cand.edge,
+        state: ContactState::Open,
+        ref_xi: cand.xi,
+        bonded: false,
+        length: cand.length,
+        n: Vector2::zeros(),
+        t: Vector2::zeros(),
+        g0: cand.gap,
+        s0: 0.0,
+        xi: cand.xi,
+        e_i: Vec6::zeros(),
+        e_j: Vec6::zeros(),
+        f_i: Vec6::zeros(),
+        f_j: Vec6::zeros(),
+        normal_force: 0.0,
+        friction_normal: 0.0,
+        shear_force: 0.0,
+        gap: cand.gap,
+        slip: 0.0,
+        slide_offset: 0.0,
+    }
+}
+
+/// Edge endpoints (A, B) of edge `k` of a block.
+#[inline]
+pub fn edge_points(g: &BlockGeometry, k: usize) -> (Vector2<f64>, Vector2<f64>) {
+    let n = g.vertices.len();
+    (g.vertices[k], g.vertices[(k + 1) % n])
+}
+
+fn linearize_one(c: &mut Contact, geoms: &[BlockGeometry]) {
+    let gi = &geoms[c.vertex_block];
+    let gj = &geoms[c.edge_block];
+    let p = gi.vertices[c.vertex];
+    let (a, b) = edge_points(gj, c.edge);
+    let ab = b - a;
+    let len = ab.norm();
+    let t = ab / len;
+    let n = Vector2::new(t.y, -t.x);
+    c.t = t;
+    c.n = n;
+    c.g0 = n.dot(&(p - a));
+    c.xi = t.dot(&(p - a)) / len;
+    // The shear reference: a material point of the edge while locked; follows the vertex while
+    // open; trails it by the elastic shear displacement while sliding.
+    match c.state {
+        ContactState::Open => c.ref_xi = c.xi,
+        ContactState::Sliding { .. } => c.ref_xi = c.xi - c.slide_offset / len,
+        ContactState::Locked => {}
+    }
+    let q = a + ab * c.xi;
+    let qr = a + ab * c.ref_xi;
+    c.s0 = t.dot(&(p - qr));
+    let ti = displacement_matrix(p, gi.centroid);
+    let tq = displacement_matrix(q, gj.centroid);
+    let tqr = displacement_matrix(qr, gj.centroid);
+    c.e_i = ti.transpose() * n;
+    c.e_j = tq.transpose() * n;
+    c.f_i = ti.transpose() * t;
+    c.f_j = tqr.transpose() * t;
+}

@@ -1,0 +1,417 @@
+//! Simulation: the DDA time step, assembled from the stages of the flow. `step` reads like
+//! the algorithm: detect contacts, then (with time-step cuts on failure) assemble, run the
+//! open–close loop and check the step, then integrate. Each stage is timed into
+//! [`StepProfile`].
+mod energy;
+mod params;
+
+pub use energy::Energy;
+pub use params::{resolve_penalty, SimParams};
+
+use crate::assembly::contact_springs::{JointLaw, Prescribed, SpringParams};
+use crate::assembly::{elasticity, BlockState, BlockSystem, BodyLoads, Dofs, Newmark};
+use crate::contact::{ContactSet, ContactState, Mobility};
+use crate::geometry::{displacement_matrix, BlockGeometry, Vec6};
+use crate::integrate;
+use crate::motion::GroundMotion;
+use crate::scene::{BlockKind, BlockModel, Excitation, Scene};
+use crate::solve::open_close::{self, OpenClose};
+use crate::solve::{LinearSolver, SolveError};
+use nalgebra::Matrix3;
+use std::time::{Duration, Instant};
+
+/// A typed failure of the engine, with where and what to change.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SimError {
+    #[error(
+        "open–close did not converge at t = {time:.6} s after {cuts} time-step cuts (Δt = {dt:.3e} s); contact between blocks {block_a:?} and {block_b:?}; try a smaller penalty stiffness or time step"
+    )]
+    NotConverged { time: f64, cuts: u32, dt: f64, block_a: String, block_b: String },
+    #[error("linear solve failed at t = {time:.6} s: {error} (block {block:?}); check for unconstrained or degenerate blocks, or reduce the penalty stiffness")]
+    Solve { time: f64, error: SolveError, block: String },
+    #[error("non-finite state at t = {time:.6} s in block {block:?}; reduce the time step or the penalty stiffness")]
+    NonFinite { time: f64, block: String },
+    #[error("penetration of {depth:.3e} m at t = {time:.6} s between blocks {block_a:?} and {block_b:?} could not be reduced by cutting the time step; raise the penalty stiffness")]
+    Penetration { time: f64, depth: f64, block_a: String, block_b: String },
+}
+
+/// Wall time spent in each stage (accumulated over steps).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepProfile {
+    pub detect: Duration,
+    pub assemble: Duration,
+    pub solve: Duration,
+    pub integrate: Duration,
+}
+
+/// Counters reported in the run summary.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Stats {
+    pub steps: u64,
+    pub time_step_cuts: u64,
+    pub open_close_iterations: u64,
+    /// Deepest penetration after a converged step, m.
+    pub max_penetration: f64,
+    pub min_dt: f64,
+    pub max_dt: f64,
+}
+
+/// The engine state of one scene under one ground motion.
+pub struct Simulation {
+    pub scene: Scene,
+    pub motion: GroundMotion,
+    pub params: SimParams,
+    pub geoms: Vec<BlockGeometry>,
+    pub mobility: Vec<Mobility>,
+    pub dofs: Dofs,
+    /// Per free block.
+    pub states: Vec<BlockState>,
+    densities: Vec<f64>,
+    elastic: Vec<Matrix3<f64>>,
+    pub contacts: ContactSet,
+    laws: Vec<JointLaw>,
+    pub springs: SpringParams,
+    system: BlockSystem,
+    solver: LinearSolver,
+    x: Vec<f64>,
+    prescribed: Vec<Prescribed>,
+    start_states: Vec<BlockState>,
+    newmark: Newmark,
+    /// Simulated time, s.
+    pub time: f64,
+    /// Current (adaptive) time step, s.
+    pub dt: f64,
+    /// Half the diagonal of the whole model's bounding box at the start, m.
+    pub model_half_size: f64,
+    pub stats: Stats,
+    pub profile: StepProfile,
+}
+
+impl std::fmt::Debug for Simulation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Simulation").field("time", &self.time).field("dt", &self.dt).field("blocks", &self.geoms.len()).finish()
+    }
+}
+
+impl Simulation {
+    pub fn new(scene: &Scene, motion: &GroundMotion, params: SimParams) -> Self {
+        let geoms: Vec<BlockGeometry> = scene.blocks.iter().map(|b| BlockGeometry::new(b.vertices.clone())).collect();
+        let mobility: Vec<Mobility> = scene
+            .blocks
+            .iter()
+            .map(|b| match b.kind {
+                BlockKind::Fixed => Mobility::Fixed,
+                BlockKind::Driven => Mobility::Driven,
+                BlockKind::Free(_) => Mobility::Free,
+            })
+            .collect();
+        let mut dofs = Dofs { free_index: vec![None; geoms.len()], ..Default::default() };
+        let (mut densities, mut elastic, mut states) = (Vec::new(), Vec::new(), Vec::new());
+        for (b, blk) in scene.blocks.iter().enumerate() {
+            if let BlockKind::Free(model) = blk.kind {
+                let nd = if model == BlockModel::Rigid { 3 } else { 6 };
+                dofs.free_index[b] = Some(dofs.block_of.len());
+                dofs.block_of.push(b);
+                dofs.ndof.push(nd);
+                dofs.offset.push(dofs.n);
+                dofs.n += nd;
+                let mat = &scene.materials[blk.material];
+                densities.push(mat.density);
+                elastic.push(elasticity(mat));
+                let v = scene.initial_velocity[b];
+                let mut st = BlockState::default();
+                st.vel[0] = v[0];
+                st.vel[1] = v[1];
+                st.vel[2] = v[2];
+                states.push(st);
+            }
+        }
+        let mut lo = geoms[0].vertices[0];
+        let mut hi = lo;
+        for g in &geoms {
+            let (a, b) = g.bounds();
+            lo = lo.inf(&a);
+            hi = hi.sup(&b);
+        }
+        let model_half_size = 0.5 * (hi - lo).norm();
+        let penalty = resolve_penalty(scene);
+        let springs = SpringParams { normal: penalty, shear: penalty * params.shear_ratio };
+        let dt = scene.control.time_step;
+        Self {
+            scene: scene.clone(),
+            motion: motion.clone(),
+            geoms,
+            mobility,
+            dofs,
+            states,
+            densities,
+            elastic,
+            contacts: ContactSet::default(),
+            laws: Vec::new(),
+            springs,
+            system: BlockSystem::default(),
+            solver: LinearSolver::new(params.solver),
+            x: Vec::new(),
+            prescribed: vec![[0.0; 2]; scene.blocks.len()],
+            start_states: Vec::new(),
+            newmark: Newmark::of(scene.control.integrator),
+            time: 0.0,
+            dt,
+            model_half_size,
+            stats: Stats { min_dt: f64::INFINITY, ..Default::default() },
+            profile: StepProfile::default(),
+            params,
+        }
+    }
+
+    /// Largest displacement allowed in one step (Shi's g2 × model half size), m.
+    pub fn max_step_displacement(&self) -> f64 {
+        self.scene.control.max_displacement_ratio * self.model_half_size
+    }
+
+    /// Advance one step of at most `max_dt` (and at most the current adaptive step).
+    /// Returns the step length taken.
+    pub fn step(&mut self, max_dt: f64) -> Result<f64, SimError> {
+        let t0 = Instant::now();
+        self.detect_contacts();
+        let t1 = Instant::now();
+        self.profile.detect += t1 - t0;
+        self.start_states.clone_from(&self.states);
+        let mut dt = self.dt.min(max_dt);
+        let mut cuts = 0u32;
+        loop {
+            self.assemble(dt);
+            let t2 = Instant::now();
+            let outcome = self.open_close()?;
+            self.profile.solve += t2.elapsed();
+            let trouble = match outcome {
+                OpenClose::Converged { .. } => self.check_step(),
+                OpenClose::NotConverged { contact, .. } => Some(contact),
+            };
+            let Some(bad_contact) = trouble else { break };
+            cuts += 1;
+            self.stats.time_step_cuts += 1;
+            if cuts > self.params.max_cuts {
+                return Err(self.not_converged(cuts, dt, bad_contact));
+            }
+            dt *= self.params.cut_factor;
+            self.states.clone_from(&self.start_states);
+        }
+        let t3 = Instant::now();
+        self.integrate(dt);
+        self.profile.integrate += t3.elapsed();
+        self.finish_step(dt, cuts);
+        Ok(dt)
+    }
+
+    /// Broad and narrow phase, then the per-step contact linearization and joint laws.
+    fn detect_contacts(&mut self) {
+        let search = self.params.contact.search_factor * self.max_step_displacement();
+        let scene = &self.scene;
+        let first = self.stats.steps == 0;
+        self.contacts.detect(&self.geoms, &self.mobility, search, &self.params.contact, first, |a, b| {
+            let j = scene.joint_between(a, b);
+            j.cohesion > 0.0 || j.tensile_strength > 0.0
+        });
+        self.contacts.linearize(&self.geoms);
+        self.laws.clear();
+        for c in &self.contacts.contacts {
+            let j = scene.joint_between(c.vertex_block, c.edge_block);
+            self.laws.push(JointLaw { tan_phi: j.friction_angle.tan(), cohesion: j.cohesion, tensile_strength: j.tensile_strength });
+        }
+        let mut pairs = Vec::new();
+        for c in &self.contacts.contacts {
+            if let (Some(a), Some(b)) = (self.dofs.free_index[c.vertex_block], self.dofs.free_index[c.edge_block]) {
+                pairs.push((a.min(b), a.max(b)));
+            }
+        }
+        self.system.set_pattern(pairs);
+    }
+
+    /// Kinetic damping, loads at the step end, prescribed motion, block terms.
+    fn assemble(&mut self, dt: f64) {
+        let t = Instant::now();
+        let c = &self.scene.control;
+        let keep = c.dynamic_factor * (-c.kinetic_damping_rate * dt).exp();
+        for st in &mut self.states {
+            st.vel *= keep;
+            st.acc *= keep;
+        }
+        let t_end = self.time + dt;
+        let ground = match self.scene.excitation {
+            Excitation::BaseAcceleration => self.motion.acceleration(t_end),
+            Excitation::DrivenBlock(b) => {
+                let d0 = self.motion.state(self.time)[2];
+                let d1 = self.motion.state(t_end)[2];
+                self.prescribed[b] = [d1[0] - d0[0], d1[1] - d0[1]];
+                [0.0, 0.0]
+            }
+        };
+        let loads = BodyLoads { gravity: self.scene.gravity, ground_acceleration: ground };
+        self.system.assemble_blocks(&self.dofs, &self.geoms, &self.densities, &self.elastic, &self.states, &loads, self.newmark, dt);
+        self.profile.assemble += t.elapsed();
+    }
+
+    fn open_close(&mut self) -> Result<OpenClose, SimError> {
+        let r = open_close::iterate(
+            &mut self.system,
+            &self.dofs,
+            &mut self.contacts.contacts,
+            &self.laws,
+            &self.springs,
+            &self.prescribed,
+            &mut self.solver,
+            &mut self.x,
+            &self.params.open_close,
+        );
+        match r {
+            Ok(o) => {
+                let (OpenClose::Converged { iterations } | OpenClose::NotConverged { iterations, .. }) = o;
+                self.stats.open_close_iterations += iterations as u64;
+                Ok(o)
+            }
+            Err(error) => {
+                let dof = match error {
+                    SolveError::NotPositiveDefinite { dof } | SolveError::NonFinite { dof } => dof,
+                    SolveError::Backend(_) => 0,
+                };
+                Err(SimError::Solve { time: self.time, error, block: self.block_of_dof(dof) })
+            }
+        }
+    }
+
+    /// After convergence: is the step within the displacement limit and the penetration
+    /// tolerance? Returns the offending contact (if any) as `Some(..)`.
+    fn check_step(&self) -> Option<Option<usize>> {
+        if self.scene.control.adaptive_time_step {
+            let limit = self.max_step_displacement();
+            for f in 0..self.dofs.block_of.len() {
+                let d = self.block_increment(f);
+                let g = &self.geoms[self.dofs.block_of[f]];
+                for p in &g.vertices {
+                    let u = displacement_matrix(*p, g.centroid) * d;
+                    if u.norm() > limit {
+                        return Some(None);
+                    }
+                }
+            }
+        }
+        let tol = self.params.penetration_ratio * self.max_step_displacement();
+        // Penetration that deepens by more than the tolerance within one step means a vertex
+        // overshot its edge (a time-step problem); a deep but steady penetration is the
+        // spring's compliance (a penalty problem) and is reported, not cut.
+        for (k, c) in self.contacts.contacts.iter().enumerate() {
+            let deepened = -c.gap - (-c.g0).max(0.0);
+            if c.state.is_closed() && deepened > tol && self.dt * self.params.cut_factor > self.params.min_dt {
+                return Some(Some(k));
+            }
+        }
+        None
+    }
+
+    fn block_increment(&self, f: usize) -> Vec6 {
+        let mut d = Vec6::zeros();
+        let o = self.dofs.offset[f];
+        for k in 0..self.dofs.ndof[f] {
+            d[k] = self.x[o + k];
+        }
+        d
+    }
+
+    fn integrate(&mut self, dt: f64) {
+        for f in 0..self.dofs.block_of.len() {
+            let d = self.block_increment(f);
+            let b = self.dofs.block_of[f];
+            integrate::move_block(&mut self.geoms[b], &d);
+            integrate::update_motion(&mut self.states[f], &d, self.newmark, dt);
+            if self.dofs.ndof[f] == 6 {
+                integrate::update_stress(&mut self.states[f], &d, &self.elastic[f]);
+            }
+        }
+        if let Excitation::DrivenBlock(b) = self.scene.excitation {
+            integrate::translate_block(&mut self.geoms[b], self.prescribed[b]);
+        }
+    }
+
+    /// Contact bookkeeping and time-step control after an accepted step.
+    fn finish_step(&mut self, dt: f64, cuts: u32) {
+        let shear = self.springs.shear;
+        for (c, law) in self.contacts.contacts.iter_mut().zip(&self.laws) {
+            match c.state {
+                ContactState::Open => c.bonded = false,
+                ContactState::Sliding { dir } => {
+                    c.bonded = false;
+                    let limit = crate::assembly::contact_springs::shear_limit(c, law, c.normal_force);
+                    c.slide_offset = dir * limit / shear;
+                }
+                ContactState::Locked => {}
+            }
+            if c.state.is_closed() {
+                self.stats.max_penetration = self.stats.max_penetration.max(-c.gap);
+            }
+        }
+        self.time += dt;
+        self.stats.steps += 1;
+        self.stats.min_dt = self.stats.min_dt.min(dt);
+        self.stats.max_dt = self.stats.max_dt.max(dt);
+        if cuts > 0 {
+            self.dt = dt;
+        } else if self.scene.control.adaptive_time_step || self.dt < self.scene.control.time_step {
+            self.dt = (self.dt * self.params.growth).min(self.scene.control.time_step);
+        }
+    }
+
+    fn elastic_inverse(&self, f: usize) -> Option<Matrix3<f64>> {
+        self.elastic[f].try_inverse()
+    }
+
+    fn block_of_dof(&self, dof: usize) -> String {
+        for f in 0..self.dofs.block_of.len() {
+            if dof >= self.dofs.offset[f] && dof < self.dofs.offset[f] + self.dofs.ndof[f] {
+                return self.scene.blocks[self.dofs.block_of[f]].id.clone();
+            }
+        }
+        "?".into()
+    }
+
+    fn not_converged(&self, cuts: u32, dt: f64, contact: Option<usize>) -> SimError {
+        let (a, b) = match contact.and_then(|k| self.contacts.contacts.get(k)) {
+            Some(c) => (self.scene.blocks[c.vertex_block].id.clone(), self.scene.blocks[c.edge_block].id.clone()),
+            None => ("?".into(), "?".into()),
+        };
+        if let Some(c) = contact.and_then(|k| self.contacts.contacts.get(k)) {
+            if c.state.is_closed() && -c.gap - (-c.g0).max(0.0) > self.params.penetration_ratio * self.max_step_displacement() {
+                return SimError::Penetration { time: self.time, depth: -c.gap, block_a: a, block_b: b };
+            }
+        }
+        SimError::NotConverged { time: self.time, cuts, dt, block_a: a, block_b: b }
+    }
+
+    /// Velocity of a block's centroid and its angular velocity (m/s, rad/s); driven blocks move
+    /// with the ground, fixed blocks are still.
+    pub fn block_velocity(&self, b: usize) -> [f64; 3] {
+        match self.dofs.free_index[b] {
+            Some(f) => [self.states[f].vel[0], self.states[f].vel[1], self.states[f].vel[2]],
+            None if self.mobility[b] == Mobility::Driven => {
+                let v = self.motion.state(self.time)[1];
+                [v[0], v[1], 0.0]
+            }
+            None => [0.0; 3],
+        }
+    }
+
+    /// True if any state value is not finite (checked by callers after each step).
+    pub fn first_non_finite_block(&self) -> Option<usize> {
+        for (b, g) in self.geoms.iter().enumerate() {
+            if !g.centroid.x.is_finite() || !g.centroid.y.is_finite() || !g.rotation.is_finite() {
+                return Some(b);
+            }
+        }
+        for (f, st) in self.states.iter().enumerate() {
+            if st.vel.iter().any(|v| !v.is_finite()) {
+                return Some(self.dofs.block_of[f]);
+            }
+        }
+        None
+    }
+}

@@ -1,0 +1,75 @@
+//! Solve: the linear solver for the assembled block system, and Shi's open–close iteration.
+//! Fifth stage of the flow (after `assembly`, before `integrate`). All factorizations live
+//! behind [`LinearSolver`]: a dense Cholesky for small systems, faer's sparse Cholesky with a
+//! reused symbolic factorization for large ones.
+mod dense_cholesky;
+pub mod open_close;
+mod sparse_cholesky;
+
+use crate::assembly::{BlockSystem, Dofs};
+
+/// Why a linear solve failed; `dof` is the global unknown where it was detected.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    #[error("system matrix not positive definite at unknown {dof}")]
+    NotPositiveDefinite { dof: usize },
+    #[error("non-finite value in the system at unknown {dof}")]
+    NonFinite { dof: usize },
+    #[error("sparse factorization failed: {0}")]
+    Backend(String),
+}
+
+/// Tuning of the linear solver.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverParams {
+    /// Systems with at most this many unknowns use the dense factorization: below ~100 the
+    /// dense kernel beats sparse bookkeeping (measured in benches/engine.rs).
+    pub dense_limit: usize,
+}
+
+impl Default for SolverParams {
+    fn default() -> Self {
+        Self { dense_limit: 96 }
+    }
+}
+
+/// Reusable linear solver (scratch buffers persist across steps).
+#[derive(Debug, Default)]
+pub struct LinearSolver {
+    pub params: SolverParams,
+    dense: dense_cholesky::DenseCholesky,
+    sparse: sparse_cholesky::SparseCholesky,
+    /// Number of symbolic factorizations done (diagnostic).
+    pub symbolic_count: u64,
+}
+
+impl LinearSolver {
+    pub fn new(params: SolverParams) -> Self {
+        Self { params, ..Default::default() }
+    }
+
+    /// Solve `sys` into `x` (length `dofs.n`).
+    pub fn solve(&mut self, sys: &BlockSystem, dofs: &Dofs, x: &mut Vec<f64>) -> Result<(), SolveError> {
+        x.clear();
+        x.resize(dofs.n, 0.0);
+        for (f, r) in sys.rhs.iter().enumerate() {
+            for k in 0..dofs.ndof[f] {
+                if !r[k].is_finite() {
+                    return Err(SolveError::NonFinite { dof: dofs.offset[f] + k });
+                }
+                x[dofs.offset[f] + k] = r[k];
+            }
+        }
+        if dofs.n <= self.params.dense_limit {
+            self.dense.factor_solve(sys, dofs, x)?;
+        } else {
+            let before = self.sparse.symbolic_count;
+            self.sparse.factor_solve(sys, dofs, x)?;
+            self.symbolic_count += self.sparse.symbolic_count - before;
+        }
+        if let Some(dof) = x.iter().position(|v| !v.is_finite()) {
+            return Err(SolveError::NonFinite { dof });
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,81 @@
+//! Scene builders shared by the physics tests (each test writes its reference solution itself).
+#![allow(dead_code)]
+use ashlar::motion::{GroundMotion, Signal};
+use ashlar::scene::{parse_scene, Scene};
+use ashlar::simulation::{SimParams, Simulation};
+use serde_json::{json, Value};
+
+pub const G: f64 = 9.81;
+
+/// A scene JSON with one material and one joint.
+pub fn scene_json(blocks: Value, friction_deg: f64, control: Value) -> Value {
+    json!({
+        "format": "ashlar.scene/1",
+        "gravity": G,
+        "materials": { "stone": { "density": 2500.0, "young_modulus": 2.0e10, "poisson_ratio": 0.2 } },
+        "joints": { "j": { "friction_angle": friction_deg } },
+        "blocks": blocks,
+        "control": control,
+    })
+}
+
+pub fn parse(v: &Value) -> Scene {
+    match parse_scene(&v.to_string()) {
+        Ok(s) => s,
+        Err(e) => panic!("test scene invalid: {e}"),
+    }
+}
+
+/// Block (w × h) resting on an incline of `alpha_deg` that descends towards +x, its bottom-left
+/// corner at the origin. Returns the scene and the unit down-slope direction.
+pub fn incline(alpha_deg: f64, friction_deg: f64, control: Value) -> (Value, [f64; 2]) {
+    let a = alpha_deg.to_radians();
+    let d = [a.cos(), -a.sin()];
+    let n = [a.sin(), a.cos()];
+    let (w, h) = (1.0, 0.5);
+    let l = 200.0;
+    let base = json!([[-l * d[0], -l * d[1]], [l * d[0], l * d[1]], [l * d[0], l * d[1] - 20.0], [-l * d[0], -l * d[1] - 20.0]]);
+    let blk = json!([[0.0, 0.0], [w * d[0], w * d[1]], [w * d[0] + h * n[0], w * d[1] + h * n[1]], [h * n[0], h * n[1]]]);
+    let blocks = json!([
+        { "id": "base", "material": "stone", "fixed": true, "vertices": base },
+        { "id": "block", "material": "stone", "vertices": blk },
+    ]);
+    (scene_json(blocks, friction_deg, control), d)
+}
+
+/// Run to `t_end`, calling `probe(sim)` after every step.
+pub fn run(sim: &mut Simulation, t_end: f64, mut probe: impl FnMut(&Simulation)) {
+    while sim.time < t_end - 1e-12 {
+        if let Err(e) = sim.step(t_end - sim.time) {
+            panic!("simulation failed: {e}");
+        }
+        probe(sim);
+    }
+}
+
+pub fn sim(scene: &Scene, motion: &GroundMotion) -> Simulation {
+    Simulation::new(scene, motion, SimParams::default())
+}
+
+pub fn sine(amplitude: f64, frequency: f64) -> GroundMotion {
+    GroundMotion::horizontal(Signal::Sine { amplitude, frequency })
+}
+
+/// Centroid displacement of block `b` from its start, m.
+pub fn displacement(sim: &Simulation, b: usize) -> [f64; 2] {
+    let g = &sim.geoms[b];
+    [g.centroid.x - g.initial_centroid.x, g.centroid.y - g.initial_centroid.y]
+}
+
+/// Run until `t_end` or until `stop(sim)` is true; returns whether it stopped early.
+pub fn run_until(sim: &mut Simulation, t_end: f64, mut stop: impl FnMut(&Simulation) -> bool) -> bool {
+    while sim.time < t_end - 1e-12 {
+        if let Err(e) = sim.step(t_end - sim.time) {
+            panic!("simulation failed: {e}");
+        }
+        if stop(sim) {
+            return true;
+        }
+    }
+    false
+}

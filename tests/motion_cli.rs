@@ -1,0 +1,85 @@
+//! `ashlar motion RECORD [--svg FILE]`: the JSON has exactly the FORMAT.md §3 fields (plus the
+//! documented extensions) and the SVG is written.
+use ashlar::motion::command::{parse_pga, report_json, MotionArgs};
+use std::path::PathBuf;
+
+fn args(record: &str) -> MotionArgs {
+    MotionArgs {
+        record: PathBuf::from(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/fixtures/motion/"
+        ))
+        .join(record),
+        svg: None,
+        units: None,
+        highpass: None,
+        order: 4,
+        baseline: "none".into(),
+        scale: None,
+        pga: None,
+        damping: 0.05,
+    }
+}
+
+#[test]
+fn json_fields_and_svg() {
+    let svg = std::env::temp_dir().join(format!("ashlar-spectrum-{}.svg", std::process::id()));
+    let mut a = args("ground-motions/friuli-1976-tolmezzo-000.at2");
+    a.svg = Some(svg.clone());
+    let json: serde_json::Value =
+        serde_json::from_str(&report_json(&a).expect("report")).expect("json");
+    for key in [
+        "npts",
+        "dt",
+        "duration",
+        "original_units",
+        "pga",
+        "pgv",
+        "pgd",
+        "arias_intensity",
+        "significant_duration_5_95",
+        "cav",
+        "mean_period",
+        "spectrum",
+    ] {
+        assert!(json.get(key).is_some(), "missing {key}");
+    }
+    for key in ["damping", "periods", "psa"] {
+        assert!(
+            json["spectrum"].get(key).is_some(),
+            "missing spectrum.{key}"
+        );
+    }
+    assert_eq!(json["npts"], 7269);
+    assert_eq!(json["original_units"], "g");
+    let text = std::fs::read_to_string(&svg).expect("svg written");
+    assert!(text.starts_with("<svg") && text.contains("<polyline"));
+}
+
+#[test]
+fn options_and_errors() {
+    assert!((parse_pga("0.3g").expect("g") - 0.3 * 9.80665).abs() < 1e-12);
+    assert_eq!(parse_pga("2.5").expect("m/s2"), 2.5);
+    assert!(parse_pga("fast").is_err());
+    let mut a = args("ground-motions/kobe-1995-nishi-akashi-000.csv");
+    a.pga = Some("0.5g".into());
+    let json: serde_json::Value =
+        serde_json::from_str(&report_json(&a).expect("report")).expect("json");
+    assert!((json["pga"].as_f64().expect("pga") - 0.5 * 9.80665).abs() < 1e-9);
+    let mut a = args("synthetic.v1");
+    a.highpass = Some(0.5);
+    a.baseline = "linear".into();
+    assert!(report_json(&a).is_ok());
+    let mut a = args("synthetic.v2");
+    a.highpass = Some(0.5);
+    let e = report_json(&a).expect_err("processed");
+    assert!(
+        e.contains("synthetic.v2") && e.contains("already processed"),
+        "{e}"
+    );
+    let mut a = args("synthetic.v2");
+    a.baseline = "cubic".into();
+    assert!(report_json(&a)
+        .expect_err("baseline")
+        .contains("--baseline"));
+}
