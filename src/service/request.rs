@@ -27,6 +27,10 @@ pub struct Limits {
     /// the adaptive step's cuts. Recorded frames (duration / output_interval) are held to the
     /// same number, since each one costs memory and output.
     pub max_total_steps: u64,
+    /// Vertices of one block. Validation checks every pair of edges for crossings (quadratic),
+    /// so an unbounded polygon would let one request stall the server; 1000 is far more than a
+    /// masonry unit or an arch voussoir needs.
+    pub max_block_vertices: usize,
     /// Coarse scan points of a PGA search (each one a full run).
     pub max_scan_points: usize,
     /// Jobs waiting in the queue; beyond it submissions get 503 with Retry-After.
@@ -40,6 +44,7 @@ impl Default for Limits {
             max_blocks: 5000,
             max_record_samples: 1_000_000,
             max_total_steps: 2_000_000,
+            max_block_vertices: 1000,
             max_scan_points: 64,
             max_queued_jobs: 100_000,
         }
@@ -227,12 +232,49 @@ fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), ApiError> {
     Ok(())
 }
 
+/// Sizes checked on the raw JSON, before any work proportional to them: vertices per block,
+/// and the length of analytic pulses (counted as 20 samples a cycle against the record limit,
+/// since evaluating a pulse's peak walks its cycles).
+fn check_sizes(scene: &Value, motion: Option<&Value>, limits: &Limits) -> Result<(), ApiError> {
+    let blocks = scene.get("blocks").and_then(Value::as_array).map(Vec::as_slice).unwrap_or_default();
+    for (i, b) in blocks.iter().enumerate() {
+        let n = b.get("vertices").and_then(Value::as_array).map(Vec::len).unwrap_or(0);
+        if n > limits.max_block_vertices {
+            let p = format!("/scene/blocks/{i}/vertices");
+            return Err(ApiError::limit_exceeded(
+                p.clone(),
+                format!("{p}: {n} vertices exceed the server's limit of {} per block", limits.max_block_vertices),
+            ));
+        }
+    }
+    for name in ["horizontal", "vertical"] {
+        let cycles = motion
+            .and_then(|m| m.get(name))
+            .and_then(|c| c.get("pulse"))
+            .and_then(|p| p.get("cycles"))
+            .and_then(Value::as_f64)
+            .unwrap_or(0.0);
+        if cycles * 20.0 > limits.max_record_samples as f64 {
+            let p = format!("/motion/{name}/pulse/cycles");
+            return Err(ApiError::limit_exceeded(
+                p.clone(),
+                format!(
+                    "{p}: {cycles} cycles is longer than the server's record limit allows ({} cycles; ashlar serve --max-record-samples)",
+                    limits.max_record_samples / 20
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn scene_and_motion(
     scene: &Value,
     motion: Option<&Value>,
     limits: &Limits,
 ) -> Result<(Scene, GroundMotion), ApiError> {
     check_shapes(scene, motion)?;
+    check_sizes(scene, motion, limits)?;
     if let Some(n) = scene.get("blocks").and_then(Value::as_array).map(Vec::len) {
         if n > limits.max_blocks {
             return Err(ApiError::limit_exceeded(
@@ -542,6 +584,11 @@ mod tests {
             pointer_of(parse_run(&json!({"scene": scene()}), &l)),
             "/scene/blocks"
         );
+        let l = Limits { max_block_vertices: 3, ..Limits::default() };
+        assert_eq!(pointer_of(parse_run(&json!({"scene": scene()}), &l)), "/scene/blocks/0/vertices");
+        let m = json!({"horizontal": {"pulse": {"amplitude": 1, "period": 0.1, "cycles": 1.0e12}}});
+        let e = parse_run(&json!({"scene": scene(), "motion": m}), &Limits::default()).expect_err("a 1e12-cycle pulse");
+        assert_eq!(e.pointer.as_deref(), Some("/motion/horizontal/pulse/cycles"));
         let l = Limits {
             max_record_samples: 3,
             ..Limits::default()

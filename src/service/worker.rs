@@ -43,8 +43,7 @@ pub fn analysis_runner() -> JobRunner {
             out_dir: Some(hooks.out_dir),
             cancel: Some(hooks.cancel),
             progress: Some(hooks.progress),
-            history_blocks: None,
-            no_trajectory: false,
+            ..Default::default()
         };
         match input {
             JobInput::Run { scene, motion } => {
