@@ -129,10 +129,18 @@ fn kill_and_recover(
         let out = temp_dir(&format!("{tag}-ref"));
         let expected = reference(&job_body(k, duration), &out);
         let (a, b) = (comparable(j["summary"].clone()), comparable(expected));
-        assert!(close_json(&a, &b, rel_tol), "job {k}: summary differs from an uninterrupted run:\n{a}\n{b}");
-        let served = std::fs::read_to_string(data.join("jobs").join(id).join("histories.csv")).expect("served histories");
-        let fresh = std::fs::read_to_string(out.join("histories.csv")).expect("reference histories");
-        assert!(close_csv(&served, &fresh, rel_tol), "job {k}: histories.csv differs from an uninterrupted run");
+        assert!(
+            close_json(&a, &b, rel_tol),
+            "job {k}: summary differs from an uninterrupted run:\n{a}\n{b}"
+        );
+        let served = std::fs::read_to_string(data.join("jobs").join(id).join("histories.csv"))
+            .expect("served histories");
+        let fresh =
+            std::fs::read_to_string(out.join("histories.csv")).expect("reference histories");
+        assert!(
+            close_csv(&served, &fresh, rel_tol),
+            "job {k}: histories.csv differs from an uninterrupted run"
+        );
         std::fs::remove_dir_all(out).ok();
     }
     assert!(
@@ -155,10 +163,18 @@ fn close_num(a: f64, b: f64, rel: f64) -> bool {
 
 fn close_json(a: &Value, b: &Value, rel: f64) -> bool {
     match (a, b) {
-        (Value::Number(x), Value::Number(y)) => close_num(x.as_f64().unwrap_or(f64::NAN), y.as_f64().unwrap_or(f64::NAN), rel),
-        (Value::Array(x), Value::Array(y)) => x.len() == y.len() && x.iter().zip(y).all(|(p, q)| close_json(p, q, rel)),
+        (Value::Number(x), Value::Number(y)) => close_num(
+            x.as_f64().unwrap_or(f64::NAN),
+            y.as_f64().unwrap_or(f64::NAN),
+            rel,
+        ),
+        (Value::Array(x), Value::Array(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(p, q)| close_json(p, q, rel))
+        }
         (Value::Object(x), Value::Object(y)) => {
-            x.len() == y.len() && x.iter().all(|(k, v)| y.get(k).is_some_and(|w| close_json(v, w, rel)))
+            x.len() == y.len()
+                && x.iter()
+                    .all(|(k, v)| y.get(k).is_some_and(|w| close_json(v, w, rel)))
         }
         _ => a == b,
     }
@@ -171,10 +187,13 @@ fn close_csv(a: &str, b: &str, rel: f64) -> bool {
         && la.iter().zip(&lb).skip(1).all(|(x, y)| {
             let (xs, ys): (Vec<&str>, Vec<&str>) = (x.split(',').collect(), y.split(',').collect());
             xs.len() == ys.len()
-                && xs.iter().zip(&ys).all(|(p, q)| match (p.parse::<f64>(), q.parse::<f64>()) {
-                    (Ok(p), Ok(q)) => close_num(p, q, rel),
-                    _ => p == q,
-                })
+                && xs
+                    .iter()
+                    .zip(&ys)
+                    .all(|(p, q)| match (p.parse::<f64>(), q.parse::<f64>()) {
+                        (Ok(p), Ok(q)) => close_num(p, q, rel),
+                        _ => p == q,
+                    })
         })
 }
 

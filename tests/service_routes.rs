@@ -115,12 +115,18 @@ async fn a_job_runs_and_its_outputs_are_served() {
     // is exact), but serde_json's default float parser, used here to read the JSON, may be off
     // by one ULP.
     let same = |a: Vec<f64>, b: &Vec<f64>| {
-        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= f64::EPSILON * x.abs().max(y.abs()))
+        a.len() == b.len()
+            && a.iter()
+                .zip(b)
+                .all(|(x, y)| (x - y).abs() <= f64::EPSILON * x.abs().max(y.abs()))
     };
     assert!(same(nums(&h["time"]), &cols[0]), "time");
     assert!(same(nums(&h["blocks"]["column"]["x"]), &cols[1]), "x");
     assert!(same(nums(&h["blocks"]["column"]["y"]), &cols[2]), "y");
-    assert!(same(nums(&h["blocks"]["column"]["rotation"]), &cols[3]), "rotation");
+    assert!(
+        same(nums(&h["blocks"]["column"]["rotation"]), &cols[3]),
+        "rotation"
+    );
     assert_eq!(
         cols[0].len(),
         101,

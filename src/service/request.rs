@@ -198,10 +198,16 @@ fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), ApiError> {
             ));
         }
     }
-    if let Some(scale) = motion.and_then(|m| m.get("scale")).and_then(Value::as_object) {
+    if let Some(scale) = motion
+        .and_then(|m| m.get("scale"))
+        .and_then(Value::as_object)
+    {
         if let Some((k, _)) = scale.iter().find(|(_, v)| v.is_null()) {
             let p = format!("/motion/scale/{k}");
-            return Err(ApiError::invalid_field(p.clone(), format!("{p}: must not be null (leave it out instead)")));
+            return Err(ApiError::invalid_field(
+                p.clone(),
+                format!("{p}: must not be null (leave it out instead)"),
+            ));
         }
     }
     for name in ["horizontal", "vertical"] {
@@ -236,14 +242,25 @@ fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), ApiError> {
 /// and the length of analytic pulses (counted as 20 samples a cycle against the record limit,
 /// since evaluating a pulse's peak walks its cycles).
 fn check_sizes(scene: &Value, motion: Option<&Value>, limits: &Limits) -> Result<(), ApiError> {
-    let blocks = scene.get("blocks").and_then(Value::as_array).map(Vec::as_slice).unwrap_or_default();
+    let blocks = scene
+        .get("blocks")
+        .and_then(Value::as_array)
+        .map(Vec::as_slice)
+        .unwrap_or_default();
     for (i, b) in blocks.iter().enumerate() {
-        let n = b.get("vertices").and_then(Value::as_array).map(Vec::len).unwrap_or(0);
+        let n = b
+            .get("vertices")
+            .and_then(Value::as_array)
+            .map(Vec::len)
+            .unwrap_or(0);
         if n > limits.max_block_vertices {
             let p = format!("/scene/blocks/{i}/vertices");
             return Err(ApiError::limit_exceeded(
                 p.clone(),
-                format!("{p}: {n} vertices exceed the server's limit of {} per block", limits.max_block_vertices),
+                format!(
+                    "{p}: {n} vertices exceed the server's limit of {} per block",
+                    limits.max_block_vertices
+                ),
             ));
         }
     }
@@ -564,8 +581,7 @@ mod tests {
             ..Limits::default()
         };
         // 1 s at 1 ms = 1000 steps > 999.
-        let e = parse_run(&json!({"scene": scene()}), &l)
-            .expect_err("over the step limit");
+        let e = parse_run(&json!({"scene": scene()}), &l).expect_err("over the step limit");
         assert_eq!(e.kind, "limit-exceeded");
         assert_eq!(e.pointer.as_deref(), Some("/scene/control/duration"));
         assert!(parse_run(
@@ -584,11 +600,21 @@ mod tests {
             pointer_of(parse_run(&json!({"scene": scene()}), &l)),
             "/scene/blocks"
         );
-        let l = Limits { max_block_vertices: 3, ..Limits::default() };
-        assert_eq!(pointer_of(parse_run(&json!({"scene": scene()}), &l)), "/scene/blocks/0/vertices");
+        let l = Limits {
+            max_block_vertices: 3,
+            ..Limits::default()
+        };
+        assert_eq!(
+            pointer_of(parse_run(&json!({"scene": scene()}), &l)),
+            "/scene/blocks/0/vertices"
+        );
         let m = json!({"horizontal": {"pulse": {"amplitude": 1, "period": 0.1, "cycles": 1.0e12}}});
-        let e = parse_run(&json!({"scene": scene(), "motion": m}), &Limits::default()).expect_err("a 1e12-cycle pulse");
-        assert_eq!(e.pointer.as_deref(), Some("/motion/horizontal/pulse/cycles"));
+        let e = parse_run(&json!({"scene": scene(), "motion": m}), &Limits::default())
+            .expect_err("a 1e12-cycle pulse");
+        assert_eq!(
+            e.pointer.as_deref(),
+            Some("/motion/horizontal/pulse/cycles")
+        );
         let l = Limits {
             max_record_samples: 3,
             ..Limits::default()

@@ -290,7 +290,11 @@ fn job_json(j: &JobRecord) -> String {
         "error": j.error,
         "links": links(j.kind, j.id),
     });
-    let key = if j.kind == JobKind::Run { "summary" } else { "result" };
+    let key = if j.kind == JobKind::Run {
+        "summary"
+    } else {
+        "result"
+    };
     with_raw_field(&v, key, j.result.as_deref())
 }
 
@@ -298,7 +302,9 @@ fn job_json(j: &JobRecord) -> String {
 /// stored summary, so its numbers reach the client exactly as the runner produced them).
 fn with_raw_field(obj: &Value, key: &str, raw: Option<&str>) -> String {
     let text = obj.to_string();
-    let raw = raw.filter(|r| serde_json::from_str::<serde::de::IgnoredAny>(r).is_ok()).unwrap_or("null");
+    let raw = raw
+        .filter(|r| serde_json::from_str::<serde::de::IgnoredAny>(r).is_ok())
+        .unwrap_or("null");
     match text.strip_suffix('}') {
         Some(head) if head.len() > 1 => format!("{head},{}:{raw}}}", Value::from(key)),
         Some(_) => format!("{{{}:{raw}}}", Value::from(key)),
@@ -308,7 +314,10 @@ fn with_raw_field(obj: &Value, key: &str, raw: Option<&str>) -> String {
 
 fn json_response(status: StatusCode, body: String) -> Response {
     let mut r = (status, body).into_response();
-    r.headers_mut().insert(header::CONTENT_TYPE, HeaderValue::from_static("application/json"));
+    r.headers_mut().insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static("application/json"),
+    );
     r
 }
 
@@ -652,9 +661,18 @@ mod tests {
     #[test]
     fn raw_fields_are_spliced_verbatim() {
         let obj = json!({"id": 1});
-        assert_eq!(with_raw_field(&obj, "summary", Some("{\"x\":0.41000000000000003}")), r#"{"id":1,"summary":{"x":0.41000000000000003}}"#);
-        assert_eq!(with_raw_field(&obj, "summary", None), r#"{"id":1,"summary":null}"#);
-        assert_eq!(with_raw_field(&obj, "summary", Some("{broken")), r#"{"id":1,"summary":null}"#);
+        assert_eq!(
+            with_raw_field(&obj, "summary", Some("{\"x\":0.41000000000000003}")),
+            r#"{"id":1,"summary":{"x":0.41000000000000003}}"#
+        );
+        assert_eq!(
+            with_raw_field(&obj, "summary", None),
+            r#"{"id":1,"summary":null}"#
+        );
+        assert_eq!(
+            with_raw_field(&obj, "summary", Some("{broken")),
+            r#"{"id":1,"summary":null}"#
+        );
         assert_eq!(with_raw_field(&json!({}), "k", Some("[1]")), r#"{"k":[1]}"#);
     }
 
