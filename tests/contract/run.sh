@@ -49,7 +49,10 @@ done
 [ -n "$ADDR" ] || { echo "contract: the server did not report its address" >&2; exit 1; }
 
 set +e
-"$VENV/bin/schemathesis" --no-color --config-file tests/contract/schemathesis.toml run "$ADDR/openapi.yaml" \
+# Run from the temporary directory: schemathesis keeps a cache (.schemathesis/) in its working
+# directory, which must not land in the source tree.
+cd "$WORK"
+"$VENV/bin/schemathesis" --no-color --config-file "$ROOT/tests/contract/schemathesis.toml" run "$ADDR/openapi.yaml" \
     --url "$ADDR" \
     --checks all \
     --max-examples "${ASHLAR_CONTRACT_MAX_EXAMPLES:-40}" \
