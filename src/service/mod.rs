@@ -1,18 +1,245 @@
 //! Service: HTTP routes → durable queue → store → worker threads, driving `analysis`.
 //! The top of the flow; nothing in the physics core imports it.
+//!
+//! `routes` answers requests (async, no simulation work), `store` keeps every job durably,
+//! `worker` runs jobs on std threads through a `JobRunner`, `events` streams progress.
+pub mod events;
+pub mod fake;
+pub mod histories;
+pub mod problem;
+pub mod request;
+pub mod routes;
+pub mod store;
+pub mod worker;
+
+pub use problem::ApiError;
+pub use request::Limits;
+pub use routes::{app, route_table, AppState, OPENAPI_YAML};
+pub use store::{JobStore, SqliteStore};
+pub use worker::{analysis_runner, JobRunner, RunHooks, RunnerOutcome, WorkerParams};
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
 
 /// `ashlar serve` arguments.
 #[derive(Debug, Clone, clap::Args)]
 pub struct ServeArgs {
-    /// Address to listen on.
+    /// Address to listen on (port 0 picks a free port; the chosen address is printed).
     #[arg(long, default_value = "127.0.0.1:8080")]
     pub addr: String,
-    /// Directory for the embedded job store and artifacts.
+    /// Directory for the embedded job store (`jobs.sqlite`) and artifacts (`jobs/<uuid>/`).
     #[arg(long, default_value = "./ashlar-data")]
-    pub data: std::path::PathBuf,
+    pub data: PathBuf,
+    /// Job store URL instead of the embedded default: `sqlite:PATH` (artifacts go to --data).
+    #[arg(long)]
+    pub database: Option<String>,
+    /// Worker threads running jobs (default: the number of cores).
+    #[arg(long)]
+    pub workers: Option<usize>,
+    /// Largest request body, bytes (413 beyond).
+    #[arg(long, default_value_t = Limits::default().max_body_bytes)]
+    pub max_body_bytes: usize,
+    /// Most blocks in a scene (422 beyond).
+    #[arg(long, default_value_t = Limits::default().max_blocks)]
+    pub max_blocks: usize,
+    /// Most samples in a ground-motion record, both components together (422 beyond).
+    #[arg(long, default_value_t = Limits::default().max_record_samples)]
+    pub max_record_samples: usize,
+    /// Most steps of one run, duration / time_step (422 beyond).
+    #[arg(long, default_value_t = Limits::default().max_total_steps)]
+    pub max_total_steps: u64,
+    /// Most jobs waiting in the queue (503 with Retry-After beyond).
+    #[arg(long, default_value_t = Limits::default().max_queued_jobs)]
+    pub max_queued_jobs: u64,
+    /// Seconds running jobs get to finish on SIGINT/SIGTERM before they are stopped and requeued.
+    #[arg(long, default_value_t = 20.0)]
+    pub shutdown_grace: f64,
+    /// Testing aid: run jobs with the service's deterministic fake runner instead of the engine.
+    #[arg(long, hide = true)]
+    pub fake_runner: bool,
 }
 
-/// Entry point of `ashlar serve` (blocks until shutdown). Provisional.
+/// How to start the service (the library form of `ServeArgs`).
+#[derive(Debug, Clone)]
+pub struct ServiceConfig {
+    /// Artifacts go to `<data_dir>/jobs/<uuid>/`.
+    pub data_dir: PathBuf,
+    /// The SQLite file (default `<data_dir>/jobs.sqlite`).
+    pub database: Option<PathBuf>,
+    pub limits: Limits,
+    pub workers: WorkerParams,
+}
+
+impl ServiceConfig {
+    pub fn new(data_dir: impl Into<PathBuf>) -> Self {
+        Self {
+            data_dir: data_dir.into(),
+            database: None,
+            limits: Limits::default(),
+            workers: WorkerParams::default(),
+        }
+    }
+}
+
+/// A started service: the state for the router, and the worker pool behind it.
+pub struct Service {
+    state: AppState,
+    pool: worker::Pool,
+}
+
+impl Service {
+    /// Open the store (recovering jobs a dead server left running) and start the workers.
+    pub fn start(config: ServiceConfig, runner: JobRunner) -> Result<Self, String> {
+        let jobs_dir = config.data_dir.join("jobs");
+        std::fs::create_dir_all(&jobs_dir)
+            .map_err(|e| format!("--data {}: {e}", config.data_dir.display()))?;
+        let db = config
+            .database
+            .clone()
+            .unwrap_or_else(|| config.data_dir.join("jobs.sqlite"));
+        let store = SqliteStore::open(&db).map_err(|e| e.to_string())?;
+        let (requeued, failed) = store
+            .recover(config.workers.max_attempts)
+            .map_err(|e| e.to_string())?;
+        if requeued + failed > 0 {
+            tracing::info!(
+                requeued,
+                failed,
+                "recovered jobs left running by a previous server"
+            );
+        }
+        let store: Arc<dyn JobStore> = Arc::new(store);
+        let core = Arc::new(worker::Core::new(
+            store,
+            config.data_dir,
+            config.limits,
+            config.workers,
+            runner,
+        ));
+        let pool = worker::Pool::start(core.clone())?;
+        Ok(Self {
+            state: AppState { core },
+            pool,
+        })
+    }
+
+    pub fn state(&self) -> AppState {
+        self.state.clone()
+    }
+
+    /// Stop gracefully (see [`worker::Pool::shutdown`]); returns how many jobs were requeued.
+    pub fn shutdown(self, grace: Duration) -> usize {
+        self.pool.shutdown(grace)
+    }
+}
+
+fn database_path(url: &str) -> Result<PathBuf, String> {
+    if let Some(p) = url
+        .strip_prefix("sqlite://")
+        .or_else(|| url.strip_prefix("sqlite:"))
+    {
+        if p.is_empty() {
+            return Err("--database sqlite:PATH: the path is empty".into());
+        }
+        return Ok(PathBuf::from(p));
+    }
+    if url.starts_with("postgres://") || url.starts_with("postgresql://") {
+        return Err("--database: PostgreSQL is not built into this ashlar yet; use sqlite:PATH or --data DIR".into());
+    }
+    Err(format!("--database {url:?}: expected sqlite:PATH"))
+}
+
+/// Entry point of `ashlar serve`: blocks until SIGINT/SIGTERM, then shuts down gracefully.
 pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
-    Err(format!("serve is not implemented yet (addr {})", args.addr))
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
+        )
+        .with_writer(std::io::stderr)
+        .try_init();
+    let mut config = ServiceConfig::new(&args.data);
+    config.database = args.database.as_deref().map(database_path).transpose()?;
+    config.limits = Limits {
+        max_body_bytes: args.max_body_bytes,
+        max_blocks: args.max_blocks,
+        max_record_samples: args.max_record_samples,
+        max_total_steps: args.max_total_steps,
+        max_queued_jobs: args.max_queued_jobs,
+        ..Limits::default()
+    };
+    if let Some(n) = args.workers {
+        if n == 0 {
+            return Err("--workers must be at least 1".into());
+        }
+        config.workers.workers = n;
+    }
+    if !(args.shutdown_grace.is_finite() && args.shutdown_grace >= 0.0) {
+        return Err(format!(
+            "--shutdown-grace must be a number of seconds ≥ 0, got {}",
+            args.shutdown_grace
+        ));
+    }
+    let runner = if args.fake_runner {
+        fake::fake_runner(Duration::from_millis(200))
+    } else {
+        analysis_runner()
+    };
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .map_err(|e| format!("starting the async runtime: {e}"))?;
+    // Bind before starting workers: a port clash must not start running recovered jobs.
+    let listener = runtime
+        .block_on(tokio::net::TcpListener::bind(&args.addr))
+        .map_err(|e| format!("--addr {}: {e}", args.addr))?;
+    let local = listener
+        .local_addr()
+        .map_err(|e| format!("--addr {}: {e}", args.addr))?;
+    let service = Service::start(config, runner)?;
+    let state = service.state();
+    // One line on stdout that scripts (and the tests) read to find the port.
+    println!("ashlar serve: listening on http://{local}");
+    tracing::info!(%local, workers = state.core.params.workers, data = %args.data.display(), "listening");
+    let served = runtime.block_on(async {
+        let shutdown_state = state.clone();
+        axum::serve(listener, app(state))
+            .with_graceful_shutdown(async move {
+                wait_for_signal().await;
+                tracing::info!(
+                    "shutting down: no new jobs; running jobs get {} s",
+                    args.shutdown_grace
+                );
+                shutdown_state.core.begin_shutdown();
+            })
+            .await
+    });
+    let requeued = service.shutdown(Duration::from_secs_f64(args.shutdown_grace));
+    runtime.shutdown_timeout(Duration::from_secs(1));
+    tracing::info!(requeued, "stopped");
+    served.map_err(|e| format!("serving: {e}"))
+}
+
+async fn wait_for_signal() {
+    let ctrl_c = async {
+        if tokio::signal::ctrl_c().await.is_err() {
+            std::future::pending::<()>().await;
+        }
+    };
+    #[cfg(unix)]
+    let term = async {
+        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            Ok(mut s) => {
+                s.recv().await;
+            }
+            Err(_) => std::future::pending::<()>().await,
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! {
+        _ = ctrl_c => {},
+        _ = term => {},
+    }
 }

@@ -1,0 +1,295 @@
+//! Errors of the HTTP layer as RFC 9457 problem details (`application/problem+json`). Every
+//! failure a client can cause names what was wrong: `pointer` (a JSON pointer into the request
+//! body) or `parameter` (a path or query parameter). Internal failures are logged with their
+//! cause and reported to the client without it.
+use axum::http::{header, HeaderValue, StatusCode};
+use axum::response::{IntoResponse, Response};
+use serde::Serialize;
+
+/// One error response.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ApiError {
+    pub status: StatusCode,
+    /// Short slug; the problem `type` is `urn:ashlar:problem:<kind>`.
+    pub kind: &'static str,
+    pub title: &'static str,
+    pub detail: String,
+    /// JSON pointer into the request body (`/scene/blocks/1/vertices`).
+    pub pointer: Option<String>,
+    /// Name of the offending path or query parameter.
+    pub parameter: Option<String>,
+    /// Seconds, for 503 answers.
+    pub retry_after: Option<u32>,
+}
+
+#[derive(Serialize)]
+struct Body<'a> {
+    #[serde(rename = "type")]
+    kind: String,
+    title: &'a str,
+    status: u16,
+    detail: &'a str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pointer: Option<&'a str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    parameter: Option<&'a str>,
+}
+
+impl ApiError {
+    fn new(
+        status: StatusCode,
+        kind: &'static str,
+        title: &'static str,
+        detail: impl Into<String>,
+    ) -> Self {
+        Self {
+            status,
+            kind,
+            title,
+            detail: detail.into(),
+            pointer: None,
+            parameter: None,
+            retry_after: None,
+        }
+    }
+
+    pub fn with_pointer(mut self, pointer: impl Into<String>) -> Self {
+        self.pointer = Some(pointer.into());
+        self
+    }
+
+    pub fn with_parameter(mut self, name: impl Into<String>) -> Self {
+        self.parameter = Some(name.into());
+        self
+    }
+
+    /// The body is not JSON at all (syntax error, wrong encoding).
+    pub fn malformed_json(detail: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::BAD_REQUEST,
+            "malformed-json",
+            "Request body is not valid JSON",
+            detail,
+        )
+    }
+
+    /// The body is JSON but a field is missing, unknown, of the wrong type or out of range.
+    pub fn invalid_field(pointer: impl Into<String>, detail: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "invalid-field",
+            "Request field is invalid",
+            detail,
+        )
+        .with_pointer(pointer)
+    }
+
+    /// A path or query parameter is malformed.
+    pub fn invalid_parameter(name: impl Into<String>, detail: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::BAD_REQUEST,
+            "invalid-parameter",
+            "Request parameter is invalid",
+            detail,
+        )
+        .with_parameter(name)
+    }
+
+    /// A configured limit is exceeded by a field of the body (blocks, record length, steps).
+    pub fn limit_exceeded(pointer: impl Into<String>, detail: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "limit-exceeded",
+            "Request exceeds a server limit",
+            detail,
+        )
+        .with_pointer(pointer)
+    }
+
+    pub fn payload_too_large(limit: usize) -> Self {
+        Self::new(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            "payload-too-large",
+            "Request body too large",
+            format!("the request body exceeds the server's limit of {limit} bytes (see `ashlar serve --max-body-bytes`)"),
+        )
+        .with_pointer("")
+    }
+
+    pub fn unsupported_media_type(got: &str) -> Self {
+        Self::new(
+            StatusCode::UNSUPPORTED_MEDIA_TYPE,
+            "unsupported-media-type",
+            "Unsupported media type",
+            format!("the body must be sent with Content-Type: application/json, got {got:?}"),
+        )
+        .with_parameter("Content-Type")
+    }
+
+    pub fn not_found(what: &str, id: impl std::fmt::Display) -> Self {
+        Self::new(
+            StatusCode::NOT_FOUND,
+            "not-found",
+            "Not found",
+            format!("no {what} with id {id}"),
+        )
+        .with_parameter("id")
+    }
+
+    /// Something the request names (e.g. `?block=`) does not exist in an existing resource.
+    pub fn not_found_parameter(name: &str, detail: impl Into<String>) -> Self {
+        Self::new(StatusCode::NOT_FOUND, "not-found", "Not found", detail).with_parameter(name)
+    }
+
+    pub fn no_route(path: &str) -> Self {
+        Self::new(
+            StatusCode::NOT_FOUND,
+            "no-route",
+            "No such endpoint",
+            format!("no endpoint at {path}; see /openapi.yaml"),
+        )
+    }
+
+    /// The resource exists but is not in a state that has what was asked for.
+    pub fn conflict(detail: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::CONFLICT,
+            "conflict",
+            "Not available in the job's current state",
+            detail,
+        )
+        .with_parameter("id")
+    }
+
+    pub fn not_acceptable(detail: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::NOT_ACCEPTABLE,
+            "not-acceptable",
+            "Not acceptable",
+            detail,
+        )
+        .with_parameter("Accept")
+    }
+
+    pub fn range_not_satisfiable(detail: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::RANGE_NOT_SATISFIABLE,
+            "range-not-satisfiable",
+            "Range not satisfiable",
+            detail,
+        )
+        .with_parameter("Range")
+    }
+
+    pub fn unavailable(detail: impl Into<String>, retry_after: u32) -> Self {
+        let mut e = Self::new(
+            StatusCode::SERVICE_UNAVAILABLE,
+            "unavailable",
+            "Service unavailable",
+            detail,
+        );
+        e.retry_after = Some(retry_after);
+        e
+    }
+
+    /// An internal failure: `cause` goes to the log, the client gets a generic message.
+    pub fn internal(cause: impl std::fmt::Display) -> Self {
+        tracing::error!(%cause, "internal error");
+        Self::new(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            "internal",
+            "Internal server error",
+            "the server failed to handle the request; the cause has been logged",
+        )
+    }
+
+    pub fn type_uri(&self) -> String {
+        format!("urn:ashlar:problem:{}", self.kind)
+    }
+}
+
+impl std::fmt::Display for ApiError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} {}: {}",
+            self.status.as_u16(),
+            self.title,
+            self.detail
+        )
+    }
+}
+
+impl IntoResponse for ApiError {
+    fn into_response(self) -> Response {
+        let body = Body {
+            kind: self.type_uri(),
+            title: self.title,
+            status: self.status.as_u16(),
+            detail: &self.detail,
+            pointer: self.pointer.as_deref(),
+            parameter: self.parameter.as_deref(),
+        };
+        let text = serde_json::to_string(&body).unwrap_or_else(|_| "{}".into());
+        let mut resp = (self.status, text).into_response();
+        resp.headers_mut().insert(
+            header::CONTENT_TYPE,
+            HeaderValue::from_static("application/problem+json"),
+        );
+        if let Some(s) = self.retry_after {
+            resp.headers_mut()
+                .insert(header::RETRY_AFTER, HeaderValue::from(s));
+        }
+        resp
+    }
+}
+
+/// Turn a scene-style dotted path (`blocks[2].vertices[0]`, `materials.stone.density`) into a
+/// JSON pointer below `prefix` (`/scene/blocks/2/vertices/0`). serde_path_to_error's `.` for
+/// "the whole document" maps to `prefix` itself.
+pub fn dotted_to_pointer(prefix: &str, path: &str) -> String {
+    let mut out = String::from(prefix);
+    if path.is_empty() || path == "." || path == "(document)" {
+        return out;
+    }
+    let mut seg = String::new();
+    let flush = |seg: &mut String, out: &mut String| {
+        if !seg.is_empty() {
+            out.push('/');
+            out.push_str(&seg.replace('~', "~0").replace('/', "~1"));
+            seg.clear();
+        }
+    };
+    for ch in path.chars() {
+        match ch {
+            '.' | '[' => flush(&mut seg, &mut out),
+            ']' => {}
+            c => seg.push(c),
+        }
+    }
+    flush(&mut seg, &mut out);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pointers_from_dotted_paths() {
+        assert_eq!(
+            dotted_to_pointer("/scene", "blocks[2].vertices[0]"),
+            "/scene/blocks/2/vertices/0"
+        );
+        assert_eq!(
+            dotted_to_pointer("/scene", "materials.stone.density"),
+            "/scene/materials/stone/density"
+        );
+        assert_eq!(dotted_to_pointer("/scene", "."), "/scene");
+        assert_eq!(
+            dotted_to_pointer("", "motion.horizontal.pulse"),
+            "/motion/horizontal/pulse"
+        );
+        assert_eq!(dotted_to_pointer("/x", "a/b"), "/x/a~1b");
+    }
+}

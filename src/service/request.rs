@@ -1,0 +1,662 @@
+//! Request bodies of the service: JSON text → validated [`JobInput`], with the server's limits
+//! applied. Used twice with the same rules: by the routes when a job is submitted (errors become
+//! 400/413/422 problems naming the field) and by a worker when it starts the stored job.
+use super::problem::{dotted_to_pointer, ApiError};
+use crate::analysis::pga::{Criterion, PgaRequest};
+use crate::motion::{GroundMotion, Signal, Units};
+use crate::scene::Scene;
+use serde::Deserialize;
+use serde_json::Value;
+
+/// Limits that protect the server from requests that would exhaust it. Each is a flag of
+/// `ashlar serve`; exceeding one is answered with 413 (body size) or 422 naming the field.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Limits {
+    /// Bytes of a request body. 16 MiB holds a 40-minute AT2 record at 200 Hz as text (~5 MB)
+    /// three times over, while bounding what one request can make the server buffer.
+    pub max_body_bytes: usize,
+    /// Blocks in a scene. 5000 covers a large masonry façade; contact detection grows faster
+    /// than linearly in the block count, so far beyond that one job would hog a worker for hours.
+    pub max_blocks: usize,
+    /// Samples in a ground-motion record (both components together). 1 000 000 is 83 minutes at
+    /// 200 Hz: every real record fits, a runaway upload does not.
+    pub max_record_samples: usize,
+    /// Nominal steps of one run, duration / time_step. 2 000 000 is 2000 s at the default 1 ms
+    /// step: hours of CPU for a large scene, the most a shared server should give to one run.
+    /// The engine's own hard cap (`control.max_steps`) is set to ten times this, leaving room for
+    /// the adaptive step's cuts. Recorded frames (duration / output_interval) are held to the
+    /// same number, since each one costs memory and output.
+    pub max_total_steps: u64,
+    /// Vertices of one block. Validation checks every pair of edges for crossings (quadratic),
+    /// so an unbounded polygon would let one request stall the server; 1000 is far more than a
+    /// masonry unit or an arch voussoir needs.
+    pub max_block_vertices: usize,
+    /// Coarse scan points of a PGA search (each one a full run).
+    pub max_scan_points: usize,
+    /// Jobs waiting in the queue; beyond it submissions get 503 with Retry-After.
+    pub max_queued_jobs: u64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self {
+            max_body_bytes: 16 * 1024 * 1024,
+            max_blocks: 5000,
+            max_record_samples: 1_000_000,
+            max_total_steps: 2_000_000,
+            max_block_vertices: 1000,
+            max_scan_points: 64,
+            max_queued_jobs: 100_000,
+        }
+    }
+}
+
+/// A validated job, ready for a runner.
+#[derive(Debug, Clone)]
+pub enum JobInput {
+    Run {
+        scene: Scene,
+        motion: GroundMotion,
+    },
+    PgaSearch {
+        scene: Scene,
+        motion: GroundMotion,
+        request: PgaRequest,
+        criterion: String,
+    },
+}
+
+impl JobInput {
+    pub fn scene(&self) -> &Scene {
+        match self {
+            JobInput::Run { scene, .. } | JobInput::PgaSearch { scene, .. } => scene,
+        }
+    }
+    pub fn motion(&self) -> &GroundMotion {
+        match self {
+            JobInput::Run { motion, .. } | JobInput::PgaSearch { motion, .. } => motion,
+        }
+    }
+}
+
+/// A parsed submission: the input, and the motion's intensity summary reported with the job.
+#[derive(Debug, Clone)]
+pub struct Parsed {
+    pub input: JobInput,
+    pub motion_summary: Value,
+}
+
+/// Parse body bytes as JSON (syntax errors name line and column).
+pub fn json_body(bytes: &[u8]) -> Result<Value, ApiError> {
+    if bytes.iter().all(|b| b.is_ascii_whitespace()) {
+        return Err(
+            ApiError::malformed_json("the request body is empty; expected a JSON object")
+                .with_pointer(""),
+        );
+    }
+    serde_json::from_slice(bytes).map_err(|e| {
+        ApiError::malformed_json(format!(
+            "invalid JSON at line {}, column {}: {e}",
+            e.line(),
+            e.column()
+        ))
+        .with_pointer("")
+    })
+}
+
+/// serde names missing and unknown fields in its message, not in the path: point at them.
+fn point_at_named_field(pointer: String, msg: &str) -> String {
+    for marker in ["missing field `", "unknown field `"] {
+        if let Some(name) = msg
+            .strip_prefix(marker)
+            .and_then(|rest| rest.split('`').next())
+        {
+            let escaped = name.replace('~', "~0").replace('/', "~1");
+            if !pointer.ends_with(&format!("/{escaped}")) {
+                return format!("{pointer}/{escaped}");
+            }
+        }
+    }
+    pointer
+}
+
+/// Deserialize a typed body part, turning serde's message into a problem naming the field.
+fn typed<T: for<'de> Deserialize<'de>>(prefix: &str, value: &Value) -> Result<T, ApiError> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let path = e.path().to_string();
+        let msg = e.into_inner().to_string();
+        let pointer = point_at_named_field(dotted_to_pointer(prefix, &path), &msg);
+        let shown = if pointer.is_empty() {
+            "(body)"
+        } else {
+            pointer.as_str()
+        };
+        ApiError::invalid_field(pointer.clone(), format!("{shown}: {msg}"))
+    })
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RunBody {
+    scene: Value,
+    #[serde(default)]
+    motion: Option<Value>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum CriterionSpec {
+    One(String),
+    Many(Vec<String>),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RangeSpec {
+    min: f64,
+    max: f64,
+    #[serde(default = "default_units")]
+    units: Units,
+}
+
+fn default_units() -> Units {
+    Units::MetresPerSecond2
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PgaBody {
+    scene: Value,
+    motion: Value,
+    criterion: CriterionSpec,
+    range: RangeSpec,
+    #[serde(default)]
+    tolerance: Option<f64>,
+    #[serde(default)]
+    scan_points: Option<usize>,
+}
+
+/// Coarse scan points of a PGA search when the request does not say: enough to catch a
+/// non-monotonic response over a typical 0–10 m/s² range, few enough to keep a search to
+/// about a dozen runs with the bisection.
+pub const DEFAULT_SCAN_POINTS: usize = 8;
+
+/// Shape checks the scene and motion readers leave out: a motion component must not mix forms
+/// or carry unknown keys (the reader picks the first form it recognises and would silently
+/// ignore the rest), and a `base_acceleration` excitation takes no other field.
+fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), ApiError> {
+    if let Some(ex) = scene.get("excitation").and_then(Value::as_object) {
+        let allowed: &[&str] = match ex.get("type").and_then(Value::as_str) {
+            Some("driven_block") => &["type", "block"],
+            _ => &["type"],
+        };
+        if let Some(k) = ex.keys().find(|k| !allowed.contains(&k.as_str())) {
+            let p = format!("/scene/excitation/{k}");
+            return Err(ApiError::invalid_field(
+                p.clone(),
+                format!("{p}: unknown field for this excitation type"),
+            ));
+        }
+    }
+    if let Some(scale) = motion
+        .and_then(|m| m.get("scale"))
+        .and_then(Value::as_object)
+    {
+        if let Some((k, _)) = scale.iter().find(|(_, v)| v.is_null()) {
+            let p = format!("/motion/scale/{k}");
+            return Err(ApiError::invalid_field(
+                p.clone(),
+                format!("{p}: must not be null (leave it out instead)"),
+            ));
+        }
+    }
+    for name in ["horizontal", "vertical"] {
+        let Some(c) = motion.and_then(|m| m.get(name)).and_then(Value::as_object) else {
+            continue;
+        };
+        let forms: [&[&str]; 4] = [
+            &["pulse"],
+            &["sine"],
+            &["samples", "dt", "units"],
+            &["format", "content", "units"],
+        ];
+        let Some(form) = forms.iter().find(|f| c.contains_key(f[0])) else {
+            continue;
+        };
+        if let Some(k) = c.keys().find(|k| !form.contains(&k.as_str())) {
+            let p = format!("/motion/{name}/{k}");
+            return Err(ApiError::invalid_field(
+                p.clone(),
+                format!(
+                    "{p}: unknown field for a {:?} component (allowed: {})",
+                    form[0],
+                    form.join(", ")
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Sizes checked on the raw JSON, before any work proportional to them: vertices per block,
+/// and the length of analytic pulses (counted as 20 samples a cycle against the record limit,
+/// since evaluating a pulse's peak walks its cycles).
+fn check_sizes(scene: &Value, motion: Option<&Value>, limits: &Limits) -> Result<(), ApiError> {
+    let blocks = scene
+        .get("blocks")
+        .and_then(Value::as_array)
+        .map(Vec::as_slice)
+        .unwrap_or_default();
+    for (i, b) in blocks.iter().enumerate() {
+        let n = b
+            .get("vertices")
+            .and_then(Value::as_array)
+            .map(Vec::len)
+            .unwrap_or(0);
+        if n > limits.max_block_vertices {
+            let p = format!("/scene/blocks/{i}/vertices");
+            return Err(ApiError::limit_exceeded(
+                p.clone(),
+                format!(
+                    "{p}: {n} vertices exceed the server's limit of {} per block",
+                    limits.max_block_vertices
+                ),
+            ));
+        }
+    }
+    for name in ["horizontal", "vertical"] {
+        let cycles = motion
+            .and_then(|m| m.get(name))
+            .and_then(|c| c.get("pulse"))
+            .and_then(|p| p.get("cycles"))
+            .and_then(Value::as_f64)
+            .unwrap_or(0.0);
+        if cycles * 20.0 > limits.max_record_samples as f64 {
+            let p = format!("/motion/{name}/pulse/cycles");
+            return Err(ApiError::limit_exceeded(
+                p.clone(),
+                format!(
+                    "{p}: {cycles} cycles is longer than the server's record limit allows ({} cycles; ashlar serve --max-record-samples)",
+                    limits.max_record_samples / 20
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn scene_and_motion(
+    scene: &Value,
+    motion: Option<&Value>,
+    limits: &Limits,
+) -> Result<(Scene, GroundMotion), ApiError> {
+    check_shapes(scene, motion)?;
+    check_sizes(scene, motion, limits)?;
+    if let Some(n) = scene.get("blocks").and_then(Value::as_array).map(Vec::len) {
+        if n > limits.max_blocks {
+            return Err(ApiError::limit_exceeded(
+                "/scene/blocks",
+                format!("/scene/blocks: {n} blocks exceed the server's limit of {} (ashlar serve --max-blocks)", limits.max_blocks),
+            ));
+        }
+    }
+    let mut scene = crate::scene::scene_from_value(scene).map_err(|e| {
+        let p = point_at_named_field(dotted_to_pointer("/scene", &e.path), &e.message);
+        ApiError::invalid_field(p.clone(), format!("{p}: {}", e.message))
+    })?;
+    let motion = match motion {
+        None | Some(Value::Null) => GroundMotion::none(),
+        Some(v) => crate::motion::from_json(v).map_err(|e| {
+            let p = point_at_named_field(dotted_to_pointer("", &e.origin), &e.message);
+            let line = e
+                .line
+                .map(|l| format!(" (line {l} of the record)"))
+                .unwrap_or_default();
+            ApiError::invalid_field(p.clone(), format!("{p}{line}: {}", e.message))
+        })?,
+    };
+    let samples = signal_samples(&motion.horizontal) + signal_samples(&motion.vertical);
+    if samples > limits.max_record_samples {
+        return Err(ApiError::limit_exceeded(
+            "/motion",
+            format!(
+                "/motion: the record has {samples} samples, over the server's limit of {} (ashlar serve --max-record-samples)",
+                limits.max_record_samples
+            ),
+        ));
+    }
+    let duration = match scene.control.duration.or_else(|| motion.duration().map(|d| d + 2.0)) {
+        Some(d) => d,
+        None => {
+            return Err(ApiError::invalid_field(
+                "/scene/control/duration",
+                "/scene/control/duration: required when the motion has no length (no record, or a steady sine)",
+            ))
+        }
+    };
+    let frames = (duration / scene.control.output_interval).ceil();
+    if frames.is_nan() || frames > limits.max_total_steps as f64 {
+        return Err(ApiError::limit_exceeded(
+            "/scene/control/output_interval",
+            format!(
+                "/scene/control/output_interval: {duration} s recorded every {} s is {frames:.0} frames, over the server's \
+                 limit of {} (ashlar serve --max-total-steps)",
+                scene.control.output_interval, limits.max_total_steps
+            ),
+        ));
+    }
+    let steps = (duration / scene.control.time_step).ceil();
+    if steps.is_nan() || steps > limits.max_total_steps as f64 {
+        return Err(ApiError::limit_exceeded(
+            "/scene/control/duration",
+            format!(
+                "/scene/control/duration: {duration} s at a time step of {} s is {steps:.0} steps, over the server's limit of {} \
+                 (ashlar serve --max-total-steps); shorten the duration or lengthen control.time_step",
+                scene.control.time_step, limits.max_total_steps
+            ),
+        ));
+    }
+    scene.control.max_steps = scene
+        .control
+        .max_steps
+        .min(limits.max_total_steps.saturating_mul(10));
+    Ok((scene, motion))
+}
+
+fn signal_samples(s: &Signal) -> usize {
+    match s {
+        Signal::Sampled(x) => x.accel.len(),
+        _ => 0,
+    }
+}
+
+/// The intensity summary reported with a job: peak horizontal acceleration after scaling (m/s²),
+/// record length (s, null for steady or no motion), samples, provenance.
+pub fn motion_summary(m: &GroundMotion) -> Value {
+    let npts = signal_samples(&m.horizontal);
+    let dt = match &m.horizontal {
+        Signal::Sampled(s) => Some(s.dt),
+        _ => None,
+    };
+    serde_json::json!({
+        "pga": m.pga(),
+        "pga_units": "m/s2",
+        "duration": m.duration(),
+        "npts": if npts > 0 { Some(npts) } else { None },
+        "dt": dt,
+        "scale": m.scale,
+        "has_vertical": !matches!(m.vertical, Signal::Zero),
+        "provenance": m.provenance,
+    })
+}
+
+/// `POST /v1/jobs` body → run input.
+pub fn parse_run(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
+    if !body.is_object() {
+        return Err(ApiError::invalid_field(
+            "",
+            "the body must be a JSON object {\"scene\": …, \"motion\": …}",
+        ));
+    }
+    let b: RunBody = typed("", body)?;
+    let (scene, motion) = scene_and_motion(&b.scene, b.motion.as_ref(), limits)?;
+    let motion_summary = motion_summary(&motion);
+    Ok(Parsed {
+        input: JobInput::Run { scene, motion },
+        motion_summary,
+    })
+}
+
+/// `POST /v1/pga-searches` body → search input (amplitudes converted to m/s²).
+pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
+    if !body.is_object() {
+        return Err(ApiError::invalid_field(
+            "",
+            "the body must be a JSON object {\"scene\", \"motion\", \"criterion\", \"range\", \"tolerance\"}",
+        ));
+    }
+    let b: PgaBody = typed("", body)?;
+    if b.motion.is_null() {
+        return Err(ApiError::invalid_field(
+            "/motion",
+            "/motion: a PGA search needs a ground motion to scale",
+        ));
+    }
+    let (scene, motion) = scene_and_motion(&b.scene, Some(&b.motion), limits)?;
+    if motion.horizontal.peak() <= 0.0 {
+        return Err(ApiError::invalid_field(
+            "/motion/horizontal",
+            "/motion/horizontal: a PGA search scales the horizontal component, which is missing or zero",
+        ));
+    }
+    let texts = match b.criterion {
+        CriterionSpec::One(s) => vec![(String::from("/criterion"), s)],
+        CriterionSpec::Many(v) => v
+            .into_iter()
+            .enumerate()
+            .map(|(i, s)| (format!("/criterion/{i}"), s))
+            .collect(),
+    };
+    if texts.is_empty() {
+        return Err(ApiError::invalid_field(
+            "/criterion",
+            "/criterion: give at least one criterion",
+        ));
+    }
+    let mut criteria = Vec::new();
+    for (p, t) in &texts {
+        let c = Criterion::parse(t)
+            .map_err(|e| ApiError::invalid_field(p.clone(), format!("{p}: {e}")))?;
+        let block = match &c {
+            Criterion::Toppled { block }
+            | Criterion::Displacement { block, .. }
+            | Criterion::Rotation { block, .. } => block,
+        };
+        let free = scene
+            .block_index(block)
+            .is_some_and(|i| matches!(scene.blocks[i].kind, crate::scene::BlockKind::Free(_)));
+        if !free {
+            return Err(ApiError::invalid_field(
+                p.clone(),
+                format!("{p}: {block:?} is not a free block of the scene"),
+            ));
+        }
+        criteria.push(c);
+    }
+    let k = b.range.units.to_si();
+    let (min, max) = (b.range.min, b.range.max);
+    if !(min.is_finite() && min >= 0.0) {
+        return Err(ApiError::invalid_field(
+            "/range/min",
+            format!("/range/min: must be a finite number ≥ 0, got {min}"),
+        ));
+    }
+    if !(max.is_finite() && max > min) {
+        return Err(ApiError::invalid_field(
+            "/range/max",
+            format!("/range/max: must be finite and > range.min, got {max}"),
+        ));
+    }
+    // Default resolution: 1 % of the searched range.
+    let tolerance = b.tolerance.unwrap_or((max - min) / 100.0);
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(ApiError::invalid_field(
+            "/tolerance",
+            format!("/tolerance: must be a finite number > 0, got {tolerance}"),
+        ));
+    }
+    let scan_points = b.scan_points.unwrap_or(DEFAULT_SCAN_POINTS);
+    if !(2..=limits.max_scan_points).contains(&scan_points) {
+        return Err(ApiError::invalid_field(
+            "/scan_points",
+            format!(
+                "/scan_points: must lie in 2..={}, got {scan_points}",
+                limits.max_scan_points
+            ),
+        ));
+    }
+    let request = PgaRequest {
+        criteria,
+        min: min * k,
+        max: max * k,
+        tolerance: tolerance * k,
+        scan_points,
+    };
+    let motion_summary = motion_summary(&motion);
+    let criterion = texts
+        .iter()
+        .map(|(_, t)| t.as_str())
+        .collect::<Vec<_>>()
+        .join(",");
+    Ok(Parsed {
+        input: JobInput::PgaSearch {
+            scene,
+            motion,
+            request,
+            criterion,
+        },
+        motion_summary,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn scene() -> Value {
+        json!({
+            "format": "ashlar.scene/1",
+            "materials": {"stone": {"density": 2500, "young_modulus": 2e10, "poisson_ratio": 0.2}},
+            "joints": {"dry": {"friction_angle": 40}},
+            "blocks": [
+                {"id": "base", "material": "stone", "fixed": true, "vertices": [[-1,-0.5],[1,-0.5],[1,0],[-1,0]]},
+                {"id": "col", "material": "stone", "vertices": [[-0.2,0],[0.2,0],[0.2,1.2],[-0.2,1.2]]}
+            ],
+            "control": {"duration": 1.0}
+        })
+    }
+
+    fn pointer_of(r: Result<Parsed, ApiError>) -> String {
+        match r {
+            Ok(_) => panic!("expected an error"),
+            Err(e) => e.pointer.unwrap_or_else(|| "<none>".into()),
+        }
+    }
+
+    #[test]
+    fn errors_point_at_the_field() {
+        let l = Limits::default();
+        assert_eq!(
+            pointer_of(parse_run(&json!({"motion": null}), &l)),
+            "/scene"
+        );
+        assert_eq!(
+            pointer_of(parse_run(&json!({"scene": scene(), "extra": 1}), &l)),
+            "/extra"
+        );
+        let mut s = scene();
+        s["blocks"][1]["vertices"] = json!([[0, 0], [1, 0]]);
+        assert_eq!(
+            pointer_of(parse_run(&json!({"scene": s}), &l)),
+            "/scene/blocks/1/vertices"
+        );
+        let mut s = scene();
+        s["materials"]["stone"]["density"] = json!("heavy");
+        assert_eq!(
+            pointer_of(parse_run(&json!({"scene": s}), &l)),
+            "/scene/materials/stone/density"
+        );
+        let m = json!({"horizontal": {"pulse": {"amplitude": 1, "period": -1}}});
+        assert_eq!(
+            pointer_of(parse_run(&json!({"scene": scene(), "motion": m}), &l)),
+            "/motion/horizontal/pulse"
+        );
+    }
+
+    #[test]
+    fn limits_name_the_field() {
+        let l = Limits {
+            max_total_steps: 999,
+            ..Limits::default()
+        };
+        // 1 s at 1 ms = 1000 steps > 999.
+        let e = parse_run(&json!({"scene": scene()}), &l).expect_err("over the step limit");
+        assert_eq!(e.kind, "limit-exceeded");
+        assert_eq!(e.pointer.as_deref(), Some("/scene/control/duration"));
+        assert!(parse_run(
+            &json!({"scene": scene()}),
+            &Limits {
+                max_total_steps: 1000,
+                ..l.clone()
+            }
+        )
+        .is_ok());
+        let l = Limits {
+            max_blocks: 1,
+            ..Limits::default()
+        };
+        assert_eq!(
+            pointer_of(parse_run(&json!({"scene": scene()}), &l)),
+            "/scene/blocks"
+        );
+        let l = Limits {
+            max_block_vertices: 3,
+            ..Limits::default()
+        };
+        assert_eq!(
+            pointer_of(parse_run(&json!({"scene": scene()}), &l)),
+            "/scene/blocks/0/vertices"
+        );
+        let m = json!({"horizontal": {"pulse": {"amplitude": 1, "period": 0.1, "cycles": 1.0e12}}});
+        let e = parse_run(&json!({"scene": scene(), "motion": m}), &Limits::default())
+            .expect_err("a 1e12-cycle pulse");
+        assert_eq!(
+            e.pointer.as_deref(),
+            Some("/motion/horizontal/pulse/cycles")
+        );
+        let l = Limits {
+            max_record_samples: 3,
+            ..Limits::default()
+        };
+        let m = json!({"horizontal": {"samples": [0, 1, 0, 1], "dt": 0.01}});
+        assert_eq!(
+            pointer_of(parse_run(&json!({"scene": scene(), "motion": m}), &l)),
+            "/motion"
+        );
+    }
+
+    #[test]
+    fn pga_search_converts_units_and_checks_the_criterion() {
+        let l = Limits::default();
+        let m = json!({"horizontal": {"pulse": {"amplitude": 1, "period": 0.5, "units": "m/s2"}}});
+        let body = json!({"scene": scene(), "motion": m, "criterion": "toppled:col",
+                          "range": {"min": 0.1, "max": 1.0, "units": "g"}, "tolerance": 0.01});
+        let p = parse_pga(&body, &l).expect("valid");
+        let JobInput::PgaSearch { request, .. } = p.input else {
+            panic!("kind")
+        };
+        // g → m/s² with the standard gravity, exactly.
+        assert_eq!(request.max, 9.80665);
+        assert_eq!(request.tolerance, 0.0980665);
+        let mut bad = body.clone();
+        bad["criterion"] = json!("toppled:base");
+        assert_eq!(pointer_of(parse_pga(&bad, &l)), "/criterion");
+        let mut bad = body.clone();
+        bad["range"]["max"] = json!(0.05);
+        assert_eq!(pointer_of(parse_pga(&bad, &l)), "/range/max");
+        let mut bad = body;
+        bad["criterion"] = json!(["toppled:col", "rotation:col:x"]);
+        assert_eq!(pointer_of(parse_pga(&bad, &l)), "/criterion/1");
+    }
+
+    #[test]
+    fn duration_is_required_without_a_record() {
+        let mut s = scene();
+        s["control"] = json!({});
+        assert_eq!(
+            pointer_of(parse_run(&json!({"scene": s}), &Limits::default())),
+            "/scene/control/duration"
+        );
+    }
+}

@@ -1,0 +1,624 @@
+//! Durable job store: the service's memory. Routes write submissions here, workers claim jobs
+//! from here, and a restarted server resumes from here. [`JobStore`] is the small interface the
+//! rest of the service sees; [`SqliteStore`] is the embedded default (one file under `--data`).
+//! A PostgreSQL store for many machines implements the same trait (`claim` becomes
+//! `UPDATE … WHERE id = (SELECT … FOR UPDATE SKIP LOCKED) RETURNING …`).
+use rusqlite::{params, Connection, OptionalExtension};
+use serde::Serialize;
+use std::path::Path;
+use std::sync::Mutex;
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use uuid::Uuid;
+
+/// What a job computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JobKind {
+    /// One run of a scene under a motion (`POST /v1/jobs`).
+    Run,
+    /// A PGA threshold search (`POST /v1/pga-searches`).
+    PgaSearch,
+}
+
+impl JobKind {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            JobKind::Run => "run",
+            JobKind::PgaSearch => "pga_search",
+        }
+    }
+    fn parse(s: &str) -> Result<Self, StoreError> {
+        match s {
+            "run" => Ok(JobKind::Run),
+            "pga_search" => Ok(JobKind::PgaSearch),
+            other => Err(StoreError(format!(
+                "unknown job kind {other:?} in the store"
+            ))),
+        }
+    }
+}
+
+/// Life cycle: `queued → running → succeeded | failed | cancelled`; `running → queued` when a
+/// server stops (or dies) while the job runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JobStatus {
+    Queued,
+    Running,
+    Succeeded,
+    Failed,
+    Cancelled,
+}
+
+impl JobStatus {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            JobStatus::Queued => "queued",
+            JobStatus::Running => "running",
+            JobStatus::Succeeded => "succeeded",
+            JobStatus::Failed => "failed",
+            JobStatus::Cancelled => "cancelled",
+        }
+    }
+    fn parse(s: &str) -> Result<Self, StoreError> {
+        Ok(match s {
+            "queued" => JobStatus::Queued,
+            "running" => JobStatus::Running,
+            "succeeded" => JobStatus::Succeeded,
+            "failed" => JobStatus::Failed,
+            "cancelled" => JobStatus::Cancelled,
+            other => {
+                return Err(StoreError(format!(
+                    "unknown job status {other:?} in the store"
+                )))
+            }
+        })
+    }
+    /// No further change can happen.
+    pub fn is_terminal(self) -> bool {
+        matches!(
+            self,
+            JobStatus::Succeeded | JobStatus::Failed | JobStatus::Cancelled
+        )
+    }
+}
+
+/// A job as stored.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JobRecord {
+    pub id: Uuid,
+    pub kind: JobKind,
+    pub status: JobStatus,
+    /// The validated request body, as submitted (re-parsed by the worker).
+    pub request: serde_json::Value,
+    /// Intensity summary of the motion, computed at submission (`{"pga": …}`).
+    pub motion: serde_json::Value,
+    /// Simulated time / duration, 0..1.
+    pub progress: f64,
+    /// `summary.json` of a run or `result.json` of a PGA search, once done, as the JSON text
+    /// the runner's value serialised to. Kept as text and served verbatim: re-parsing it with
+    /// serde_json's default float parser could move a number by one ULP.
+    pub result: Option<String>,
+    /// Why the job failed (a message for the user; internals are logged, not stored here).
+    pub error: Option<String>,
+    pub cancel_requested: bool,
+    /// How many times a worker has started the job.
+    pub attempts: u32,
+    /// Unix milliseconds.
+    pub created_ms: i64,
+    pub started_ms: Option<i64>,
+    pub finished_ms: Option<i64>,
+}
+
+/// A new job to enqueue.
+#[derive(Debug, Clone)]
+pub struct NewJob {
+    pub id: Uuid,
+    pub kind: JobKind,
+    pub request: serde_json::Value,
+    pub motion: serde_json::Value,
+}
+
+/// How a claimed job ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Finish {
+    Succeeded(serde_json::Value),
+    Failed(String),
+    /// Stopped by the user; `result` holds the partial summary where the runner gave one.
+    Cancelled(Option<serde_json::Value>),
+}
+
+/// What `request_cancel` did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CancelOutcome {
+    /// The job was queued and is now cancelled.
+    CancelledQueued,
+    /// The job is running; its worker will stop it within one step.
+    Requested,
+    /// The job had already finished with this status; nothing changed.
+    AlreadyFinished(JobStatus),
+    NotFound,
+}
+
+/// Queue depth by status, for `/healthz` and the load test.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Counts {
+    pub queued: u64,
+    pub running: u64,
+    pub succeeded: u64,
+    pub failed: u64,
+    pub cancelled: u64,
+}
+
+/// A store failure (I/O, corruption). Logged in full; clients see a generic 500/503.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("job store: {0}")]
+pub struct StoreError(pub String);
+
+impl From<rusqlite::Error> for StoreError {
+    fn from(e: rusqlite::Error) -> Self {
+        StoreError(e.to_string())
+    }
+}
+
+/// The durable queue. Every method is one transaction; implementations must make `claim`
+/// atomic across processes (two workers never get the same job).
+pub trait JobStore: Send + Sync {
+    fn insert(&self, job: &NewJob) -> Result<(), StoreError>;
+    fn get(&self, id: Uuid) -> Result<Option<JobRecord>, StoreError>;
+    /// Atomically move the oldest queued job to `running` (attempts + 1) and return it.
+    fn claim(&self) -> Result<Option<JobRecord>, StoreError>;
+    /// Record progress of a running job (0..1).
+    fn set_progress(&self, id: Uuid, progress: f64) -> Result<(), StoreError>;
+    /// Move a running job to a terminal status.
+    fn finish(&self, id: Uuid, finish: &Finish) -> Result<(), StoreError>;
+    /// Put a running job back in the queue (graceful shutdown); `refund` gives back the attempt.
+    fn requeue(&self, id: Uuid, refund: bool) -> Result<(), StoreError>;
+    fn request_cancel(&self, id: Uuid) -> Result<CancelOutcome, StoreError>;
+    /// Start-up recovery: jobs left `running` by a server that died go back to `queued`, unless
+    /// they have already been started `max_attempts` times (then they fail: a job that keeps
+    /// killing the server must not keep killing it). Returns (requeued, failed).
+    fn recover(&self, max_attempts: u32) -> Result<(usize, usize), StoreError>;
+    fn counts(&self) -> Result<Counts, StoreError>;
+}
+
+/// Unix time in milliseconds.
+pub fn now_ms() -> i64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_millis() as i64)
+        .unwrap_or(0)
+}
+
+/// RFC 3339 UTC timestamp (`2026-11-22T12:00:00.000Z`) from Unix milliseconds.
+pub fn rfc3339(ms: i64) -> String {
+    let secs = ms.div_euclid(1000);
+    let milli = ms.rem_euclid(1000);
+    let days = secs.div_euclid(86_400);
+    let sod = secs.rem_euclid(86_400);
+    // Civil date from days since 1970-01-01 (H. Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}.{milli:03}Z",
+        sod / 3600,
+        sod % 3600 / 60,
+        sod % 60
+    )
+}
+
+/// The embedded store: SQLite in WAL mode, `synchronous = FULL` so that a job acknowledged with
+/// 202 survives even a power cut. One writer connection and one reader connection (WAL lets
+/// readers proceed while a write commits), each behind a mutex.
+pub struct SqliteStore {
+    writer: Mutex<Connection>,
+    reader: Mutex<Connection>,
+}
+
+const SCHEMA: &str = "
+CREATE TABLE IF NOT EXISTS jobs (
+    seq INTEGER PRIMARY KEY AUTOINCREMENT,
+    id TEXT NOT NULL UNIQUE,
+    kind TEXT NOT NULL,
+    status TEXT NOT NULL,
+    request TEXT NOT NULL,
+    motion TEXT NOT NULL,
+    progress REAL NOT NULL DEFAULT 0,
+    result TEXT,
+    error TEXT,
+    cancel_requested INTEGER NOT NULL DEFAULT 0,
+    attempts INTEGER NOT NULL DEFAULT 0,
+    created_ms INTEGER NOT NULL,
+    started_ms INTEGER,
+    finished_ms INTEGER
+);
+CREATE INDEX IF NOT EXISTS jobs_status_seq ON jobs(status, seq);
+";
+
+const COLUMNS: &str =
+    "id, kind, status, request, motion, progress, result, error, cancel_requested, attempts, created_ms, started_ms, finished_ms";
+
+impl SqliteStore {
+    /// Open (or create) the store at `path`.
+    pub fn open(path: &Path) -> Result<Self, StoreError> {
+        let open = || -> Result<Connection, StoreError> {
+            let c = Connection::open(path)
+                .map_err(|e| StoreError(format!("{}: {e}", path.display())))?;
+            // Writers from another process (a second server on the same data) wait instead of failing.
+            c.busy_timeout(Duration::from_secs(10))?;
+            c.pragma_update(None, "journal_mode", "WAL")?;
+            c.pragma_update(None, "synchronous", "FULL")?;
+            Ok(c)
+        };
+        let writer = open()?;
+        writer.execute_batch(SCHEMA)?;
+        let reader = open()?;
+        Ok(Self {
+            writer: Mutex::new(writer),
+            reader: Mutex::new(reader),
+        })
+    }
+
+    fn write<T>(
+        &self,
+        f: impl FnOnce(&mut Connection) -> Result<T, StoreError>,
+    ) -> Result<T, StoreError> {
+        let mut c = self
+            .writer
+            .lock()
+            .map_err(|_| StoreError("writer lock poisoned".into()))?;
+        f(&mut c)
+    }
+
+    fn read<T>(
+        &self,
+        f: impl FnOnce(&Connection) -> Result<T, StoreError>,
+    ) -> Result<T, StoreError> {
+        let c = self
+            .reader
+            .lock()
+            .map_err(|_| StoreError("reader lock poisoned".into()))?;
+        f(&c)
+    }
+}
+
+fn json_col(s: Option<String>, what: &str) -> Result<Option<serde_json::Value>, StoreError> {
+    s.map(|s| {
+        serde_json::from_str(&s).map_err(|e| StoreError(format!("corrupt {what} column: {e}")))
+    })
+    .transpose()
+}
+
+fn row_to_record(row: &rusqlite::Row<'_>) -> rusqlite::Result<Result<JobRecord, StoreError>> {
+    let id: String = row.get(0)?;
+    let kind: String = row.get(1)?;
+    let status: String = row.get(2)?;
+    let request: String = row.get(3)?;
+    let motion: String = row.get(4)?;
+    let progress: f64 = row.get(5)?;
+    let result: Option<String> = row.get(6)?;
+    let error: Option<String> = row.get(7)?;
+    let cancel: i64 = row.get(8)?;
+    let attempts: i64 = row.get(9)?;
+    let created_ms: i64 = row.get(10)?;
+    let started_ms: Option<i64> = row.get(11)?;
+    let finished_ms: Option<i64> = row.get(12)?;
+    Ok((|| {
+        Ok(JobRecord {
+            id: Uuid::parse_str(&id).map_err(|e| StoreError(format!("corrupt id {id:?}: {e}")))?,
+            kind: JobKind::parse(&kind)?,
+            status: JobStatus::parse(&status)?,
+            request: json_col(Some(request), "request")?.unwrap_or_default(),
+            motion: json_col(Some(motion), "motion")?.unwrap_or_default(),
+            progress,
+            result,
+            error,
+            cancel_requested: cancel != 0,
+            attempts: u32::try_from(attempts).unwrap_or(u32::MAX),
+            created_ms,
+            started_ms,
+            finished_ms,
+        })
+    })())
+}
+
+impl JobStore for SqliteStore {
+    fn insert(&self, job: &NewJob) -> Result<(), StoreError> {
+        self.write(|c| {
+            c.execute(
+                "INSERT INTO jobs (id, kind, status, request, motion, created_ms) VALUES (?1, ?2, 'queued', ?3, ?4, ?5)",
+                params![job.id.to_string(), job.kind.as_str(), job.request.to_string(), job.motion.to_string(), now_ms()],
+            )?;
+            Ok(())
+        })
+    }
+
+    fn get(&self, id: Uuid) -> Result<Option<JobRecord>, StoreError> {
+        self.read(|c| {
+            let sql = format!("SELECT {COLUMNS} FROM jobs WHERE id = ?1");
+            c.query_row(&sql, params![id.to_string()], row_to_record)
+                .optional()?
+                .transpose()
+        })
+    }
+
+    fn claim(&self) -> Result<Option<JobRecord>, StoreError> {
+        self.write(|c| {
+            // One statement: atomic even with other processes writing the same file.
+            let sql = format!(
+                "UPDATE jobs SET status = 'running', attempts = attempts + 1, started_ms = ?1, progress = 0
+                 WHERE seq = (SELECT seq FROM jobs WHERE status = 'queued' ORDER BY seq LIMIT 1)
+                 RETURNING {COLUMNS}"
+            );
+            c.query_row(&sql, params![now_ms()], row_to_record).optional()?.transpose()
+        })
+    }
+
+    fn set_progress(&self, id: Uuid, progress: f64) -> Result<(), StoreError> {
+        self.write(|c| {
+            c.execute(
+                "UPDATE jobs SET progress = ?2 WHERE id = ?1 AND status = 'running'",
+                params![id.to_string(), progress.clamp(0.0, 1.0)],
+            )?;
+            Ok(())
+        })
+    }
+
+    fn finish(&self, id: Uuid, finish: &Finish) -> Result<(), StoreError> {
+        let (status, result, error, progress) = match finish {
+            Finish::Succeeded(v) => ("succeeded", Some(v.to_string()), None, Some(1.0)),
+            Finish::Failed(e) => ("failed", None, Some(e.clone()), None),
+            Finish::Cancelled(v) => ("cancelled", v.as_ref().map(|v| v.to_string()), None, None),
+        };
+        self.write(|c| {
+            c.execute(
+                "UPDATE jobs SET status = ?2, result = ?3, error = ?4, progress = COALESCE(?5, progress), finished_ms = ?6
+                 WHERE id = ?1 AND status = 'running'",
+                params![id.to_string(), status, result, error, progress, now_ms()],
+            )?;
+            Ok(())
+        })
+    }
+
+    fn requeue(&self, id: Uuid, refund: bool) -> Result<(), StoreError> {
+        self.write(|c| {
+            c.execute(
+                "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL,
+                        attempts = CASE WHEN ?2 THEN MAX(attempts - 1, 0) ELSE attempts END
+                 WHERE id = ?1 AND status = 'running'",
+                params![id.to_string(), refund],
+            )?;
+            Ok(())
+        })
+    }
+
+    fn request_cancel(&self, id: Uuid) -> Result<CancelOutcome, StoreError> {
+        self.write(|c| {
+            let tx = c.transaction()?;
+            let status: Option<String> =
+                tx.query_row("SELECT status FROM jobs WHERE id = ?1", params![id.to_string()], |r| r.get(0)).optional()?;
+            let Some(status) = status else {
+                return Ok(CancelOutcome::NotFound);
+            };
+            let out = match JobStatus::parse(&status)? {
+                JobStatus::Queued => {
+                    tx.execute(
+                        "UPDATE jobs SET status = 'cancelled', cancel_requested = 1, finished_ms = ?2 WHERE id = ?1",
+                        params![id.to_string(), now_ms()],
+                    )?;
+                    CancelOutcome::CancelledQueued
+                }
+                JobStatus::Running => {
+                    tx.execute("UPDATE jobs SET cancel_requested = 1 WHERE id = ?1", params![id.to_string()])?;
+                    CancelOutcome::Requested
+                }
+                s => CancelOutcome::AlreadyFinished(s),
+            };
+            tx.commit()?;
+            Ok(out)
+        })
+    }
+
+    fn recover(&self, max_attempts: u32) -> Result<(usize, usize), StoreError> {
+        self.write(|c| {
+            let tx = c.transaction()?;
+            let failed = tx.execute(
+                "UPDATE jobs SET status = 'failed', finished_ms = ?2,
+                        error = 'the server stopped ' || attempts || ' times while running this job; not retried again'
+                 WHERE status = 'running' AND attempts >= ?1",
+                params![i64::from(max_attempts), now_ms()],
+            )?;
+            // A cancel requested before the crash is honoured now rather than rerunning the job.
+            tx.execute(
+                "UPDATE jobs SET status = 'cancelled', finished_ms = ?1 WHERE status = 'running' AND cancel_requested = 1",
+                params![now_ms()],
+            )?;
+            let requeued =
+                tx.execute("UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL WHERE status = 'running'", [])?;
+            tx.commit()?;
+            Ok((requeued, failed))
+        })
+    }
+
+    fn counts(&self) -> Result<Counts, StoreError> {
+        self.read(|c| {
+            let mut st = c.prepare("SELECT status, COUNT(*) FROM jobs GROUP BY status")?;
+            let mut rows = st.query([])?;
+            let mut out = Counts::default();
+            while let Some(r) = rows.next()? {
+                let s: String = r.get(0)?;
+                let n: i64 = r.get(1)?;
+                let n = u64::try_from(n).unwrap_or(0);
+                match JobStatus::parse(&s)? {
+                    JobStatus::Queued => out.queued = n,
+                    JobStatus::Running => out.running = n,
+                    JobStatus::Succeeded => out.succeeded = n,
+                    JobStatus::Failed => out.failed = n,
+                    JobStatus::Cancelled => out.cancelled = n,
+                }
+            }
+            Ok(out)
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp_store() -> (SqliteStore, std::path::PathBuf) {
+        let dir = std::env::temp_dir().join(format!("ashlar-store-{}", Uuid::new_v4()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        (
+            SqliteStore::open(&dir.join("jobs.sqlite")).expect("open"),
+            dir,
+        )
+    }
+
+    fn job(kind: JobKind) -> NewJob {
+        NewJob {
+            id: Uuid::new_v4(),
+            kind,
+            request: serde_json::json!({"a": 1}),
+            motion: serde_json::json!({"pga": 2.0}),
+        }
+    }
+
+    #[test]
+    fn rfc3339_matches_known_instants() {
+        // Reference values from `date -u -d @SECONDS`.
+        assert_eq!(rfc3339(0), "1970-01-01T00:00:00.000Z");
+        assert_eq!(rfc3339(951_782_400_123), "2000-02-29T00:00:00.123Z");
+        assert_eq!(rfc3339(1_795_349_400_000), "2026-11-22T12:10:00.000Z");
+    }
+
+    #[test]
+    fn claims_in_submission_order_and_once() {
+        let (s, dir) = temp_store();
+        let a = job(JobKind::Run);
+        let b = job(JobKind::PgaSearch);
+        s.insert(&a).expect("insert");
+        s.insert(&b).expect("insert");
+        let first = s.claim().expect("claim").expect("a job");
+        assert_eq!(first.id, a.id);
+        assert_eq!(first.status, JobStatus::Running);
+        assert_eq!(first.attempts, 1);
+        let second = s.claim().expect("claim").expect("a job");
+        assert_eq!(second.id, b.id);
+        assert_eq!(second.kind, JobKind::PgaSearch);
+        assert!(s.claim().expect("claim").is_none());
+        assert_eq!(s.counts().expect("counts").running, 2);
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn survives_reopen_and_recovers_running_jobs() {
+        let (s, dir) = temp_store();
+        let a = job(JobKind::Run);
+        let b = job(JobKind::Run);
+        s.insert(&a).expect("insert");
+        s.insert(&b).expect("insert");
+        s.claim().expect("claim");
+        drop(s); // as if killed: `a` is left running
+        let s = SqliteStore::open(&dir.join("jobs.sqlite")).expect("reopen");
+        assert_eq!(s.recover(3).expect("recover"), (1, 0));
+        let c = s.counts().expect("counts");
+        assert_eq!((c.queued, c.running), (2, 0));
+        // The requeued job keeps its place at the head of the queue.
+        assert_eq!(s.claim().expect("claim").expect("job").id, a.id);
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn a_job_that_keeps_killing_the_server_fails_after_max_attempts() {
+        let (s, dir) = temp_store();
+        let a = job(JobKind::Run);
+        s.insert(&a).expect("insert");
+        // max_attempts = 3: the first two crashes requeue, the third fails the job.
+        for _ in 0..2 {
+            s.claim().expect("claim").expect("job");
+            assert_eq!(s.recover(3).expect("recover"), (1, 0));
+        }
+        s.claim().expect("claim").expect("job");
+        assert_eq!(s.recover(3).expect("recover"), (0, 1));
+        let r = s.get(a.id).expect("get").expect("exists");
+        assert_eq!(r.status, JobStatus::Failed);
+        assert!(r.error.unwrap_or_default().contains("3 times"));
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn cancel_paths() {
+        let (s, dir) = temp_store();
+        let q = job(JobKind::Run);
+        s.insert(&q).expect("insert");
+        assert_eq!(
+            s.request_cancel(q.id).expect("cancel"),
+            CancelOutcome::CancelledQueued
+        );
+        assert_eq!(
+            s.get(q.id).expect("get").expect("job").status,
+            JobStatus::Cancelled
+        );
+        assert!(
+            s.claim().expect("claim").is_none(),
+            "a cancelled job is never claimed"
+        );
+        let r = job(JobKind::Run);
+        s.insert(&r).expect("insert");
+        s.claim().expect("claim");
+        assert_eq!(
+            s.request_cancel(r.id).expect("cancel"),
+            CancelOutcome::Requested
+        );
+        assert!(s.get(r.id).expect("get").expect("job").cancel_requested);
+        s.finish(r.id, &Finish::Cancelled(None)).expect("finish");
+        assert_eq!(
+            s.request_cancel(r.id).expect("cancel"),
+            CancelOutcome::AlreadyFinished(JobStatus::Cancelled)
+        );
+        assert_eq!(
+            s.request_cancel(Uuid::new_v4()).expect("cancel"),
+            CancelOutcome::NotFound
+        );
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn finish_and_requeue_only_touch_running_jobs() {
+        let (s, dir) = temp_store();
+        let a = job(JobKind::Run);
+        s.insert(&a).expect("insert");
+        // Not running yet: finish is a no-op.
+        s.finish(a.id, &Finish::Failed("x".into())).expect("finish");
+        assert_eq!(
+            s.get(a.id).expect("get").expect("job").status,
+            JobStatus::Queued
+        );
+        s.claim().expect("claim");
+        s.set_progress(a.id, 0.5).expect("progress");
+        assert_eq!(s.get(a.id).expect("get").expect("job").progress, 0.5);
+        s.requeue(a.id, true).expect("requeue");
+        let r = s.get(a.id).expect("get").expect("job");
+        assert_eq!(
+            (r.status, r.attempts, r.progress),
+            (JobStatus::Queued, 0, 0.0)
+        );
+        s.claim().expect("claim");
+        s.finish(a.id, &Finish::Succeeded(serde_json::json!({"ok": true})))
+            .expect("finish");
+        let r = s.get(a.id).expect("get").expect("job");
+        assert_eq!(r.status, JobStatus::Succeeded);
+        assert_eq!(r.progress, 1.0);
+        assert_eq!(r.result.as_deref(), Some(r#"{"ok":true}"#));
+        assert!(r.finished_ms.is_some());
+        std::fs::remove_dir_all(dir).ok();
+    }
+}

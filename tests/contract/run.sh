@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Contract test: the real `ashlar serve` binary checked against openapi.yaml by schemathesis,
+# with every check enabled. Installs schemathesis (pinned) from the Python package index into a
+# virtual environment under the target directory, starts the server on a free loopback port with
+# a temporary data directory, runs the tests, stops the server. Exits non-zero on any failure.
+#
+# Usage: tests/contract/run.sh [extra schemathesis options]
+#   ASHLAR_CONTRACT_MAX_EXAMPLES  examples per operation (default 40; the run takes about 2 min)
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+ROOT=$PWD
+TARGET=${CARGO_TARGET_DIR:-$ROOT/target}
+VENV=$TARGET/contract-venv
+SCHEMATHESIS_VERSION=4.32.5
+
+# CPython 3.11's ast.parse can fail with "AST constructor recursion depth mismatch" when called
+# from several threads at once (hypothesis does, under schemathesis workers): prefer a newer
+# interpreter when there is one, and run schemathesis with one worker.
+PYTHON=python3
+for p in python3.13 python3.12; do
+    if command -v "$p" >/dev/null 2>&1 && "$p" -c 'import venv' 2>/dev/null; then PYTHON=$p; break; fi
+done
+if ! "$VENV/bin/schemathesis" --version 2>/dev/null | grep -q "$SCHEMATHESIS_VERSION"; then
+    rm -rf "$VENV"
+    "$PYTHON" -m venv "$VENV"
+    "$VENV/bin/pip" install --quiet --disable-pip-version-check "schemathesis==$SCHEMATHESIS_VERSION"
+fi
+
+cargo build --locked --quiet --bin ashlar
+BIN=$TARGET/debug/ashlar
+
+WORK=$(mktemp -d)
+"$BIN" serve --addr 127.0.0.1:0 --data "$WORK/data" --workers 1 >"$WORK/stdout" 2>"$WORK/server.log" &
+PID=$!
+cleanup() {
+    kill -TERM "$PID" 2>/dev/null || true
+    wait "$PID" 2>/dev/null || true
+    rm -rf "$WORK"
+}
+trap cleanup EXIT
+
+ADDR=""
+for _ in $(seq 1 200); do
+    ADDR=$(sed -n 's/^ashlar serve: listening on //p' "$WORK/stdout")
+    [ -n "$ADDR" ] && break
+    kill -0 "$PID" 2>/dev/null || { cat "$WORK/server.log" >&2; echo "contract: the server did not start" >&2; exit 1; }
+    sleep 0.05
+done
+[ -n "$ADDR" ] || { echo "contract: the server did not report its address" >&2; exit 1; }
+
+set +e
+# Run from the temporary directory: schemathesis keeps a cache (.schemathesis/) in its working
+# directory, which must not land in the source tree.
+cd "$WORK"
+"$VENV/bin/schemathesis" --no-color --config-file "$ROOT/tests/contract/schemathesis.toml" run "$ADDR/openapi.yaml" \
+    --url "$ADDR" \
+    --checks all \
+    --max-examples "${ASHLAR_CONTRACT_MAX_EXAMPLES:-40}" \
+    --seed 1 \
+    --workers 1 \
+    "$@"
+STATUS=$?
+set -e
+if [ "$STATUS" -ne 0 ]; then
+    echo "--- server log (tail) ---" >&2
+    tail -n 50 "$WORK/server.log" >&2
+fi
+exit "$STATUS"
