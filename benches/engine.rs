@@ -23,7 +23,12 @@ fn rocking_column(c: &mut Criterion) {
     spec.control.duration = Some(10.0);
     spec.control.time_step = Some(1e-3);
     let scene = validate(&spec).expect("column scene");
-    let pulse = GroundMotion::horizontal(Signal::Pulse { amplitude: 5.0, period: 1.0, cycles: 0.5, phase: 0.0 });
+    let pulse = GroundMotion::horizontal(Signal::Pulse {
+        amplitude: 5.0,
+        period: 1.0,
+        cycles: 0.5,
+        phase: 0.0,
+    });
     c.bench_function("rocking_column_1000_steps", |b| {
         b.iter(|| {
             let mut sim = Simulation::new(&scene, &pulse, SimParams::default());
@@ -34,7 +39,11 @@ fn rocking_column(c: &mut Criterion) {
 }
 
 fn wall(c: &mut Criterion) {
-    let spec = running_bond_wall(&WallParams { courses: 20, blocks_per_course: 20, ..Default::default() });
+    let spec = running_bond_wall(&WallParams {
+        courses: 20,
+        blocks_per_course: 20,
+        ..Default::default()
+    });
     let mut spec = spec;
     spec.control.time_step = Some(1e-3);
     spec.control.duration = Some(10.0);

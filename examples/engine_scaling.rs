@@ -12,7 +12,11 @@ fn main() {
     println!("|---|---|---|---|---|---|");
     let mut prev: Option<(f64, f64)> = None;
     for (courses, per) in [(10, 10), (20, 20), (40, 40), (80, 80)] {
-        let mut spec = running_bond_wall(&WallParams { courses, blocks_per_course: per, ..Default::default() });
+        let mut spec = running_bond_wall(&WallParams {
+            courses,
+            blocks_per_course: per,
+            ..Default::default()
+        });
         spec.control.time_step = Some(1e-3);
         let scene = validate(&spec).expect("wall");
         let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
@@ -25,9 +29,24 @@ fn main() {
         }
         let per_step = t.elapsed().as_secs_f64() / n as f64;
         let blocks = scene.blocks.len() as f64 - 1.0;
-        let exp = prev.map(|(b0, s0)| (per_step / s0).ln() / (blocks / b0).ln()).map(|e| format!("{e:.2}")).unwrap_or_default();
-        println!("| {} | {} | {} | {} | {:.3e} | {} |", blocks, sim.dofs.n, sim.contacts.contacts.len(), n, per_step, exp);
-        eprintln!("  profile {:?} iterations/step {:.2}", sim.profile, sim.stats.open_close_iterations as f64 / sim.stats.steps as f64);
+        let exp = prev
+            .map(|(b0, s0)| (per_step / s0).ln() / (blocks / b0).ln())
+            .map(|e| format!("{e:.2}"))
+            .unwrap_or_default();
+        println!(
+            "| {} | {} | {} | {} | {:.3e} | {} |",
+            blocks,
+            sim.dofs.n,
+            sim.contacts.contacts.len(),
+            n,
+            per_step,
+            exp
+        );
+        eprintln!(
+            "  profile {:?} iterations/step {:.2}",
+            sim.profile,
+            sim.stats.open_close_iterations as f64 / sim.stats.steps as f64
+        );
         prev = Some((blocks, per_step));
     }
 }

@@ -8,7 +8,11 @@ use common::*;
 use serde_json::json;
 
 fn check(alpha: f64, phi: f64, v0: f64, t_end: f64, from: f64) -> f64 {
-    let (mut v, d) = incline(alpha, phi, json!({ "time_step": 1e-3, "block_model": "rigid", "duration": t_end }));
+    let (mut v, d) = incline(
+        alpha,
+        phi,
+        json!({ "time_step": 1e-3, "block_model": "rigid", "duration": t_end }),
+    );
     if v0 != 0.0 {
         v["initial"] = json!([{ "block": "block", "velocity": [v0 * d[0], v0 * d[1]] }]);
     }

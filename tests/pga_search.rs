@@ -20,15 +20,33 @@ fn column() -> ashlar::scene::Scene {
 #[test]
 fn rocking_column_bracket_contains_housner_and_is_honest() {
     let scene = column();
-    let pulse = GroundMotion::horizontal(Signal::Pulse { amplitude: 1.0, period: 1.0, cycles: 0.5, phase: 0.0 });
+    let pulse = GroundMotion::horizontal(Signal::Pulse {
+        amplitude: 1.0,
+        period: 1.0,
+        cycles: 0.5,
+        phase: 0.0,
+    });
     let criteria = vec![Criterion::parse("toppled:column").expect("criterion")];
-    let req = PgaRequest { criteria: criteria.clone(), min: 2.0, max: 10.0, tolerance: 0.01, scan_points: 8 };
+    let req = PgaRequest {
+        criteria: criteria.clone(),
+        min: 2.0,
+        max: 10.0,
+        tolerance: 0.01,
+        scan_points: 8,
+    };
     let r = search(&scene, &pulse, &req, &RunOptions::default()).expect("search");
     let (safe, fail) = (r.safe_pga.expect("safe"), r.failing_pga.expect("failing"));
-    eprintln!("bracket [{safe:.4}, {fail:.4}] m/s² after {} runs, monotonic {}", r.runs.len(), r.monotonic);
+    eprintln!(
+        "bracket [{safe:.4}, {fail:.4}] m/s² after {} runs, monotonic {}",
+        r.runs.len(),
+        r.monotonic
+    );
     assert!(fail - safe <= 0.01 + 1e-12);
     let housner = 5.64;
-    assert!(safe <= housner * 1.02 && fail >= housner * 0.98, "bracket [{safe}, {fail}] vs {housner}");
+    assert!(
+        safe <= housner * 1.02 && fail >= housner * 0.98,
+        "bracket [{safe}, {fail}] vs {housner}"
+    );
     assert!(!evaluate(&scene, &pulse, &criteria, safe, None).expect("run"));
     assert!(evaluate(&scene, &pulse, &criteria, fail, None).expect("run"));
 }
@@ -36,11 +54,22 @@ fn rocking_column_bracket_contains_housner_and_is_honest() {
 #[test]
 fn negated_criterion_bounds_from_above_and_bad_requests_are_named() {
     let scene = column();
-    let pulse = GroundMotion::horizontal(Signal::Pulse { amplitude: 1.0, period: 1.0, cycles: 0.5, phase: 0.0 });
+    let pulse = GroundMotion::horizontal(Signal::Pulse {
+        amplitude: 1.0,
+        period: 1.0,
+        cycles: 0.5,
+        phase: 0.0,
+    });
     let not = Criterion::parse("not:toppled:column").expect("criterion");
     assert!(evaluate(&scene, &pulse, std::slice::from_ref(&not), 3.0, None).expect("run"));
     assert!(!evaluate(&scene, &pulse, &[not], 8.0, None).expect("run"));
-    let bad = PgaRequest { criteria: vec![Criterion::parse("toppled:nope").expect("parse")], min: 1.0, max: 2.0, tolerance: 0.1, scan_points: 4 };
+    let bad = PgaRequest {
+        criteria: vec![Criterion::parse("toppled:nope").expect("parse")],
+        min: 1.0,
+        max: 2.0,
+        tolerance: 0.1,
+        scan_points: 4,
+    };
     let e = search(&scene, &pulse, &bad, &RunOptions::default()).expect_err("unknown block");
     assert!(e.to_string().contains("nope"), "{e}");
     assert!(Criterion::parse("displacement:column:-1").is_err());

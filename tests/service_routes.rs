@@ -841,13 +841,17 @@ async fn shutdown_requeues_running_jobs_and_a_new_server_finishes_them() {
             .await,
         );
     }
-    wait_for(
-        &app1,
-        &format!("/v1/jobs/{}", ids[0]),
-        Duration::from_secs(20),
-        |j| j["status"] == "running",
-    )
-    .await;
+    // Both workers must have claimed a job before the shutdown (under load the second claim
+    // can lag the first by a poll interval).
+    for id in &ids[..2] {
+        wait_for(
+            &app1,
+            &format!("/v1/jobs/{id}"),
+            Duration::from_secs(20),
+            |j| j["status"] == "running",
+        )
+        .await;
+    }
     assert_eq!(
         svc.shutdown(Duration::ZERO),
         2,

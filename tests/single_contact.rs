@@ -16,7 +16,14 @@ use ashlar::motion::GroundMotion;
 use common::*;
 use serde_json::json;
 
-fn two_blocks(h: f64, gap: f64, friction: f64, control: serde_json::Value, gravity: f64, vy: f64) -> ashlar::scene::Scene {
+fn two_blocks(
+    h: f64,
+    gap: f64,
+    friction: f64,
+    control: serde_json::Value,
+    gravity: f64,
+    vy: f64,
+) -> ashlar::scene::Scene {
     let blocks = json!([
         { "id": "base", "material": "stone", "fixed": true, "vertices": [[-3.0, -1.0], [3.0, -1.0], [3.0, 0.0], [-3.0, 0.0]] },
         { "id": "block", "material": "stone", "block_model": "rigid",
@@ -32,7 +39,14 @@ fn two_blocks(h: f64, gap: f64, friction: f64, control: serde_json::Value, gravi
 fn impact(integrator: &str) -> (f64, f64, f64) {
     let h = 0.2;
     let p = 2.5e7;
-    let scene = two_blocks(h, 1e-4, 30.0, json!({ "time_step": 1e-5, "penalty_stiffness": p, "integrator": integrator, "duration": 0.05 }), 0.0, -0.5);
+    let scene = two_blocks(
+        h,
+        1e-4,
+        30.0,
+        json!({ "time_step": 1e-5, "penalty_stiffness": p, "integrator": integrator, "duration": 0.05 }),
+        0.0,
+        -0.5,
+    );
     let m = 2500.0 * 2.0 * h;
     let expected = std::f64::consts::PI * (m / (2.0 * p)).sqrt();
     let mut s = sim(&scene, &GroundMotion::none());
@@ -57,9 +71,15 @@ fn normal_impact_contact_duration_and_rebound() {
     for integrator in ["dda", "trapezoidal"] {
         let (duration, rebound, expected) = impact(integrator);
         eprintln!("{integrator}: contact {duration:.5} s (π√(m/k) = {expected:.5} s), rebound {rebound:.5} m/s");
-        assert!((duration - expected).abs() < 0.01 * expected, "{integrator}: duration {duration} vs {expected}");
+        assert!(
+            (duration - expected).abs() < 0.01 * expected,
+            "{integrator}: duration {duration} vs {expected}"
+        );
         if integrator == "trapezoidal" {
-            assert!((rebound - 0.5).abs() < 0.005 * 0.5, "rebound speed {rebound}");
+            assert!(
+                (rebound - 0.5).abs() < 0.005 * 0.5,
+                "rebound speed {rebound}"
+            );
         }
     }
 }
@@ -70,7 +90,14 @@ fn shear_stick_slide_restick() {
     let p = 1.0e6;
     let mu: f64 = 0.6;
     let m = 2500.0 * 2.0 * h;
-    let scene = two_blocks(h, 0.0, mu.atan().to_degrees(), json!({ "time_step": 1e-5, "penalty_stiffness": p, "duration": 0.1 }), G, 0.0);
+    let scene = two_blocks(
+        h,
+        0.0,
+        mu.atan().to_degrees(),
+        json!({ "time_step": 1e-5, "penalty_stiffness": p, "duration": 0.1 }),
+        G,
+        0.0,
+    );
     let mut s = sim(&scene, &GroundMotion::none());
     let kt = 2.0 * s.springs.shear;
     let w = (kt / m).sqrt();
@@ -92,7 +119,12 @@ fn shear_stick_slide_restick() {
     let b = vs1 * vs1 / (2.0 * mu * G);
     let (mut slip_at, mut restick_at) = (None, None);
     run_until(&mut s, t0 + ts4 + 0.05, |s| {
-        let sliding = s.contacts.contacts.iter().filter(|c| matches!(c.state, ContactState::Sliding { .. })).count();
+        let sliding = s
+            .contacts
+            .contacts
+            .iter()
+            .filter(|c| matches!(c.state, ContactState::Sliding { .. }))
+            .count();
         if sliding == 2 && slip_at.is_none() {
             slip_at = Some(s.time - t0);
         }
@@ -118,5 +150,8 @@ fn shear_stick_slide_restick() {
     });
     let mean = sum / n;
     eprintln!("mean position after re-stick {mean:.5e} m vs b = {b:.5e} m");
-    assert!((mean - b).abs() < 0.02 * b, "sliding distance {mean} vs {b}");
+    assert!(
+        (mean - b).abs() < 0.02 * b,
+        "sliding distance {mean} vs {b}"
+    );
 }

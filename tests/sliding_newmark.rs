@@ -39,7 +39,11 @@ fn newmark_reference(alpha: f64, phi: f64, a: f64, f: f64, t_end: f64) -> f64 {
 }
 
 fn dda(alpha_deg: f64, phi_deg: f64, a: f64, f: f64, t_end: f64) -> f64 {
-    let (v, d) = incline(alpha_deg, phi_deg, json!({ "time_step": 1e-3, "block_model": "rigid", "duration": t_end }));
+    let (v, d) = incline(
+        alpha_deg,
+        phi_deg,
+        json!({ "time_step": 1e-3, "block_model": "rigid", "duration": t_end }),
+    );
     let scene = parse(&v);
     let mut s = sim(&scene, &sine(a, f));
     run(&mut s, t_end, |_| {});
@@ -51,7 +55,10 @@ fn check(alpha: f64, phi: f64, a: f64, f: f64, t_end: f64) {
     let reference = newmark_reference(alpha.to_radians(), phi.to_radians(), a, f, t_end);
     let num = dda(alpha, phi, a, f, t_end);
     let err = ((num - reference) / reference).abs();
-    eprintln!("α={alpha} φ={phi} A={a} f={f}: DDA {num:.5} m, Newmark {reference:.5} m, error {:.3} %", 100.0 * err);
+    eprintln!(
+        "α={alpha} φ={phi} A={a} f={f}: DDA {num:.5} m, Newmark {reference:.5} m, error {:.3} %",
+        100.0 * err
+    );
     assert!(reference.abs() > 1e-3, "the case must slide");
     assert!(err < 0.02, "α={alpha} φ={phi}: error {err}");
 }

@@ -30,14 +30,18 @@ impl Criterion {
     /// Parse the command-line / API form.
     pub fn parse(text: &str) -> Result<Self, String> {
         if let Some(rest) = text.strip_prefix("not:") {
-            return Ok(Criterion::Not { inner: Box::new(Criterion::parse(rest)?) });
+            return Ok(Criterion::Not {
+                inner: Box::new(Criterion::parse(rest)?),
+            });
         }
         let parts: Vec<&str> = text.split(':').collect();
         let num = |s: &str, what: &str| -> Result<f64, String> {
             s.parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite() && *v > 0.0)
-                .ok_or_else(|| format!("criterion {text:?}: {what} must be a positive number, got {s:?}"))
+                .ok_or_else(|| {
+                    format!("criterion {text:?}: {what} must be a positive number, got {s:?}")
+                })
         };
         match parts.as_slice() {
             ["toppled", b] if !b.is_empty() => Ok(Criterion::Toppled { block: b.to_string() }),
@@ -57,23 +61,30 @@ impl Criterion {
         }
     }
 
-    fn block(&self) -> &str {
+    /// The block the criterion observes.
+    pub fn block(&self) -> &str {
         match self {
-            Criterion::Toppled { block } | Criterion::Displacement { block, .. } | Criterion::Rotation { block, .. } => block,
+            Criterion::Toppled { block }
+            | Criterion::Displacement { block, .. }
+            | Criterion::Rotation { block, .. } => block,
             Criterion::Not { inner } => inner.block(),
         }
     }
 
     /// Is the criterion met by the run's final state?
     fn met(&self, tr: &Tracker) -> bool {
-        let Some(k) = tr.index_of(self.block()) else { return false };
+        let Some(k) = tr.index_of(self.block()) else {
+            return false;
+        };
         match self {
             Criterion::Toppled { .. } => tr.final_rotation[k].abs() > 30f64.to_radians(),
             Criterion::Displacement { metres, .. } => {
                 let d = tr.final_displacement[k];
                 (d[0] * d[0] + d[1] * d[1]).sqrt() >= *metres
             }
-            Criterion::Rotation { degrees, .. } => tr.final_rotation[k].abs() >= degrees.to_radians(),
+            Criterion::Rotation { degrees, .. } => {
+                tr.final_rotation[k].abs() >= degrees.to_radians()
+            }
             Criterion::Not { inner } => !inner.met(tr),
         }
     }
@@ -125,34 +136,64 @@ fn all_met(criteria: &[Criterion], tr: &Tracker) -> bool {
 
 fn validate(scene: &Scene, motion: &GroundMotion, req: &PgaRequest) -> Result<(), RunError> {
     if req.criteria.is_empty() {
-        return Err(RunError::Invalid("criterion: at least one is required".into()));
+        return Err(RunError::Invalid(
+            "criterion: at least one is required".into(),
+        ));
     }
     for c in &req.criteria {
         let id = c.block();
-        if scene.block_index(id).is_none_or(|b| !matches!(scene.blocks[b].kind, crate::scene::BlockKind::Free(_))) {
-            return Err(RunError::Invalid(format!("criterion {:?}: no free block with id {id:?}", c.text())));
+        if scene
+            .block_index(id)
+            .is_none_or(|b| !matches!(scene.blocks[b].kind, crate::scene::BlockKind::Free(_)))
+        {
+            return Err(RunError::Invalid(format!(
+                "criterion {:?}: no free block with id {id:?}",
+                c.text()
+            )));
         }
     }
     if !(req.min.is_finite() && req.max.is_finite() && req.min >= 0.0 && req.max > req.min) {
-        return Err(RunError::Invalid(format!("range: need 0 ≤ min < max, got min {} max {}", req.min, req.max)));
+        return Err(RunError::Invalid(format!(
+            "range: need 0 ≤ min < max, got min {} max {}",
+            req.min, req.max
+        )));
     }
     if !(req.tolerance.is_finite() && req.tolerance > 0.0) {
-        return Err(RunError::Invalid(format!("tolerance: must be > 0, got {}", req.tolerance)));
+        return Err(RunError::Invalid(format!(
+            "tolerance: must be > 0, got {}",
+            req.tolerance
+        )));
     }
     if req.scan_points < 2 || req.scan_points > 1000 {
-        return Err(RunError::Invalid(format!("scan_points: must lie in 2..=1000, got {}", req.scan_points)));
+        return Err(RunError::Invalid(format!(
+            "scan_points: must lie in 2..=1000, got {}",
+            req.scan_points
+        )));
     }
     if motion.horizontal.peak() <= 0.0 {
-        return Err(RunError::Invalid("motion: the horizontal record is zero everywhere and cannot be scaled to a PGA".into()));
+        return Err(RunError::Invalid(
+            "motion: the horizontal record is zero everywhere and cannot be scaled to a PGA".into(),
+        ));
     }
     Ok(())
 }
 
 /// Evaluate the criteria at one amplitude (m/s²), stopping the run as soon as they are decided.
-pub fn evaluate(scene: &Scene, motion: &GroundMotion, criteria: &[Criterion], pga: f64, cancel: Option<&std::sync::atomic::AtomicBool>) -> Result<bool, RunError> {
+pub fn evaluate(
+    scene: &Scene,
+    motion: &GroundMotion,
+    criteria: &[Criterion],
+    pga: f64,
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<bool, RunError> {
     let gm = motion.scaled_to_pga(pga);
     let decided = |tr: &Tracker| criteria.iter().all(|c| c.decided(tr).is_some());
-    let opts = RunOptions { stop_when: Some(&decided), cancel, no_trajectory: true, ..Default::default() };
+    let opts = RunOptions {
+        stop_when: Some(&decided),
+        cancel,
+        no_trajectory: true,
+        ..Default::default()
+    };
     let mut fin = None;
     let outcome = run(scene, &gm, &opts)?;
     // Re-derive the verdict from the tracker state captured in the summary.
@@ -170,16 +211,26 @@ pub fn evaluate(scene: &Scene, motion: &GroundMotion, criteria: &[Criterion], pg
 }
 
 /// Search for the threshold amplitude.
-pub fn search(scene: &Scene, motion: &GroundMotion, req: &PgaRequest, opts: &RunOptions) -> Result<PgaResult, RunError> {
+pub fn search(
+    scene: &Scene,
+    motion: &GroundMotion,
+    req: &PgaRequest,
+    opts: &RunOptions,
+) -> Result<PgaResult, RunError> {
     validate(scene, motion, req)?;
     let cancel = opts.cancel;
     let eval_many = |pgas: &[f64]| -> Result<Vec<PgaRun>, RunError> {
         pgas.par_iter()
-            .map(|&pga| evaluate(scene, motion, &req.criteria, pga, cancel).map(|failed| PgaRun { pga, failed }))
+            .map(|&pga| {
+                evaluate(scene, motion, &req.criteria, pga, cancel)
+                    .map(|failed| PgaRun { pga, failed })
+            })
             .collect()
     };
     let n = req.scan_points;
-    let grid: Vec<f64> = (0..n).map(|k| req.min + (req.max - req.min) * k as f64 / (n - 1) as f64).collect();
+    let grid: Vec<f64> = (0..n)
+        .map(|k| req.min + (req.max - req.min) * k as f64 / (n - 1) as f64)
+        .collect();
     let mut runs = eval_many(&grid)?;
     if let Some(p) = opts.progress {
         p(0.5);
@@ -203,7 +254,9 @@ pub fn search(scene: &Scene, motion: &GroundMotion, req: &PgaRequest, opts: &Run
             return Err(RunError::Invalid("cancelled".into()));
         }
         // Split the bracket into workers + 1 parts and evaluate the interior points together.
-        let pts: Vec<f64> = (1..=workers).map(|k| s + (f - s) * k as f64 / (workers + 1) as f64).collect();
+        let pts: Vec<f64> = (1..=workers)
+            .map(|k| s + (f - s) * k as f64 / (workers + 1) as f64)
+            .collect();
         let round = eval_many(&pts)?;
         match round.iter().position(|r| r.failed) {
             Some(0) => fail = Some(round[0].pga),
@@ -216,12 +269,21 @@ pub fn search(scene: &Scene, motion: &GroundMotion, req: &PgaRequest, opts: &Run
         runs.extend(round);
     }
     let monotonic = monotonic_scan && {
-        let lowest_fail = runs.iter().filter(|r| r.failed).map(|r| r.pga).fold(f64::INFINITY, f64::min);
+        let lowest_fail = runs
+            .iter()
+            .filter(|r| r.failed)
+            .map(|r| r.pga)
+            .fold(f64::INFINITY, f64::min);
         runs.iter().all(|r| r.failed || r.pga < lowest_fail)
     };
     runs.sort_by(|a, b| a.pga.total_cmp(&b.pga));
     Ok(PgaResult {
-        criterion: req.criteria.iter().map(Criterion::text).collect::<Vec<_>>().join(","),
+        criterion: req
+            .criteria
+            .iter()
+            .map(Criterion::text)
+            .collect::<Vec<_>>()
+            .join(","),
         safe_pga: safe,
         failing_pga: fail,
         units: "m/s2".into(),

@@ -4,7 +4,9 @@ use crate::contact::{ContactState, Mobility};
 use crate::motion::GroundMotion;
 use crate::record::histories::HistoryWriter;
 use crate::record::mcap::{McapParams, McapRecorder};
-use crate::record::{BlockFrame, BlockMotionState, Frame, FrameBlockKind, GroundFrame, RecordHeader};
+use crate::record::{
+    BlockFrame, BlockMotionState, Frame, FrameBlockKind, GroundFrame, RecordHeader,
+};
 use crate::scene::{ModelChoice, Scene};
 use crate::simulation::{SimParams, Simulation};
 use serde::{Deserialize, Serialize};
@@ -120,7 +122,12 @@ pub struct FailureParams {
 
 impl Default for FailureParams {
     fn default() -> Self {
-        Self { toppled_rotation: 30f64.to_radians(), sliding_distance: 1e-3, collapse_fraction: 0.5, rocking_speed: 1e-2 }
+        Self {
+            toppled_rotation: 30f64.to_radians(),
+            sliding_distance: 1e-3,
+            collapse_fraction: 0.5,
+            rocking_speed: 1e-2,
+        }
     }
 }
 
@@ -139,10 +146,15 @@ pub struct Tracker {
 
 impl Tracker {
     fn new(sim: &Simulation) -> Self {
-        let free: Vec<usize> = (0..sim.geoms.len()).filter(|&b| sim.mobility[b] == Mobility::Free).collect();
+        let free: Vec<usize> = (0..sim.geoms.len())
+            .filter(|&b| sim.mobility[b] == Mobility::Free)
+            .collect();
         let n = free.len();
         Self {
-            ids: free.iter().map(|&b| sim.scene.blocks[b].id.clone()).collect(),
+            ids: free
+                .iter()
+                .map(|&b| sim.scene.blocks[b].id.clone())
+                .collect(),
             free,
             max_displacement: vec![0.0; n],
             max_rotation: vec![0.0; n],
@@ -187,7 +199,9 @@ pub fn duration(scene: &Scene, motion: &GroundMotion) -> Result<f64, RunError> {
     match (scene.control.duration, motion.duration()) {
         (Some(d), _) => Ok(d),
         (None, Some(r)) => Ok(r + 2.0),
-        (None, None) => Err(RunError::Invalid("control.duration: required when the ground motion has no record length".into())),
+        (None, None) => Err(RunError::Invalid(
+            "control.duration: required when the ground motion has no record length".into(),
+        )),
     }
 }
 
@@ -211,24 +225,42 @@ struct Writers {
 }
 
 impl Writers {
-    fn open(out: Option<&Path>, header: &RecordHeader, no_trajectory: bool) -> Result<Self, RunError> {
-        let Some(dir) = out else { return Ok(Self { histories: None, mcap: None }) };
-        std::fs::create_dir_all(dir).map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
-        let histories = Some(HistoryWriter::create(&dir.join("histories.csv"), header).map_err(|e| RunError::Io(e.to_string()))?);
+    fn open(
+        out: Option<&Path>,
+        header: &RecordHeader,
+        no_trajectory: bool,
+    ) -> Result<Self, RunError> {
+        let Some(dir) = out else {
+            return Ok(Self {
+                histories: None,
+                mcap: None,
+            });
+        };
+        std::fs::create_dir_all(dir)
+            .map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
+        let histories = Some(
+            HistoryWriter::create(&dir.join("histories.csv"), header)
+                .map_err(|e| RunError::Io(e.to_string()))?,
+        );
         let mcap = if no_trajectory {
             None
         } else {
-            Some(McapRecorder::create(&dir.join("trajectory.mcap"), header, &McapParams::default()).map_err(|e| RunError::Io(e.to_string()))?)
+            Some(
+                McapRecorder::create(&dir.join("trajectory.mcap"), header, &McapParams::default())
+                    .map_err(|e| RunError::Io(e.to_string()))?,
+            )
         };
         Ok(Self { histories, mcap })
     }
 
     fn write(&mut self, frame: &Frame) -> Result<(), RunError> {
         if let Some(h) = &mut self.histories {
-            h.write_frame(frame).map_err(|e| RunError::Io(e.to_string()))?;
+            h.write_frame(frame)
+                .map_err(|e| RunError::Io(e.to_string()))?;
         }
         if let Some(m) = &mut self.mcap {
-            m.write_frame(frame).map_err(|e| RunError::Io(e.to_string()))?;
+            m.write_frame(frame)
+                .map_err(|e| RunError::Io(e.to_string()))?;
         }
         Ok(())
     }
@@ -245,7 +277,11 @@ impl Writers {
 }
 
 /// Run `scene` under `motion`.
-pub fn run(scene: &Scene, motion: &GroundMotion, opts: &RunOptions) -> Result<RunOutcome, RunError> {
+pub fn run(
+    scene: &Scene,
+    motion: &GroundMotion,
+    opts: &RunOptions,
+) -> Result<RunOutcome, RunError> {
     let wall = Instant::now();
     let (model, model_reason) = choose_model(scene)?;
     let duration = duration(scene, motion)?;
@@ -268,7 +304,10 @@ pub fn run(scene: &Scene, motion: &GroundMotion, opts: &RunOptions) -> Result<Ru
             break;
         }
         if sim.stats.steps >= scene.control.max_steps {
-            stopped_reason = Some(format!("step budget of {} steps reached (control.max_steps)", scene.control.max_steps));
+            stopped_reason = Some(format!(
+                "step budget of {} steps reached (control.max_steps)",
+                scene.control.max_steps
+            ));
             break;
         }
         let next_frame = ((frame_index + 1) as f64 * interval).min(duration);
@@ -297,35 +336,66 @@ pub fn run(scene: &Scene, motion: &GroundMotion, opts: &RunOptions) -> Result<Ru
     if let Some(msg) = failure_msg {
         return Err(RunError::Simulation(msg));
     }
-    let summary = summarize(&sim, &tracker, motion, &failure, wall.elapsed().as_secs_f64(), stopped_reason, model, model_reason, duration);
+    let summary = summarize(
+        &sim,
+        &tracker,
+        motion,
+        &failure,
+        wall.elapsed().as_secs_f64(),
+        stopped_reason,
+        model,
+        model_reason,
+        duration,
+    );
     if let Some(dir) = opts.out_dir {
-        let text = serde_json::to_string_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;
-        std::fs::write(dir.join("summary.json"), text + "\n").map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
+        let text =
+            serde_json::to_string_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;
+        std::fs::write(dir.join("summary.json"), text + "\n")
+            .map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
     }
     Ok(RunOutcome { summary, cancelled })
 }
 
-fn header(sim: &Simulation, motion: &GroundMotion, opts: &RunOptions) -> Result<RecordHeader, RunError> {
+fn header(
+    sim: &Simulation,
+    motion: &GroundMotion,
+    opts: &RunOptions,
+) -> Result<RecordHeader, RunError> {
     let scene = &sim.scene;
     let history_blocks = match &opts.history_blocks {
-        None => (0..scene.blocks.len()).filter(|&b| sim.mobility[b] == Mobility::Free).collect(),
+        None => (0..scene.blocks.len())
+            .filter(|&b| sim.mobility[b] == Mobility::Free)
+            .collect(),
         Some(ids) => ids
             .iter()
             .map(|id| {
                 scene
                     .block_index(id)
                     .filter(|&b| sim.mobility[b] == Mobility::Free)
-                    .ok_or_else(|| RunError::Invalid(format!("history block {id:?}: no free block with that id")))
+                    .ok_or_else(|| {
+                        RunError::Invalid(format!(
+                            "history block {id:?}: no free block with that id"
+                        ))
+                    })
             })
             .collect::<Result<Vec<_>, _>>()?,
     };
     let mut metadata = std::collections::BTreeMap::new();
-    metadata.insert("scene".into(), serde_json::to_string(&scene.spec).unwrap_or_default());
+    metadata.insert(
+        "scene".into(),
+        serde_json::to_string(&scene.spec).unwrap_or_default(),
+    );
     metadata.insert("motion_provenance".into(), motion.provenance.clone());
     metadata.insert("motion_scale".into(), format!("{}", motion.scale));
     metadata.insert("pga_m_s2".into(), format!("{}", motion.pga()));
-    metadata.insert("solver".into(), serde_json::to_string(&scene.control).unwrap_or_default());
-    metadata.insert("penalty_stiffness".into(), format!("{}", sim.springs.normal));
+    metadata.insert(
+        "solver".into(),
+        serde_json::to_string(&scene.control).unwrap_or_default(),
+    );
+    metadata.insert(
+        "penalty_stiffness".into(),
+        format!("{}", sim.springs.normal),
+    );
     metadata.insert("code_version".into(), env!("CARGO_PKG_VERSION").into());
     Ok(RecordHeader {
         block_ids: scene.blocks.iter().map(|b| b.id.clone()).collect(),
@@ -382,18 +452,36 @@ fn frame(sim: &Simulation, failure: &FailureParams) -> Frame {
         })
         .collect();
     let gs = sim.motion.state(sim.time);
-    Frame { time: sim.time, blocks, ground: GroundFrame { acceleration: gs[0], velocity: gs[1], displacement: gs[2] } }
+    Frame {
+        time: sim.time,
+        blocks,
+        ground: GroundFrame {
+            acceleration: gs[0],
+            velocity: gs[1],
+            displacement: gs[2],
+        },
+    }
 }
 
 /// Classify the outcome from the per-block results.
 pub fn failure_mode(blocks: &[BlockSummary], failure: &FailureParams) -> &'static str {
     let n = blocks.len().max(1) as f64;
     let toppled = blocks.iter().filter(|b| b.toppled).count();
-    let slid = blocks.iter().filter(|b| b.sliding_distance > failure.sliding_distance).count();
-    let moved = blocks.iter().filter(|b| b.toppled || b.sliding_distance > failure.sliding_distance).count();
+    let slid = blocks
+        .iter()
+        .filter(|b| b.sliding_distance > failure.sliding_distance)
+        .count();
+    let moved = blocks
+        .iter()
+        .filter(|b| b.toppled || b.sliding_distance > failure.sliding_distance)
+        .count();
     if blocks.len() > 1 && moved as f64 / n > failure.collapse_fraction && toppled > 0 {
         "collapse"
-    } else if toppled > 0 && blocks.iter().any(|b| b.toppled && b.sliding_distance > failure.sliding_distance) {
+    } else if toppled > 0
+        && blocks
+            .iter()
+            .any(|b| b.toppled && b.sliding_distance > failure.sliding_distance)
+    {
         "sliding_toppling"
     } else if toppled > 0 {
         "toppling"
@@ -440,7 +528,11 @@ fn summarize(
             penalty_stiffness: sim.springs.normal,
             time_step_cuts: st.time_step_cuts,
             max_penetration: st.max_penetration,
-            open_close_iterations_mean: if st.steps > 0 { st.open_close_iterations as f64 / st.steps as f64 } else { 0.0 },
+            open_close_iterations_mean: if st.steps > 0 {
+                st.open_close_iterations as f64 / st.steps as f64
+            } else {
+                0.0
+            },
             min_time_step: (st.steps > 0).then_some(st.min_dt),
             max_time_step: (st.steps > 0).then_some(st.max_dt),
         },

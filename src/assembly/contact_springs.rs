@@ -47,7 +47,11 @@ pub fn constants(c: &Contact, prescribed: &[Prescribed]) -> (f64, f64) {
 /// Coulomb limit of the shear force of a contact, N (≥ 0).
 #[inline]
 pub fn shear_limit(c: &Contact, law: &JointLaw, normal_force: f64) -> f64 {
-    let coh = if c.bonded { law.cohesion * c.length } else { 0.0 };
+    let coh = if c.bonded {
+        law.cohesion * c.length
+    } else {
+        0.0
+    };
     (normal_force.max(0.0) * law.tan_phi + coh).max(0.0)
 }
 
@@ -86,7 +90,15 @@ pub fn add_contacts(
 
 /// Spring of stiffness `k` on the measure `m = m0 + a·D_i − b·D_j`: energy k/2·m².
 #[inline]
-fn add_spring(sys: &mut BlockSystem, fi: Option<usize>, fj: Option<usize>, a: &Vec6, b: &Vec6, k: f64, m0: f64) {
+fn add_spring(
+    sys: &mut BlockSystem,
+    fi: Option<usize>,
+    fj: Option<usize>,
+    a: &Vec6,
+    b: &Vec6,
+    k: f64,
+    m0: f64,
+) {
     if let Some(i) = fi {
         sys.diag[i] += (a * a.transpose()) * k;
         sys.rhs[i] -= a * (k * m0);

@@ -25,8 +25,14 @@ pub struct Newmark {
 impl Newmark {
     pub fn of(integrator: Integrator) -> Self {
         match integrator {
-            Integrator::Dda => Newmark { beta: 0.5, gamma: 1.0 },
-            Integrator::Trapezoidal => Newmark { beta: 0.25, gamma: 0.5 },
+            Integrator::Dda => Newmark {
+                beta: 0.5,
+                gamma: 1.0,
+            },
+            Integrator::Trapezoidal => Newmark {
+                beta: 0.25,
+                gamma: 0.5,
+            },
         }
     }
 }
@@ -59,7 +65,11 @@ pub struct BlockState {
 
 impl Default for BlockState {
     fn default() -> Self {
-        Self { vel: Vec6::zeros(), acc: Vec6::zeros(), stress: Vector3::zeros() }
+        Self {
+            vel: Vec6::zeros(),
+            acc: Vec6::zeros(),
+            stress: Vector3::zeros(),
+        }
     }
 }
 
@@ -69,11 +79,31 @@ pub fn elasticity(m: &Material) -> Matrix3<f64> {
     match m.plane {
         PlaneKind::Stress => {
             let k = e / (1.0 - nu * nu);
-            Matrix3::new(k, k * nu, 0.0, k * nu, k, 0.0, 0.0, 0.0, k * (1.0 - nu) / 2.0)
+            Matrix3::new(
+                k,
+                k * nu,
+                0.0,
+                k * nu,
+                k,
+                0.0,
+                0.0,
+                0.0,
+                k * (1.0 - nu) / 2.0,
+            )
         }
         PlaneKind::Strain => {
             let k = e / ((1.0 + nu) * (1.0 - 2.0 * nu));
-            Matrix3::new(k * (1.0 - nu), k * nu, 0.0, k * nu, k * (1.0 - nu), 0.0, 0.0, 0.0, k * (1.0 - 2.0 * nu) / 2.0)
+            Matrix3::new(
+                k * (1.0 - nu),
+                k * nu,
+                0.0,
+                k * nu,
+                k * (1.0 - nu),
+                0.0,
+                0.0,
+                0.0,
+                k * (1.0 - 2.0 * nu) / 2.0,
+            )
         }
     }
 }

@@ -5,7 +5,11 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 #[derive(Debug, Parser)]
-#[command(name = "ashlar", version, about = "Seismic analysis of historical structures (2D DDA)")]
+#[command(
+    name = "ashlar",
+    version,
+    about = "Seismic analysis of historical structures (2D DDA)"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,

@@ -69,7 +69,9 @@ pub fn parse_acceleration(text: &str) -> Result<f64, String> {
         .ok()
         .filter(|v| v.is_finite() && *v >= 0.0)
         .map(|v| v * k)
-        .ok_or_else(|| format!("{text:?} is not an acceleration (m/s², or with a g suffix such as 0.3g)"))
+        .ok_or_else(|| {
+            format!("{text:?} is not an acceleration (m/s², or with a g suffix such as 0.3g)")
+        })
 }
 
 fn load_scene(path: &Path) -> Result<Scene, String> {
@@ -100,16 +102,27 @@ fn load_motion(args: &RunArgs) -> Result<GroundMotion, String> {
 pub fn run(args: &RunArgs) -> Result<(), String> {
     let scene = load_scene(&args.scene)?;
     let gm = load_motion(args)?;
-    let opts = RunOptions { out_dir: Some(&args.out), no_trajectory: args.no_trajectory, ..Default::default() };
+    let opts = RunOptions {
+        out_dir: Some(&args.out),
+        no_trajectory: args.no_trajectory,
+        ..Default::default()
+    };
     let outcome = run_scene(&scene, &gm, &opts).map_err(|e| e.to_string())?;
-    println!("{}", serde_json::to_string_pretty(&outcome.summary).map_err(|e| e.to_string())?);
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&outcome.summary).map_err(|e| e.to_string())?
+    );
     Ok(())
 }
 
 pub fn pga(args: &PgaArgs) -> Result<(), String> {
     let scene = load_scene(&args.scene)?;
     let gm = motion::load_path(&args.motion).map_err(|e| e.to_string())?;
-    let criteria = args.criterion.iter().map(|c| Criterion::parse(c)).collect::<Result<Vec<_>, _>>()?;
+    let criteria = args
+        .criterion
+        .iter()
+        .map(|c| Criterion::parse(c))
+        .collect::<Result<Vec<_>, _>>()?;
     let req = PgaRequest {
         criteria,
         min: parse_acceleration(&args.min)?,
@@ -120,7 +133,8 @@ pub fn pga(args: &PgaArgs) -> Result<(), String> {
     let result = search(&scene, &gm, &req, &RunOptions::default()).map_err(|e| e.to_string())?;
     let text = serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?;
     std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
-    std::fs::write(args.out.join("result.json"), format!("{text}\n")).map_err(|e| format!("{}: {e}", args.out.display()))?;
+    std::fs::write(args.out.join("result.json"), format!("{text}\n"))
+        .map_err(|e| format!("{}: {e}", args.out.display()))?;
     println!("{text}");
     Ok(())
 }

@@ -17,7 +17,8 @@ impl BroadPhase {
         self.boxes.clear();
         for g in geoms {
             let (lo, hi) = g.bounds();
-            self.boxes.push([lo.x - search, hi.x + search, lo.y - search, hi.y + search]);
+            self.boxes
+                .push([lo.x - search, hi.x + search, lo.y - search, hi.y + search]);
         }
         if self.order.len() != n {
             self.order = (0..n).collect();

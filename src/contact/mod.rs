@@ -58,7 +58,10 @@ pub struct ContactParams {
 
 impl Default for ContactParams {
     fn default() -> Self {
-        Self { search_factor: 2.5, angle_tolerance: 1.0e-3 }
+        Self {
+            search_factor: 2.5,
+            angle_tolerance: 1.0e-3,
+        }
     }
 }
 
@@ -134,7 +137,8 @@ impl ContactSet {
     ) {
         self.previous.clear();
         for (k, c) in self.contacts.iter().enumerate() {
-            self.previous.insert(key(c.vertex_block, c.vertex, c.edge_block, c.edge), k);
+            self.previous
+                .insert(key(c.vertex_block, c.vertex, c.edge_block, c.edge), k);
         }
         self.broad.update(geoms, mobility, search);
         self.scratch.clear();
@@ -165,7 +169,9 @@ impl ContactSet {
                         if cand.gap <= 0.0 {
                             c.state = ContactState::Locked;
                         }
-                        c.bonded = first_step && cand.gap <= search * 1e-3 && bond(cand.vertex_block, cand.edge_block);
+                        c.bonded = first_step
+                            && cand.gap <= search * 1e-3
+                            && bond(cand.vertex_block, cand.edge_block);
                         c
                     }
                 };

@@ -19,7 +19,14 @@ pub struct Candidate {
 }
 
 /// Best candidate edge of block `j` for vertex `k` of block `i`, if any.
-pub fn candidate(geoms: &[BlockGeometry], i: usize, k: usize, j: usize, search: f64, params: &ContactParams) -> Option<Candidate> {
+pub fn candidate(
+    geoms: &[BlockGeometry],
+    i: usize,
+    k: usize,
+    j: usize,
+    search: f64,
+    params: &ContactParams,
+) -> Option<Candidate> {
     let gi = &geoms[i];
     let gj = &geoms[j];
     let nv = gi.vertices.len();
@@ -61,7 +68,15 @@ pub fn candidate(geoms: &[BlockGeometry], i: usize, k: usize, j: usize, search: 
             }
         }
         let length = 0.5 * (e1.dot(&t).abs() + e2.dot(&t).abs());
-        let c = Candidate { vertex_block: i, vertex: k, edge_block: j, edge: m, gap, xi, length };
+        let c = Candidate {
+            vertex_block: i,
+            vertex: k,
+            edge_block: j,
+            edge: m,
+            gap,
+            xi,
+            length,
+        };
         // Several admissible edges (near a corner): the shallowest penetration is the edge the
         // vertex actually crossed.
         if best.is_none_or(|bc| gap > bc.gap) {
@@ -72,7 +87,14 @@ pub fn candidate(geoms: &[BlockGeometry], i: usize, k: usize, j: usize, search: 
 }
 
 /// Candidates of every vertex of block `i` against the edges of block `j`.
-pub fn pair_candidates(geoms: &[BlockGeometry], i: usize, j: usize, search: f64, params: &ContactParams, out: &mut Vec<Candidate>) {
+pub fn pair_candidates(
+    geoms: &[BlockGeometry],
+    i: usize,
+    j: usize,
+    search: f64,
+    params: &ContactParams,
+    out: &mut Vec<Candidate>,
+) {
     for k in 0..geoms[i].vertices.len() {
         if let Some(c) = candidate(geoms, i, k, j, search, params) {
             out.push(c);
@@ -83,17 +105,24 @@ pub fn pair_candidates(geoms: &[BlockGeometry], i: usize, j: usize, search: f64,
 /// Two coincident vertices each produce a contact against the other's edge at the same point
 /// (vertex–vertex): keep one, so the joint is not twice as stiff there. The one kept has the
 /// lower vertex-block index, which makes the choice deterministic.
-pub fn drop_mirrored_vertex_pairs(geoms: &[BlockGeometry], cands: &mut Vec<Candidate>, search: f64) {
+pub fn drop_mirrored_vertex_pairs(
+    geoms: &[BlockGeometry],
+    cands: &mut Vec<Candidate>,
+    search: f64,
+) {
     let tol = 1e-3 * search;
     let mut k = 0;
     while k < cands.len() {
         let c = cands[k];
         let p = geoms[c.vertex_block].vertices[c.vertex];
         let mirrored = cands.iter().any(|o| {
-            o.vertex_block == c.edge_block && o.edge_block == c.vertex_block && c.vertex_block > o.vertex_block && {
-                let q = geoms[o.vertex_block].vertices[o.vertex];
-                (p - q).norm() <= tol
-            }
+            o.vertex_block == c.edge_block
+                && o.edge_block == c.vertex_block
+                && c.vertex_block > o.vertex_block
+                && {
+                    let q = geoms[o.vertex_block].vertices[o.vertex];
+                    (p - q).norm() <= tol
+                }
         });
         if mirrored {
             cands.remove(k);

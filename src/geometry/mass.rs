@@ -36,7 +36,13 @@ pub fn polygon_moments(v: &[Vector2<f64>]) -> Moments {
     let sxx = ixx / 12.0 - area * cxl * cxl;
     let syy = iyy / 12.0 - area * cyl * cyl;
     let sxy = ixy / 24.0 - area * cxl * cyl;
-    Moments { area, centroid: Vector2::new(cxl + o.x, cyl + o.y), sxx, syy, sxy }
+    Moments {
+        area,
+        centroid: Vector2::new(cxl + o.x, cyl + o.y),
+        sxx,
+        syy,
+        sxy,
+    }
 }
 
 #[cfg(test)]
@@ -47,7 +53,12 @@ mod tests {
     fn rectangle_moments_match_closed_form() {
         // b×h rectangle: A = bh, Sxx = b³h/12, Syy = bh³/12, Sxy = 0 (exact to round-off).
         let (b, h) = (0.4, 1.2);
-        let v = vec![Vector2::new(10.0, 5.0), Vector2::new(10.0 + b, 5.0), Vector2::new(10.0 + b, 5.0 + h), Vector2::new(10.0, 5.0 + h)];
+        let v = vec![
+            Vector2::new(10.0, 5.0),
+            Vector2::new(10.0 + b, 5.0),
+            Vector2::new(10.0 + b, 5.0 + h),
+            Vector2::new(10.0, 5.0 + h),
+        ];
         let m = polygon_moments(&v);
         assert!((m.area - b * h).abs() < 1e-14);
         assert!((m.centroid - Vector2::new(10.2, 5.6)).norm() < 1e-12);
@@ -60,7 +71,11 @@ mod tests {
     fn right_triangle_product_moment() {
         // Right triangle legs a (x), b (y): Sxy about centroid = −a²b²/72.
         let (a, b) = (3.0, 2.0);
-        let m = polygon_moments(&[Vector2::new(0.0, 0.0), Vector2::new(a, 0.0), Vector2::new(0.0, b)]);
+        let m = polygon_moments(&[
+            Vector2::new(0.0, 0.0),
+            Vector2::new(a, 0.0),
+            Vector2::new(0.0, b),
+        ]);
         assert!((m.sxy + a * a * b * b / 72.0).abs() < 1e-12);
         assert!((m.sxx - a.powi(3) * b / 36.0).abs() < 1e-12);
     }

@@ -42,7 +42,14 @@ impl BlockGeometry {
     pub fn new(vertices: Vec<Vector2<f64>>) -> Self {
         let moments = polygon_moments(&vertices);
         let centroid = moments.centroid;
-        let mut g = Self { vertices, centroid, initial_centroid: centroid, rotation: 0.0, moments, half_size: 0.0 };
+        let mut g = Self {
+            vertices,
+            centroid,
+            initial_centroid: centroid,
+            rotation: 0.0,
+            moments,
+            half_size: 0.0,
+        };
         g.half_size = g.bounds_half_diagonal();
         g
     }

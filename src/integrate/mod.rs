@@ -33,7 +33,8 @@ pub fn translate_block(g: &mut BlockGeometry, du: [f64; 2]) {
 /// Newmark update of velocity and acceleration from the increment `d` over `dt`; `st.vel` and
 /// `st.acc` hold the step-start values (after kinetic damping).
 pub fn update_motion(st: &mut BlockState, d: &Vec6, newmark: Newmark, dt: f64) {
-    let a1 = (d - st.vel * dt - st.acc * (dt * dt * (0.5 - newmark.beta))) / (newmark.beta * dt * dt);
+    let a1 =
+        (d - st.vel * dt - st.acc * (dt * dt * (0.5 - newmark.beta))) / (newmark.beta * dt * dt);
     st.vel += (st.acc * (1.0 - newmark.gamma) + a1 * newmark.gamma) * dt;
     st.acc = a1;
 }
@@ -51,7 +52,12 @@ mod tests {
     fn exact_rotation_preserves_area() {
         // A full turn in 1000 steps of 2π/1000: first-order rotation would grow the area by
         // (1 + r²) per step (≈ +4 %); the exact update keeps it to round-off.
-        let mut g = BlockGeometry::new(vec![Vector2::new(0.0, 0.0), Vector2::new(2.0, 0.0), Vector2::new(2.0, 1.0), Vector2::new(0.0, 1.0)]);
+        let mut g = BlockGeometry::new(vec![
+            Vector2::new(0.0, 0.0),
+            Vector2::new(2.0, 0.0),
+            Vector2::new(2.0, 1.0),
+            Vector2::new(0.0, 1.0),
+        ]);
         let a0 = g.moments.area;
         let mut d = Vec6::zeros();
         d[2] = std::f64::consts::TAU / 1000.0;

@@ -21,7 +21,14 @@ pub struct WallParams {
 
 impl Default for WallParams {
     fn default() -> Self {
-        Self { courses: 5, blocks_per_course: 6, block_length: 0.6, block_height: 0.3, friction_angle: 35.0, block_model: BlockModel::Rigid }
+        Self {
+            courses: 5,
+            blocks_per_course: 6,
+            block_length: 0.6,
+            block_height: 0.3,
+            friction_angle: 35.0,
+            block_model: BlockModel::Rigid,
+        }
     }
 }
 
@@ -31,9 +38,24 @@ fn rect(x0: f64, y0: f64, w: f64, h: f64) -> Vec<[f64; 2]> {
 
 fn base_spec(name: &str, friction: f64) -> SceneSpec {
     let mut materials = BTreeMap::new();
-    materials.insert("limestone".into(), MaterialSpec { density: 2500.0, young_modulus: 2.0e10, poisson_ratio: 0.2, plane: PlaneKind::Stress });
+    materials.insert(
+        "limestone".into(),
+        MaterialSpec {
+            density: 2500.0,
+            young_modulus: 2.0e10,
+            poisson_ratio: 0.2,
+            plane: PlaneKind::Stress,
+        },
+    );
     let mut joints = BTreeMap::new();
-    joints.insert("dry".into(), JointSpec { friction_angle: friction, cohesion: 0.0, tensile_strength: 0.0 });
+    joints.insert(
+        "dry".into(),
+        JointSpec {
+            friction_angle: friction,
+            cohesion: 0.0,
+            tensile_strength: 0.0,
+        },
+    );
     SceneSpec {
         format: "ashlar.scene/1".into(),
         name: Some(name.into()),
@@ -50,7 +72,13 @@ fn base_spec(name: &str, friction: f64) -> SceneSpec {
 
 /// A running-bond wall: `courses` courses on a fixed foundation, joints offset by half a block.
 pub fn running_bond_wall(p: &WallParams) -> SceneSpec {
-    let mut spec = base_spec(&format!("running-bond wall, {} courses × {} blocks", p.courses, p.blocks_per_course), p.friction_angle);
+    let mut spec = base_spec(
+        &format!(
+            "running-bond wall, {} courses × {} blocks",
+            p.courses, p.blocks_per_course
+        ),
+        p.friction_angle,
+    );
     let (l, h) = (p.block_length, p.block_height);
     let width = l * p.blocks_per_course as f64;
     spec.blocks.push(BlockSpec {
@@ -92,7 +120,13 @@ pub fn running_bond_wall(p: &WallParams) -> SceneSpec {
 /// A free-standing rectangular column (half-width `b`, half-height `h`) on a fixed plinth.
 pub fn column(b: f64, h: f64, friction: f64) -> SceneSpec {
     let mut spec = base_spec("free-standing column on a plinth", friction);
-    spec.blocks.push(BlockSpec { id: "plinth".into(), material: "limestone".into(), fixed: true, vertices: rect(-1.0, -0.5, 2.0, 0.5), block_model: None });
+    spec.blocks.push(BlockSpec {
+        id: "plinth".into(),
+        material: "limestone".into(),
+        fixed: true,
+        vertices: rect(-1.0, -0.5, 2.0, 0.5),
+        block_model: None,
+    });
     spec.blocks.push(BlockSpec {
         id: "column".into(),
         material: "limestone".into(),
@@ -109,7 +143,11 @@ mod tests {
 
     #[test]
     fn wall_validates_and_has_expected_block_count() {
-        let p = WallParams { courses: 4, blocks_per_course: 5, ..Default::default() };
+        let p = WallParams {
+            courses: 4,
+            blocks_per_course: 5,
+            ..Default::default()
+        };
         let spec = running_bond_wall(&p);
         // 2 courses of 5 + 2 courses of 6 (4 whole + 2 halves) + foundation.
         assert_eq!(spec.blocks.len(), 1 + 5 + 6 + 5 + 6);

@@ -25,7 +25,10 @@ pub struct SceneError {
 
 impl SceneError {
     pub fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
-        Self { path: path.into(), message: message.into() }
+        Self {
+            path: path.into(),
+            message: message.into(),
+        }
     }
 }
 
@@ -35,7 +38,11 @@ pub fn parse_scene(text: &str) -> Result<Scene, SceneError> {
     let spec: SceneSpec = serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
         let inner = e.into_inner();
-        let path = if path == "." { "(document)".to_string() } else { path };
+        let path = if path == "." {
+            "(document)".to_string()
+        } else {
+            path
+        };
         SceneError::new(path, inner.to_string())
     })?;
     validate(&spec)
@@ -192,7 +199,11 @@ impl Scene {
     /// Joint acting between blocks `a` and `b`.
     pub fn joint_between(&self, a: usize, b: usize) -> &Joint {
         let key = if a < b { (a, b) } else { (b, a) };
-        let j = self.pair_joints.get(&key).copied().unwrap_or(self.default_joint);
+        let j = self
+            .pair_joints
+            .get(&key)
+            .copied()
+            .unwrap_or(self.default_joint);
         &self.joints[j]
     }
 
@@ -202,6 +213,10 @@ impl Scene {
 
     /// Indices of blocks that carry unknowns.
     pub fn free_blocks(&self) -> impl Iterator<Item = usize> + '_ {
-        self.blocks.iter().enumerate().filter(|(_, b)| matches!(b.kind, BlockKind::Free(_))).map(|(i, _)| i)
+        self.blocks
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| matches!(b.kind, BlockKind::Free(_)))
+            .map(|(i, _)| i)
     }
 }

@@ -20,16 +20,29 @@ fn orient(a: Vector2<f64>, b: Vector2<f64>, c: Vector2<f64>) -> f64 {
 
 /// True when segments `ab` and `cd` cross at a point interior to both (a proper crossing),
 /// with `tol` the tolerance on the orientation tests (m²).
-pub fn segments_cross(a: Vector2<f64>, b: Vector2<f64>, c: Vector2<f64>, d: Vector2<f64>, tol: f64) -> bool {
+pub fn segments_cross(
+    a: Vector2<f64>,
+    b: Vector2<f64>,
+    c: Vector2<f64>,
+    d: Vector2<f64>,
+    tol: f64,
+) -> bool {
     let o1 = orient(a, b, c);
     let o2 = orient(a, b, d);
     let o3 = orient(c, d, a);
     let o4 = orient(c, d, b);
-    ((o1 > tol && o2 < -tol) || (o1 < -tol && o2 > tol)) && ((o3 > tol && o4 < -tol) || (o3 < -tol && o4 > tol))
+    ((o1 > tol && o2 < -tol) || (o1 < -tol && o2 > tol))
+        && ((o3 > tol && o4 < -tol) || (o3 < -tol && o4 > tol))
 }
 
 /// True when segments touch or cross anywhere (used for self-intersection of non-adjacent edges).
-pub fn segments_touch(a: Vector2<f64>, b: Vector2<f64>, c: Vector2<f64>, d: Vector2<f64>, tol: f64) -> bool {
+pub fn segments_touch(
+    a: Vector2<f64>,
+    b: Vector2<f64>,
+    c: Vector2<f64>,
+    d: Vector2<f64>,
+    tol: f64,
+) -> bool {
     let o1 = orient(a, b, c);
     let o2 = orient(a, b, d);
     let o3 = orient(c, d, a);

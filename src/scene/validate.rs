@@ -3,6 +3,9 @@ use super::plane::{inside_depth, polygon_signed_area, segments_cross, segments_t
 use super::*;
 use std::collections::HashMap;
 
+/// Joint index per block pair (lower index first).
+type PairJoints = HashMap<(usize, usize), usize>;
+
 fn err<T>(path: impl Into<String>, msg: impl Into<String>) -> Result<T, SceneError> {
     Err(SceneError::new(path, msg))
 }
@@ -36,7 +39,10 @@ fn non_negative(path: &str, v: f64) -> Result<f64, SceneError> {
 /// Validate a parsed scene.
 pub fn validate(spec: &SceneSpec) -> Result<Scene, SceneError> {
     if spec.format != "ashlar.scene/1" {
-        return err("format", format!("expected \"ashlar.scene/1\", got {:?}", spec.format));
+        return err(
+            "format",
+            format!("expected \"ashlar.scene/1\", got {:?}", spec.format),
+        );
     }
     let gravity = match spec.gravity {
         Some(g) => non_negative("gravity", g)?,
@@ -47,7 +53,11 @@ pub fn validate(spec: &SceneSpec) -> Result<Scene, SceneError> {
     let control = control(&spec.control)?;
     let blocks = blocks(spec, &mat_index, &control)?;
     let ids: Vec<String> = blocks.iter().map(|b| b.id.clone()).collect();
-    let by_id: HashMap<&str, usize> = ids.iter().enumerate().map(|(i, b)| (b.as_str(), i)).collect();
+    let by_id: HashMap<&str, usize> = ids
+        .iter()
+        .enumerate()
+        .map(|(i, b)| (b.as_str(), i))
+        .collect();
     let (default_joint, pair_joints) = interfaces(spec, &joint_index, &by_id)?;
     let mut blocks = blocks;
     let excitation = match &spec.excitation {
@@ -57,7 +67,10 @@ pub fn validate(spec: &SceneSpec) -> Result<Scene, SceneError> {
                 return err("excitation.block", format!("no block with id {block:?}"));
             };
             if blocks[i].kind == BlockKind::Fixed {
-                return err("excitation.block", format!("block {block:?} is fixed; a driven block must not also be fixed"));
+                return err(
+                    "excitation.block",
+                    format!("block {block:?} is fixed; a driven block must not also be fixed"),
+                );
             }
             blocks[i].kind = BlockKind::Driven;
             Excitation::DrivenBlock(i)
@@ -70,10 +83,19 @@ pub fn validate(spec: &SceneSpec) -> Result<Scene, SceneError> {
     for (k, init) in spec.initial.iter().enumerate() {
         let path = format!("initial[{k}]");
         let Some(&i) = by_id.get(init.block.as_str()) else {
-            return err(format!("{path}.block"), format!("no block with id {:?}", init.block));
+            return err(
+                format!("{path}.block"),
+                format!("no block with id {:?}", init.block),
+            );
         };
         if !matches!(blocks[i].kind, BlockKind::Free(_)) {
-            return err(format!("{path}.block"), format!("block {:?} is not free; only free blocks take initial velocities", init.block));
+            return err(
+                format!("{path}.block"),
+                format!(
+                    "block {:?} is not free; only free blocks take initial velocities",
+                    init.block
+                ),
+            );
         }
         finite(&format!("{path}.velocity[0]"), init.velocity[0])?;
         finite(&format!("{path}.velocity[1]"), init.velocity[1])?;
@@ -108,7 +130,10 @@ fn materials(spec: &SceneSpec) -> Result<(Vec<Material>, HashMap<String, usize>)
         positive(&format!("{p}.young_modulus"), m.young_modulus)?;
         finite(&format!("{p}.poisson_ratio"), m.poisson_ratio)?;
         if !(m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5) {
-            return err(format!("{p}.poisson_ratio"), format!("must lie in (−1, 0.5), got {}", m.poisson_ratio));
+            return err(
+                format!("{p}.poisson_ratio"),
+                format!("must lie in (−1, 0.5), got {}", m.poisson_ratio),
+            );
         }
         idx.insert(name.clone(), out.len());
         out.push(Material {
@@ -132,7 +157,10 @@ fn joints(spec: &SceneSpec) -> Result<(Vec<Joint>, HashMap<String, usize>), Scen
         let p = format!("joints.{name}");
         finite(&format!("{p}.friction_angle"), j.friction_angle)?;
         if !(0.0..90.0).contains(&j.friction_angle) {
-            return err(format!("{p}.friction_angle"), format!("must lie in [0°, 90°), got {}", j.friction_angle));
+            return err(
+                format!("{p}.friction_angle"),
+                format!("must lie in [0°, 90°), got {}", j.friction_angle),
+            );
         }
         non_negative(&format!("{p}.cohesion"), j.cohesion)?;
         non_negative(&format!("{p}.tensile_strength"), j.tensile_strength)?;
@@ -147,7 +175,11 @@ fn joints(spec: &SceneSpec) -> Result<(Vec<Joint>, HashMap<String, usize>), Scen
     Ok((out, idx))
 }
 
-fn blocks(spec: &SceneSpec, mat_index: &HashMap<String, usize>, control: &Control) -> Result<Vec<Block>, SceneError> {
+fn blocks(
+    spec: &SceneSpec,
+    mat_index: &HashMap<String, usize>,
+    control: &Control,
+) -> Result<Vec<Block>, SceneError> {
     if spec.blocks.is_empty() {
         return err("blocks", "at least one block is required");
     }
@@ -159,10 +191,16 @@ fn blocks(spec: &SceneSpec, mat_index: &HashMap<String, usize>, control: &Contro
             return err(format!("{p}.id"), "must not be empty");
         }
         if let Some(j) = seen.insert(b.id.as_str(), i) {
-            return err(format!("{p}.id"), format!("duplicate id {:?} (also blocks[{j}])", b.id));
+            return err(
+                format!("{p}.id"),
+                format!("duplicate id {:?} (also blocks[{j}])", b.id),
+            );
         }
         let Some(&material) = mat_index.get(&b.material) else {
-            return err(format!("{p}.material"), format!("block {:?}: no material named {:?}", b.id, b.material));
+            return err(
+                format!("{p}.material"),
+                format!("block {:?}: no material named {:?}", b.id, b.material),
+            );
         };
         let vertices = polygon(&p, &b.id, &b.vertices)?;
         let kind = if b.fixed {
@@ -170,7 +208,12 @@ fn blocks(spec: &SceneSpec, mat_index: &HashMap<String, usize>, control: &Contro
         } else {
             BlockKind::Free(b.block_model.unwrap_or(control.block_model))
         };
-        out.push(Block { id: b.id.clone(), material, kind, vertices });
+        out.push(Block {
+            id: b.id.clone(),
+            material,
+            kind,
+            vertices,
+        });
     }
     Ok(out)
 }
@@ -178,11 +221,20 @@ fn blocks(spec: &SceneSpec, mat_index: &HashMap<String, usize>, control: &Contro
 fn polygon(p: &str, id: &str, raw: &[[f64; 2]]) -> Result<Vec<Vector2<f64>>, SceneError> {
     let path = format!("{p}.vertices");
     if raw.len() < 3 {
-        return err(path, format!("block {id:?}: a polygon needs at least 3 vertices, got {}", raw.len()));
+        return err(
+            path,
+            format!(
+                "block {id:?}: a polygon needs at least 3 vertices, got {}",
+                raw.len()
+            ),
+        );
     }
     for (k, v) in raw.iter().enumerate() {
         if !v[0].is_finite() || !v[1].is_finite() {
-            return err(format!("{path}[{k}]"), format!("block {id:?}: vertex coordinates must be finite"));
+            return err(
+                format!("{path}[{k}]"),
+                format!("block {id:?}: vertex coordinates must be finite"),
+            );
         }
     }
     let mut v: Vec<Vector2<f64>> = raw.iter().map(|a| Vector2::new(a[0], a[1])).collect();
@@ -195,7 +247,10 @@ fn polygon(p: &str, id: &str, raw: &[[f64; 2]]) -> Result<Vec<Vector2<f64>>, Sce
     let size = (hi - lo).norm();
     for k in 0..n {
         if (v[(k + 1) % n] - v[k]).norm() <= 1e-12 * size.max(f64::MIN_POSITIVE) {
-            return err(format!("{path}[{}]", (k + 1) % n), format!("block {id:?}: repeats the previous vertex (zero-length edge)"));
+            return err(
+                format!("{path}[{}]", (k + 1) % n),
+                format!("block {id:?}: repeats the previous vertex (zero-length edge)"),
+            );
         }
     }
     let area = polygon_signed_area(&v);
@@ -210,7 +265,10 @@ fn polygon(p: &str, id: &str, raw: &[[f64; 2]]) -> Result<Vec<Vector2<f64>>, Sce
                 continue;
             }
             if segments_touch(v[a], v[(a + 1) % n], v[b], v[(b + 1) % n], tol) {
-                return err(path, format!("block {id:?}: polygon self-intersects (edges {a} and {b})"));
+                return err(
+                    path,
+                    format!("block {id:?}: polygon self-intersects (edges {a} and {b})"),
+                );
             }
         }
     }
@@ -220,7 +278,10 @@ fn polygon(p: &str, id: &str, raw: &[[f64; 2]]) -> Result<Vec<Vector2<f64>>, Sce
         let b = v[k];
         let c = v[(k + 1) % n];
         if (b - a).perp(&(c - b)).abs() <= tol && (b - a).dot(&(c - b)) < 0.0 {
-            return err(format!("{path}[{k}]"), format!("block {id:?}: edges fold back at this vertex"));
+            return err(
+                format!("{path}[{k}]"),
+                format!("block {id:?}: edges fold back at this vertex"),
+            );
         }
     }
     if area < 0.0 {
@@ -233,15 +294,18 @@ fn interfaces(
     spec: &SceneSpec,
     joint_index: &HashMap<String, usize>,
     by_id: &HashMap<&str, usize>,
-) -> Result<(usize, HashMap<(usize, usize), usize>), SceneError> {
+) -> Result<(usize, PairJoints), SceneError> {
     let mut pairs = HashMap::new();
     let default = match spec.interfaces.as_ref().and_then(|i| i.default.as_ref()) {
-        Some(name) => *joint_index
-            .get(name)
-            .ok_or_else(|| SceneError::new("interfaces.default", format!("no joint named {name:?}")))?,
+        Some(name) => *joint_index.get(name).ok_or_else(|| {
+            SceneError::new("interfaces.default", format!("no joint named {name:?}"))
+        })?,
         None if joint_index.len() == 1 => 0,
         None => {
-            return err("interfaces.default", "required when the scene has more than one joint");
+            return err(
+                "interfaces.default",
+                "required when the scene has more than one joint",
+            );
         }
     };
     if let Some(ifs) = &spec.interfaces {
@@ -249,16 +313,25 @@ fn interfaces(
             let p = format!("interfaces.pairs[{k}]");
             let mut ix = [0usize; 2];
             for s in 0..2 {
-                ix[s] = *by_id
-                    .get(pr.blocks[s].as_str())
-                    .ok_or_else(|| SceneError::new(format!("{p}.blocks[{s}]"), format!("no block with id {:?}", pr.blocks[s])))?;
+                ix[s] = *by_id.get(pr.blocks[s].as_str()).ok_or_else(|| {
+                    SceneError::new(
+                        format!("{p}.blocks[{s}]"),
+                        format!("no block with id {:?}", pr.blocks[s]),
+                    )
+                })?;
             }
             if ix[0] == ix[1] {
-                return err(format!("{p}.blocks"), "a block cannot form an interface with itself");
+                return err(
+                    format!("{p}.blocks"),
+                    "a block cannot form an interface with itself",
+                );
             }
-            let j = *joint_index
-                .get(&pr.joint)
-                .ok_or_else(|| SceneError::new(format!("{p}.joint"), format!("no joint named {:?}", pr.joint)))?;
+            let j = *joint_index.get(&pr.joint).ok_or_else(|| {
+                SceneError::new(
+                    format!("{p}.joint"),
+                    format!("no joint named {:?}", pr.joint),
+                )
+            })?;
             pairs.insert((ix[0].min(ix[1]), ix[0].max(ix[1])), j);
         }
     }
@@ -279,7 +352,10 @@ fn control(c: &ControlSpec) -> Result<Control, SceneError> {
     if let Some(g2) = c.max_displacement_ratio {
         positive("control.max_displacement_ratio", g2)?;
         if g2 > 0.5 {
-            return err("control.max_displacement_ratio", format!("must be ≤ 0.5 (a fraction of the model's half size), got {g2}"));
+            return err(
+                "control.max_displacement_ratio",
+                format!("must be ≤ 0.5 (a fraction of the model's half size), got {g2}"),
+            );
         }
         out.max_displacement_ratio = g2;
     }
@@ -292,7 +368,10 @@ fn control(c: &ControlSpec) -> Result<Control, SceneError> {
     if let Some(f) = c.dynamic_factor {
         finite("control.dynamic_factor", f)?;
         if !(0.0..=1.0).contains(&f) {
-            return err("control.dynamic_factor", format!("must lie in [0, 1], got {f}"));
+            return err(
+                "control.dynamic_factor",
+                format!("must lie in [0, 1], got {f}"),
+            );
         }
         out.dynamic_factor = f;
     }
@@ -391,11 +470,20 @@ fn overlap_depth(a: &Block, b: &Block) -> Option<f64> {
     for i in 0..na {
         for j in 0..nb {
             let t = 1e-9 * s * s;
-            if segments_cross(a.vertices[i], a.vertices[(i + 1) % na], b.vertices[j], b.vertices[(j + 1) % nb], t) {
+            if segments_cross(
+                a.vertices[i],
+                a.vertices[(i + 1) % na],
+                b.vertices[j],
+                b.vertices[(j + 1) % nb],
+                t,
+            ) {
                 // Crossing edges with no vertex inside deeper than tol: e.g. two squares forming a
                 // cross. Measure depth from the crossing geometry.
                 let mid = 0.5 * (a.vertices[i] + a.vertices[(i + 1) % na]);
-                let d = inside_depth(mid, &b.vertices).max(inside_depth(0.5 * (b.vertices[j] + b.vertices[(j + 1) % nb]), &a.vertices));
+                let d = inside_depth(mid, &b.vertices).max(inside_depth(
+                    0.5 * (b.vertices[j] + b.vertices[(j + 1) % nb]),
+                    &a.vertices,
+                ));
                 if d > tol {
                     return Some(d);
                 }

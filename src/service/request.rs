@@ -447,11 +447,7 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
     for (p, t) in &texts {
         let c = Criterion::parse(t)
             .map_err(|e| ApiError::invalid_field(p.clone(), format!("{p}: {e}")))?;
-        let block = match &c {
-            Criterion::Toppled { block }
-            | Criterion::Displacement { block, .. }
-            | Criterion::Rotation { block, .. } => block,
-        };
+        let block = c.block();
         let free = scene
             .block_index(block)
             .is_some_and(|i| matches!(scene.blocks[i].kind, crate::scene::BlockKind::Free(_)));

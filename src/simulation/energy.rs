@@ -38,7 +38,8 @@ impl Simulation {
             if nd == 6 {
                 // ½·A·σᵀ·C⁻¹·σ
                 if let Some(inv) = self.elastic_inverse(f) {
-                    e.strain += 0.5 * g.moments.area * (st.stress.transpose() * inv * st.stress)[(0, 0)];
+                    e.strain +=
+                        0.5 * g.moments.area * (st.stress.transpose() * inv * st.stress)[(0, 0)];
                 }
             }
         }
@@ -46,9 +47,12 @@ impl Simulation {
             match c.state {
                 ContactState::Open => {}
                 ContactState::Locked => {
-                    e.springs += 0.5 * self.springs.normal * c.gap.min(0.0).powi(2) + 0.5 * self.springs.shear * (c.s0 + c.slip).powi(2)
+                    e.springs += 0.5 * self.springs.normal * c.gap.min(0.0).powi(2)
+                        + 0.5 * self.springs.shear * (c.s0 + c.slip).powi(2)
                 }
-                ContactState::Sliding { .. } => e.springs += 0.5 * self.springs.normal * c.gap.min(0.0).powi(2),
+                ContactState::Sliding { .. } => {
+                    e.springs += 0.5 * self.springs.normal * c.gap.min(0.0).powi(2)
+                }
             }
         }
         e

@@ -26,13 +26,28 @@ pub enum SimError {
     #[error(
         "open–close did not converge at t = {time:.6} s after {cuts} time-step cuts (Δt = {dt:.3e} s); contact between blocks {block_a:?} and {block_b:?}; try a smaller penalty stiffness or time step"
     )]
-    NotConverged { time: f64, cuts: u32, dt: f64, block_a: String, block_b: String },
+    NotConverged {
+        time: f64,
+        cuts: u32,
+        dt: f64,
+        block_a: String,
+        block_b: String,
+    },
     #[error("linear solve failed at t = {time:.6} s: {error} (block {block:?}); check for unconstrained or degenerate blocks, or reduce the penalty stiffness")]
-    Solve { time: f64, error: SolveError, block: String },
+    Solve {
+        time: f64,
+        error: SolveError,
+        block: String,
+    },
     #[error("non-finite state at t = {time:.6} s in block {block:?}; reduce the time step or the penalty stiffness")]
     NonFinite { time: f64, block: String },
     #[error("penetration of {depth:.3e} m at t = {time:.6} s between blocks {block_a:?} and {block_b:?} could not be reduced by cutting the time step; raise the penalty stiffness")]
-    Penetration { time: f64, depth: f64, block_a: String, block_b: String },
+    Penetration {
+        time: f64,
+        depth: f64,
+        block_a: String,
+        block_b: String,
+    },
 }
 
 /// Wall time spent in each stage (accumulated over steps).
@@ -89,13 +104,21 @@ pub struct Simulation {
 
 impl std::fmt::Debug for Simulation {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Simulation").field("time", &self.time).field("dt", &self.dt).field("blocks", &self.geoms.len()).finish()
+        f.debug_struct("Simulation")
+            .field("time", &self.time)
+            .field("dt", &self.dt)
+            .field("blocks", &self.geoms.len())
+            .finish()
     }
 }
 
 impl Simulation {
     pub fn new(scene: &Scene, motion: &GroundMotion, params: SimParams) -> Self {
-        let geoms: Vec<BlockGeometry> = scene.blocks.iter().map(|b| BlockGeometry::new(b.vertices.clone())).collect();
+        let geoms: Vec<BlockGeometry> = scene
+            .blocks
+            .iter()
+            .map(|b| BlockGeometry::new(b.vertices.clone()))
+            .collect();
         let mobility: Vec<Mobility> = scene
             .blocks
             .iter()
@@ -105,7 +128,10 @@ impl Simulation {
                 BlockKind::Free(_) => Mobility::Free,
             })
             .collect();
-        let mut dofs = Dofs { free_index: vec![None; geoms.len()], ..Default::default() };
+        let mut dofs = Dofs {
+            free_index: vec![None; geoms.len()],
+            ..Default::default()
+        };
         let (mut densities, mut elastic, mut states) = (Vec::new(), Vec::new(), Vec::new());
         for (b, blk) in scene.blocks.iter().enumerate() {
             if let BlockKind::Free(model) = blk.kind {
@@ -134,7 +160,11 @@ impl Simulation {
             hi = hi.sup(&b);
         }
         let model_half_size = 0.5 * (hi - lo).norm();
-        let smallest_free_block = dofs.block_of.iter().map(|&b| geoms[b].half_size).fold(f64::INFINITY, f64::min);
+        let smallest_free_block = dofs
+            .block_of
+            .iter()
+            .map(|&b| geoms[b].half_size)
+            .fold(f64::INFINITY, f64::min);
         let penalty = resolve_penalty(scene);
         let springs = SpringParams {
             normal: penalty,
@@ -163,7 +193,10 @@ impl Simulation {
             time: 0.0,
             dt,
             model_half_size,
-            stats: Stats { min_dt: f64::INFINITY, ..Default::default() },
+            stats: Stats {
+                min_dt: f64::INFINITY,
+                ..Default::default()
+            },
             profile: StepProfile::default(),
             params,
         }
@@ -216,19 +249,33 @@ impl Simulation {
         let search = self.params.contact.search_factor * self.max_step_displacement();
         let scene = &self.scene;
         let first = self.stats.steps == 0;
-        self.contacts.detect(&self.geoms, &self.mobility, search, &self.params.contact, first, |a, b| {
-            let j = scene.joint_between(a, b);
-            j.cohesion > 0.0 || j.tensile_strength > 0.0
-        });
+        self.contacts.detect(
+            &self.geoms,
+            &self.mobility,
+            search,
+            &self.params.contact,
+            first,
+            |a, b| {
+                let j = scene.joint_between(a, b);
+                j.cohesion > 0.0 || j.tensile_strength > 0.0
+            },
+        );
         self.contacts.linearize(&self.geoms);
         self.laws.clear();
         for c in &self.contacts.contacts {
             let j = scene.joint_between(c.vertex_block, c.edge_block);
-            self.laws.push(JointLaw { tan_phi: j.friction_angle.tan(), cohesion: j.cohesion, tensile_strength: j.tensile_strength });
+            self.laws.push(JointLaw {
+                tan_phi: j.friction_angle.tan(),
+                cohesion: j.cohesion,
+                tensile_strength: j.tensile_strength,
+            });
         }
         let mut pairs = Vec::new();
         for c in &self.contacts.contacts {
-            if let (Some(a), Some(b)) = (self.dofs.free_index[c.vertex_block], self.dofs.free_index[c.edge_block]) {
+            if let (Some(a), Some(b)) = (
+                self.dofs.free_index[c.vertex_block],
+                self.dofs.free_index[c.edge_block],
+            ) {
                 pairs.push((a.min(b), a.max(b)));
             }
         }
@@ -254,8 +301,20 @@ impl Simulation {
                 [0.0, 0.0]
             }
         };
-        let loads = BodyLoads { gravity: self.scene.gravity, ground_acceleration: ground };
-        self.system.assemble_blocks(&self.dofs, &self.geoms, &self.densities, &self.elastic, &self.states, &loads, self.newmark, dt);
+        let loads = BodyLoads {
+            gravity: self.scene.gravity,
+            ground_acceleration: ground,
+        };
+        self.system.assemble_blocks(
+            &self.dofs,
+            &self.geoms,
+            &self.densities,
+            &self.elastic,
+            &self.states,
+            &loads,
+            self.newmark,
+            dt,
+        );
         self.profile.assemble += t.elapsed();
     }
 
@@ -273,7 +332,8 @@ impl Simulation {
         );
         match r {
             Ok(o) => {
-                let (OpenClose::Converged { iterations } | OpenClose::NotConverged { iterations, .. }) = o;
+                let (OpenClose::Converged { iterations }
+                | OpenClose::NotConverged { iterations, .. }) = o;
                 self.stats.open_close_iterations += iterations as u64;
                 Ok(o)
             }
@@ -282,7 +342,11 @@ impl Simulation {
                     SolveError::NotPositiveDefinite { dof } | SolveError::NonFinite { dof } => dof,
                     SolveError::Backend(_) => 0,
                 };
-                Err(SimError::Solve { time: self.time, error, block: self.block_of_dof(dof) })
+                Err(SimError::Solve {
+                    time: self.time,
+                    error,
+                    block: self.block_of_dof(dof),
+                })
             }
         }
     }
@@ -309,7 +373,10 @@ impl Simulation {
         // spring's compliance (a penalty problem) and is reported, not cut.
         for (k, c) in self.contacts.contacts.iter().enumerate() {
             let deepened = -c.gap - (-c.g0).max(0.0);
-            if c.state.is_closed() && deepened > tol && self.dt * self.params.cut_factor > self.params.min_dt {
+            if c.state.is_closed()
+                && deepened > tol
+                && self.dt * self.params.cut_factor > self.params.min_dt
+            {
                 return Some(Some(k));
             }
         }
@@ -348,7 +415,8 @@ impl Simulation {
                 ContactState::Open => c.bonded = false,
                 ContactState::Sliding { dir } => {
                     c.bonded = false;
-                    let limit = crate::assembly::contact_springs::shear_limit(c, law, c.normal_force);
+                    let limit =
+                        crate::assembly::contact_springs::shear_limit(c, law, c.normal_force);
                     c.slide_offset = dir * limit / shear;
                 }
                 ContactState::Locked => {}
@@ -383,22 +451,43 @@ impl Simulation {
 
     fn not_converged(&self, cuts: u32, dt: f64, contact: Option<usize>) -> SimError {
         let (a, b) = match contact.and_then(|k| self.contacts.contacts.get(k)) {
-            Some(c) => (self.scene.blocks[c.vertex_block].id.clone(), self.scene.blocks[c.edge_block].id.clone()),
+            Some(c) => (
+                self.scene.blocks[c.vertex_block].id.clone(),
+                self.scene.blocks[c.edge_block].id.clone(),
+            ),
             None => ("?".into(), "?".into()),
         };
         if let Some(c) = contact.and_then(|k| self.contacts.contacts.get(k)) {
-            if c.state.is_closed() && -c.gap - (-c.g0).max(0.0) > self.params.penetration_ratio * self.max_step_displacement() {
-                return SimError::Penetration { time: self.time, depth: -c.gap, block_a: a, block_b: b };
+            if c.state.is_closed()
+                && -c.gap - (-c.g0).max(0.0)
+                    > self.params.penetration_ratio * self.max_step_displacement()
+            {
+                return SimError::Penetration {
+                    time: self.time,
+                    depth: -c.gap,
+                    block_a: a,
+                    block_b: b,
+                };
             }
         }
-        SimError::NotConverged { time: self.time, cuts, dt, block_a: a, block_b: b }
+        SimError::NotConverged {
+            time: self.time,
+            cuts,
+            dt,
+            block_a: a,
+            block_b: b,
+        }
     }
 
     /// Velocity of a block's centroid and its angular velocity (m/s, rad/s); driven blocks move
     /// with the ground, fixed blocks are still.
     pub fn block_velocity(&self, b: usize) -> [f64; 3] {
         match self.dofs.free_index[b] {
-            Some(f) => [self.states[f].vel[0], self.states[f].vel[1], self.states[f].vel[2]],
+            Some(f) => [
+                self.states[f].vel[0],
+                self.states[f].vel[1],
+                self.states[f].vel[2],
+            ],
             None if self.mobility[b] == Mobility::Driven => {
                 let v = self.motion.state(self.time)[1];
                 [v[0], v[1], 0.0]

@@ -55,7 +55,11 @@ pub fn resolve_penalty(scene: &Scene) -> f64 {
     match scene.control.penalty_stiffness {
         Penalty::Value(v) => v,
         Penalty::Auto => {
-            let e = scene.materials.iter().map(|m| m.young_modulus).fold(0.0, f64::max);
+            let e = scene
+                .materials
+                .iter()
+                .map(|m| m.young_modulus)
+                .fold(0.0, f64::max);
             10.0 * e
         }
     }

@@ -9,7 +9,12 @@ pub struct DenseCholesky {
 }
 
 impl DenseCholesky {
-    pub fn factor_solve(&mut self, sys: &BlockSystem, dofs: &Dofs, x: &mut [f64]) -> Result<(), SolveError> {
+    pub fn factor_solve(
+        &mut self,
+        sys: &BlockSystem,
+        dofs: &Dofs,
+        x: &mut [f64],
+    ) -> Result<(), SolveError> {
         let n = dofs.n;
         self.a.clear();
         self.a.resize(n * n, 0.0);

@@ -45,17 +45,27 @@ pub struct LinearSolver {
 
 impl LinearSolver {
     pub fn new(params: SolverParams) -> Self {
-        Self { params, ..Default::default() }
+        Self {
+            params,
+            ..Default::default()
+        }
     }
 
     /// Solve `sys` into `x` (length `dofs.n`).
-    pub fn solve(&mut self, sys: &BlockSystem, dofs: &Dofs, x: &mut Vec<f64>) -> Result<(), SolveError> {
+    pub fn solve(
+        &mut self,
+        sys: &BlockSystem,
+        dofs: &Dofs,
+        x: &mut Vec<f64>,
+    ) -> Result<(), SolveError> {
         x.clear();
         x.resize(dofs.n, 0.0);
         for (f, r) in sys.rhs.iter().enumerate() {
             for k in 0..dofs.ndof[f] {
                 if !r[k].is_finite() {
-                    return Err(SolveError::NonFinite { dof: dofs.offset[f] + k });
+                    return Err(SolveError::NonFinite {
+                        dof: dofs.offset[f] + k,
+                    });
                 }
                 x[dofs.offset[f] + k] = r[k];
             }

@@ -2,7 +2,9 @@
 //! solution, repeat until no contact changes state. Called once per step attempt after
 //! `BlockSystem::assemble_blocks`; on non-convergence the caller cuts the time step.
 use super::{LinearSolver, SolveError};
-use crate::assembly::contact_springs::{add_contacts, constants, shear_limit, JointLaw, Prescribed, SpringParams};
+use crate::assembly::contact_springs::{
+    add_contacts, constants, shear_limit, JointLaw, Prescribed, SpringParams,
+};
 use crate::assembly::{BlockSystem, Dofs};
 use crate::contact::{Contact, ContactState};
 use crate::geometry::Vec6;
@@ -33,16 +35,27 @@ pub struct OpenCloseParams {
 
 impl Default for OpenCloseParams {
     fn default() -> Self {
-        Self { max_iterations: 20, friction_tolerance: 1e-4, hysteresis: 1e-6, relax_after: 3, max_flips: 4 }
+        Self {
+            max_iterations: 20,
+            friction_tolerance: 1e-4,
+            hysteresis: 1e-6,
+            relax_after: 3,
+            max_flips: 4,
+        }
     }
 }
 
 /// Result of one open–close loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum OpenClose {
-    Converged { iterations: usize },
+    Converged {
+        iterations: usize,
+    },
     /// `contact` is one that was still changing state.
-    NotConverged { iterations: usize, contact: Option<usize> },
+    NotConverged {
+        iterations: usize,
+        contact: Option<usize>,
+    },
 }
 
 /// Dot product of a contact gradient with a block's unknowns (rigid blocks use 3).
@@ -97,7 +110,10 @@ pub fn iterate(
             return Ok(OpenClose::Converged { iterations: it });
         }
     }
-    Ok(OpenClose::NotConverged { iterations: params.max_iterations, contact: last_changed })
+    Ok(OpenClose::NotConverged {
+        iterations: params.max_iterations,
+        contact: last_changed,
+    })
 }
 
 /// New state of one contact given the trial solution; returns whether it changed.
@@ -117,9 +133,17 @@ fn update_state(
     c.gap = g;
     c.slip = s - c.s0;
     // A bonded joint holds tension up to its tensile strength.
-    let tension_allowance = if c.bonded { law.tensile_strength * c.length / springs.normal } else { 0.0 };
+    let tension_allowance = if c.bonded {
+        law.tensile_strength * c.length / springs.normal
+    } else {
+        0.0
+    };
     let old = c.state;
-    let opening_gap = if old.is_closed() { tension_allowance + springs.gap_tolerance } else { -springs.gap_tolerance };
+    let opening_gap = if old.is_closed() {
+        tension_allowance + springs.gap_tolerance
+    } else {
+        -springs.gap_tolerance
+    };
     let new = if g > opening_gap {
         c.normal_force = 0.0;
         c.shear_force = 0.0;
@@ -153,7 +177,9 @@ fn update_state(
                     ContactState::Sliding { dir }
                 } else if limit <= 0.0 {
                     // No friction: the slip direction is irrelevant and must not count as a change.
-                    ContactState::Sliding { dir: if c.slip != 0.0 { c.slip.signum() } else { dir } }
+                    ContactState::Sliding {
+                        dir: if c.slip != 0.0 { c.slip.signum() } else { dir },
+                    }
                 } else if c.slip * dir < -(h * limit / springs.shear + springs.gap_tolerance) {
                     ContactState::Locked
                 } else {
@@ -168,19 +194,24 @@ fn update_state(
     }
     let frictionless = shear_limit(c, law, c.normal_force) <= 0.0;
     let changed = std::mem::discriminant(&old) != std::mem::discriminant(&new)
-        || (!frictionless && matches!((old, new), (ContactState::Sliding { dir: a }, ContactState::Sliding { dir: b }) if a != b));
+        || (!frictionless
+            && matches!((old, new), (ContactState::Sliding { dir: a }, ContactState::Sliding { dir: b }) if a != b));
     let mut friction_moved = false;
     if let ContactState::Sliding { .. } = new {
         let n = c.normal_force.max(0.0);
-        friction_moved = matches!(old, ContactState::Sliding { .. }) && (n - c.friction_normal).abs() > friction_tol * (n.max(c.friction_normal) + springs.normal * springs.gap_tolerance);
+        friction_moved = matches!(old, ContactState::Sliding { .. })
+            && (n - c.friction_normal).abs()
+                > friction_tol
+                    * (n.max(c.friction_normal) + springs.normal * springs.gap_tolerance);
         // The friction force depends on the normal force it helps to determine (a pivoting,
         // sliding corner): plain fixed-point iteration can oscillate, so after the first
         // iterations the update is relaxed by half, which converges for slopes in (−3, 1).
-        c.friction_normal = if matches!(old, ContactState::Sliding { .. }) && iteration > params.relax_after {
-            0.5 * (c.friction_normal + n)
-        } else {
-            n
-        };
+        c.friction_normal =
+            if matches!(old, ContactState::Sliding { .. }) && iteration > params.relax_after {
+                0.5 * (c.friction_normal + n)
+            } else {
+                n
+            };
     }
     changed || friction_moved
 }

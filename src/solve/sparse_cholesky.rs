@@ -4,7 +4,9 @@ use super::SolveError;
 use crate::assembly::{BlockSystem, Dofs};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering,
+};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Par, Side};
 
@@ -25,7 +27,10 @@ pub struct SparseCholesky {
 
 impl std::fmt::Debug for SparseCholesky {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("SparseCholesky").field("n", &self.n).field("symbolic_count", &self.symbolic_count).finish()
+        f.debug_struct("SparseCholesky")
+            .field("n", &self.n)
+            .field("symbolic_count", &self.symbolic_count)
+            .finish()
     }
 }
 
@@ -58,8 +63,13 @@ impl SparseCholesky {
         }
         let n = dofs.n;
         let symb = SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx);
-        let symbolic = factorize_symbolic_cholesky(symb, Side::Upper, SymmetricOrdering::Amd, CholeskySymbolicParams::default())
-            .map_err(|e| SolveError::Backend(format!("{e:?}")))?;
+        let symbolic = factorize_symbolic_cholesky(
+            symb,
+            Side::Upper,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| SolveError::Backend(format!("{e:?}")))?;
         self.l_values = vec![0.0; symbolic.len_val()];
         let req = symbolic
             .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
@@ -94,7 +104,12 @@ impl SparseCholesky {
         }
     }
 
-    pub fn factor_solve(&mut self, sys: &BlockSystem, dofs: &Dofs, x: &mut [f64]) -> Result<(), SolveError> {
+    pub fn factor_solve(
+        &mut self,
+        sys: &BlockSystem,
+        dofs: &Dofs,
+        x: &mut [f64],
+    ) -> Result<(), SolveError> {
         if self.symbolic.is_none() || self.pattern != sys.pairs || self.n != dofs.n {
             self.rebuild_pattern(sys, dofs)?;
         }
@@ -103,11 +118,24 @@ impl SparseCholesky {
             return Err(SolveError::Backend("symbolic factorization missing".into()));
         };
         let n = dofs.n;
-        let a = SparseColMatRef::new(SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx), &self.values);
+        let a = SparseColMatRef::new(
+            SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx),
+            &self.values,
+        );
         let stack = MemStack::new(mem);
         let llt = symbolic
-            .factorize_numeric_llt(&mut self.l_values, a, Side::Upper, LltRegularization::default(), Par::Seq, stack, Default::default())
-            .map_err(|_| SolveError::NotPositiveDefinite { dof: first_bad_pivot(sys, dofs) })?;
+            .factorize_numeric_llt(
+                &mut self.l_values,
+                a,
+                Side::Upper,
+                LltRegularization::default(),
+                Par::Seq,
+                stack,
+                Default::default(),
+            )
+            .map_err(|_| SolveError::NotPositiveDefinite {
+                dof: first_bad_pivot(sys, dofs),
+            })?;
         let rhs = faer::MatMut::from_column_major_slice_mut(x, n, 1);
         llt.solve_in_place_with_conj(faer::Conj::No, rhs, Par::Seq, MemStack::new(mem));
         Ok(())
@@ -119,7 +147,7 @@ impl SparseCholesky {
 fn first_bad_pivot(sys: &BlockSystem, dofs: &Dofs) -> usize {
     for (f, d) in sys.diag.iter().enumerate() {
         for k in 0..dofs.ndof[f] {
-            if !(d[(k, k)] > 0.0) {
+            if d[(k, k)].is_nan() || d[(k, k)] <= 0.0 {
                 return dofs.offset[f] + k;
             }
         }

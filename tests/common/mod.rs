@@ -34,8 +34,18 @@ pub fn incline(alpha_deg: f64, friction_deg: f64, control: Value) -> (Value, [f6
     let n = [a.sin(), a.cos()];
     let (w, h) = (1.0, 0.5);
     let l = 200.0;
-    let base = json!([[-l * d[0], -l * d[1]], [l * d[0], l * d[1]], [l * d[0], l * d[1] - 20.0], [-l * d[0], -l * d[1] - 20.0]]);
-    let blk = json!([[0.0, 0.0], [w * d[0], w * d[1]], [w * d[0] + h * n[0], w * d[1] + h * n[1]], [h * n[0], h * n[1]]]);
+    let base = json!([
+        [-l * d[0], -l * d[1]],
+        [l * d[0], l * d[1]],
+        [l * d[0], l * d[1] - 20.0],
+        [-l * d[0], -l * d[1] - 20.0]
+    ]);
+    let blk = json!([
+        [0.0, 0.0],
+        [w * d[0], w * d[1]],
+        [w * d[0] + h * n[0], w * d[1] + h * n[1]],
+        [h * n[0], h * n[1]]
+    ]);
     let blocks = json!([
         { "id": "base", "material": "stone", "fixed": true, "vertices": base },
         { "id": "block", "material": "stone", "vertices": blk },
@@ -58,17 +68,27 @@ pub fn sim(scene: &Scene, motion: &GroundMotion) -> Simulation {
 }
 
 pub fn sine(amplitude: f64, frequency: f64) -> GroundMotion {
-    GroundMotion::horizontal(Signal::Sine { amplitude, frequency })
+    GroundMotion::horizontal(Signal::Sine {
+        amplitude,
+        frequency,
+    })
 }
 
 /// Centroid displacement of block `b` from its start, m.
 pub fn displacement(sim: &Simulation, b: usize) -> [f64; 2] {
     let g = &sim.geoms[b];
-    [g.centroid.x - g.initial_centroid.x, g.centroid.y - g.initial_centroid.y]
+    [
+        g.centroid.x - g.initial_centroid.x,
+        g.centroid.y - g.initial_centroid.y,
+    ]
 }
 
 /// Run until `t_end` or until `stop(sim)` is true; returns whether it stopped early.
-pub fn run_until(sim: &mut Simulation, t_end: f64, mut stop: impl FnMut(&Simulation) -> bool) -> bool {
+pub fn run_until(
+    sim: &mut Simulation,
+    t_end: f64,
+    mut stop: impl FnMut(&Simulation) -> bool,
+) -> bool {
     while sim.time < t_end - 1e-12 {
         if let Err(e) = sim.step(t_end - sim.time) {
             panic!("simulation failed: {e}");
