@@ -17,15 +17,20 @@ fn column() -> ashlar::scene::Scene {
     parse(&scene_json(blocks, 75.0, json!({ "duration": 3.0 })))
 }
 
-#[test]
-fn rocking_column_bracket_contains_housner_and_is_honest() {
-    let scene = column();
-    let pulse = GroundMotion::horizontal(Signal::Pulse {
+/// The half-sine pulse of the engine issue at unit amplitude (the search rescales it).
+fn unit_pulse() -> GroundMotion {
+    GroundMotion::horizontal(Signal::Pulse {
         amplitude: 1.0,
         period: 1.0,
         cycles: 0.5,
         phase: 0.0,
-    });
+    })
+}
+
+#[test]
+fn rocking_column_bracket_contains_housner_and_is_honest() {
+    let scene = column();
+    let pulse = unit_pulse();
     let criteria = vec![Criterion::parse("toppled:column").expect("criterion")];
     let req = PgaRequest {
         criteria: criteria.clone(),
@@ -54,12 +59,7 @@ fn rocking_column_bracket_contains_housner_and_is_honest() {
 #[test]
 fn negated_criterion_bounds_from_above_and_bad_requests_are_named() {
     let scene = column();
-    let pulse = GroundMotion::horizontal(Signal::Pulse {
-        amplitude: 1.0,
-        period: 1.0,
-        cycles: 0.5,
-        phase: 0.0,
-    });
+    let pulse = unit_pulse();
     let not = Criterion::parse("not:toppled:column").expect("criterion");
     assert!(evaluate(&scene, &pulse, std::slice::from_ref(&not), 3.0, None).expect("run"));
     assert!(!evaluate(&scene, &pulse, &[not], 8.0, None).expect("run"));
