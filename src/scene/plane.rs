@@ -27,12 +27,24 @@ pub fn segments_cross(
     d: Vector2<f64>,
     tol: f64,
 ) -> bool {
-    let o1 = orient(a, b, c);
-    let o2 = orient(a, b, d);
-    let o3 = orient(c, d, a);
-    let o4 = orient(c, d, b);
-    ((o1 > tol && o2 < -tol) || (o1 < -tol && o2 > tol))
-        && ((o3 > tol && o4 < -tol) || (o3 < -tol && o4 > tol))
+    let o = orientations(a, b, c, d);
+    proper_cross(&o, tol)
+}
+
+/// Orientations of c and d against ab, then of a and b against cd.
+fn orientations(a: Vector2<f64>, b: Vector2<f64>, c: Vector2<f64>, d: Vector2<f64>) -> [f64; 4] {
+    [
+        orient(a, b, c),
+        orient(a, b, d),
+        orient(c, d, a),
+        orient(c, d, b),
+    ]
+}
+
+/// Each segment's endpoints lie strictly on opposite sides of the other's line.
+fn proper_cross(o: &[f64; 4], tol: f64) -> bool {
+    let opposite = |p: f64, q: f64| (p > tol && q < -tol) || (p < -tol && q > tol);
+    opposite(o[0], o[1]) && opposite(o[2], o[3])
 }
 
 /// True when segments touch or cross anywhere (used for self-intersection of non-adjacent edges).
@@ -43,13 +55,11 @@ pub fn segments_touch(
     d: Vector2<f64>,
     tol: f64,
 ) -> bool {
-    let o1 = orient(a, b, c);
-    let o2 = orient(a, b, d);
-    let o3 = orient(c, d, a);
-    let o4 = orient(c, d, b);
-    if segments_cross(a, b, c, d, tol) {
+    let o = orientations(a, b, c, d);
+    if proper_cross(&o, tol) {
         return true;
     }
+    let [o1, o2, o3, o4] = o;
     let on = |p: Vector2<f64>, q: Vector2<f64>, r: Vector2<f64>, o: f64| {
         o.abs() <= tol
             && r.x >= p.x.min(q.x) - tol.sqrt()

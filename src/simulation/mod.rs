@@ -10,7 +10,7 @@ pub use params::{resolve_penalty, SimParams};
 
 use crate::assembly::contact_springs::{JointLaw, Prescribed, SpringParams};
 use crate::assembly::{elasticity, BlockState, BlockSystem, BodyLoads, Dofs, Newmark};
-use crate::contact::{ContactSet, ContactState, Mobility};
+use crate::contact::{Contact, ContactSet, ContactState, Mobility};
 use crate::geometry::{displacement_matrix, BlockGeometry, Vec6};
 use crate::integrate;
 use crate::motion::GroundMotion;
@@ -367,16 +367,8 @@ impl Simulation {
                 }
             }
         }
-        let tol = self.params.penetration_ratio * self.max_step_displacement();
-        // Penetration that deepens by more than the tolerance within one step means a vertex
-        // overshot its edge (a time-step problem); a deep but steady penetration is the
-        // spring's compliance (a penalty problem) and is reported, not cut.
         for (k, c) in self.contacts.contacts.iter().enumerate() {
-            let deepened = -c.gap - (-c.g0).max(0.0);
-            if c.state.is_closed()
-                && deepened > tol
-                && self.dt * self.params.cut_factor > self.params.min_dt
-            {
+            if self.overshot(c) && self.dt * self.params.cut_factor > self.params.min_dt {
                 return Some(Some(k));
             }
         }
@@ -449,6 +441,15 @@ impl Simulation {
         "?".into()
     }
 
+    /// A closed contact whose penetration deepened within the step by more than the tolerance:
+    /// a vertex overshot its edge (a time-step problem). A deep but steady penetration is the
+    /// spring's compliance (a penalty problem) and is reported, not cut.
+    fn overshot(&self, c: &Contact) -> bool {
+        let deepened = -c.gap - (-c.g0).max(0.0);
+        c.state.is_closed()
+            && deepened > self.params.penetration_ratio * self.max_step_displacement()
+    }
+
     fn not_converged(&self, cuts: u32, dt: f64, contact: Option<usize>) -> SimError {
         let (a, b) = match contact.and_then(|k| self.contacts.contacts.get(k)) {
             Some(c) => (
@@ -458,10 +459,7 @@ impl Simulation {
             None => ("?".into(), "?".into()),
         };
         if let Some(c) = contact.and_then(|k| self.contacts.contacts.get(k)) {
-            if c.state.is_closed()
-                && -c.gap - (-c.g0).max(0.0)
-                    > self.params.penetration_ratio * self.max_step_displacement()
-            {
+            if self.overshot(c) {
                 return SimError::Penetration {
                     time: self.time,
                     depth: -c.gap,
