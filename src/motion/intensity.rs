@@ -292,17 +292,60 @@ pub fn oscillator_peak(a: &[f64], dt: f64, period: f64, z: f64) -> f64 {
             let p1 = -(w[0] + (w[1] - w[0]) * (s + 1) as f64 / sub as f64);
             let un = c.a * u + c.b * v + c.c * p0 + c.d * p1;
             let vn = c.a2 * u + c.b2 * v + c.c2 * p0 + c.d2 * p1;
+            peak = peak.max(substep_peak(u, v, un, vn, h));
             u = un;
             v = vn;
-            peak = peak.max(u.abs());
         }
     }
     // Free vibration after the record: the envelope only decays, so one period holds its peak.
     for _ in 0..((period / h).ceil() as usize).min(1_000_000) {
         let un = c.a * u + c.b * v;
-        v = c.a2 * u + c.b2 * v;
+        let vn = c.a2 * u + c.b2 * v;
+        peak = peak.max(substep_peak(u, v, un, vn, h));
         u = un;
-        peak = peak.max(u.abs());
+        v = vn;
+    }
+    peak
+}
+
+/// max |u| over one substep of length `h` from the end states (u0, v0) and (u1, v1). When the
+/// velocity changes sign inside, the extremum is located on the cubic Hermite interpolant of the
+/// exact end states: with at least 20 substeps a period its error is below (2π/20)⁴/384 ≈ 3e-5
+/// of the amplitude, where reading the peak at the substeps alone misses up to
+/// 1 − cos(π/20) = 1.2 %.
+fn substep_peak(u0: f64, v0: f64, u1: f64, v1: f64, h: f64) -> f64 {
+    let mut peak = u1.abs();
+    if v0 * v1 < 0.0 {
+        let (hv0, hv1) = (h * v0, h * v1);
+        // p'(s) = qa s² + qb s + qc on s ∈ [0, 1].
+        let qa = 6.0 * (u0 - u1) + 3.0 * (hv0 + hv1);
+        let qb = 6.0 * (u1 - u0) - 4.0 * hv0 - 2.0 * hv1;
+        let qc = hv0;
+        let hermite = |s: f64| {
+            let s2 = s * s;
+            let s3 = s2 * s;
+            (2.0 * s3 - 3.0 * s2 + 1.0) * u0
+                + (s3 - 2.0 * s2 + s) * hv0
+                + (-2.0 * s3 + 3.0 * s2) * u1
+                + (s3 - s2) * hv1
+        };
+        let mut consider = |s: f64| {
+            if (0.0..=1.0).contains(&s) {
+                peak = peak.max(hermite(s).abs());
+            }
+        };
+        if qa.abs() < 1e-300 {
+            if qb != 0.0 {
+                consider(-qc / qb);
+            }
+        } else {
+            let disc = qb * qb - 4.0 * qa * qc;
+            if disc >= 0.0 {
+                let r = disc.sqrt();
+                consider((-qb + r) / (2.0 * qa));
+                consider((-qb - r) / (2.0 * qa));
+            }
+        }
     }
     peak
 }
