@@ -277,6 +277,7 @@ fn rebuild_system(s: &mut Simulation, dt: f64) -> (BlockSystem, Vec<Vec<f64>>) {
         });
     }
     sys.set_pattern(pairs);
+    sys.bind_contacts(&s.dofs, &s.contacts.contacts);
     let densities: Vec<f64> = s
         .dofs
         .block_of
@@ -396,7 +397,10 @@ fn check_symmetry(s: &mut Simulation) {
         }
     }
     for dense_limit in [usize::MAX, 0] {
-        let mut solver = LinearSolver::new(SolverParams { dense_limit });
+        let mut solver = LinearSolver::new(SolverParams {
+            dense_limit,
+            ..Default::default()
+        });
         let mut unit = copy_system(&sys);
         let probes: Vec<usize> = (0..n).step_by((n / 12).max(1)).collect();
         let mut cols = Vec::new();

@@ -1,7 +1,7 @@
 //! Contact springs of Shi's penalty method: a normal spring for every closed contact, a shear
 //! spring for locked ones, and Coulomb friction (with cohesion while bonded) as point loads on
 //! sliding ones. Driven blocks' prescribed displacements enter the gap constants.
-use super::{BlockSystem, Dofs};
+use super::{BlockSystem, CouplingSlot, Dofs};
 use crate::contact::{Contact, ContactState};
 use crate::geometry::{Mat6, Vec6};
 
@@ -64,16 +64,27 @@ pub fn add_contacts(
     springs: &SpringParams,
     prescribed: &[Prescribed],
 ) {
-    for (c, law) in contacts.iter().zip(laws) {
+    for (k, (c, law)) in contacts.iter().zip(laws).enumerate() {
         if !c.state.is_closed() {
             continue;
         }
         let fi = dofs.free_index[c.vertex_block];
         let fj = dofs.free_index[c.edge_block];
+        let slot = sys.contact_slots[k];
         let (g0, s0) = constants(c, prescribed);
-        add_spring(sys, fi, fj, &c.e_i, &c.e_j, springs.normal, g0);
+        add_spring(
+            sys,
+            dofs,
+            (fi, fj, slot),
+            &c.e_i,
+            &c.e_j,
+            springs.normal,
+            g0,
+        );
         match c.state {
-            ContactState::Locked => add_spring(sys, fi, fj, &c.f_i, &c.f_j, springs.shear, s0),
+            ContactState::Locked => {
+                add_spring(sys, dofs, (fi, fj, slot), &c.f_i, &c.f_j, springs.shear, s0)
+            }
             ContactState::Sliding { dir } => {
                 let f = dir * shear_limit(c, law, c.friction_normal);
                 if let Some(a) = fi {
@@ -92,23 +103,42 @@ pub fn add_contacts(
 #[inline]
 fn add_spring(
     sys: &mut BlockSystem,
-    fi: Option<usize>,
-    fj: Option<usize>,
+    dofs: &Dofs,
+    (fi, fj, slot): (Option<usize>, Option<usize>, CouplingSlot),
     a: &Vec6,
     b: &Vec6,
     k: f64,
     m0: f64,
 ) {
+    let rigid = |f: usize| dofs.ndof[f] == 3;
     if let Some(i) = fi {
-        sys.diag[i] += (a * a.transpose()) * k;
+        rank_one(&mut sys.diag[i], k, a, a, rigid(i));
         sys.rhs[i] -= a * (k * m0);
     }
     if let Some(j) = fj {
-        sys.diag[j] += (b * b.transpose()) * k;
+        rank_one(&mut sys.diag[j], k, b, b, rigid(j));
         sys.rhs[j] += b * (k * m0);
     }
     if let (Some(i), Some(j)) = (fi, fj) {
-        let kij: Mat6 = (a * b.transpose()) * (-k);
-        sys.add_block(i, j, &kij);
+        let both_rigid = rigid(i) && rigid(j);
+        let off = &mut sys.off[slot.slot];
+        if slot.vertex_is_row {
+            rank_one(off, -k, a, b, both_rigid);
+        } else {
+            rank_one(off, -k, b, a, both_rigid);
+        }
+    }
+}
+
+/// `m += k·x·yᵀ`, on the leading 3×3 part only when both blocks are rigid (the solver reads
+/// only the leading ndof × ndof part of each block, and the rigid case is 4× cheaper). Each
+/// entry is rounded as (x_r·y_c)·k, as a full outer product scaled by k would be.
+#[inline]
+fn rank_one(m: &mut Mat6, k: f64, x: &Vec6, y: &Vec6, rigid: bool) {
+    let n = if rigid { 3 } else { 6 };
+    for c in 0..n {
+        for r in 0..n {
+            m[(r, c)] += (x[r] * y[c]) * k;
+        }
     }
 }

@@ -13,7 +13,6 @@ pub mod contact_springs;
 use crate::geometry::{BlockGeometry, Mat6, Vec6};
 use crate::scene::{Integrator, Material, PlaneKind};
 use nalgebra::{Matrix3, Vector3};
-use std::collections::HashMap;
 
 /// Newmark constants of an integrator.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -126,12 +125,22 @@ pub struct BlockSystem {
     /// Off-diagonal blocks K_ab for free-block pairs a < b (row block a, column block b).
     pub pairs: Vec<(usize, usize)>,
     pub off: Vec<Mat6>,
-    pair_index: HashMap<(usize, usize), usize>,
     /// Inertia + elastic + loads, before contacts.
     base_diag: Vec<Mat6>,
     base_rhs: Vec<Vec6>,
     /// Mass matrices of this step (for energy and velocity updates).
     pub mass: Vec<Mat6>,
+    /// Per contact (in `ContactSet` order): where its coupling block goes, found once per step
+    /// by [`BlockSystem::bind_contacts`] rather than once per spring and iteration.
+    pub contact_slots: Vec<CouplingSlot>,
+}
+
+/// Where the coupling block of a contact between free blocks i (vertex) and j (edge) is
+/// stored: `off[slot]` holds K_ij when `vertex_is_row` (i < j), else its transpose K_ji.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CouplingSlot {
+    pub slot: usize,
+    pub vertex_is_row: bool,
 }
 
 impl BlockSystem {
@@ -194,12 +203,45 @@ impl BlockSystem {
         pairs.sort_unstable();
         pairs.dedup();
         if pairs != self.pairs {
-            self.pair_index.clear();
-            for (k, p) in pairs.iter().enumerate() {
-                self.pair_index.insert(*p, k);
-            }
             self.off = vec![Mat6::zeros(); pairs.len()];
             self.pairs = pairs;
+        }
+    }
+
+    /// Find the coupling slot of every contact between two distinct free blocks (call after
+    /// [`BlockSystem::set_pattern`], whose pattern must contain every such pair).
+    pub fn bind_contacts(&mut self, dofs: &Dofs, contacts: &[crate::contact::Contact]) {
+        let mut slots = std::mem::take(&mut self.contact_slots);
+        slots.clear();
+        for c in contacts {
+            let s = match (
+                dofs.free_index[c.vertex_block],
+                dofs.free_index[c.edge_block],
+            ) {
+                (Some(i), Some(j)) if i != j => CouplingSlot {
+                    slot: self.slot(i.min(j), i.max(j)),
+                    vertex_is_row: i < j,
+                },
+                _ => CouplingSlot {
+                    slot: usize::MAX,
+                    vertex_is_row: true,
+                },
+            };
+            slots.push(s);
+        }
+        self.contact_slots = slots;
+    }
+
+    /// Slot of the off-diagonal block of free blocks (a, b), a < b, in `pairs`/`off`.
+    /// `pairs` is sorted, so a binary search finds it (cheaper than hashing at these sizes).
+    ///
+    /// # Panics
+    /// If the pair was not declared by [`BlockSystem::set_pattern`]: a bug, not bad input.
+    #[inline]
+    pub fn slot(&self, a: usize, b: usize) -> usize {
+        match self.pairs.binary_search(&(a, b)) {
+            Ok(k) => k,
+            Err(_) => panic!("block pair ({a}, {b}) missing from the declared pattern"),
         }
     }
 
@@ -209,10 +251,10 @@ impl BlockSystem {
         if a == b {
             self.diag[a] += m;
         } else if a < b {
-            let k = self.pair_index[&(a, b)];
+            let k = self.slot(a, b);
             self.off[k] += m;
         } else {
-            let k = self.pair_index[&(b, a)];
+            let k = self.slot(b, a);
             self.off[k] += m.transpose();
         }
     }

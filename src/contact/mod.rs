@@ -17,7 +17,7 @@ pub use vertex_edge::{candidate, Candidate};
 
 use crate::geometry::{displacement_matrix, BlockGeometry, Vec6};
 use nalgebra::Vector2;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 /// State of a contact spring pair.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -54,6 +54,14 @@ pub struct ContactParams {
     /// Angle tolerance (rad) of the entrance criterion: edges within this of parallel still
     /// count as "not entering" so flat-on-flat contacts are found despite round-off.
     pub angle_tolerance: f64,
+    /// Detection is skipped (the contact list kept, only re-linearized) while no vertex has
+    /// moved more than this fraction of min(search distance, angle_tolerance × shortest edge)
+    /// since the last full detection. Skipping is then the same as a detection whose distance
+    /// thresholds moved by at most 0.2 % of the search distance and whose entrance tolerance
+    /// moved by 0.2 % of itself: far below what either heuristic means physically, while a
+    /// structure at rest (or creeping) pays for detection once instead of every step.
+    /// 0 detects every step.
+    pub reuse_ratio: f64,
 }
 
 impl Default for ContactParams {
@@ -61,6 +69,7 @@ impl Default for ContactParams {
         Self {
             search_factor: 2.5,
             angle_tolerance: 1.0e-3,
+            reuse_ratio: 1.0e-3,
         }
     }
 }
@@ -118,14 +127,23 @@ pub struct ContactSet {
     pub contacts: Vec<Contact>,
     broad: BroadPhase,
     /// Scratch: previous contacts by key, reused each step.
-    previous: HashMap<(u32, u32, u32, u32), usize>,
+    /// Fx hashing: the keys are small integers from our own detection, not adversarial input.
+    previous: FxHashMap<(u32, u32, u32, u32), usize>,
     scratch: Vec<Contact>,
     candidates: Vec<Candidate>,
+    /// Every block's vertices at the last full detection, flattened, and how far they may move
+    /// before the next one is due (see [`ContactParams::reuse_ratio`]).
+    snapshot: Vec<Vector2<f64>>,
+    snapshot_search: f64,
+    reuse_limit: f64,
+    /// Full detections done (diagnostic).
+    pub detections: u64,
 }
 
 impl ContactSet {
     /// Find contacts for the current geometry. `search` is the search distance (m); contacts
-    /// found again keep their state, reference point and bond.
+    /// found again keep their state, reference point and bond. Returns false when the list was
+    /// kept because nothing moved enough to change it (see [`ContactParams::reuse_ratio`]).
     pub fn detect(
         &mut self,
         geoms: &[BlockGeometry],
@@ -134,7 +152,12 @@ impl ContactSet {
         params: &ContactParams,
         first_step: bool,
         bond: impl Fn(usize, usize) -> bool,
-    ) {
+    ) -> bool {
+        if !first_step && self.unchanged_since_snapshot(geoms, search) {
+            return false;
+        }
+        self.take_snapshot(geoms, search, params);
+        self.detections += 1;
         self.previous.clear();
         for (k, c) in self.contacts.iter().enumerate() {
             self.previous
@@ -179,6 +202,40 @@ impl ContactSet {
             }
         }
         std::mem::swap(&mut self.contacts, &mut self.scratch);
+        true
+    }
+
+    /// No vertex moved more than the reuse limit since the last full detection at this search
+    /// distance.
+    fn unchanged_since_snapshot(&self, geoms: &[BlockGeometry], search: f64) -> bool {
+        if self.reuse_limit <= 0.0 || search != self.snapshot_search {
+            return false;
+        }
+        let limit2 = self.reuse_limit * self.reuse_limit;
+        let mut old = self.snapshot.iter();
+        for g in geoms {
+            for v in &g.vertices {
+                match old.next() {
+                    Some(o) if (v - o).norm_squared() <= limit2 => {}
+                    _ => return false,
+                }
+            }
+        }
+        old.next().is_none()
+    }
+
+    fn take_snapshot(&mut self, geoms: &[BlockGeometry], search: f64, params: &ContactParams) {
+        self.snapshot.clear();
+        let mut shortest = f64::INFINITY;
+        for g in geoms {
+            self.snapshot.extend_from_slice(&g.vertices);
+            for k in 0..g.vertices.len() {
+                let (a, b) = edge_points(g, k);
+                shortest = shortest.min((b - a).norm());
+            }
+        }
+        self.snapshot_search = search;
+        self.reuse_limit = params.reuse_ratio * search.min(params.angle_tolerance * shortest);
     }
 
     /// Compute the per-step linearization of every contact from the geometry at the step start.

@@ -18,14 +18,15 @@ pub struct Candidate {
     pub length: f64,
 }
 
-/// Best candidate edge of block `j` for vertex `k` of block `i`, if any.
+/// Best candidate edge of block `j` for vertex `k` of block `i`, if any. `sin_tol` is the sine
+/// of [`ContactParams::angle_tolerance`] (computed once per pair by the caller).
 pub fn candidate(
     geoms: &[BlockGeometry],
     i: usize,
     k: usize,
     j: usize,
     search: f64,
-    params: &ContactParams,
+    sin_tol: f64,
 ) -> Option<Candidate> {
     let gi = &geoms[i];
     let gj = &geoms[j];
@@ -35,7 +36,6 @@ pub fn candidate(
     let next = gi.vertices[(k + 1) % nv];
     let (e1, e2) = (prev - p, next - p);
     let (l1, l2) = (e1.norm(), e2.norm());
-    let sin_tol = params.angle_tolerance.sin();
     let ne = gj.vertices.len();
     let mut best: Option<Candidate> = None;
     for m in 0..ne {
@@ -95,8 +95,15 @@ pub fn pair_candidates(
     params: &ContactParams,
     out: &mut Vec<Candidate>,
 ) {
-    for k in 0..geoms[i].vertices.len() {
-        if let Some(c) = candidate(geoms, i, k, j, search, params) {
+    let sin_tol = params.angle_tolerance.sin();
+    // A vertex outside block j's box inflated by the search distance cannot be near its edges.
+    let (lo, hi) = geoms[j].bounds();
+    for (k, p) in geoms[i].vertices.iter().enumerate() {
+        if p.x < lo.x - search || p.x > hi.x + search || p.y < lo.y - search || p.y > hi.y + search
+        {
+            continue;
+        }
+        if let Some(c) = candidate(geoms, i, k, j, search, sin_tol) {
             out.push(c);
         }
     }

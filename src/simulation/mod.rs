@@ -202,6 +202,11 @@ impl Simulation {
         }
     }
 
+    /// Work counters of the sparse linear solver (factorizations, reused-factor iterations).
+    pub fn solver_counts(&self) -> crate::solve::SparseCounts {
+        self.solver.sparse_counts()
+    }
+
     /// Largest displacement allowed in one step (Shi's g2 × model half size), m.
     pub fn max_step_displacement(&self) -> f64 {
         self.scene.control.max_displacement_ratio * self.model_half_size
@@ -249,7 +254,7 @@ impl Simulation {
         let search = self.params.contact.search_factor * self.max_step_displacement();
         let scene = &self.scene;
         let first = self.stats.steps == 0;
-        self.contacts.detect(
+        let rebuilt = self.contacts.detect(
             &self.geoms,
             &self.mobility,
             search,
@@ -261,6 +266,10 @@ impl Simulation {
             },
         );
         self.contacts.linearize(&self.geoms);
+        if !rebuilt {
+            // Same contacts as the last step: joint laws and the block pattern still hold.
+            return;
+        }
         self.laws.clear();
         for c in &self.contacts.contacts {
             let j = scene.joint_between(c.vertex_block, c.edge_block);
@@ -280,6 +289,8 @@ impl Simulation {
             }
         }
         self.system.set_pattern(pairs);
+        self.system
+            .bind_contacts(&self.dofs, &self.contacts.contacts);
     }
 
     /// Kinetic damping, loads at the step end, prescribed motion, block terms.

@@ -6,6 +6,8 @@ mod dense_cholesky;
 pub mod open_close;
 mod sparse_cholesky;
 
+pub use sparse_cholesky::SparseParams;
+
 use crate::assembly::{BlockSystem, Dofs};
 
 /// Why a linear solve failed; `dof` is the global unknown where it was detected.
@@ -25,11 +27,17 @@ pub struct SolverParams {
     /// Systems with at most this many unknowns use the dense factorization: below ~100 the
     /// dense kernel beats sparse bookkeeping (measured in benches/engine.rs).
     pub dense_limit: usize,
+    /// The sparse path: supernodal factorization and reuse of the last factor as a
+    /// preconditioner (see [`SparseParams`]).
+    pub sparse: SparseParams,
 }
 
 impl Default for SolverParams {
     fn default() -> Self {
-        Self { dense_limit: 96 }
+        Self {
+            dense_limit: 96,
+            sparse: SparseParams::default(),
+        }
     }
 }
 
@@ -43,11 +51,28 @@ pub struct LinearSolver {
     pub symbolic_count: u64,
 }
 
+/// Work counters of the sparse path (diagnostics for benchmarks).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SparseCounts {
+    pub symbolic: u64,
+    pub numeric: u64,
+    /// Conjugate-gradient iterations preconditioned by a reused factor.
+    pub reuse_iterations: u64,
+}
+
 impl LinearSolver {
     pub fn new(params: SolverParams) -> Self {
         Self {
             params,
             ..Default::default()
+        }
+    }
+
+    pub fn sparse_counts(&self) -> SparseCounts {
+        SparseCounts {
+            symbolic: self.sparse.symbolic_count,
+            numeric: self.sparse.numeric_count,
+            reuse_iterations: self.sparse.reuse_iterations,
         }
     }
 
@@ -74,7 +99,8 @@ impl LinearSolver {
             self.dense.factor_solve(sys, dofs, x)?;
         } else {
             let before = self.sparse.symbolic_count;
-            self.sparse.factor_solve(sys, dofs, x)?;
+            self.sparse
+                .factor_solve(sys, dofs, x, &self.params.sparse)?;
             self.symbolic_count += self.sparse.symbolic_count - before;
         }
         if let Some(dof) = x.iter().position(|v| !v.is_finite()) {
