@@ -692,7 +692,7 @@ function drawPlots(cursor) {
   const series = (f) => v.ids.map((id, k) => ({ x: time, y: f(v.hist.blocks[id]), label: id, color: PLOT_COLORS[k % PLOT_COLORS.length] }));
   plot($("plot-displacement"), { title: "Horizontal displacement of each block (centroid)", xlabel: "time (s)", ylabel: "x (m)", series: series((h) => h.x), cursor, xrange: [time[0] || 0, time[time.length - 1] || 1] });
   plot($("plot-rotation"), { title: "Rotation of each block (counter-clockwise +)", xlabel: "time (s)", ylabel: "θ (°)", series: series((h) => h.rotation.map((r) => (r * 180) / Math.PI)), cursor, xrange: [time[0] || 0, time[time.length - 1] || 1] });
-  plot($("plot-ground"), { title: "Ground acceleration", xlabel: "time (s)", ylabel: "m/s²", series: [{ x: v.ground.time, y: v.ground.acc, label: "horizontal", color: "#5a5a5a", width: 1 }], cursor, xrange: [time[0] || 0, time[time.length - 1] || 1] });
+  plot($("plot-ground"), { title: "Ground acceleration", xlabel: "time (s)", ylabel: "m/s²", series: [{ x: v.ground.time, y: v.ground.acc, label: "horizontal", color: "#6a3d9a", width: 1 }], cursor, xrange: [time[0] || 0, time[time.length - 1] || 1] });
 }
 
 let playing = null;
