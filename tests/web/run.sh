@@ -7,6 +7,7 @@
 #
 #   ASHLAR_SCREENSHOT  where to write the screenshot of the finished run
 #                      (default target/web-screenshot.png; docs/web-screenshot.png is a copy)
+#   ASHLAR_BIN         use this ashlar binary instead of building one
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 ROOT=$PWD
@@ -20,8 +21,12 @@ if ! command -v chromium >/dev/null 2>&1; then
 fi
 (cd tests/web && npm ci --no-audit --no-fund --loglevel=error)
 
-cargo build --locked --quiet --bin ashlar
-BIN=$TARGET/debug/ashlar
+if [ -n "${ASHLAR_BIN:-}" ]; then
+    BIN=$ASHLAR_BIN
+else
+    cargo build --locked --quiet --bin ashlar
+    BIN=$TARGET/debug/ashlar
+fi
 
 # A shared record (../shared beside the checkout), or the test fixtures' copy of it.
 RECORD=$ROOT/../shared/ground-motions/friuli-1976-tolmezzo-000.at2
