@@ -206,6 +206,14 @@ async fn inspect_errors_name_the_field() {
         .await
         .problem(422);
     assert_eq!(p["pointer"], "/horizontal/pulse/colour", "{p}");
+    let p = inspect(json!({"horizontal": {"pulse": {"amplitude": 1, "period": 1}, "dt": 0.1}}))
+        .await
+        .problem(422);
+    assert_eq!(p["pointer"], "/horizontal/dt", "{p}");
+    let p = inspect(json!({"horizontal": {"format": "csv", "content": "0,1\n0.1,2\n", "units": null}}))
+        .await
+        .problem(422);
+    assert_eq!(p["pointer"], "/horizontal/units", "{p}");
     let p = inspect(json!({"horizontal": {"pulse": {"amplitude": 1, "period": -1}}}))
         .await
         .problem(422);

@@ -489,9 +489,16 @@ function follow(job) {
 
 function renderJobs() {
   const body = $("jobs-body");
+  // Keep keyboard focus on the same button across the re-render.
+  const a = document.activeElement;
+  const keep = a && body.contains(a) ? [a.closest("tr").id, a.dataset.action] : null;
   const rows = state.order.map((id) => jobRow(state.jobs.get(id))).filter(Boolean);
   body.replaceChildren(...rows);
   $("jobs-empty").hidden = rows.length > 0;
+  if (keep) {
+    const b = document.querySelector(`#${CSS.escape(keep[0])} [data-action="${keep[1]}"]`);
+    if (b) b.focus();
+  }
 }
 
 function renderJobRow(id) {
@@ -818,7 +825,11 @@ function syncVisibility() {
   $("scale-label").textContent = mode === "pga" ? "Target PGA" : "Factor";
   $("scale-units").hidden = mode !== "pga";
   document.querySelector('label[for="scale-units"]').hidden = mode !== "pga";
-  $("pga-fields").hidden = radio("analysis") !== "pga";
+  const pga = radio("analysis") === "pga";
+  $("pga-fields").hidden = !pga;
+  // A PGA search scales the record itself: no scale of its own.
+  $("scale-mode-row").hidden = pga;
+  if (pga) $("scale-row").hidden = true;
   $("criterion-value").disabled = $("criterion-kind").value === "toppled";
 }
 

@@ -112,7 +112,7 @@ fn asset_response(name: &str) -> ApiResult {
         .ok_or_else(|| ApiError::not_found_parameter("name", format!("no asset {name:?}")))?;
     let mut r = (StatusCode::OK, *body).into_response();
     let h = r.headers_mut();
-    h.insert(header::CONTENT_TYPE, HeaderValue::from_static(ct));
+    h.insert(header::CONTENT_TYPE, HeaderValue::from_static(*ct));
     // The assets change with the binary only; a short cache keeps upgrades visible.
     h.insert(
         header::CACHE_CONTROL,
@@ -348,6 +348,47 @@ fn motion_pointer(origin: &str, message: &str) -> String {
     p
 }
 
+/// What the motion parser lets pass but FORMAT.md §2 (and `openapi.yaml`) does not: members of
+/// a component that belong to another form (`{"pulse": …, "dt": 1}`), and nulls where a value
+/// or nothing is expected. The job routes refuse the same (`request::check_shapes`).
+fn check_motion_shape(body: &Value) -> Result<(), ApiError> {
+    let refuse = |p: String, what: &str| Err(ApiError::invalid_field(p.clone(), format!("{p}: {what}")));
+    if let Some(scale) = body.get("scale").and_then(Value::as_object) {
+        if let Some((k, _)) = scale.iter().find(|(_, v)| v.is_null()) {
+            return refuse(format!("/scale/{k}"), "must not be null (leave it out instead)");
+        }
+    }
+    for name in ["horizontal", "vertical"] {
+        let Some(c) = body.get(name).and_then(Value::as_object) else {
+            continue;
+        };
+        let forms: [&[&str]; 4] = [
+            &["pulse"],
+            &["sine"],
+            &["samples", "dt", "units"],
+            &["format", "content", "units"],
+        ];
+        let Some(form) = forms.iter().find(|f| c.contains_key(f[0])) else {
+            continue;
+        };
+        if let Some(k) = c.keys().find(|k| !form.contains(&k.as_str())) {
+            return refuse(
+                format!("/{name}/{k}"),
+                format!(
+                    "unknown field for a {:?} component (allowed: {})",
+                    form[0],
+                    form.join(", ")
+                )
+                .as_str(),
+            );
+        }
+        if let Some((k, _)) = c.iter().find(|(_, v)| v.is_null()) {
+            return refuse(format!("/{name}/{k}"), "must not be null (leave it out instead)");
+        }
+    }
+    Ok(())
+}
+
 fn evaluated_samples(sig: &Signal, p: &ReportParams) -> f64 {
     match sig {
         Signal::Zero => 0.0,
@@ -378,6 +419,7 @@ pub fn inspect_motion(
             "the body must be a ground motion object {\"horizontal\": …, \"vertical\": …, \"scale\": …} (FORMAT.md §2)",
         ));
     }
+    check_motion_shape(body)?;
     let gm = crate::motion::from_json(body).map_err(|e| {
         let p = motion_pointer(&e.origin, &e.message);
         let line = e
