@@ -788,7 +788,7 @@ function showPga(j) {
       for (const run of rec.runs || []) points.push({ x: run.pga, y: k, color: run.failed ? "#c62828" : "#2e7d32", shape: run.failed ? "x" : "o", label: run.failed ? "failed" : "safe" });
     });
     const brackets = r.records.filter((rec) => rec.safe_pga !== null && rec.failing_pga !== null).map((rec) => ({ x: [rec.safe_pga, rec.failing_pga], y: [r.records.indexOf(rec), r.records.indexOf(rec)], color: "#e0a000", width: 6 }));
-    plot(scanCanvas, { title: "Scan points per record (row = record, in table order)", xlabel: `PGA (${units})`, ylabel: "record", series: brackets, points, yrange: [-0.7, r.records.length - 0.3] });
+    plot(scanCanvas, { title: "Scan points per record (safe ○, failed ×; bracket in orange)", xlabel: `PGA (${units})`, ylabel: "record", series: brackets, points, yrange: [-0.7, r.records.length - 0.3], yticks: r.records.map((rec, k) => [k, rec.motion || String(k + 1)]) });
     if (f && f.median > 0 && f.beta > 0) {
       fragCanvas.hidden = false;
       const all = (f.points || []).map((p) => p.pga).concat(r.records.flatMap((rec) => (rec.runs || []).map((x) => x.pga)));

@@ -72,6 +72,8 @@ function plot(canvas, spec) {
   if (x1 === x0) { x1 = x0 + 1; }
   if (y1 === y0) { const d = Math.abs(y0) > 0 ? Math.abs(y0) * 0.1 : 1; y0 -= d; y1 += d; }
   if (!spec.yrange && !spec.ylog) { const pad = 0.05 * (y1 - y0); y0 -= pad; y1 += pad; }
+  // Scatter points sit inside the frame, not on its edge.
+  if (!spec.xrange && !spec.xlog && (spec.points || []).length) { const pad = 0.04 * (x1 - x0); x0 -= pad; x1 += pad; }
   const X0 = tx(x0), X1 = tx(x1), Y0 = ty(y0), Y1 = ty(y1);
   const sx = (v) => m.l + ((tx(v) - X0) / (X1 - X0)) * pw;
   const sy = (v) => m.t + ph - ((ty(v) - Y0) / (Y1 - Y0)) * ph;
@@ -105,10 +107,12 @@ function plot(canvas, spec) {
     ctx.fillText(spec.xlog ? String(v) : fmtTick(v, step), X, m.t + ph + 4);
   }
   ctx.textAlign = "right"; ctx.textBaseline = "middle";
-  for (const [v, step] of ticks(y0, y1, spec.ylog, Math.max(2, Math.floor(ph / 40)))) {
+  // spec.yticks: [[value, label], ...] replaces the automatic ticks (categorical rows).
+  const yt = spec.yticks || ticks(y0, y1, spec.ylog, Math.max(2, Math.floor(ph / 40))).map(([v, step]) => [v, spec.ylog ? String(v) : fmtTick(v, step)]);
+  for (const [v, label] of yt) {
     const Y = sy(v);
     ctx.beginPath(); ctx.moveTo(m.l, Y); ctx.lineTo(m.l + pw, Y); ctx.stroke();
-    ctx.fillText(spec.ylog ? String(v) : fmtTick(v, step), m.l - 4, Y);
+    ctx.fillText(String(label).slice(0, 9), m.l - 4, Y);
   }
   ctx.strokeStyle = "#555";
   ctx.strokeRect(m.l, m.t, pw, ph);
@@ -181,6 +185,7 @@ function plot(canvas, spec) {
       ctx.strokeStyle = c; ctx.fillStyle = c; ctx.lineWidth = 2;
       if (kind === "band") ctx.fillRect(x, y + 2, 18, 8);
       else if (kind === "line") { ctx.beginPath(); ctx.moveTo(x, y + 6); ctx.lineTo(x + 18, y + 6); ctx.stroke(); }
+      else if (kind === "x") { ctx.beginPath(); ctx.moveTo(x + 5, y + 2); ctx.lineTo(x + 13, y + 10); ctx.moveTo(x + 13, y + 2); ctx.lineTo(x + 5, y + 10); ctx.stroke(); }
       else { ctx.beginPath(); ctx.arc(x + 9, y + 6, 4, 0, 2 * Math.PI); ctx.stroke(); }
       ctx.fillStyle = "#222"; ctx.textAlign = "left"; ctx.textBaseline = "middle";
       ctx.fillText(t, x + 24, y + 6);
