@@ -328,12 +328,19 @@ pub async fn job_ground(
 /// A motion error's origin (`motion.horizontal.pulse`) as a pointer into the inspected body,
 /// which is the ground motion itself (`/horizontal/pulse`); serde's "unknown/missing field
 /// `x`" messages point one level further.
-fn motion_pointer(origin: &str, message: &str) -> String {
+fn motion_pointer(origin: &str, message: &str, body: &Value) -> String {
     let full = dotted_to_pointer("", origin);
     let mut p = full
         .strip_prefix("/motion")
         .map(str::to_string)
         .unwrap_or(full);
+    // The parser names an analytic component (`/horizontal`) for errors inside its `pulse` or
+    // `sine` object: point at that object.
+    if let Some(c) = p.strip_prefix('/').and_then(|name| body.get(name)) {
+        if let Some(form) = ["pulse", "sine"].into_iter().find(|f| c.get(f).is_some()) {
+            p = format!("{p}/{form}");
+        }
+    }
     for marker in ["missing field `", "unknown field `"] {
         if let Some(name) = message
             .strip_prefix(marker)
@@ -397,11 +404,14 @@ fn evaluated_samples(sig: &Signal, p: &ReportParams) -> f64 {
     }
 }
 
+/// Every number finite. serde_json writes a non-finite float as `null`, so a `null` counts as
+/// non-finite: call this only on values that hold numbers alone.
 fn all_finite(v: &Value) -> bool {
     match v {
         Value::Number(n) => n.as_f64().is_some_and(f64::is_finite),
         Value::Array(a) => a.iter().all(all_finite),
         Value::Object(o) => o.values().all(all_finite),
+        Value::Null => false,
         _ => true,
     }
 }
@@ -421,7 +431,7 @@ pub fn inspect_motion(
     }
     check_motion_shape(body)?;
     let gm = crate::motion::from_json(body).map_err(|e| {
-        let p = motion_pointer(&e.origin, &e.message);
+        let p = motion_pointer(&e.origin, &e.message, body);
         let line = e
             .line
             .map(|l| format!(" (line {l} of the record)"))
@@ -469,6 +479,21 @@ pub fn inspect_motion(
         }
     }
     let im = report_with(&gm, &rp);
+    let measures_finite = [
+        im.dt,
+        im.duration,
+        im.pga,
+        im.pga_original_units,
+        im.pgv,
+        im.pgd,
+        im.arias_intensity,
+        im.significant_duration_5_95,
+        im.cav,
+        im.mean_period,
+    ]
+    .iter()
+    .chain(&im.spectrum.psa)
+    .all(|v| v.is_finite());
     let mut out = serde_json::to_value(&im).map_err(ApiError::internal)?;
     let duration = gm.duration().unwrap_or(rp.steady_duration);
     let native = (im.npts.max(2) - 1).max(1);
@@ -478,7 +503,7 @@ pub fn inspect_motion(
     } else {
         "/horizontal"
     };
-    if !all_finite(&out) || !all_finite(&series) {
+    if !measures_finite || !all_finite(&series["time"]) || !all_finite(&series["acceleration"]) {
         return Err(ApiError::invalid_field(
             pointer,
             format!("{pointer}: the scaled record overflows (values beyond the range of a double)"),
@@ -523,15 +548,25 @@ mod tests {
 
     #[test]
     fn pointers_are_relative_to_the_motion() {
+        let rec = json!({"horizontal": {"format": "at2", "content": ""}});
+        let pulse = json!({"horizontal": {"pulse": {}}});
         assert_eq!(
-            motion_pointer("motion.horizontal.pulse", "bad"),
+            motion_pointer("motion.horizontal.pulse", "bad", &pulse),
             "/horizontal/pulse"
         );
         assert_eq!(
-            motion_pointer("motion.horizontal", "unknown field `foo`, expected one of"),
+            motion_pointer(
+                "motion.horizontal",
+                "unknown field `foo`, expected one of",
+                &rec
+            ),
             "/horizontal/foo"
         );
-        assert_eq!(motion_pointer("motion", "x"), "");
+        assert_eq!(
+            motion_pointer("motion.horizontal", "missing field `period`", &pulse),
+            "/horizontal/pulse/period"
+        );
+        assert_eq!(motion_pointer("motion", "x", &rec), "");
     }
 
     #[test]
