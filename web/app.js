@@ -489,6 +489,14 @@ function follow(job) {
 
 function renderJobs() {
   const body = $("jobs-body");
+  // Rows whose state is unchanged are updated in place; the table is rebuilt only when a job
+  // appears or changes state (or the watched job changes).
+  const shown = [...body.rows].map((r) => `${r.id}:${r.dataset.status}:${r.classList.contains("watched")}`).join();
+  const want = state.order.filter((id) => state.jobs.has(id)).map((id) => `job-${id}:${state.jobs.get(id).status}:${state.watched === id}`).join();
+  if (shown === want) {
+    for (const id of state.order) renderJobRow(id);
+    return;
+  }
   // Keep keyboard focus on the same button across the re-render.
   const a = document.activeElement;
   const keep = a && body.contains(a) ? [a.closest("tr").id, a.dataset.action] : null;
@@ -505,6 +513,14 @@ function renderJobRow(id) {
   const old = document.getElementById(`job-${id}`);
   const j = state.jobs.get(id);
   if (!j) return;
+  // Same state: move the bar in place (re-creating the row would pull its buttons from under
+  // the pointer at every progress event).
+  if (old && old.dataset.status === j.status) {
+    const pct = Math.round((j.progress || 0) * 100);
+    const bar = old.querySelector("progress");
+    if (bar) { bar.value = pct; bar.nextSibling.textContent = ` ${pct} %`; }
+    return;
+  }
   const fresh = jobRow(j);
   if (old) {
     // Keep keyboard focus on the same button across the re-render.

@@ -88,11 +88,11 @@ try {
     await page.waitForFunction(() => document.getElementById("scene-info").textContent.includes("column"));
     await page.setInputFiles("#record-file", record);
     await page.check('input[name="scale-mode"][value="pga"]');
-    await page.fill("#scale-value", "0.45");
+    await page.fill("#scale-value", "1");
     await page.selectOption("#scale-units", "g");
     await page.waitForFunction(() => document.getElementById("record-provenance").textContent.includes("scaled"), null, { timeout: 20000 });
     const table = await page.textContent("#record-measures");
-    assert(/PGA\s*4\.41 m\/s² \(0\.45 g\)/.test(table), `measures: ${table}`);
+    assert(/PGA\s*9\.81 m\/s² \(1 g\)/.test(table), `measures: ${table}`);
     assert(table.includes("Arias intensity") && table.includes("D5–95"), table);
     for (const id of ["record-accel", "record-spectrum"]) {
       const n = await colouredPixels(page, id);
