@@ -53,7 +53,10 @@ async fn page_assets_and_examples_are_served_from_the_binary() {
         assert!(html.contains(needle), "the page lacks {needle}");
     }
     // No asset is fetched from another host (the page must work offline).
-    assert!(!html.contains("http://") && !html.contains("//cdn"), "{html}");
+    assert!(
+        !html.contains("http://") && !html.contains("//cdn"),
+        "{html}"
+    );
     for (name, ct) in [
         ("app.js", "text/javascript; charset=utf-8"),
         ("plot.js", "text/javascript; charset=utf-8"),
@@ -81,7 +84,10 @@ async fn page_assets_and_examples_are_served_from_the_binary() {
             .expect("examples/column.json"),
     )
     .expect("json");
-    assert_eq!(col, on_disk, "the bundled example is the file of the repository");
+    assert_eq!(
+        col, on_disk,
+        "the bundled example is the file of the repository"
+    );
     call(&router, get("/v1/examples/nope")).await.problem(404);
     svc.shutdown(Duration::ZERO);
     std::fs::remove_dir_all(dir).ok();
@@ -139,7 +145,8 @@ async fn inspect_agrees_with_ashlar_motion_on_a_real_record() {
     let (svc, router, dir) = start("web-inspect-at2", Duration::from_millis(1));
     let path = fixture("friuli-1976-tolmezzo-000.at2");
     let content = std::fs::read_to_string(&path).expect("record");
-    let body = json!({"horizontal": {"format": "at2", "content": content}, "scale": {"factor": 1.5}});
+    let body =
+        json!({"horizontal": {"format": "at2", "content": content}, "scale": {"factor": 1.5}});
     let r = call(&router, post_json("/v1/motions/inspect", &body)).await;
     assert_eq!(r.status, 200, "{}", r.text());
     let im = r.json();
@@ -191,8 +198,8 @@ async fn inspect_errors_name_the_field() {
         async move { call(&router, post_json("/v1/motions/inspect", &body)).await }
     };
     // A damaged AT2: the pointer names the content and the detail the line.
-    let content = std::fs::read_to_string(fixture("northridge-1994-mulholland-009.at2"))
-        .expect("record");
+    let content =
+        std::fs::read_to_string(fixture("northridge-1994-mulholland-009.at2")).expect("record");
     let mut lines: Vec<String> = content.lines().map(str::to_string).collect();
     lines[9] = "0.001 oops 0.002".into();
     let bad = json!({"horizontal": {"format": "at2", "content": lines.join("\n")}});
@@ -210,9 +217,10 @@ async fn inspect_errors_name_the_field() {
         .await
         .problem(422);
     assert_eq!(p["pointer"], "/horizontal/dt", "{p}");
-    let p = inspect(json!({"horizontal": {"format": "csv", "content": "0,1\n0.1,2\n", "units": null}}))
-        .await
-        .problem(422);
+    let p =
+        inspect(json!({"horizontal": {"format": "csv", "content": "0,1\n0.1,2\n", "units": null}}))
+            .await
+            .problem(422);
     assert_eq!(p["pointer"], "/horizontal/units", "{p}");
     let p = inspect(json!({"horizontal": {"pulse": {"amplitude": 1, "period": -1}}}))
         .await
@@ -222,9 +230,11 @@ async fn inspect_errors_name_the_field() {
         .await
         .problem(422);
     assert_eq!(p["pointer"], "/horizontal", "{p}");
-    let p = inspect(json!({"horizontal": {"samples": [1.0, -2.0], "dt": 0.01}, "scale": {"factor": 1e308}}))
-        .await
-        .problem(422);
+    let p = inspect(
+        json!({"horizontal": {"samples": [1.0, -2.0], "dt": 0.01}, "scale": {"factor": 1e308}}),
+    )
+    .await
+    .problem(422);
     assert_eq!(p["pointer"], "/scale", "{p}");
     let p = inspect(json!({"horizontal": {"pulse": {"amplitude": 1, "period": 1, "cycles": 1e9}}}))
         .await
@@ -373,7 +383,11 @@ async fn a_runs_geometry_and_ground_motion() {
             )
         } else {
             let v_end = 2.0 * amp / w;
-            (0.0, v_end, amp / w * period / 2.0 + v_end * (t - period / 2.0))
+            (
+                0.0,
+                v_end,
+                amp / w * period / 2.0 + v_end * (t - period / 2.0),
+            )
         };
         assert!((f(&g["acceleration"][i]) - a).abs() < 1e-9, "a({t})");
         assert!((f(&g["velocity"][i]) - v).abs() < 1e-9, "v({t})");

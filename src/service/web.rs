@@ -112,7 +112,7 @@ fn asset_response(name: &str) -> ApiResult {
         .ok_or_else(|| ApiError::not_found_parameter("name", format!("no asset {name:?}")))?;
     let mut r = (StatusCode::OK, *body).into_response();
     let h = r.headers_mut();
-    h.insert(header::CONTENT_TYPE, HeaderValue::from_static(*ct));
+    h.insert(header::CONTENT_TYPE, HeaderValue::from_static(ct));
     // The assets change with the binary only; a short cache keeps upgrades visible.
     h.insert(
         header::CACHE_CONTROL,
@@ -260,7 +260,8 @@ pub async fn job_scene(
     id: Result<Path<String>, PathRejection>,
 ) -> ApiResult {
     let j = load(&s, parse_id(id)?, JobKind::Run).await?;
-    let body = blocking(move || stored_input(&j).map(|(scene, _)| scene_geometry(&scene))).await??;
+    let body =
+        blocking(move || stored_input(&j).map(|(scene, _)| scene_geometry(&scene))).await??;
     Ok(axum::Json(body).into_response())
 }
 
@@ -359,10 +360,14 @@ fn motion_pointer(origin: &str, message: &str, body: &Value) -> String {
 /// a component that belong to another form (`{"pulse": …, "dt": 1}`), and nulls where a value
 /// or nothing is expected. The job routes refuse the same (`request::check_shapes`).
 fn check_motion_shape(body: &Value) -> Result<(), ApiError> {
-    let refuse = |p: String, what: &str| Err(ApiError::invalid_field(p.clone(), format!("{p}: {what}")));
+    let refuse =
+        |p: String, what: &str| Err(ApiError::invalid_field(p.clone(), format!("{p}: {what}")));
     if let Some(scale) = body.get("scale").and_then(Value::as_object) {
         if let Some((k, _)) = scale.iter().find(|(_, v)| v.is_null()) {
-            return refuse(format!("/scale/{k}"), "must not be null (leave it out instead)");
+            return refuse(
+                format!("/scale/{k}"),
+                "must not be null (leave it out instead)",
+            );
         }
     }
     for name in ["horizontal", "vertical"] {
@@ -390,7 +395,10 @@ fn check_motion_shape(body: &Value) -> Result<(), ApiError> {
             );
         }
         if let Some((k, _)) = c.iter().find(|(_, v)| v.is_null()) {
-            return refuse(format!("/{name}/{k}"), "must not be null (leave it out instead)");
+            return refuse(
+                format!("/{name}/{k}"),
+                "must not be null (leave it out instead)",
+            );
         }
     }
     Ok(())
