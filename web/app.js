@@ -535,7 +535,7 @@ function jobRow(j) {
   const pct = Math.round((j.progress || 0) * 100);
   const label = j.kind === "run" ? "run" : "PGA search";
   const actions = el("td");
-  const viewable = j.status === "succeeded" || (j.kind === "run" && j.status === "cancelled") || j.status === "failed";
+  const viewable = j.status === "succeeded" || (j.kind === "run" && j.status === "cancelled" && j.started_at) || j.status === "failed";
   if (viewable) actions.append(el("button", { type: "button", class: "secondary", "data-action": "view", "aria-label": `View ${label} ${j.id.slice(0, 8)}`, onclick: () => show(j.id), text: "View" }));
   if (!TERMINAL.has(j.status)) actions.append(el("button", { type: "button", class: "danger", "data-action": "cancel", "aria-label": `Cancel ${label} ${j.id.slice(0, 8)}`, onclick: () => cancel(j.id), text: "Cancel" }));
   const when = new Date(j.created_at);
@@ -578,8 +578,14 @@ async function show(id) {
     head.textContent += ` · ${j.error || "failed"}`;
     return;
   }
-  if (j.kind === "run") await showRun(j);
-  else showPga(j);
+  try {
+    if (j.kind === "run") await showRun(j);
+    else showPga(j);
+  } catch (e) {
+    // E.g. a run cancelled before it started has no histories.
+    $("run-view").hidden = true;
+    head.textContent += ` · ${e.message}`;
+  }
   $("result").scrollIntoView({ behavior: "smooth", block: "start" });
 }
 
