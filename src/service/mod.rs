@@ -10,6 +10,7 @@ pub mod problem;
 pub mod request;
 pub mod routes;
 pub mod store;
+pub mod web;
 pub mod worker;
 
 pub use problem::ApiError;

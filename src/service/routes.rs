@@ -5,6 +5,7 @@ use super::histories::Histories;
 use super::problem::ApiError;
 use super::request::{json_body, parse_pga, parse_run};
 use super::store::{rfc3339, CancelOutcome, JobKind, JobRecord, JobStatus, NewJob};
+use super::web;
 use super::worker::Core;
 use axum::body::{Body, Bytes};
 use axum::extract::rejection::{BytesRejection, PathRejection, QueryRejection};
@@ -55,6 +56,15 @@ pub fn route_table() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
         ),
         (Method::GET, "/healthz", get(healthz)),
         (Method::GET, "/openapi.yaml", get(openapi)),
+        // The web page (issue 11) and the endpoints it needs: src/service/web.rs.
+        (Method::GET, "/", get(web::index)),
+        (Method::GET, "/assets/{name}", get(web::asset)),
+        (Method::GET, "/v1/jobs", get(web::list_jobs)),
+        (Method::GET, "/v1/jobs/{id}/scene", get(web::job_scene)),
+        (Method::GET, "/v1/jobs/{id}/ground", get(web::job_ground)),
+        (Method::POST, "/v1/motions/inspect", post(web::inspect)),
+        (Method::GET, "/v1/examples", get(web::list_examples)),
+        (Method::GET, "/v1/examples/{name}", get(web::get_example)),
     ]
 }
 
@@ -122,7 +132,7 @@ async fn problem_for_bare_errors(resp: Response) -> Response {
 }
 
 /// Run store work on the blocking pool (SQLite calls fsync; never stall the runtime's threads).
-async fn blocking<T: Send + 'static>(
+pub(super) async fn blocking<T: Send + 'static>(
     f: impl FnOnce() -> T + Send + 'static,
 ) -> Result<T, ApiError> {
     tokio::task::spawn_blocking(f)
@@ -130,13 +140,13 @@ async fn blocking<T: Send + 'static>(
         .map_err(ApiError::internal)
 }
 
-fn parse_id(path: Result<Path<String>, PathRejection>) -> Result<Uuid, ApiError> {
+pub(super) fn parse_id(path: Result<Path<String>, PathRejection>) -> Result<Uuid, ApiError> {
     let Path(raw) = path.map_err(|e| ApiError::invalid_parameter("id", e.body_text()))?;
     Uuid::try_parse(&raw)
         .map_err(|_| ApiError::invalid_parameter("id", format!("id {raw:?} is not a UUID")))
 }
 
-async fn load(state: &AppState, id: Uuid, kind: JobKind) -> Result<JobRecord, ApiError> {
+pub(super) async fn load(state: &AppState, id: Uuid, kind: JobKind) -> Result<JobRecord, ApiError> {
     let store = state.core.store.clone();
     let job = blocking(move || store.get(id))
         .await?
@@ -152,7 +162,7 @@ async fn load(state: &AppState, id: Uuid, kind: JobKind) -> Result<JobRecord, Ap
     }
 }
 
-fn check_json_content_type(headers: &HeaderMap) -> Result<(), ApiError> {
+pub(super) fn check_json_content_type(headers: &HeaderMap) -> Result<(), ApiError> {
     let ct = headers
         .get(header::CONTENT_TYPE)
         .and_then(|v| v.to_str().ok())
@@ -275,7 +285,7 @@ async fn submit_pga(
     submit(s, headers, body, JobKind::PgaSearch).await
 }
 
-fn job_json(j: &JobRecord) -> String {
+pub(super) fn job_json(j: &JobRecord) -> String {
     let v = json!({
         "id": j.id,
         "kind": j.kind,

@@ -180,6 +180,17 @@ pub trait JobStore: Send + Sync {
     /// killing the server must not keep killing it). Returns (requeued, failed).
     fn recover(&self, max_attempts: u32) -> Result<(usize, usize), StoreError>;
     fn counts(&self) -> Result<Counts, StoreError>;
+    /// The most recent jobs, newest first, at most `limit`, optionally of one kind, for the
+    /// web page's queue (`GET /v1/jobs`). Their `request` is left out (`Null`): a record
+    /// embedded in it can be megabytes, and a listing never needs it.
+    fn list_recent(
+        &self,
+        limit: usize,
+        kind: Option<JobKind>,
+    ) -> Result<Vec<JobRecord>, StoreError> {
+        let _ = (limit, kind);
+        Err(StoreError("this job store cannot list jobs".into()))
+    }
 }
 
 /// Unix time in milliseconds.
@@ -463,6 +474,26 @@ impl JobStore for SqliteStore {
                     JobStatus::Failed => out.failed = n,
                     JobStatus::Cancelled => out.cancelled = n,
                 }
+            }
+            Ok(out)
+        })
+    }
+
+    fn list_recent(
+        &self,
+        limit: usize,
+        kind: Option<JobKind>,
+    ) -> Result<Vec<JobRecord>, StoreError> {
+        let cols = COLUMNS.replace("request,", "'null',");
+        let limit = i64::try_from(limit).unwrap_or(i64::MAX);
+        self.read(|c| {
+            let mut st = c.prepare(&format!(
+                "SELECT {cols} FROM jobs WHERE ?1 IS NULL OR kind = ?1 ORDER BY seq DESC LIMIT ?2"
+            ))?;
+            let rows = st.query_map(params![kind.map(JobKind::as_str), limit], row_to_record)?;
+            let mut out = Vec::new();
+            for r in rows {
+                out.push(r??);
             }
             Ok(out)
         })

@@ -1,0 +1,588 @@
+//! The browser page (`GET /`, issue 11) and the JSON endpoints it needs beyond the job API:
+//! record inspection before submitting, the list of recent jobs, a job's geometry and ground
+//! motion for the animation and plots, and the bundled examples. Sits beside `routes` at the
+//! top of the flow; the page itself is plain HTML/CSS/JS under `web/`, embedded in the binary.
+use super::problem::{dotted_to_pointer, ApiError};
+use super::request::json_body;
+use super::routes::{blocking, check_json_content_type, job_json, load, parse_id, AppState};
+use super::store::{JobKind, JobRecord};
+use crate::geometry::polygon_moments;
+use crate::motion::{report_with, GroundMotion, ReportParams, Signal};
+use crate::scene::{BlockKind, Excitation, Scene};
+use axum::body::Bytes;
+use axum::extract::rejection::{BytesRejection, PathRejection, QueryRejection};
+use axum::extract::{Path, Query, State};
+use axum::http::{header, HeaderMap, HeaderValue, StatusCode};
+use axum::response::{IntoResponse, Response};
+use serde_json::{json, Value};
+
+type ApiResult = Result<Response, ApiError>;
+
+/// The page and its assets: (URL path below `/`, content type, body).
+const ASSETS: &[(&str, &str, &str)] = &[
+    (
+        "index.html",
+        "text/html; charset=utf-8",
+        include_str!("../../web/index.html"),
+    ),
+    (
+        "app.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../../web/app.js"),
+    ),
+    (
+        "plot.js",
+        "text/javascript; charset=utf-8",
+        include_str!("../../web/plot.js"),
+    ),
+    (
+        "app.css",
+        "text/css; charset=utf-8",
+        include_str!("../../web/app.css"),
+    ),
+];
+
+/// Bundled examples: (name, kind, title, JSON text). Served from the binary so that the page
+/// works without the source tree.
+pub const EXAMPLES: &[(&str, &str, &str, &str)] = &[
+    (
+        "column",
+        "scene",
+        "Free-standing column on a plinth (rocking, toppling)",
+        include_str!("../../examples/column.json"),
+    ),
+    (
+        "incline",
+        "scene",
+        "Block on a 20° incline (sliding)",
+        include_str!("../../examples/incline.json"),
+    ),
+    (
+        "half-sine-pulse",
+        "motion",
+        "Half-sine pulse, 5 m/s², 1 s period",
+        include_str!("../../examples/half-sine-pulse.json"),
+    ),
+];
+
+/// Knobs of the page's endpoints.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WebParams {
+    /// Default and largest number of points of a sampled series sent to the page. 4000 is more
+    /// than a laptop plot has pixels across, and keeps a 40-minute record's reply under 200 kB.
+    pub series_points: usize,
+    pub max_series_points: usize,
+    /// Default and largest number of jobs listed by `GET /v1/jobs`.
+    pub list_default: usize,
+    pub list_max: usize,
+    /// Work budget of one inspection, in oscillator substeps (samples × Σ substeps per period).
+    /// The spectrum splits each record step so that a period spans ≥ 20 substeps; a record with
+    /// a coarse step and many samples could otherwise tie a thread for minutes. 2·10⁹ is a few
+    /// seconds of CPU; a real record (8000 samples at 5 ms) needs about 10⁷.
+    pub inspect_budget: f64,
+}
+
+impl Default for WebParams {
+    fn default() -> Self {
+        Self {
+            series_points: 4000,
+            max_series_points: 100_000,
+            list_default: 50,
+            list_max: 500,
+            inspect_budget: 2.0e9,
+        }
+    }
+}
+
+/// `GET /` and `GET /index.html`.
+pub async fn index() -> Response {
+    asset_response("index.html").unwrap_or_else(|e| e.into_response())
+}
+
+/// `GET /assets/{name}`.
+pub async fn asset(name: Result<Path<String>, PathRejection>) -> ApiResult {
+    let Path(name) = name.map_err(|e| ApiError::invalid_parameter("name", e.body_text()))?;
+    asset_response(&name)
+}
+
+fn asset_response(name: &str) -> ApiResult {
+    let (_, ct, body) = ASSETS
+        .iter()
+        .find(|(n, _, _)| *n == name)
+        .ok_or_else(|| ApiError::not_found_parameter("name", format!("no asset {name:?}")))?;
+    let mut r = (StatusCode::OK, *body).into_response();
+    let h = r.headers_mut();
+    h.insert(header::CONTENT_TYPE, HeaderValue::from_static(ct));
+    // The assets change with the binary only; a short cache keeps upgrades visible.
+    h.insert(
+        header::CACHE_CONTROL,
+        HeaderValue::from_static("public, max-age=60"),
+    );
+    Ok(r)
+}
+
+/// `GET /v1/examples`: the bundled scenes and motions.
+pub async fn list_examples() -> Response {
+    let items: Vec<Value> = EXAMPLES
+        .iter()
+        .map(|(name, kind, title, _)| {
+            json!({"name": name, "kind": kind, "title": title, "url": format!("/v1/examples/{name}")})
+        })
+        .collect();
+    axum::Json(json!({ "examples": items })).into_response()
+}
+
+/// `GET /v1/examples/{name}`: one bundled example, as JSON.
+pub async fn get_example(name: Result<Path<String>, PathRejection>) -> ApiResult {
+    let Path(name) = name.map_err(|e| ApiError::invalid_parameter("name", e.body_text()))?;
+    let (_, _, _, text) = EXAMPLES
+        .iter()
+        .find(|(n, _, _, _)| *n == name)
+        .ok_or_else(|| ApiError::not_found_parameter("name", format!("no example {name:?}")))?;
+    let mut r = (StatusCode::OK, *text).into_response();
+    r.headers_mut().insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static("application/json"),
+    );
+    Ok(r)
+}
+
+fn query_usize(
+    query: &[(String, String)],
+    name: &str,
+    default: usize,
+    max: usize,
+) -> Result<usize, ApiError> {
+    match query.iter().rev().find(|(k, _)| k == name) {
+        None => Ok(default),
+        Some((_, v)) => match v.parse::<usize>() {
+            Ok(n) if (1..=max).contains(&n) => Ok(n),
+            _ => Err(ApiError::invalid_parameter(
+                name,
+                format!("?{name}={v:?}: expected an integer in 1..={max}"),
+            )),
+        },
+    }
+}
+
+/// `GET /v1/jobs?limit=N&kind=run|pga_search`: recent jobs and searches, newest first, each as
+/// `GET /v1/jobs/{id}` (or `/v1/pga-searches/{id}`) answers.
+pub async fn list_jobs(
+    State(s): State<AppState>,
+    query: Result<Query<Vec<(String, String)>>, QueryRejection>,
+) -> ApiResult {
+    let Query(query) = query.map_err(|e| ApiError::invalid_parameter("query", e.body_text()))?;
+    let p = WebParams::default();
+    let limit = query_usize(&query, "limit", p.list_default, p.list_max)?;
+    let kind = match query.iter().rev().find(|(k, _)| k == "kind") {
+        None => None,
+        Some((_, v)) => Some(match v.as_str() {
+            "run" => JobKind::Run,
+            "pga_search" => JobKind::PgaSearch,
+            other => {
+                return Err(ApiError::invalid_parameter(
+                    "kind",
+                    format!("?kind={other:?}: expected run or pga_search"),
+                ))
+            }
+        }),
+    };
+    let store = s.core.store.clone();
+    let jobs = blocking(move || store.list_recent(limit, kind))
+        .await?
+        .map_err(ApiError::internal)?;
+    let body = format!(
+        "{{\"jobs\":[{}]}}",
+        jobs.iter().map(job_json).collect::<Vec<_>>().join(",")
+    );
+    let mut r = (StatusCode::OK, body).into_response();
+    r.headers_mut().insert(
+        header::CONTENT_TYPE,
+        HeaderValue::from_static("application/json"),
+    );
+    Ok(r)
+}
+
+/// The scene and motion of a stored run, re-read from its request (validated at submission).
+fn stored_input(j: &JobRecord) -> Result<(Scene, GroundMotion), ApiError> {
+    let scene = crate::scene::scene_from_value(&j.request["scene"])
+        .map_err(|e| ApiError::internal(format!("stored scene of job {}: {e:?}", j.id)))?;
+    let motion = match j.request.get("motion") {
+        None | Some(Value::Null) => GroundMotion::none(),
+        Some(m) => crate::motion::from_json(m)
+            .map_err(|e| ApiError::internal(format!("stored motion of job {}: {e}", j.id)))?,
+    };
+    Ok((scene, motion))
+}
+
+/// The geometry the page draws: every block's outline (counter-clockwise, m), its centroid (the
+/// point whose displacement `histories` reports and about which it rotates), area and role.
+pub fn scene_geometry(scene: &Scene) -> Value {
+    let driven = match scene.excitation {
+        Excitation::DrivenBlock(i) => Some(i),
+        Excitation::BaseAcceleration => None,
+    };
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    let blocks: Vec<Value> = scene
+        .blocks
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let m = polygon_moments(&b.vertices);
+            for v in &b.vertices {
+                lo = [lo[0].min(v.x), lo[1].min(v.y)];
+                hi = [hi[0].max(v.x), hi[1].max(v.y)];
+            }
+            json!({
+                "id": b.id,
+                "fixed": matches!(b.kind, BlockKind::Fixed),
+                "driven": driven == Some(i),
+                "vertices": b.vertices.iter().map(|v| [v.x, v.y]).collect::<Vec<_>>(),
+                "centroid": [m.centroid.x, m.centroid.y],
+                "area": m.area,
+            })
+        })
+        .collect();
+    json!({
+        "name": scene.name,
+        "excitation": match driven {
+            Some(i) => json!({"type": "driven_block", "block": scene.blocks[i].id}),
+            None => json!({"type": "base_acceleration"}),
+        },
+        "bounds": {"min": lo, "max": hi},
+        "blocks": blocks,
+    })
+}
+
+/// `GET /v1/jobs/{id}/scene`.
+pub async fn job_scene(
+    State(s): State<AppState>,
+    id: Result<Path<String>, PathRejection>,
+) -> ApiResult {
+    let j = load(&s, parse_id(id)?, JobKind::Run).await?;
+    let body =
+        blocking(move || stored_input(&j).map(|(scene, _)| scene_geometry(&scene))).await??;
+    Ok(axum::Json(body).into_response())
+}
+
+/// Ground acceleration, velocity and displacement (scaled, m/s², m/s, m) on `n + 1` uniform
+/// times over `[0, duration]`.
+pub fn ground_series(motion: &GroundMotion, duration: f64, n: usize) -> Value {
+    let n = n.max(1);
+    let dt = duration / n as f64;
+    let mut time = Vec::with_capacity(n + 1);
+    let (mut a, mut v, mut d, mut av) = (
+        Vec::with_capacity(n + 1),
+        Vec::with_capacity(n + 1),
+        Vec::with_capacity(n + 1),
+        Vec::with_capacity(n + 1),
+    );
+    for i in 0..=n {
+        let t = i as f64 * dt;
+        let [acc, vel, disp] = motion.state(t);
+        time.push(t);
+        a.push(acc[0]);
+        v.push(vel[0]);
+        d.push(disp[0]);
+        av.push(acc[1]);
+    }
+    let vertical = !matches!(motion.vertical, Signal::Zero);
+    json!({
+        "units": {"time": "s", "acceleration": "m/s2", "velocity": "m/s", "displacement": "m"},
+        "pga": motion.pga(),
+        "time": time,
+        "acceleration": a,
+        "velocity": v,
+        "displacement": d,
+        "vertical_acceleration": if vertical { json!(av) } else { Value::Null },
+    })
+}
+
+/// `GET /v1/jobs/{id}/ground?points=N`: the ground motion the run felt, over its duration.
+pub async fn job_ground(
+    State(s): State<AppState>,
+    id: Result<Path<String>, PathRejection>,
+    query: Result<Query<Vec<(String, String)>>, QueryRejection>,
+) -> ApiResult {
+    let Query(query) = query.map_err(|e| ApiError::invalid_parameter("query", e.body_text()))?;
+    let p = WebParams::default();
+    let points = query_usize(&query, "points", p.series_points, p.max_series_points)?;
+    let j = load(&s, parse_id(id)?, JobKind::Run).await?;
+    let body = blocking(move || {
+        let (scene, motion) = stored_input(&j)?;
+        let duration = scene
+            .control
+            .duration
+            .or_else(|| motion.duration().map(|d| d + 2.0))
+            .unwrap_or(0.0);
+        // No more points than the record has samples over the run (no invented detail).
+        let native = match &motion.horizontal {
+            Signal::Sampled(x) if x.dt > 0.0 => (duration / x.dt).ceil() as usize,
+            _ => points,
+        };
+        Ok::<_, ApiError>(ground_series(&motion, duration, points.min(native.max(1))))
+    })
+    .await??;
+    Ok(axum::Json(body).into_response())
+}
+
+/// A motion error's origin (`motion.horizontal.pulse`) as a pointer into the inspected body,
+/// which is the ground motion itself (`/horizontal/pulse`); serde's "unknown/missing field
+/// `x`" messages point one level further.
+fn motion_pointer(origin: &str, message: &str, body: &Value) -> String {
+    let full = dotted_to_pointer("", origin);
+    let mut p = full
+        .strip_prefix("/motion")
+        .map(str::to_string)
+        .unwrap_or(full);
+    // The parser names an analytic component (`/horizontal`) for errors inside its `pulse` or
+    // `sine` object: point at that object.
+    if let Some(c) = p.strip_prefix('/').and_then(|name| body.get(name)) {
+        if let Some(form) = ["pulse", "sine"].into_iter().find(|f| c.get(f).is_some()) {
+            p = format!("{p}/{form}");
+        }
+    }
+    for marker in ["missing field `", "unknown field `"] {
+        if let Some(name) = message
+            .strip_prefix(marker)
+            .and_then(|r| r.split('`').next())
+        {
+            let seg = format!("/{}", name.replace('~', "~0").replace('/', "~1"));
+            if !p.ends_with(&seg) {
+                p.push_str(&seg);
+            }
+        }
+    }
+    p
+}
+
+/// What the motion parser lets pass but FORMAT.md §2 (and `openapi.yaml`) does not: members of
+/// a component that belong to another form (`{"pulse": …, "dt": 1}`), and nulls where a value
+/// or nothing is expected. The job routes refuse the same (`request::check_shapes`).
+fn check_motion_shape(body: &Value) -> Result<(), ApiError> {
+    let refuse =
+        |p: String, what: &str| Err(ApiError::invalid_field(p.clone(), format!("{p}: {what}")));
+    if let Some(scale) = body.get("scale").and_then(Value::as_object) {
+        if let Some((k, _)) = scale.iter().find(|(_, v)| v.is_null()) {
+            return refuse(
+                format!("/scale/{k}"),
+                "must not be null (leave it out instead)",
+            );
+        }
+    }
+    for name in ["horizontal", "vertical"] {
+        let Some(c) = body.get(name).and_then(Value::as_object) else {
+            continue;
+        };
+        let forms: [&[&str]; 4] = [
+            &["pulse"],
+            &["sine"],
+            &["samples", "dt", "units"],
+            &["format", "content", "units"],
+        ];
+        let Some(form) = forms.iter().find(|f| c.contains_key(f[0])) else {
+            continue;
+        };
+        if let Some(k) = c.keys().find(|k| !form.contains(&k.as_str())) {
+            return refuse(
+                format!("/{name}/{k}"),
+                format!(
+                    "unknown field for a {:?} component (allowed: {})",
+                    form[0],
+                    form.join(", ")
+                )
+                .as_str(),
+            );
+        }
+        if let Some((k, _)) = c.iter().find(|(_, v)| v.is_null()) {
+            return refuse(
+                format!("/{name}/{k}"),
+                "must not be null (leave it out instead)",
+            );
+        }
+    }
+    Ok(())
+}
+
+fn evaluated_samples(sig: &Signal, p: &ReportParams) -> f64 {
+    match sig {
+        Signal::Zero => 0.0,
+        Signal::Sampled(s) => s.accel.len() as f64,
+        other => other.duration().unwrap_or(p.steady_duration) / p.analytic_dt,
+    }
+}
+
+/// Every number finite. serde_json writes a non-finite float as `null`, so a `null` counts as
+/// non-finite: call this only on values that hold numbers alone.
+fn all_finite(v: &Value) -> bool {
+    match v {
+        Value::Number(n) => n.as_f64().is_some_and(f64::is_finite),
+        Value::Array(a) => a.iter().all(all_finite),
+        Value::Object(o) => o.values().all(all_finite),
+        Value::Null => false,
+        _ => true,
+    }
+}
+
+/// Intensity measures (the `ashlar motion` JSON) of a ground motion, plus the scaled horizontal
+/// acceleration as `series` (at most `points` + 1 uniform samples) for a plot.
+pub fn inspect_motion(
+    body: &Value,
+    max_record_samples: usize,
+    points: usize,
+) -> Result<Value, ApiError> {
+    if !body.is_object() {
+        return Err(ApiError::invalid_field(
+            "",
+            "the body must be a ground motion object {\"horizontal\": …, \"vertical\": …, \"scale\": …} (FORMAT.md §2)",
+        ));
+    }
+    check_motion_shape(body)?;
+    let gm = crate::motion::from_json(body).map_err(|e| {
+        let p = motion_pointer(&e.origin, &e.message, body);
+        let line = e
+            .line
+            .map(|l| format!(" (line {l} of the record)"))
+            .unwrap_or_default();
+        let shown = if p.is_empty() { "(body)" } else { p.as_str() };
+        ApiError::invalid_field(p.clone(), format!("{shown}{line}: {}", e.message))
+    })?;
+    if matches!(gm.horizontal, Signal::Zero) {
+        return Err(ApiError::invalid_field(
+            "/horizontal",
+            "/horizontal: nothing to inspect: the horizontal component is missing",
+        ));
+    }
+    let rp = ReportParams::default();
+    let n = evaluated_samples(&gm.horizontal, &rp);
+    if n > max_record_samples as f64 {
+        let p = match gm.horizontal {
+            Signal::Sampled(_) => "/horizontal",
+            Signal::Pulse { .. } => "/horizontal/pulse/cycles",
+            _ => "/horizontal/sine",
+        };
+        return Err(ApiError::limit_exceeded(
+            p,
+            format!(
+                "{p}: {n:.0} samples to evaluate exceed the server's limit of {max_record_samples} (ashlar serve --max-record-samples)"
+            ),
+        ));
+    }
+    if let Signal::Sampled(s) = &gm.horizontal {
+        let periods = crate::motion::log_periods(rp.period_range.0, rp.period_range.1, rp.periods);
+        let work: f64 = periods
+            .iter()
+            .map(|t| (20.0 * s.dt / t).ceil().clamp(1.0, 10_000.0))
+            .sum::<f64>()
+            * n;
+        if work > WebParams::default().inspect_budget {
+            return Err(ApiError::limit_exceeded(
+                "/horizontal",
+                format!(
+                    "/horizontal: {n:.0} samples at a step of {} s need {work:.1e} oscillator steps for the spectrum, over the server's budget of {:.0e}",
+                    s.dt,
+                    WebParams::default().inspect_budget
+                ),
+            ));
+        }
+    }
+    let im = report_with(&gm, &rp);
+    let measures_finite = [
+        im.dt,
+        im.duration,
+        im.pga,
+        im.pga_original_units,
+        im.pgv,
+        im.pgd,
+        im.arias_intensity,
+        im.significant_duration_5_95,
+        im.cav,
+        im.mean_period,
+    ]
+    .iter()
+    .chain(&im.spectrum.psa)
+    .all(|v| v.is_finite());
+    let mut out = serde_json::to_value(&im).map_err(ApiError::internal)?;
+    let duration = gm.duration().unwrap_or(rp.steady_duration);
+    let native = (im.npts.max(2) - 1).max(1);
+    let series = ground_series(&gm, duration, points.min(native));
+    let pointer = if gm.scale != 1.0 {
+        "/scale"
+    } else {
+        "/horizontal"
+    };
+    if !measures_finite || !all_finite(&series["time"]) || !all_finite(&series["acceleration"]) {
+        return Err(ApiError::invalid_field(
+            pointer,
+            format!("{pointer}: the scaled record overflows (values beyond the range of a double)"),
+        ));
+    }
+    out["scale"] = json!(gm.scale);
+    out["series"] = json!({
+        "time": series["time"],
+        "acceleration": series["acceleration"],
+    });
+    Ok(out)
+}
+
+/// `POST /v1/motions/inspect?points=N`: the record's intensity measures and spectrum before a
+/// job is submitted. Errors point into the body (the ground motion).
+pub async fn inspect(
+    State(s): State<AppState>,
+    headers: HeaderMap,
+    query: Result<Query<Vec<(String, String)>>, QueryRejection>,
+    body: Result<Bytes, BytesRejection>,
+) -> ApiResult {
+    let Query(query) = query.map_err(|e| ApiError::invalid_parameter("query", e.body_text()))?;
+    let p = WebParams::default();
+    let points = query_usize(&query, "points", p.series_points, p.max_series_points)?;
+    check_json_content_type(&headers)?;
+    let max_body = s.core.limits.max_body_bytes;
+    let bytes = body.map_err(|e| {
+        if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
+            ApiError::payload_too_large(max_body)
+        } else {
+            ApiError::malformed_json(e.body_text()).with_pointer("")
+        }
+    })?;
+    let max_samples = s.core.limits.max_record_samples;
+    let out = blocking(move || inspect_motion(&json_body(&bytes)?, max_samples, points)).await??;
+    Ok(axum::Json(out).into_response())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pointers_are_relative_to_the_motion() {
+        let rec = json!({"horizontal": {"format": "at2", "content": ""}});
+        let pulse = json!({"horizontal": {"pulse": {}}});
+        assert_eq!(
+            motion_pointer("motion.horizontal.pulse", "bad", &pulse),
+            "/horizontal/pulse"
+        );
+        assert_eq!(
+            motion_pointer(
+                "motion.horizontal",
+                "unknown field `foo`, expected one of",
+                &rec
+            ),
+            "/horizontal/foo"
+        );
+        assert_eq!(
+            motion_pointer("motion.horizontal", "missing field `period`", &pulse),
+            "/horizontal/pulse/period"
+        );
+        assert_eq!(motion_pointer("motion", "x", &rec), "");
+    }
+
+    #[test]
+    fn assets_and_examples_are_embedded() {
+        for (n, _, _, text) in EXAMPLES {
+            let v: Value = serde_json::from_str(text).expect(n);
+            assert!(v.is_object(), "{n}");
+        }
+        assert!(ASSETS.iter().any(|(n, _, _)| *n == "index.html"));
+    }
+}

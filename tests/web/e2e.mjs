@@ -1,0 +1,214 @@
+// End-to-end test of the ashlar web page in headless Chromium (run by tests/web/run.sh, which
+// starts `ashlar serve` and sets the environment):
+//   ASHLAR_URL         base URL of the running server (http://127.0.0.1:PORT)
+//   ASHLAR_RECORD      a ground-motion record file (AT2) to upload
+//   ASHLAR_SCENE_BAD   a scene file the server must refuse (a block with two vertices)
+//   ASHLAR_SCREENSHOT  where to save the screenshot of the finished run
+//   CHROMIUM           the browser (default /usr/bin/chromium)
+// Prints one line per check and a closing "N passed, N failed" line; exits non-zero on failure.
+import { chromium } from "playwright-core";
+import { mkdtempSync, rmSync } from "node:fs";
+import { tmpdir } from "node:os";
+import { join } from "node:path";
+
+const base = process.env.ASHLAR_URL;
+const record = process.env.ASHLAR_RECORD;
+const badScene = process.env.ASHLAR_SCENE_BAD;
+const screenshot = process.env.ASHLAR_SCREENSHOT;
+if (!base || !record || !badScene) {
+  console.error("e2e: set ASHLAR_URL, ASHLAR_RECORD and ASHLAR_SCENE_BAD (tests/web/run.sh does)");
+  process.exit(2);
+}
+
+let passed = 0;
+let failed = 0;
+async function check(name, fn) {
+  const t0 = Date.now();
+  try {
+    await fn();
+    passed++;
+    console.log(`ok   ${name} (${Date.now() - t0} ms)`);
+  } catch (e) {
+    failed++;
+    console.log(`FAIL ${name}: ${e && e.stack ? e.stack : e}`);
+  }
+}
+function assert(cond, msg) {
+  if (!cond) throw new Error(msg);
+}
+
+// Pixels of a canvas that carry a saturated colour: data series and state outlines are drawn in
+// saturated colours, axes, grids, labels and fixed blocks in greys, so this counts drawn data.
+async function colouredPixels(page, id) {
+  return page.evaluate((id) => {
+    const c = document.getElementById(id);
+    const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) {
+      if (d[i + 3] > 0 && Math.max(d[i], d[i + 1], d[i + 2]) - Math.min(d[i], d[i + 1], d[i + 2]) > 60) n++;
+    }
+    return n;
+  }, id);
+}
+
+const userDataDir = mkdtempSync(join(tmpdir(), "ashlar-e2e-chromium-"));
+const context = await chromium.launchPersistentContext(userDataDir, {
+  executablePath: process.env.CHROMIUM || "/usr/bin/chromium",
+  headless: true,
+  args: ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync"],
+  viewport: { width: 1440, height: 900 },
+});
+const page = context.pages()[0] || (await context.newPage());
+const pageErrors = [];
+const foreign = [];
+page.on("pageerror", (e) => pageErrors.push(String(e)));
+// The browser logs every 4xx answer as a console error; the page handles those (field errors).
+page.on("console", (m) => { if (m.type() === "error" && !m.text().startsWith("Failed to load resource")) pageErrors.push(m.text()); });
+page.on("request", (r) => { const u = r.url(); if (!u.startsWith(base) && !u.startsWith("data:") && !u.startsWith("blob:")) foreign.push(u); });
+
+try {
+  await check("the page loads from the server alone", async () => {
+    const r = await page.goto(`${base}/`);
+    assert(r.status() === 200, `status ${r.status()}`);
+    await page.waitForSelector("#scene-example option[value=column]", { state: "attached", timeout: 10000 });
+    assert((await page.title()).includes("ashlar"), "title");
+  });
+
+  await check("every input and select has a label", async () => {
+    const unlabelled = await page.evaluate(() =>
+      [...document.querySelectorAll("input, select, button")]
+        .filter((e) => !(e.labels && e.labels.length) && !e.getAttribute("aria-label") && !(e.tagName === "BUTTON" && e.textContent.trim()))
+        .map((e) => e.id || e.outerHTML.slice(0, 60)));
+    assert(unlabelled.length === 0, `unlabelled: ${unlabelled.join(", ")}`);
+  });
+
+  await check("the record's intensity measures and spectrum show before submitting", async () => {
+    await page.selectOption("#scene-example", "column");
+    await page.waitForFunction(() => document.getElementById("scene-info").textContent.includes("column"));
+    await page.setInputFiles("#record-file", record);
+    await page.check('input[name="scale-mode"][value="pga"]');
+    await page.fill("#scale-value", "1");
+    await page.selectOption("#scale-units", "g");
+    await page.waitForFunction(() => document.getElementById("record-provenance").textContent.includes("scaled"), null, { timeout: 20000 });
+    const table = await page.textContent("#record-measures");
+    assert(/PGA\s*9\.81 m\/s² \(1 g\)/.test(table), `measures: ${table}`);
+    assert(table.includes("Arias intensity") && table.includes("D5–95"), table);
+    for (const id of ["record-accel", "record-spectrum"]) {
+      const n = await colouredPixels(page, id);
+      assert(n > 200, `${id}: ${n} coloured pixels`);
+    }
+  });
+
+  let runId = null;
+  await check("submitting the column with the record runs to completion", async () => {
+    await page.fill("#duration", "8");
+    await page.click("#submit-button");
+    await page.waitForFunction(() => /Queued run/.test(document.getElementById("submit-status").textContent), null, { timeout: 20000 });
+    runId = (await page.textContent("#submit-status")).match(/Queued run (\w+)/)[1];
+    await page.waitForFunction(() => /: succeeded/.test(document.getElementById("result-head").textContent) && !document.getElementById("run-view").hidden, null, { timeout: 180000 });
+    const row = await page.getAttribute("#jobs-body tr:first-child", "data-status");
+    assert(row === "succeeded", `queue row: ${row}`);
+  });
+
+  await check("the animation and both plots (and the ground) have drawn", async () => {
+    await page.waitForTimeout(300);
+    for (const id of ["anim", "plot-displacement", "plot-rotation", "plot-ground"]) {
+      const n = await colouredPixels(page, id);
+      assert(n > 150, `${id}: ${n} coloured pixels`);
+    }
+  });
+
+  await check("summary: failure mode and per-block peaks", async () => {
+    const mode = await page.textContent("#failure-mode");
+    assert(["stable", "sliding", "toppling", "sliding_toppling", "collapse"].includes(mode), `mode ${mode}`);
+    const peaks = await page.textContent("#summary table");
+    assert(peaks.includes("column"), peaks);
+  });
+
+  await check("time slider and play/pause", async () => {
+    await page.focus("#time-slider");
+    await page.keyboard.press("Home");
+    assert((await page.textContent("#time-label")) === "t = 0.00 s", await page.textContent("#time-label"));
+    await page.click("#play");
+    await page.waitForTimeout(700);
+    await page.click("#play");
+    const label = await page.textContent("#time-label");
+    assert(label !== "t = 0.00 s" && (await page.textContent("#play")) === "Play", `after playing: ${label}`);
+    await page.focus("#time-slider");
+    await page.keyboard.press("End");
+  });
+
+  await check("downloads: histories CSV, trajectory MCAP, Foxglove link", async () => {
+    const csvHref = await page.getAttribute("#dl-csv", "href");
+    const csv = await page.evaluate(async (u) => (await fetch(u)).text(), csvHref);
+    assert(csv.startsWith("time,column.x,column.y,column.rotation"), csv.slice(0, 80));
+    const mcapHref = await page.getAttribute("#dl-mcap", "href");
+    const magic = await page.evaluate(async (u) => Array.from(new Uint8Array(await (await fetch(u)).arrayBuffer()).slice(0, 8)), mcapHref);
+    assert(String.fromCharCode(...magic.slice(1, 5)) === "MCAP" && magic[0] === 0x89, `magic ${magic}`);
+    const fox = await page.getAttribute("#dl-foxglove", "href");
+    const want = `https://app.foxglove.dev/?ds=remote-file&ds.url=${encodeURIComponent(new URL(mcapHref, base).href)}`;
+    assert(fox === want, `${fox} != ${want}`);
+  });
+
+  if (screenshot) {
+    await check("screenshot of the finished run", async () => {
+      await page.evaluate(() => window.scrollTo(0, 0));
+      await page.screenshot({ path: screenshot, fullPage: true });
+    });
+  }
+
+  await check("a bad scene shows the server's error next to the scene field", async () => {
+    await page.setInputFiles("#scene-file", badScene);
+    await page.fill("#duration", "");
+    await page.click("#submit-button");
+    await page.waitForFunction(() => document.getElementById("scene-error").textContent.length > 0, null, { timeout: 10000 });
+    const text = await page.textContent("#scene-error");
+    assert(text.includes("/scene/blocks/1/vertices") && text.includes('block "column"'), text);
+    assert((await page.getAttribute("#scene-file", "aria-invalid")) === "true", "the field is not marked invalid");
+    const focused = await page.evaluate(() => document.activeElement.id);
+    assert(focused === "scene-file", `focus on ${focused}`);
+  });
+
+  await check("cancel: a long run is cancelled from the queue", async () => {
+    await page.selectOption("#scene-example", "column");
+    await page.waitForFunction(() => !document.getElementById("scene-error").textContent);
+    await page.fill("#duration", "600");
+    await page.click("#submit-button");
+    await page.waitForFunction((prev) => { const m = document.getElementById("submit-status").textContent.match(/Queued run (\w+)/); return m && m[1] !== prev; }, runId, { timeout: 20000 });
+    const row = "#jobs-body tr:first-child";
+    await page.waitForFunction((sel) => document.querySelector(sel).dataset.status === "running", row, { timeout: 30000 });
+    await page.waitForFunction((sel) => parseFloat(document.querySelector(`${sel} progress`).value) > 0, row, { timeout: 30000 });
+    await page.click(`${row} button[data-action=cancel]`);
+    await page.waitForFunction((sel) => document.querySelector(sel).dataset.status === "cancelled", row, { timeout: 30000 });
+  });
+
+  await check("PGA search: scan points and bracket are plotted", async () => {
+    await page.fill("#duration", "4");
+    await page.check('input[name="analysis"][value="pga"]');
+    await page.selectOption("#criterion-kind", "toppled");
+    await page.fill("#range-min", "0.1");
+    await page.fill("#range-max", "1.5");
+    await page.selectOption("#range-units", "g");
+    await page.fill("#tolerance", "0.1");
+    await page.fill("#scan-points", "4");
+    await page.click("#submit-button");
+    await page.waitForFunction(() => /Queued PGA search/.test(document.getElementById("submit-status").textContent), null, { timeout: 20000 });
+    await page.waitForFunction(() => /PGA search \w+: succeeded/.test(document.getElementById("result-head").textContent) && !document.getElementById("pga-view").hidden, null, { timeout: 300000 });
+    const n = await colouredPixels(page, "plot-scan");
+    assert(n > 50, `plot-scan: ${n} coloured pixels`);
+    const text = await page.textContent("#pga-summary");
+    assert(text.includes("toppled:column"), text);
+  });
+
+  await check("no script errors, nothing fetched from another host", async () => {
+    assert(pageErrors.length === 0, `errors: ${pageErrors.join(" | ")}`);
+    assert(foreign.length === 0, `foreign requests: ${foreign.join(", ")}`);
+  });
+} finally {
+  await context.close();
+  rmSync(userDataDir, { recursive: true, force: true });
+}
+
+console.log(`web e2e: ${passed} passed, ${failed} failed`);
+process.exit(failed ? 1 : 0);

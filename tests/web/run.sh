@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# End-to-end test of the web page: the real `ashlar serve` binary driven by headless Chromium
+# (Debian's `chromium` package) through playwright-core (npm, pinned in package-lock.json).
+# Installs Chromium with apt when it is missing and the npm dependencies, builds and starts the
+# server on a free loopback port with a temporary data directory, runs tests/web/e2e.mjs, stops
+# the server. Exits non-zero on any failure.
+#
+#   ASHLAR_SCREENSHOT  where to write the screenshot of the finished run
+#                      (default target/web-screenshot.png; docs/web-screenshot.png is a copy)
+#   ASHLAR_BIN         use this ashlar binary instead of building one
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+ROOT=$PWD
+TARGET=${CARGO_TARGET_DIR:-$ROOT/target}
+
+if ! command -v chromium >/dev/null 2>&1; then
+    SUDO=""
+    [ "$(id -u)" -eq 0 ] || SUDO=sudo
+    $SUDO apt-get update -q
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q chromium
+fi
+(cd tests/web && npm ci --no-audit --no-fund --loglevel=error)
+
+if [ -n "${ASHLAR_BIN:-}" ]; then
+    BIN=$ASHLAR_BIN
+else
+    cargo build --locked --quiet --bin ashlar
+    BIN=$TARGET/debug/ashlar
+fi
+
+# A shared record (../shared beside the checkout), or the test fixtures' copy of it.
+RECORD=$ROOT/../shared/ground-motions/friuli-1976-tolmezzo-000.at2
+[ -f "$RECORD" ] || RECORD=$ROOT/tests/fixtures/motion/ground-motions/friuli-1976-tolmezzo-000.at2
+
+WORK=$(mktemp -d)
+"$BIN" serve --addr 127.0.0.1:0 --data "$WORK/data" --workers 1 >"$WORK/stdout" 2>"$WORK/server.log" &
+PID=$!
+cleanup() {
+    kill -TERM "$PID" 2>/dev/null || true
+    wait "$PID" 2>/dev/null || true
+    rm -rf "$WORK"
+}
+trap cleanup EXIT
+
+ADDR=""
+for _ in $(seq 1 200); do
+    ADDR=$(sed -n 's/^ashlar serve: listening on //p' "$WORK/stdout")
+    [ -n "$ADDR" ] && break
+    kill -0 "$PID" 2>/dev/null || { cat "$WORK/server.log" >&2; echo "web e2e: the server did not start" >&2; exit 1; }
+    sleep 0.05
+done
+[ -n "$ADDR" ] || { echo "web e2e: the server did not report its address" >&2; exit 1; }
+
+# The bundled column with its column reduced to a segment: the server must name the field.
+python3 - "$ROOT/examples/column.json" "$WORK/bad-scene.json" <<'PY'
+import json, sys
+scene = json.load(open(sys.argv[1]))
+scene["blocks"][1]["vertices"] = [[-0.2, 0.0], [0.2, 0.0]]
+json.dump(scene, open(sys.argv[2], "w"))
+PY
+
+set +e
+ASHLAR_URL=$ADDR ASHLAR_RECORD=$RECORD ASHLAR_SCENE_BAD=$WORK/bad-scene.json \
+ASHLAR_SCREENSHOT=${ASHLAR_SCREENSHOT:-$TARGET/web-screenshot.png} \
+    node tests/web/e2e.mjs
+STATUS=$?
+set -e
+if [ "$STATUS" -ne 0 ]; then
+    echo "--- server log (tail) ---" >&2
+    tail -n 40 "$WORK/server.log" >&2
+fi
+exit "$STATUS"
