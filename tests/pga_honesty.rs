@@ -17,15 +17,11 @@ use std::path::Path;
 
 const WINDOW: f64 = 9.0;
 
+/// A shared record, from the repository's copy of /work/shared/ground-motions.
 fn record(name: &str) -> GroundMotion {
     let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/ground-motions")
+        .join("tests/fixtures/motion/ground-motions")
         .join(name);
-    let p = if p.exists() {
-        p
-    } else {
-        Path::new("/work/shared/ground-motions").join(name)
-    };
     load_path(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 

@@ -191,12 +191,6 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
 }
 
 pub fn pga(args: &PgaArgs) -> Result<(), String> {
-    let scene = load_scene(&args.scene)?;
-    let (paths, several) = record_paths(&args.motion)?;
-    let mut records = Vec::new();
-    for p in &paths {
-        records.push((record_name(p), motion::load_path(p).map_err(|e| e.to_string())?));
-    }
     let criteria = args
         .criterion
         .iter()
@@ -211,6 +205,12 @@ pub fn pga(args: &PgaArgs) -> Result<(), String> {
         scan_points: args.scan_points,
     };
     let method = Method::parse(&args.fit).map_err(|e| format!("--fit: {e}"))?;
+    let scene = load_scene(&args.scene)?;
+    let (paths, several) = record_paths(&args.motion)?;
+    let mut records = Vec::new();
+    for p in &paths {
+        records.push((record_name(p), motion::load_path(p).map_err(|e| e.to_string())?));
+    }
     std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
     let write = |name: &str, text: &str| {
         std::fs::write(args.out.join(name), text)
