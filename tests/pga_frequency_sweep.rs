@@ -8,7 +8,7 @@
 //! The reference threshold is the lowest overturning amplitude found by a fine scan (120 points
 //! from g tan α to 16 g tan α) and bisection to 1e-4 relative. "Overturned" means what the
 //! engine's `toppled` criterion means: |θ| ≥ 60° at any time, or |θ| > 30° at the end of the
-//! window (pulse + 2 s).
+//! window (pulse + 3 s).
 //!
 //! The sweep crosses the jump where the overturning mode changes: the 0.2 × 0.6 column overturns
 //! after one impact (mode 2) up to 2 Hz, but at 4 Hz only without impact (mode 1) at about
@@ -25,8 +25,10 @@ use common::*;
 use rayon::prelude::*;
 use serde_json::json;
 
-/// Seconds simulated after the pulse ends (both reference and engine).
-const AFTER: f64 = 2.0;
+/// Seconds simulated after the pulse ends (both reference and engine). 3 s: a slender column
+/// left rocking near its tipping angle can take more than 2 s to fall, and a shorter window
+/// breaks the overturning region into narrow islands (seen with 2 s at 4 Hz).
+const AFTER: f64 = 3.0;
 
 #[derive(Debug, Clone, Copy)]
 struct Column {
@@ -125,10 +127,20 @@ fn scene(c: Column, f: f64) -> ashlar::scene::Scene {
     ]);
     // Friction angle 85° (μ = 11.4): Housner's model has no sliding, and the stocky column's
     // 4 Hz threshold (~4.6 g) would make a 75° joint (μ = 3.7) slide.
+    // Δt: 1 ms (the default) up to 1 Hz, 0.1 ms for the short pulses (2 and 4 Hz). Measured
+    // (`cargo run --example pga_probe -- 0.2 0.6 F A...`): at the default 1 ms the 4 Hz pulse of
+    // ~4.6 g puts the stocky column's threshold 2.4 % low, overturning after an impact that
+    // Housner's model (and the engine at Δt ≤ 2e-4 s) does not have; at 2 Hz the outcome just
+    // above the threshold flips between amplitudes 0.1 m/s² apart at Δt = 1e-3 and 5e-4 s (safe
+    // islands from the impact's resolution) and settles at 1e-4 s. A time-discretisation error
+    // of the engine near mode-2 thresholds, not a difference of restitution: the engine's
+    // effective restitution matches Housner's 1 − 1.5 sin²α within 0.5 %
+    // (`cargo run --example rocking_restitution`).
+    let dt = if f >= 2.0 { 1e-4 } else { 1e-3 };
     parse(&scene_json(
         blocks,
         85.0,
-        json!({ "duration": 1.0 / f + AFTER }),
+        json!({ "duration": 1.0 / f + AFTER, "time_step": dt }),
     ))
 }
 
