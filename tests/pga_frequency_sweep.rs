@@ -5,7 +5,7 @@
 //! Reference: Housner's equation of rocking, θ̈ = −p²[sin(α sgnθ − θ) − (ü_g/g) cos(α sgnθ − θ)]
 //! with p² = 3g/(4R), integrated here by RK4 (Δt = 1e-4 s) with Housner's restitution
 //! r = 1 − 1.5 sin²α applied to the angular velocity at each impact (as in tests/rocking.rs).
-//! The reference threshold is the lowest overturning amplitude found by a fine scan (120 points
+//! The reference threshold is the lowest overturning amplitude found by a fine scan (3000 points
 //! from g tan α to 16 g tan α) and bisection to 1e-4 relative. "Overturned" means what the
 //! engine's `toppled` criterion means: |θ| ≥ 60° at any time, or |θ| > 30° at the end of the
 //! window (pulse + 3 s).
@@ -15,8 +15,8 @@
 //! 14 g tan α, so the threshold jumps. The test checks the reference's mode at each case, and
 //! that the engine overturns in the same mode at its failing amplitude.
 //!
-//! Tolerance: the engine's threshold (a PGA search to 0.5 % of the reference) within 3 % of
-//! Housner's (the bound).
+//! Tolerance: the engine's threshold (a PGA search over [0.97, 1.10] × the reference with 24
+//! scan points, to 0.4 %) within 3 % of Housner's (the bound).
 mod common;
 use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};
 use ashlar::analysis::run::RunOptions;
@@ -95,17 +95,25 @@ fn housner(c: Column, a: f64, f: f64) -> (bool, usize) {
 }
 
 /// Lowest overturning amplitude of the reference, and its mode (impacts before overturning).
+/// The scan is fine (steps of 0.005 g tan α) because the overturning set has narrow islands:
+/// the slender column at 0.5 Hz overturns (after 3 impacts) for 1.35–1.365 m/s², then stands
+/// again up to 1.39 m/s²; a coarse scan steps over such an island. Scanned in parallel chunks,
+/// in order, up to the first chunk that overturns.
 fn housner_threshold(c: Column, f: f64) -> (f64, usize) {
     let gt = G * c.b / c.h;
-    let n = 120;
+    let n = 3000;
     let grid: Vec<f64> = (0..n)
         .map(|k| gt * (1.0 + 15.0 * k as f64 / (n - 1) as f64))
         .collect();
-    let fell: Vec<bool> = grid.par_iter().map(|&a| housner(c, a, f).0).collect();
-    let k = fell
-        .iter()
-        .position(|&x| x)
-        .expect("the reference overturns in the scanned range");
+    let mut k = None;
+    for (ci, chunk) in grid.chunks(128).enumerate() {
+        let fell: Vec<bool> = chunk.par_iter().map(|&a| housner(c, a, f).0).collect();
+        if let Some(j) = fell.iter().position(|&x| x) {
+            k = Some(ci * 128 + j);
+            break;
+        }
+    }
+    let k = k.expect("the reference overturns in the scanned range");
     assert!(k > 0, "the reference overturns at g tan α already");
     let (mut s, mut fl) = (grid[k - 1], grid[k]);
     while fl - s > 1e-4 * fl {
@@ -178,16 +186,20 @@ fn check(c: Column, f: f64) -> usize {
     let req = PgaRequest {
         criteria: vec![Criterion::parse("toppled:column").expect("criterion")],
         combine: Combine::All,
-        min: 0.85 * ha,
-        max: 1.25 * ha,
-        tolerance: 0.005 * ha,
-        scan_points: 6,
+        // The 3 % band below the reference, and 10 % above, scanned every 0.57 %: the
+        // overturning islands near the thresholds (0.2 × 0.6 at 0.5 Hz: 3.615–3.645 m/s² in the
+        // engine, 3.613–… in Housner) are ~0.8 % wide, and a coarser scan steps over them and
+        // reports the next region up (+2 % there with 6 points over ±20 %).
+        min: 0.97 * ha,
+        max: 1.10 * ha,
+        tolerance: 0.004 * ha,
+        scan_points: 24,
     };
     let r = search(&scene(c, f), &pulse(f), &req, &RunOptions::default()).expect("search");
     let (s, fl) = (
-        r.safe_pga.expect("the engine stands at 0.85 × Housner"),
+        r.safe_pga.expect("the engine stands at 0.97 × Housner"),
         r.failing_pga
-            .expect("the engine overturns below 1.25 × Housner"),
+            .expect("the engine overturns below 1.10 × Housner"),
     );
     let da = 0.5 * (s + fl);
     let d_impacts = dda_mode(c, f, fl);
