@@ -5,7 +5,10 @@ use ashlar::motion::{GroundMotion, Signal};
 use ashlar::scene::parse_scene;
 
 fn main() {
-    let a: Vec<f64> = std::env::args().skip(1).map(|s| s.parse().expect("number")).collect();
+    let a: Vec<f64> = std::env::args()
+        .skip(1)
+        .map(|s| s.parse().expect("number"))
+        .collect();
     let (b, h, f) = (a[0], a[1], a[2]);
     for dt in [1e-3, 5e-4, 2e-4, 1e-4] {
         let scene = serde_json::json!({
@@ -19,11 +22,25 @@ fn main() {
             "control": { "duration": 1.0 / f + 3.0, "time_step": dt },
         });
         let scene = parse_scene(&scene.to_string()).expect("scene");
-        let pulse = GroundMotion::horizontal(Signal::Pulse { amplitude: 1.0, period: 1.0 / f, cycles: 1.0, phase: 0.0 });
+        let pulse = GroundMotion::horizontal(Signal::Pulse {
+            amplitude: 1.0,
+            period: 1.0 / f,
+            cycles: 1.0,
+            phase: 0.0,
+        });
         let c = [Criterion::parse("toppled:column").expect("c")];
         let out: Vec<String> = a[3..]
             .iter()
-            .map(|&amp| format!("{amp}:{}", if evaluate(&scene, &pulse, &c, amp, None).expect("run") { "X" } else { "." }))
+            .map(|&amp| {
+                format!(
+                    "{amp}:{}",
+                    if evaluate(&scene, &pulse, &c, amp, None).expect("run") {
+                        "X"
+                    } else {
+                        "."
+                    }
+                )
+            })
             .collect();
         println!("dt {dt:e}: {}", out.join(" "));
     }

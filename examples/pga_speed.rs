@@ -54,8 +54,8 @@ fn main() {
         (0..reps)
             .map(|_| {
                 let t = Instant::now();
-                let out = run(&scene, &pulse.scaled_to_pga(5.6), &RunOptions::default())
-                    .expect("run");
+                let out =
+                    run(&scene, &pulse.scaled_to_pga(5.6), &RunOptions::default()).expect("run");
                 assert!(out.summary.completed);
                 t.elapsed().as_secs_f64()
             })
@@ -91,7 +91,10 @@ fn main() {
     let (w1, runs1, _) = timed(1);
     println!("| figure | measured | target |");
     println!("|---|---|---|");
-    println!("| one full run (3 s simulated) | {:.2} ms | |", 1e3 * single);
+    println!(
+        "| one full run (3 s simulated) | {:.2} ms | |",
+        1e3 * single
+    );
     println!(
         "| search, 2 threads: wall time ({runs2} runs, bracket [{:.3}, {:.3}] m/s²) | {:.1} ms | < 1 s |",
         b2.0,
@@ -103,8 +106,5 @@ fn main() {
         1e3 * w1,
         w1 / single
     );
-    println!(
-        "| speed-up of 2 threads over 1 | {:.2} | |",
-        w1 / w2
-    );
+    println!("| speed-up of 2 threads over 1 | {:.2} | |", w1 / w2);
 }

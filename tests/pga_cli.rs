@@ -34,7 +34,16 @@ fn pga(motion: &str, out: &Path, extra: &[&str]) -> std::process::Output {
         .arg("pga")
         .arg(scene())
         .args(["--motion", motion, "--criterion", "toppled:column"])
-        .args(["--min", "2", "--max", "10", "--tolerance", "0.2", "--scan-points", "4"])
+        .args([
+            "--min",
+            "2",
+            "--max",
+            "10",
+            "--tolerance",
+            "0.2",
+            "--scan-points",
+            "4",
+        ])
         .args(extra)
         .arg("--out")
         .arg(out)
@@ -58,7 +67,9 @@ fn directory_list_and_list_file_give_one_fragility() {
     assert_eq!(r["records"][0]["motion"], "pulse-0.8.json");
     let f = read(&out.join("fragility.json"));
     assert_eq!(f["fragility"], r["fragility"]);
-    assert!(f["fragility"]["median"].as_f64().is_some_and(|m| m > 2.0 && m < 10.0));
+    assert!(f["fragility"]["median"]
+        .as_f64()
+        .is_some_and(|m| m > 2.0 && m < 10.0));
     let svg = std::fs::read_to_string(out.join("fragility.svg")).expect("svg");
     assert!(svg.contains("Probability of failure") && svg.contains("PGA (m/s²)"));
 
@@ -74,7 +85,10 @@ fn directory_list_and_list_file_give_one_fragility() {
     // to the optimiser's resolution.
     let same = |a: &Value, b: &Value| {
         for k in ["median", "beta"] {
-            let (x, y) = (a[k].as_f64().expect("number"), b[k].as_f64().expect("number"));
+            let (x, y) = (
+                a[k].as_f64().expect("number"),
+                b[k].as_f64().expect("number"),
+            );
             assert!((x / y - 1.0).abs() < 1e-6, "{k}: {x} vs {y}");
         }
     };
@@ -102,7 +116,11 @@ fn bad_input_is_one_clear_message() {
     let out = dir.join("out");
     let cases: [(&str, &[&str], &str); 4] = [
         (dir.to_str().expect("utf-8"), &[], "holds no record"),
-        ("/nonexistent/a.at2,/nonexistent/b.at2", &[], "/nonexistent/a.at2"),
+        (
+            "/nonexistent/a.at2,/nonexistent/b.at2",
+            &[],
+            "/nonexistent/a.at2",
+        ),
         ("/nonexistent/a.at2", &["--combine", "most"], "combine"),
         ("/nonexistent/a.at2", &["--fit", "bayes"], "fit"),
     ];

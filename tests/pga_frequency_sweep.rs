@@ -224,10 +224,7 @@ fn check(c: Column, f: f64) -> usize {
 #[test]
 fn stocky_column_frequency_sweep_with_mode_jump() {
     let c = Column { b: 0.2, h: 0.6 };
-    let modes: Vec<usize> = [0.5, 1.0, 2.0, 4.0]
-        .iter()
-        .map(|&f| check(c, f))
-        .collect();
+    let modes: Vec<usize> = [0.5, 1.0, 2.0, 4.0].iter().map(|&f| check(c, f)).collect();
     // The jump: with an impact up to 2 Hz, without one at 4 Hz.
     assert!(modes[2] > 0 && modes[3] == 0, "modes {modes:?}");
 }

@@ -73,10 +73,21 @@ fn met_in(c: &Criterion, s: &Summary) -> bool {
 #[test]
 fn full_runs_at_the_bracket_ends_agree_with_the_bracket() {
     let records = [
-        ("friuli-1976-tolmezzo-000.at2", record("friuli-1976-tolmezzo-000.at2")),
-        ("kobe-1995-nishi-akashi-000.csv", record("kobe-1995-nishi-akashi-000.csv")),
+        (
+            "friuli-1976-tolmezzo-000.at2",
+            record("friuli-1976-tolmezzo-000.at2"),
+        ),
+        (
+            "kobe-1995-nishi-akashi-000.csv",
+            record("kobe-1995-nishi-akashi-000.csv"),
+        ),
     ];
-    type Case = (&'static str, ashlar::scene::Scene, Vec<&'static str>, Combine);
+    type Case = (
+        &'static str,
+        ashlar::scene::Scene,
+        Vec<&'static str>,
+        Combine,
+    );
     let cases: Vec<Case> = vec![
         ("column", column(), vec!["toppled:column"], Combine::All),
         (
@@ -113,13 +124,16 @@ fn full_runs_at_the_bracket_ends_agree_with_the_bracket() {
             };
             let r = search(scene, gm, &req, &RunOptions::default()).expect("search");
             let verdict = |pga: f64| {
-                let out = run_scene(scene, &gm.scaled_to_pga(pga), &RunOptions::default())
-                    .expect("run");
-                assert!(out.summary.completed, "{name}/{rec}: the full run completes");
-                let each = criteria.iter().map(|c| met_in(c, &out.summary));
+                let out =
+                    run_scene(scene, &gm.scaled_to_pga(pga), &RunOptions::default()).expect("run");
+                assert!(
+                    out.summary.completed,
+                    "{name}/{rec}: the full run completes"
+                );
+                let mut each = criteria.iter().map(|c| met_in(c, &out.summary));
                 match combine {
-                    Combine::All => each.fold(true, |a, m| a && m),
-                    Combine::Any => each.fold(false, |a, m| a || m),
+                    Combine::All => each.all(|m| m),
+                    Combine::Any => each.any(|m| m),
                 }
             };
             let line = format!(
@@ -136,7 +150,10 @@ fn full_runs_at_the_bracket_ends_agree_with_the_bracket() {
             assert!(verdict(f), "{line}: a full run at failing_pga must meet it");
             if let Some(s) = r.safe_pga {
                 assert!(f - s <= 0.05 + 1e-12, "{line}");
-                assert!(!verdict(s), "{line}: a full run at safe_pga must not meet it");
+                assert!(
+                    !verdict(s),
+                    "{line}: a full run at safe_pga must not meet it"
+                );
             }
             line
         })

@@ -98,8 +98,7 @@ fn displacement_threshold_matches_newmark_bisection() {
 
     // Honesty with full runs (no early stop).
     let moved = |pga: f64| {
-        let out = run_scene(&scene, &unit.scaled_to_pga(pga), &RunOptions::default())
-            .expect("run");
+        let out = run_scene(&scene, &unit.scaled_to_pga(pga), &RunOptions::default()).expect("run");
         let d = out.summary.blocks[0].final_displacement;
         d[0].hypot(d[1])
     };

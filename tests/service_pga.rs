@@ -60,7 +60,10 @@ fn events_of(text: &str) -> Vec<(String, Value)> {
                 .find_map(|l| l.strip_prefix("data:"))
                 .unwrap_or("")
                 .trim();
-            (name, serde_json::from_str(data).expect("event data is JSON"))
+            (
+                name,
+                serde_json::from_str(data).expect("event data is JSON"),
+            )
         })
         .collect()
 }
@@ -96,7 +99,9 @@ async fn multi_record_search_streams_progress_and_serves_its_fragility() {
         "intermediate progress: {p:?}"
     );
 
-    let j = call(&app, get(&format!("/v1/pga-searches/{id}"))).await.json();
+    let j = call(&app, get(&format!("/v1/pga-searches/{id}")))
+        .await
+        .json();
     assert_eq!(j["status"], "succeeded");
     assert_eq!(j["motion"]["records"].as_array().map(Vec::len), Some(3));
     let res = &j["result"];
@@ -158,12 +163,19 @@ async fn a_running_multi_record_search_is_cancellable() {
         j["status"] == "running" || is_terminal(j)
     })
     .await;
-    let c = call(&app, post_raw(&format!("{uri}/cancel"), "application/json", "")).await;
+    let c = call(
+        &app,
+        post_raw(&format!("{uri}/cancel"), "application/json", ""),
+    )
+    .await;
     assert!(matches!(c.status, 200 | 202), "{}", c.text());
     let t = Instant::now();
     let j = wait_for(&app, &uri, Duration::from_secs(30), is_terminal).await;
     assert_eq!(j["status"], "cancelled", "{j}");
-    eprintln!("cancelled {:.2} s after the request", t.elapsed().as_secs_f64());
+    eprintln!(
+        "cancelled {:.2} s after the request",
+        t.elapsed().as_secs_f64()
+    );
     let svg = call(&app, get(&format!("{uri}/fragility.svg"))).await;
     svg.problem(409);
     svc.shutdown(Duration::ZERO);
@@ -186,7 +198,9 @@ async fn bad_multi_record_requests_name_the_field() {
     };
     let mut both = multi_body(3.0);
     both["motion"] = half_sine(1.0, "x");
-    both["motion"].as_object_mut().map(|o| o.remove("name"));
+    if let Some(o) = both["motion"].as_object_mut() {
+        o.remove("name");
+    }
     check(both, "/motions").await;
     let mut bad_item = multi_body(3.0);
     bad_item["motions"][1]["horizontal"]["pulse"]["period"] = json!(-1.0);
@@ -222,7 +236,10 @@ async fn bad_multi_record_requests_name_the_field() {
     assert_eq!(j["status"], "succeeded", "{j}");
     let svg = call(&app, get(&format!("{uri}/fragility.svg"))).await;
     let p = svg.problem(409);
-    assert!(p["detail"].as_str().unwrap_or("").contains("motions"), "{p}");
+    assert!(
+        p["detail"].as_str().unwrap_or("").contains("motions"),
+        "{p}"
+    );
     svc.shutdown(Duration::ZERO);
     std::fs::remove_dir_all(dir).ok();
 }

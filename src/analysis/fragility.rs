@@ -118,7 +118,8 @@ fn ln_normal_cdf(z: f64) -> f64 {
         normal_cdf(z).ln()
     } else {
         // Φ(z) ≈ φ(z)/|z| (1 − 1/z²) for very negative z.
-        -0.5 * z * z - (-z).ln() - 0.5 * (2.0 * std::f64::consts::PI).ln() + (1.0 - 1.0 / (z * z)).ln()
+        -0.5 * z * z - (-z).ln() - 0.5 * (2.0 * std::f64::consts::PI).ln()
+            + (1.0 - 1.0 / (z * z)).ln()
     }
 }
 
@@ -229,7 +230,12 @@ fn nll_binary(points: &[Point], mu: f64, beta: f64) -> f64 {
 }
 
 /// Nelder–Mead minimisation over (μ, ln β) from `start`.
-fn minimise(f: impl Fn(f64, f64) -> f64, start: (f64, f64), step: (f64, f64), p: &FitParams) -> (f64, f64, f64) {
+fn minimise(
+    f: impl Fn(f64, f64) -> f64,
+    start: (f64, f64),
+    step: (f64, f64),
+    p: &FitParams,
+) -> (f64, f64, f64) {
     let (lo, hi) = (p.min_beta.ln(), p.max_beta.ln());
     let g = |x: [f64; 2]| {
         if x[1] < lo || x[1] > hi {
@@ -292,17 +298,30 @@ fn start_of(values: impl Iterator<Item = f64>, p: &FitParams) -> (f64, f64) {
     let n = logs.len().max(1) as f64;
     let mean = logs.iter().sum::<f64>() / n;
     let sd = (logs.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / n).sqrt();
-    (mean, sd.clamp(p.min_beta * 10.0, p.max_beta / 2.0).max(0.05).ln())
+    (
+        mean,
+        sd.clamp(p.min_beta * 10.0, p.max_beta / 2.0).max(0.05).ln(),
+    )
 }
 
 /// Fit by interval-censored maximum likelihood. Needs at least two records with a finite
 /// bound, and at least one bounded from above and one from below (otherwise the likelihood
 /// has no maximum: every θ beyond the data explains them).
-pub fn fit_interval(caps: &[Capacity], points: Vec<Point>, p: &FitParams) -> Result<Fragility, FitError> {
+pub fn fit_interval(
+    caps: &[Capacity],
+    points: Vec<Point>,
+    p: &FitParams,
+) -> Result<Fragility, FitError> {
     for (i, c) in caps.iter().enumerate() {
         let ok = |x: Option<f64>| x.is_none_or(|v| v.is_finite() && v > 0.0);
-        if !ok(c.above) || !ok(c.at_most) || matches!((c.above, c.at_most), (Some(a), Some(b)) if b < a) {
-            return Err(FitError(format!("record {i}: capacity bounds {:?}..{:?} are not 0 < above ≤ at_most", c.above, c.at_most)));
+        if !ok(c.above)
+            || !ok(c.at_most)
+            || matches!((c.above, c.at_most), (Some(a), Some(b)) if b < a)
+        {
+            return Err(FitError(format!(
+                "record {i}: capacity bounds {:?}..{:?} are not 0 < above ≤ at_most",
+                c.above, c.at_most
+            )));
         }
     }
     let failing = caps.iter().filter(|c| c.at_most.is_some()).count();
@@ -334,8 +353,14 @@ pub fn fit_interval(caps: &[Capacity], points: Vec<Point>, p: &FitParams) -> Res
 /// outcomes, and a failure below some safe run or vice versa is not required: a perfectly
 /// separated set drives β to its lower bound, reported as is.
 pub fn fit_binary(points: Vec<Point>, p: &FitParams) -> Result<Fragility, FitError> {
-    if let Some(bad) = points.iter().find(|pt| !(pt.pga.is_finite() && pt.pga > 0.0)) {
-        return Err(FitError(format!("a run at PGA {} cannot enter a lognormal fit (PGA must be > 0)", bad.pga)));
+    if let Some(bad) = points
+        .iter()
+        .find(|pt| !(pt.pga.is_finite() && pt.pga > 0.0))
+    {
+        return Err(FitError(format!(
+            "a run at PGA {} cannot enter a lognormal fit (PGA must be > 0)",
+            bad.pga
+        )));
     }
     let fails = points.iter().filter(|pt| pt.failed).count();
     if fails == 0 || fails == points.len() {
@@ -383,7 +408,10 @@ fn tick_step(span: f64, target: usize) -> f64 {
 }
 
 fn esc(text: &str) -> String {
-    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 /// The fragility plot: curve, every run as a point at 0 (stood) or 1 (failed), and each
@@ -456,7 +484,11 @@ pub fn svg(f: &Fragility, capacities: &[(String, Capacity)], title: &str) -> Str
     ));
     // Runs.
     for pt in &f.points {
-        let (y, colour) = if pt.failed { (1.0, "#c0392b") } else { (0.0, "#27ae60") };
+        let (y, colour) = if pt.failed {
+            (1.0, "#c0392b")
+        } else {
+            (0.0, "#27ae60")
+        };
         s.push_str(&format!(
             "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"3\" fill=\"{colour}\" fill-opacity=\"0.5\"><title>{} m/s²: {}</title></circle>\n",
             px(pt.pga),
@@ -531,7 +563,10 @@ mod tests {
         ];
         for (x, want) in cases {
             let got = erfc(x);
-            assert!(((got - want) / want).abs() < 1e-13, "erfc({x}) = {got}, want {want}");
+            assert!(
+                ((got - want) / want).abs() < 1e-13,
+                "erfc({x}) = {got}, want {want}"
+            );
         }
         assert!((normal_cdf(1.959_963_984_540_054) - 0.975).abs() < 1e-14);
     }

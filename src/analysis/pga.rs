@@ -119,7 +119,9 @@ impl Combine {
         match text {
             "all" => Ok(Combine::All),
             "any" => Ok(Combine::Any),
-            other => Err(format!("combine: expected \"all\" or \"any\", got {other:?}")),
+            other => Err(format!(
+                "combine: expected \"all\" or \"any\", got {other:?}"
+            )),
         }
     }
 
@@ -258,8 +260,11 @@ pub fn evaluate_combined(
     cancel: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<bool, RunError> {
     let gm = motion.scaled_to_pga(pga);
-    let decided =
-        |tr: &Tracker| combine.decided(criteria.iter().map(|c| c.decided(tr))).is_some();
+    let decided = |tr: &Tracker| {
+        combine
+            .decided(criteria.iter().map(|c| c.decided(tr)))
+            .is_some()
+    };
     let opts = RunOptions {
         stop_when: Some(&decided),
         cancel,
@@ -410,7 +415,9 @@ pub fn search_records(
     opts: &RunOptions,
 ) -> Result<MultiResult, RunError> {
     if records.is_empty() {
-        return Err(RunError::Invalid("motions: give at least one record".into()));
+        return Err(RunError::Invalid(
+            "motions: give at least one record".into(),
+        ));
     }
     for (name, gm) in records {
         validate(scene, gm, req).map_err(|e| RunError::Invalid(format!("record {name:?}: {e}")))?;

@@ -92,9 +92,9 @@ pub fn record_paths(spec: &str) -> Result<(Vec<PathBuf>, bool), String> {
             .filter_map(|e| e.ok().map(|e| e.path()))
             .filter(|p| {
                 p.is_file()
-                    && p.extension()
-                        .and_then(|e| e.to_str())
-                        .is_some_and(|e| RECORD_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
+                    && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+                        RECORD_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str())
+                    })
             })
             .collect();
         paths.sort();
@@ -108,8 +108,8 @@ pub fn record_paths(spec: &str) -> Result<(Vec<PathBuf>, bool), String> {
         return Ok((paths, true));
     }
     if path.extension().and_then(|e| e.to_str()) == Some("list") {
-        let text =
-            std::fs::read_to_string(&path).map_err(|e| format!("--motion {}: {e}", path.display()))?;
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| format!("--motion {}: {e}", path.display()))?;
         let dir = path.parent().unwrap_or(Path::new("."));
         let paths: Vec<PathBuf> = text
             .lines()
@@ -118,7 +118,10 @@ pub fn record_paths(spec: &str) -> Result<(Vec<PathBuf>, bool), String> {
             .map(|l| dir.join(l))
             .collect();
         if paths.is_empty() {
-            return Err(format!("--motion {}: the list names no record", path.display()));
+            return Err(format!(
+                "--motion {}: the list names no record",
+                path.display()
+            ));
         }
         return Ok((paths, true));
     }
@@ -209,7 +212,10 @@ pub fn pga(args: &PgaArgs) -> Result<(), String> {
     let (paths, several) = record_paths(&args.motion)?;
     let mut records = Vec::new();
     for p in &paths {
-        records.push((record_name(p), motion::load_path(p).map_err(|e| e.to_string())?));
+        records.push((
+            record_name(p),
+            motion::load_path(p).map_err(|e| e.to_string())?,
+        ));
     }
     std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
     let write = |name: &str, text: &str| {
@@ -228,13 +234,19 @@ pub fn pga(args: &PgaArgs) -> Result<(), String> {
         });
         write(
             "fragility.json",
-            &format!("{}\n", serde_json::to_string_pretty(&frag).map_err(|e| e.to_string())?),
+            &format!(
+                "{}\n",
+                serde_json::to_string_pretty(&frag).map_err(|e| e.to_string())?
+            ),
         )?;
         match fragility_svg(&result) {
             Some(svg) => write("fragility.svg", &svg)?,
             None => eprintln!(
                 "ashlar: no fragility curve: {}",
-                result.fragility_error.as_deref().unwrap_or("unknown reason")
+                result
+                    .fragility_error
+                    .as_deref()
+                    .unwrap_or("unknown reason")
             ),
         }
         text

@@ -259,7 +259,9 @@ fn parse_records(
             let p = format!("/motions/{i}/horizontal");
             return Err(ApiError::invalid_field(
                 p.clone(),
-                format!("{p}: a PGA search scales the horizontal component, which is missing or zero"),
+                format!(
+                    "{p}: a PGA search scales the horizontal component, which is missing or zero"
+                ),
             ));
         }
         if records.iter().any(|(n, _)| *n == name) {
@@ -272,7 +274,8 @@ fn parse_records(
         parsed_scene.get_or_insert(sc);
         records.push((name, motion));
     }
-    let scene = parsed_scene.ok_or_else(|| ApiError::invalid_field("/motions", "/motions: empty"))?;
+    let scene =
+        parsed_scene.ok_or_else(|| ApiError::invalid_field("/motions", "/motions: empty"))?;
     Ok((scene, records))
 }
 
@@ -535,8 +538,9 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
     };
     let combine = match &b.combine {
         None => Combine::All,
-        Some(t) => Combine::parse(t)
-            .map_err(|e| ApiError::invalid_field("/combine", format!("/{e}")))?,
+        Some(t) => {
+            Combine::parse(t).map_err(|e| ApiError::invalid_field("/combine", format!("/{e}")))?
+        }
     };
     let fit = match &b.fit {
         None => Method::Interval,

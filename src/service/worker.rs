@@ -65,7 +65,8 @@ pub fn analysis_runner() -> JobRunner {
             } if !records.is_empty() => {
                 // Several records: per-record searches and the fragility curve; the plot is
                 // written beside result.json for `GET .../fragility.svg`.
-                let res = crate::analysis::pga::search_records(scene, records, request, *fit, &opts);
+                let res =
+                    crate::analysis::pga::search_records(scene, records, request, *fit, &opts);
                 if hooks.cancel.load(Ordering::Relaxed) {
                     return Ok(RunnerOutcome::Cancelled(None));
                 }
