@@ -574,6 +574,6 @@ mod tests {
     #[test]
     fn ticks_are_round() {
         assert_eq!(tick_step(10.0, 5), 2.0);
-        assert_eq!(tick_step(0.9, 6), 0.2);
+        assert_eq!(tick_step(1.0, 6), 0.2);
     }
 }

@@ -497,3 +497,53 @@ pub fn fragility_svg(r: &MultiResult) -> Option<String> {
         &format!("Fragility: {} ({} records)", r.criterion, r.records.len()),
     ))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn combinations_decide_as_early_as_logic_allows() {
+        let (t, f, u) = (Some(true), Some(false), None);
+        // all: one known failure decides false; true needs every criterion known.
+        assert_eq!(Combine::All.decided([f, u].into_iter()), Some(false));
+        assert_eq!(Combine::All.decided([t, u].into_iter()), None);
+        assert_eq!(Combine::All.decided([t, t].into_iter()), Some(true));
+        // any: one known success decides true; false needs every criterion known.
+        assert_eq!(Combine::Any.decided([u, t].into_iter()), Some(true));
+        assert_eq!(Combine::Any.decided([f, u].into_iter()), None);
+        assert_eq!(Combine::Any.decided([f, f].into_iter()), Some(false));
+        assert!(Combine::Any.verdict([false, true].into_iter()));
+        assert!(!Combine::All.verdict([false, true].into_iter()));
+        assert!(Combine::parse("most").is_err());
+        let c = [
+            Criterion::parse("toppled:a").expect("c"),
+            Criterion::parse("not:rotation:b:5").expect("c"),
+        ];
+        assert_eq!(Combine::All.label(&c), "toppled:a,not:rotation:b:5");
+        assert_eq!(Combine::Any.label(&c), "any(toppled:a,not:rotation:b:5)");
+        assert_eq!(Combine::Any.label(&c[..1]), "toppled:a");
+    }
+
+    #[test]
+    fn capacity_bounds_come_from_the_bracket() {
+        let r = |s: Option<f64>, f: Option<f64>| PgaResult {
+            criterion: "toppled:a".into(),
+            safe_pga: s,
+            failing_pga: f,
+            units: "m/s2".into(),
+            monotonic: true,
+            runs: vec![],
+        };
+        assert_eq!(
+            capacity(&r(Some(2.0), Some(2.1))),
+            Capacity {
+                above: Some(2.0),
+                at_most: Some(2.1)
+            }
+        );
+        // A safe amplitude of 0 bounds nothing on a log scale; never failing is right-censored.
+        assert_eq!(capacity(&r(Some(0.0), Some(0.5))).above, None);
+        assert_eq!(capacity(&r(Some(9.0), None)).at_most, None);
+    }
+}
