@@ -3,7 +3,7 @@
 //! independent RK4 value is checked in tests/rocking.rs), within 2 %; and the bracket must be
 //! honest: a run at `safe_pga` does not meet the criterion, a run at `failing_pga` does.
 mod common;
-use ashlar::analysis::pga::{evaluate, search, Criterion, PgaRequest};
+use ashlar::analysis::pga::{evaluate, search, Combine, Criterion, PgaRequest};
 use ashlar::analysis::run::RunOptions;
 use ashlar::motion::{GroundMotion, Signal};
 use common::*;
@@ -34,6 +34,7 @@ fn rocking_column_bracket_contains_housner_and_is_honest() {
     let criteria = vec![Criterion::parse("toppled:column").expect("criterion")];
     let req = PgaRequest {
         criteria: criteria.clone(),
+        combine: Combine::All,
         min: 2.0,
         max: 10.0,
         tolerance: 0.01,
@@ -65,6 +66,7 @@ fn negated_criterion_bounds_from_above_and_bad_requests_are_named() {
     assert!(!evaluate(&scene, &pulse, &[not], 8.0, None).expect("run"));
     let bad = PgaRequest {
         criteria: vec![Criterion::parse("toppled:nope").expect("parse")],
+        combine: Combine::All,
         min: 1.0,
         max: 2.0,
         tolerance: 0.1,

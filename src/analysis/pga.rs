@@ -4,6 +4,7 @@
 //! overturning amplitude), so the search first scans a coarse grid of amplitudes in parallel,
 //! then narrows the lowest safe/failing bracket, evaluating as many interior points per round
 //! as there are cores.
+use super::fragility::{fit_binary, fit_interval, Capacity, FitParams, Fragility, Method, Point};
 use super::run::{run, RunError, RunOptions, Tracker};
 use crate::motion::GroundMotion;
 use crate::scene::Scene;
@@ -100,10 +101,74 @@ impl Criterion {
     }
 }
 
-/// A PGA search request (amplitudes in m/s²). All criteria must hold for "failed".
+/// How several criteria combine into one verdict "failed".
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Combine {
+    /// Every criterion is met (the observations all hold at once). The default: several
+    /// observations of one site constrain the same shaking together.
+    #[default]
+    All,
+    /// At least one criterion is met (any of several damage states counts as failure).
+    Any,
+}
+
+impl Combine {
+    /// Parse `all` / `any`.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        match text {
+            "all" => Ok(Combine::All),
+            "any" => Ok(Combine::Any),
+            other => Err(format!(
+                "combine: expected \"all\" or \"any\", got {other:?}"
+            )),
+        }
+    }
+
+    /// The verdict from the criteria's verdicts.
+    fn verdict(self, mut met: impl Iterator<Item = bool>) -> bool {
+        match self {
+            Combine::All => met.all(|m| m),
+            Combine::Any => met.any(|m| m),
+        }
+    }
+
+    /// The combined verdict once it is known before the end of the run: `all` is decided false
+    /// by one criterion decided false, `any` true by one decided true; otherwise every
+    /// criterion must be decided.
+    fn decided(self, each: impl Iterator<Item = Option<bool>>) -> Option<bool> {
+        let short = self == Combine::Any;
+        let mut all_known = true;
+        for d in each {
+            match d {
+                Some(m) if m == short => return Some(short),
+                Some(_) => {}
+                None => all_known = false,
+            }
+        }
+        all_known.then_some(!short)
+    }
+
+    /// The `criterion` text of a result: one criterion as given (FORMAT.md §3); several joined
+    /// by `,` for `all` (as before) and written `any(a,b)` for `any`.
+    pub fn label(self, criteria: &[Criterion]) -> String {
+        let joined = criteria
+            .iter()
+            .map(Criterion::text)
+            .collect::<Vec<_>>()
+            .join(",");
+        match self {
+            Combine::Any if criteria.len() > 1 => format!("any({joined})"),
+            _ => joined,
+        }
+    }
+}
+
+/// A PGA search request (amplitudes in m/s²). The criteria combine by `combine` into "failed".
 #[derive(Debug, Clone, PartialEq)]
 pub struct PgaRequest {
     pub criteria: Vec<Criterion>,
+    pub combine: Combine,
     pub min: f64,
     pub max: f64,
     pub tolerance: f64,
@@ -128,10 +193,6 @@ pub struct PgaResult {
     pub units: String,
     pub monotonic: bool,
     pub runs: Vec<PgaRun>,
-}
-
-fn all_met(criteria: &[Criterion], tr: &Tracker) -> bool {
-    criteria.iter().all(|c| c.met(tr))
 }
 
 fn validate(scene: &Scene, motion: &GroundMotion, req: &PgaRequest) -> Result<(), RunError> {
@@ -186,15 +247,35 @@ pub fn evaluate(
     pga: f64,
     cancel: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<bool, RunError> {
+    evaluate_combined(scene, motion, criteria, Combine::All, pga, cancel)
+}
+
+/// [`evaluate`] with an explicit combination of the criteria.
+pub fn evaluate_combined(
+    scene: &Scene,
+    motion: &GroundMotion,
+    criteria: &[Criterion],
+    combine: Combine,
+    pga: f64,
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<bool, RunError> {
     let gm = motion.scaled_to_pga(pga);
-    let decided = |tr: &Tracker| criteria.iter().all(|c| c.decided(tr).is_some());
+    let decided = |tr: &Tracker| {
+        combine
+            .decided(criteria.iter().map(|c| c.decided(tr)))
+            .is_some()
+    };
     let opts = RunOptions {
         stop_when: Some(&decided),
         cancel,
         no_trajectory: true,
         ..Default::default()
     };
-    let s = run(scene, &gm, &opts)?.summary;
+    let out = run(scene, &gm, &opts)?;
+    if out.cancelled {
+        return Err(RunError::Invalid("cancelled".into()));
+    }
+    let s = out.summary;
     // The verdict from the final state; a run stopped early was stopped because every
     // criterion was decided, and `decided` agrees with `met` by construction.
     let mut tr = Tracker::default();
@@ -203,7 +284,7 @@ pub fn evaluate(
         tr.final_rotation.push(b.final_rotation);
         tr.final_displacement.push(b.final_displacement);
     }
-    Ok(all_met(criteria, &tr))
+    Ok(combine.verdict(criteria.iter().map(|c| c.met(&tr))))
 }
 
 /// Search for the threshold amplitude.
@@ -218,7 +299,7 @@ pub fn search(
     let eval_many = |pgas: &[f64]| -> Result<Vec<PgaRun>, RunError> {
         pgas.par_iter()
             .map(|&pga| {
-                evaluate(scene, motion, &req.criteria, pga, cancel)
+                evaluate_combined(scene, motion, &req.criteria, req.combine, pga, cancel)
                     .map(|failed| PgaRun { pga, failed })
             })
             .collect()
@@ -228,9 +309,20 @@ pub fn search(
         .map(|k| req.min + (req.max - req.min) * k as f64 / (n - 1) as f64)
         .collect();
     let mut runs = eval_many(&grid)?;
-    if let Some(p) = opts.progress {
-        p(0.5);
-    }
+    let workers = rayon::current_num_threads().max(1);
+    // Progress: runs done over the runs the search is expected to need (the scan, then one round
+    // of `workers` runs per (workers + 1)-fold narrowing of a scan interval to the tolerance).
+    let rounds = ((req.max - req.min) / (n - 1) as f64 / req.tolerance)
+        .max(1.0)
+        .log((workers + 1) as f64)
+        .ceil();
+    let expected = n as f64 + rounds * workers as f64;
+    let report = |done: usize| {
+        if let Some(p) = opts.progress {
+            p((done as f64 / expected).min(0.99));
+        }
+    };
+    report(runs.len());
     let first_fail = runs.iter().position(|r| r.failed);
     let monotonic_scan = match first_fail {
         Some(k) => runs[k..].iter().all(|r| r.failed),
@@ -241,7 +333,6 @@ pub fn search(
         Some(0) => (None, Some(req.min)),
         Some(k) => (Some(runs[k - 1].pga), Some(runs[k].pga)),
     };
-    let workers = rayon::current_num_threads().max(1);
     while let (Some(s), Some(f)) = (safe, fail) {
         if f - s <= req.tolerance {
             break;
@@ -263,6 +354,7 @@ pub fn search(
             None => safe = Some(round[round.len() - 1].pga),
         }
         runs.extend(round);
+        report(runs.len());
     }
     let monotonic = monotonic_scan && {
         let lowest_fail = runs
@@ -274,16 +366,184 @@ pub fn search(
     };
     runs.sort_by(|a, b| a.pga.total_cmp(&b.pga));
     Ok(PgaResult {
-        criterion: req
-            .criteria
-            .iter()
-            .map(Criterion::text)
-            .collect::<Vec<_>>()
-            .join(","),
+        criterion: req.combine.label(&req.criteria),
         safe_pga: safe,
         failing_pga: fail,
         units: "m/s2".into(),
         monotonic,
         runs,
     })
+}
+
+/// One record's search in a multi-record study: the single-record result plus the record's name.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RecordResult {
+    pub motion: String,
+    #[serde(flatten)]
+    pub result: PgaResult,
+}
+
+/// The result of a search over several records with its fragility curve.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MultiResult {
+    pub criterion: String,
+    pub units: String,
+    pub records: Vec<RecordResult>,
+    /// `null` when no curve can be fitted (then `fragility_error` says why).
+    pub fragility: Option<Fragility>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fragility_error: Option<String>,
+}
+
+/// What a record's search says of its capacity (the lowest PGA that meets the criterion):
+/// it lies in (safe_pga, failing_pga]; a side the search did not bound is open.
+pub fn capacity(r: &PgaResult) -> Capacity {
+    Capacity {
+        above: r.safe_pga.filter(|s| *s > 0.0),
+        at_most: r.failing_pga,
+    }
+}
+
+/// Search every record (each scaled to the amplitudes of `req`), then fit a lognormal fragility
+/// curve by `method`. Records run in parallel, and so do the runs of each record's scan.
+/// Progress is the mean of the records' progress.
+pub fn search_records(
+    scene: &Scene,
+    records: &[(String, GroundMotion)],
+    req: &PgaRequest,
+    method: Method,
+    opts: &RunOptions,
+) -> Result<MultiResult, RunError> {
+    if records.is_empty() {
+        return Err(RunError::Invalid(
+            "motions: give at least one record".into(),
+        ));
+    }
+    for (name, gm) in records {
+        validate(scene, gm, req).map_err(|e| RunError::Invalid(format!("record {name:?}: {e}")))?;
+    }
+    let parts = std::sync::Mutex::new(vec![0.0f64; records.len()]);
+    let results: Vec<RecordResult> = records
+        .par_iter()
+        .enumerate()
+        .map(|(i, (name, gm))| {
+            let progress = |p: f64| {
+                if let (Some(report), Ok(mut parts)) = (opts.progress, parts.lock()) {
+                    parts[i] = p;
+                    report(parts.iter().sum::<f64>() / parts.len() as f64);
+                }
+            };
+            let sub = RunOptions {
+                cancel: opts.cancel,
+                progress: Some(&progress),
+                ..Default::default()
+            };
+            search(scene, gm, req, &sub)
+                .map(|result| RecordResult {
+                    motion: name.clone(),
+                    result,
+                })
+                .map_err(|e| match e {
+                    RunError::Invalid(m) if m == "cancelled" => RunError::Invalid(m),
+                    RunError::Invalid(m) => RunError::Invalid(format!("record {name:?}: {m}")),
+                    RunError::Simulation(m) => {
+                        RunError::Simulation(format!("record {name:?}: {m}"))
+                    }
+                    RunError::Io(m) => RunError::Io(m),
+                })
+        })
+        .collect::<Result<_, _>>()?;
+    let points: Vec<Point> = results
+        .iter()
+        .flat_map(|r| r.result.runs.iter())
+        .filter(|r| r.pga > 0.0)
+        .map(|r| Point {
+            pga: r.pga,
+            failed: r.failed,
+        })
+        .collect();
+    let params = FitParams::default();
+    let fit = match method {
+        Method::Interval => {
+            let caps: Vec<Capacity> = results.iter().map(|r| capacity(&r.result)).collect();
+            fit_interval(&caps, points, &params)
+        }
+        Method::Binary => fit_binary(points, &params),
+    };
+    let (fragility, fragility_error) = match fit {
+        Ok(f) => (Some(f), None),
+        Err(e) => (None, Some(e.to_string())),
+    };
+    Ok(MultiResult {
+        criterion: req.combine.label(&req.criteria),
+        units: "m/s2".into(),
+        records: results,
+        fragility,
+        fragility_error,
+    })
+}
+
+/// The fragility plot of a multi-record result (`None` when no curve was fitted).
+pub fn fragility_svg(r: &MultiResult) -> Option<String> {
+    let f = r.fragility.as_ref()?;
+    let caps: Vec<(String, Capacity)> = r
+        .records
+        .iter()
+        .map(|x| (x.motion.clone(), capacity(&x.result)))
+        .collect();
+    Some(super::fragility::svg(
+        f,
+        &caps,
+        &format!("Fragility: {} ({} records)", r.criterion, r.records.len()),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn combinations_decide_as_early_as_logic_allows() {
+        let (t, f, u) = (Some(true), Some(false), None);
+        // all: one known failure decides false; true needs every criterion known.
+        assert_eq!(Combine::All.decided([f, u].into_iter()), Some(false));
+        assert_eq!(Combine::All.decided([t, u].into_iter()), None);
+        assert_eq!(Combine::All.decided([t, t].into_iter()), Some(true));
+        // any: one known success decides true; false needs every criterion known.
+        assert_eq!(Combine::Any.decided([u, t].into_iter()), Some(true));
+        assert_eq!(Combine::Any.decided([f, u].into_iter()), None);
+        assert_eq!(Combine::Any.decided([f, f].into_iter()), Some(false));
+        assert!(Combine::Any.verdict([false, true].into_iter()));
+        assert!(!Combine::All.verdict([false, true].into_iter()));
+        assert!(Combine::parse("most").is_err());
+        let c = [
+            Criterion::parse("toppled:a").expect("c"),
+            Criterion::parse("not:rotation:b:5").expect("c"),
+        ];
+        assert_eq!(Combine::All.label(&c), "toppled:a,not:rotation:b:5");
+        assert_eq!(Combine::Any.label(&c), "any(toppled:a,not:rotation:b:5)");
+        assert_eq!(Combine::Any.label(&c[..1]), "toppled:a");
+    }
+
+    #[test]
+    fn capacity_bounds_come_from_the_bracket() {
+        let r = |s: Option<f64>, f: Option<f64>| PgaResult {
+            criterion: "toppled:a".into(),
+            safe_pga: s,
+            failing_pga: f,
+            units: "m/s2".into(),
+            monotonic: true,
+            runs: vec![],
+        };
+        assert_eq!(
+            capacity(&r(Some(2.0), Some(2.1))),
+            Capacity {
+                above: Some(2.0),
+                at_most: Some(2.1)
+            }
+        );
+        // A safe amplitude of 0 bounds nothing on a log scale; never failing is right-censored.
+        assert_eq!(capacity(&r(Some(0.0), Some(0.5))).above, None);
+        assert_eq!(capacity(&r(Some(9.0), None)).at_most, None);
+    }
 }

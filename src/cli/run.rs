@@ -1,5 +1,6 @@
 //! `ashlar run` and `ashlar pga`: load the scene and the record, call `analysis`, print.
-use crate::analysis::pga::{search, Criterion, PgaRequest};
+use crate::analysis::fragility::Method;
+use crate::analysis::pga::{fragility_svg, search, search_records, Combine, Criterion, PgaRequest};
 use crate::analysis::run::{run as run_scene, RunOptions};
 use crate::motion::{self, GroundMotion, STANDARD_GRAVITY};
 use crate::scene::{parse_scene, Scene};
@@ -33,13 +34,18 @@ pub struct RunArgs {
 pub struct PgaArgs {
     /// Scene file (ashlar.scene/1 JSON).
     pub scene: PathBuf,
-    /// Record (same formats as `run`).
+    /// Record (same formats as `run`); or several, for a fragility curve: a directory (every
+    /// record file in it), a comma-separated list of paths, or a `.list` file naming one path a
+    /// line (`#` comments; relative paths from the list's directory).
     #[arg(long)]
-    pub motion: PathBuf,
+    pub motion: String,
     /// toppled:BLOCK, displacement:BLOCK:METRES or rotation:BLOCK:DEGREES; repeat for several
-    /// (all must hold); prefix with `not:` for an observation that a block did not fail.
+    /// (combined by --combine); prefix with `not:` for an observation that a block did not fail.
     #[arg(long, required = true)]
     pub criterion: Vec<String>,
+    /// How several criteria combine: `all` must be met, or `any` one of them.
+    #[arg(long, default_value = "all")]
+    pub combine: String,
     /// Lower end of the amplitude range (m/s² or 0.1g).
     #[arg(long, default_value = "0.05g")]
     pub min: String,
@@ -52,9 +58,81 @@ pub struct PgaArgs {
     /// Coarse scan points before bisection.
     #[arg(long, default_value_t = 8)]
     pub scan_points: usize,
-    /// Output directory for result.json.
+    /// Fragility fit over several records: `interval` (each record's capacity censored in
+    /// its bracket) or `binary` (every run a pass/fail outcome, Baker 2015).
+    #[arg(long, default_value = "interval")]
+    pub fit: String,
+    /// Output directory for result.json (and fragility.json, fragility.svg over several records).
     #[arg(long, default_value = "ashlar-out")]
     pub out: PathBuf,
+}
+
+/// Record file extensions picked from a directory.
+const RECORD_EXTENSIONS: [&str; 8] = ["at2", "csv", "v1", "v2", "v1c", "v2c", "asc", "json"];
+
+/// The record paths `--motion` names: one file, a directory, a comma-separated list or a
+/// `.list` file. Returns whether several were meant (a directory or list, even of one).
+pub fn record_paths(spec: &str) -> Result<(Vec<PathBuf>, bool), String> {
+    if spec.contains(',') {
+        let paths: Vec<PathBuf> = spec
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(PathBuf::from)
+            .collect();
+        if paths.is_empty() {
+            return Err(format!("--motion {spec:?}: the list names no record"));
+        }
+        return Ok((paths, true));
+    }
+    let path = PathBuf::from(spec);
+    if path.is_dir() {
+        let mut paths: Vec<PathBuf> = std::fs::read_dir(&path)
+            .map_err(|e| format!("--motion {}: {e}", path.display()))?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| {
+                p.is_file()
+                    && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+                        RECORD_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str())
+                    })
+            })
+            .collect();
+        paths.sort();
+        if paths.is_empty() {
+            return Err(format!(
+                "--motion {}: the directory holds no record file (.{})",
+                path.display(),
+                RECORD_EXTENSIONS.join(", .")
+            ));
+        }
+        return Ok((paths, true));
+    }
+    if path.extension().and_then(|e| e.to_str()) == Some("list") {
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| format!("--motion {}: {e}", path.display()))?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let paths: Vec<PathBuf> = text
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty() && !l.starts_with('#'))
+            .map(|l| dir.join(l))
+            .collect();
+        if paths.is_empty() {
+            return Err(format!(
+                "--motion {}: the list names no record",
+                path.display()
+            ));
+        }
+        return Ok((paths, true));
+    }
+    Ok((vec![path], false))
+}
+
+/// A record's name in results: its file name.
+fn record_name(p: &Path) -> String {
+    p.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| p.display().to_string())
 }
 
 /// Parse an acceleration given in m/s² or with a `g` suffix.
@@ -116,8 +194,6 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
 }
 
 pub fn pga(args: &PgaArgs) -> Result<(), String> {
-    let scene = load_scene(&args.scene)?;
-    let gm = motion::load_path(&args.motion).map_err(|e| e.to_string())?;
     let criteria = args
         .criterion
         .iter()
@@ -125,16 +201,61 @@ pub fn pga(args: &PgaArgs) -> Result<(), String> {
         .collect::<Result<Vec<_>, _>>()?;
     let req = PgaRequest {
         criteria,
+        combine: Combine::parse(&args.combine).map_err(|e| format!("--{e}"))?,
         min: parse_acceleration(&args.min)?,
         max: parse_acceleration(&args.max)?,
         tolerance: args.tolerance,
         scan_points: args.scan_points,
     };
-    let result = search(&scene, &gm, &req, &RunOptions::default()).map_err(|e| e.to_string())?;
-    let text = serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?;
+    let method = Method::parse(&args.fit).map_err(|e| format!("--fit: {e}"))?;
+    let scene = load_scene(&args.scene)?;
+    let (paths, several) = record_paths(&args.motion)?;
+    let mut records = Vec::new();
+    for p in &paths {
+        records.push((
+            record_name(p),
+            motion::load_path(p).map_err(|e| e.to_string())?,
+        ));
+    }
     std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
-    std::fs::write(args.out.join("result.json"), format!("{text}\n"))
-        .map_err(|e| format!("{}: {e}", args.out.display()))?;
+    let write = |name: &str, text: &str| {
+        std::fs::write(args.out.join(name), text)
+            .map_err(|e| format!("{}: {e}", args.out.join(name).display()))
+    };
+    let text = if several {
+        let result = search_records(&scene, &records, &req, method, &RunOptions::default())
+            .map_err(|e| e.to_string())?;
+        let text = serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?;
+        let frag = serde_json::json!({
+            "criterion": result.criterion,
+            "units": result.units,
+            "fragility": result.fragility,
+            "fragility_error": result.fragility_error,
+        });
+        write(
+            "fragility.json",
+            &format!(
+                "{}\n",
+                serde_json::to_string_pretty(&frag).map_err(|e| e.to_string())?
+            ),
+        )?;
+        match fragility_svg(&result) {
+            Some(svg) => write("fragility.svg", &svg)?,
+            None => eprintln!(
+                "ashlar: no fragility curve: {}",
+                result
+                    .fragility_error
+                    .as_deref()
+                    .unwrap_or("unknown reason")
+            ),
+        }
+        text
+    } else {
+        let (_, gm) = &records[0];
+        let result = search(&scene, gm, &req, &RunOptions::default()).map_err(|e| e.to_string())?;
+        serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?
+    };
+    write("result.json", &format!("{text}\n"))?;
     println!("{text}");
     Ok(())
 }

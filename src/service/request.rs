@@ -2,7 +2,8 @@
 //! applied. Used twice with the same rules: by the routes when a job is submitted (errors become
 //! 400/413/422 problems naming the field) and by a worker when it starts the stored job.
 use super::problem::{dotted_to_pointer, ApiError};
-use crate::analysis::pga::{Criterion, PgaRequest};
+use crate::analysis::fragility::Method;
+use crate::analysis::pga::{Combine, Criterion, PgaRequest};
 use crate::motion::{GroundMotion, Signal, Units};
 use crate::scene::Scene;
 use serde::Deserialize;
@@ -63,6 +64,11 @@ pub enum JobInput {
         motion: GroundMotion,
         request: PgaRequest,
         criterion: String,
+        /// A multi-record search (`"motions"`): each record's name and motion, and the
+        /// fragility fit. Empty for a single-record search (then `motion` is the record; with
+        /// several, `motion` is the first).
+        records: Vec<(String, GroundMotion)>,
+        fit: Method,
     },
 }
 
@@ -167,8 +173,16 @@ fn default_units() -> Units {
 #[serde(deny_unknown_fields)]
 struct PgaBody {
     scene: Value,
+    #[serde(default)]
     motion: Value,
+    /// Several records (a fragility study) instead of `motion`.
+    #[serde(default)]
+    motions: Option<Vec<Value>>,
     criterion: CriterionSpec,
+    #[serde(default)]
+    combine: Option<String>,
+    #[serde(default)]
+    fit: Option<String>,
     range: RangeSpec,
     #[serde(default)]
     tolerance: Option<f64>,
@@ -180,6 +194,90 @@ struct PgaBody {
 /// non-monotonic response over a typical 0–10 m/s² range, few enough to keep a search to
 /// about a dozen runs with the bisection.
 pub const DEFAULT_SCAN_POINTS: usize = 8;
+
+/// Records of one multi-record search: 100 is more than any fragility study uses (FEMA P695
+/// has 44), and bounds one job to 100 searches; the body-size limit bounds their samples.
+pub const MAX_RECORDS: usize = 100;
+
+/// Re-point an error of the single-motion parser at `/motions/{i}`.
+fn at_record(e: ApiError, i: usize) -> ApiError {
+    let re = |t: &str| t.replacen("/motion", &format!("/motions/{i}"), 1);
+    ApiError {
+        detail: re(&e.detail),
+        pointer: e.pointer.as_deref().map(re),
+        ..e
+    }
+}
+
+/// The records of `"motions"`: each a GroundMotion, optionally with a `"name"` (default
+/// `motions/{i}`), parsed with the same rules as `"motion"`.
+fn parse_records(
+    scene: &Value,
+    items: &[Value],
+    limits: &Limits,
+) -> Result<(Scene, Vec<(String, GroundMotion)>), ApiError> {
+    if items.is_empty() {
+        return Err(ApiError::invalid_field(
+            "/motions",
+            "/motions: give at least one record",
+        ));
+    }
+    if items.len() > MAX_RECORDS {
+        return Err(ApiError::limit_exceeded(
+            "/motions",
+            format!(
+                "/motions: {} records exceed the limit of {MAX_RECORDS} per search",
+                items.len()
+            ),
+        ));
+    }
+    let mut parsed_scene = None;
+    let mut records = Vec::new();
+    for (i, item) in items.iter().enumerate() {
+        let mut item = item.clone();
+        let name = match item.as_object_mut().and_then(|o| o.remove("name")) {
+            None => format!("motions/{i}"),
+            Some(Value::String(n)) if !n.trim().is_empty() => n,
+            Some(_) => {
+                let p = format!("/motions/{i}/name");
+                return Err(ApiError::invalid_field(
+                    p.clone(),
+                    format!("{p}: must be a non-empty string"),
+                ));
+            }
+        };
+        if item.is_null() {
+            let p = format!("/motions/{i}");
+            return Err(ApiError::invalid_field(
+                p.clone(),
+                format!("{p}: a record is required"),
+            ));
+        }
+        let (sc, motion) =
+            scene_and_motion(scene, Some(&item), limits).map_err(|e| at_record(e, i))?;
+        if motion.horizontal.peak() <= 0.0 {
+            let p = format!("/motions/{i}/horizontal");
+            return Err(ApiError::invalid_field(
+                p.clone(),
+                format!(
+                    "{p}: a PGA search scales the horizontal component, which is missing or zero"
+                ),
+            ));
+        }
+        if records.iter().any(|(n, _)| *n == name) {
+            let p = format!("/motions/{i}/name");
+            return Err(ApiError::invalid_field(
+                p.clone(),
+                format!("{p}: {name:?} names an earlier record too"),
+            ));
+        }
+        parsed_scene.get_or_insert(sc);
+        records.push((name, motion));
+    }
+    let scene =
+        parsed_scene.ok_or_else(|| ApiError::invalid_field("/motions", "/motions: empty"))?;
+    Ok((scene, records))
+}
 
 /// Shape checks the scene and motion readers leave out: a motion component must not mix forms
 /// or carry unknown keys (the reader picks the first form it recognises and would silently
@@ -416,13 +514,46 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
         ));
     }
     let b: PgaBody = typed("", body)?;
-    if b.motion.is_null() {
+    let (scene, motion, records) = match &b.motions {
+        Some(items) => {
+            if !b.motion.is_null() {
+                return Err(ApiError::invalid_field(
+                    "/motions",
+                    "/motions: give either \"motion\" (one record) or \"motions\" (several), not both",
+                ));
+            }
+            let (scene, records) = parse_records(&b.scene, items, limits)?;
+            (scene, records[0].1.clone(), records)
+        }
+        None => {
+            if b.motion.is_null() {
+                return Err(ApiError::invalid_field(
+                    "/motion",
+                    "/motion: a PGA search needs a ground motion to scale (or \"motions\": several records)",
+                ));
+            }
+            let (scene, motion) = scene_and_motion(&b.scene, Some(&b.motion), limits)?;
+            (scene, motion, Vec::new())
+        }
+    };
+    let combine = match &b.combine {
+        None => Combine::All,
+        Some(t) => {
+            Combine::parse(t).map_err(|e| ApiError::invalid_field("/combine", format!("/{e}")))?
+        }
+    };
+    let fit = match &b.fit {
+        None => Method::Interval,
+        Some(t) => {
+            Method::parse(t).map_err(|e| ApiError::invalid_field("/fit", format!("/fit: {e}")))?
+        }
+    };
+    if b.fit.is_some() && records.is_empty() {
         return Err(ApiError::invalid_field(
-            "/motion",
-            "/motion: a PGA search needs a ground motion to scale",
+            "/fit",
+            "/fit: a fragility fit needs several records (\"motions\")",
         ));
     }
-    let (scene, motion) = scene_and_motion(&b.scene, Some(&b.motion), limits)?;
     if motion.horizontal.peak() <= 0.0 {
         return Err(ApiError::invalid_field(
             "/motion/horizontal",
@@ -493,23 +624,40 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
     }
     let request = PgaRequest {
         criteria,
+        combine,
         min: min * k,
         max: max * k,
         tolerance: tolerance * k,
         scan_points,
     };
-    let motion_summary = motion_summary(&motion);
-    let criterion = texts
+    let mut motion_summary = motion_summary(&motion);
+    if let (false, Some(obj)) = (records.is_empty(), motion_summary.as_object_mut()) {
+        // The first record's summary, and every record's name and intensity.
+        let list: Vec<Value> = records
+            .iter()
+            .map(|(name, m)| {
+                serde_json::json!({"name": name, "pga": m.pga(), "duration": m.duration(), "provenance": m.provenance})
+            })
+            .collect();
+        obj.insert("records".into(), Value::Array(list));
+    }
+    let joined = texts
         .iter()
         .map(|(_, t)| t.as_str())
         .collect::<Vec<_>>()
         .join(",");
+    let criterion = match combine {
+        Combine::Any if texts.len() > 1 => format!("any({joined})"),
+        _ => joined,
+    };
     Ok(Parsed {
         input: JobInput::PgaSearch {
             scene,
             motion,
             request,
             criterion,
+            records,
+            fit,
         },
         motion_summary,
     })

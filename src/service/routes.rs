@@ -50,6 +50,11 @@ pub fn route_table() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
         (Method::GET, "/v1/pga-searches/{id}", get(get_pga)),
         (Method::GET, "/v1/pga-searches/{id}/events", get(pga_events)),
         (
+            Method::GET,
+            "/v1/pga-searches/{id}/fragility.svg",
+            get(get_fragility_svg),
+        ),
+        (
             Method::POST,
             "/v1/pga-searches/{id}/cancel",
             post(cancel_pga),
@@ -633,6 +638,33 @@ async fn get_trajectory(
         HeaderValue::from_static("attachment; filename=\"trajectory.mcap\""),
     );
     Ok(resp)
+}
+
+/// The fragility plot of a finished multi-record search.
+async fn get_fragility_svg(
+    State(s): State<AppState>,
+    id: Result<Path<String>, PathRejection>,
+) -> ApiResult {
+    let id = parse_id(id)?;
+    let j = load(&s, id, JobKind::PgaSearch).await?;
+    if j.status != JobStatus::Succeeded {
+        return Err(ApiError::conflict(format!(
+            "the search is {}; its fragility plot is available once it has succeeded",
+            j.status.as_str()
+        )));
+    }
+    let path = s.core.job_dir(id).join("fragility.svg");
+    match tokio::fs::read(&path).await {
+        Ok(bytes) => Ok((
+            [(header::CONTENT_TYPE, "image/svg+xml")],
+            Body::from(bytes),
+        )
+            .into_response()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(ApiError::conflict(
+            "the search has no fragility curve: it ran one record (give \"motions\" for several), or the fit failed (see result.fragility_error)",
+        )),
+        Err(e) => Err(ApiError::internal(format!("{}: {e}", path.display()))),
+    }
 }
 
 async fn healthz(State(s): State<AppState>) -> ApiResult {

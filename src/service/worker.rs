@@ -58,6 +58,31 @@ pub fn analysis_runner() -> JobRunner {
             }
             JobInput::PgaSearch {
                 scene,
+                request,
+                records,
+                fit,
+                ..
+            } if !records.is_empty() => {
+                // Several records: per-record searches and the fragility curve; the plot is
+                // written beside result.json for `GET .../fragility.svg`.
+                let res =
+                    crate::analysis::pga::search_records(scene, records, request, *fit, &opts);
+                if hooks.cancel.load(Ordering::Relaxed) {
+                    return Ok(RunnerOutcome::Cancelled(None));
+                }
+                let res = res.map_err(|e| e.to_string())?;
+                let value = serde_json::to_value(&res).map_err(|e| e.to_string())?;
+                if let Some(svg) = crate::analysis::pga::fragility_svg(&res) {
+                    std::fs::write(hooks.out_dir.join("fragility.svg"), svg)
+                        .map_err(|e| format!("writing fragility.svg: {e}"))?;
+                }
+                let text = serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?;
+                std::fs::write(hooks.out_dir.join("result.json"), text)
+                    .map_err(|e| format!("writing result.json: {e}"))?;
+                Ok(RunnerOutcome::Completed(value))
+            }
+            JobInput::PgaSearch {
+                scene,
                 motion,
                 request,
                 ..

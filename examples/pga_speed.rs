@@ -1,0 +1,110 @@
+//! Speed of the PGA search (issue 6): the rocking column (0.2 × 0.6 m half-sizes, half-sine pulse
+//! of period 1 s, 3 s simulated) searched over 2–10 m/s² to a tolerance of 0.01 m/s² with the
+//! default 8 scan points. Prints, from one run of this program:
+//! - the wall time of one full run (no early stop, at 5.6 m/s², just below the threshold);
+//! - the search's wall time on a 2-thread pool (target < 1 s);
+//! - the search's wall time on a 1-thread pool, i.e. its total work, divided by the full run's
+//!   time: the cost in single-run equivalents (target ≤ 15).
+//!
+//! Each figure is the median of 7 repetitions. Run:
+//! `cargo run --release --example pga_speed`
+use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};
+use ashlar::analysis::run::{run, RunOptions};
+use ashlar::motion::{GroundMotion, Signal};
+use ashlar::scene::parse_scene;
+use std::time::Instant;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    let scene = parse_scene(
+        &serde_json::json!({
+            "format": "ashlar.scene/1",
+            "gravity": 9.81,
+            "materials": { "stone": { "density": 2500.0, "young_modulus": 2.0e10, "poisson_ratio": 0.2 } },
+            "joints": { "j": { "friction_angle": 75.0 } },
+            "blocks": [
+                { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
+                { "id": "column", "material": "stone", "block_model": "rigid", "vertices": [[-0.2, 0.0], [0.2, 0.0], [0.2, 1.2], [-0.2, 1.2]] }
+            ],
+            "control": { "duration": 3.0 }
+        })
+        .to_string(),
+    )
+    .expect("scene");
+    let pulse = GroundMotion::horizontal(Signal::Pulse {
+        amplitude: 1.0,
+        period: 1.0,
+        cycles: 0.5,
+        phase: 0.0,
+    });
+    let req = PgaRequest {
+        criteria: vec![Criterion::parse("toppled:column").expect("criterion")],
+        combine: Combine::All,
+        min: 2.0,
+        max: 10.0,
+        tolerance: 0.01,
+        scan_points: 8,
+    };
+    let reps = 7;
+    let single = median(
+        (0..reps)
+            .map(|_| {
+                let t = Instant::now();
+                let out =
+                    run(&scene, &pulse.scaled_to_pga(5.6), &RunOptions::default()).expect("run");
+                assert!(out.summary.completed);
+                t.elapsed().as_secs_f64()
+            })
+            .collect(),
+    );
+    let timed = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        let mut runs = 0;
+        let mut bracket = (0.0, 0.0);
+        let wall = median(
+            (0..reps)
+                .map(|_| {
+                    let t = Instant::now();
+                    let r = pool
+                        .install(|| search(&scene, &pulse, &req, &RunOptions::default()))
+                        .expect("search");
+                    let dt = t.elapsed().as_secs_f64();
+                    runs = r.runs.len();
+                    bracket = (
+                        r.safe_pga.unwrap_or(f64::NAN),
+                        r.failing_pga.unwrap_or(f64::NAN),
+                    );
+                    dt
+                })
+                .collect(),
+        );
+        (wall, runs, bracket)
+    };
+    let (w2, runs2, b2) = timed(2);
+    let (w1, runs1, _) = timed(1);
+    println!("| figure | measured | target |");
+    println!("|---|---|---|");
+    println!(
+        "| one full run (3 s simulated) | {:.2} ms | |",
+        1e3 * single
+    );
+    println!(
+        "| search, 2 threads: wall time ({runs2} runs, bracket [{:.3}, {:.3}] m/s²) | {:.1} ms | < 1 s |",
+        b2.0,
+        b2.1,
+        1e3 * w2
+    );
+    println!(
+        "| search, 1 thread: total work ({runs1} runs) | {:.1} ms = {:.1} single-run equivalents | ≤ 15 |",
+        1e3 * w1,
+        w1 / single
+    );
+    println!("| speed-up of 2 threads over 1 | {:.2} | |", w1 / w2);
+}

@@ -1,0 +1,238 @@
+//! Overturning amplitude against pulse frequency (issue 6): full one-cycle sine pulses
+//! a(t) = A sin(2πft), 0 ≤ t ≤ 1/f, at f = 0.5, 1, 2 and 4 Hz, for two rigid columns on a fixed
+//! base (half-width × half-height 0.2 × 0.6 m and the more slender 0.1 × 0.8 m).
+//!
+//! Reference: Housner's equation of rocking, θ̈ = −p²[sin(α sgnθ − θ) − (ü_g/g) cos(α sgnθ − θ)]
+//! with p² = 3g/(4R), integrated here by RK4 (Δt = 1e-4 s) with Housner's restitution
+//! r = 1 − 1.5 sin²α applied to the angular velocity at each impact (as in tests/rocking.rs).
+//! The reference threshold is the lowest overturning amplitude found by a fine scan (3000 points
+//! from g tan α to 16 g tan α) and bisection to 1e-4 relative. "Overturned" means what the
+//! engine's `toppled` criterion means: |θ| ≥ 60° at any time, or |θ| > 30° at the end of the
+//! window (pulse + 3 s).
+//!
+//! The sweep crosses the jump where the overturning mode changes: the 0.2 × 0.6 column overturns
+//! after one impact (mode 2) up to 2 Hz, but at 4 Hz only without impact (mode 1) at about
+//! 14 g tan α, so the threshold jumps. The test checks the reference's mode at each case, and
+//! that the engine overturns in the same mode at its failing amplitude.
+//!
+//! Tolerance: the engine's threshold (a PGA search over [0.97, 1.10] × the reference with 24
+//! scan points, to 0.4 %) within 3 % of Housner's (the issue's bound).
+mod common;
+use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};
+use ashlar::analysis::run::RunOptions;
+use ashlar::motion::{GroundMotion, Signal};
+use common::*;
+use rayon::prelude::*;
+use serde_json::json;
+
+/// Seconds simulated after the pulse ends (both reference and engine). 3 s: a slender column
+/// left rocking near its tipping angle can take more than 2 s to fall, and a shorter window
+/// breaks the overturning region into narrow islands (seen with 2 s at 4 Hz).
+const AFTER: f64 = 3.0;
+
+#[derive(Debug, Clone, Copy)]
+struct Column {
+    b: f64,
+    h: f64,
+}
+
+/// Housner with the engine's `toppled` verdict. Returns (overturned, impacts before the verdict).
+fn housner(c: Column, a: f64, f: f64) -> (bool, usize) {
+    let r = c.b.hypot(c.h);
+    let alpha = (c.b / c.h).atan();
+    let p2 = 3.0 * G / (4.0 * r);
+    let e = 1.0 - 1.5 * alpha.sin().powi(2);
+    let t_pulse = 1.0 / f;
+    let ground = |t: f64| {
+        if t <= t_pulse {
+            a * (2.0 * std::f64::consts::PI * f * t).sin()
+        } else {
+            0.0
+        }
+    };
+    let dt = 1e-4;
+    let (mut t, mut th, mut w, mut sgn) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut impacts = 0;
+    let t_end = t_pulse + AFTER;
+    while t < t_end - 1e-12 {
+        if sgn == 0.0 {
+            let ug = ground(t);
+            if ug.abs() > G * alpha.tan() {
+                // Ground to +x tips the column towards −x: counter-clockwise, θ > 0 (as in
+                // tests/rocking.rs); only the magnitude matters here.
+                sgn = ug.signum();
+            } else {
+                t += dt;
+                continue;
+            }
+        }
+        let acc = |t: f64, th: f64| {
+            p2 * (-(alpha * sgn - th).sin() + ground(t) / G * (alpha * sgn - th).cos())
+        };
+        let (k1t, k1w) = (w, acc(t, th));
+        let (k2t, k2w) = (w + 0.5 * dt * k1w, acc(t + 0.5 * dt, th + 0.5 * dt * k1t));
+        let (k3t, k3w) = (w + 0.5 * dt * k2w, acc(t + 0.5 * dt, th + 0.5 * dt * k2t));
+        let (k4t, k4w) = (w + dt * k3w, acc(t + dt, th + dt * k3t));
+        let nth = th + dt / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t);
+        let nw = w + dt / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
+        t += dt;
+        if nth * sgn < 0.0 {
+            impacts += 1;
+            th = 0.0;
+            w = nw * e;
+            sgn = w.signum();
+            if w.abs() < 1e-6 {
+                (sgn, w) = (0.0, 0.0);
+            }
+        } else {
+            (th, w) = (nth, nw);
+        }
+        if th.abs() >= std::f64::consts::FRAC_PI_3 {
+            return (true, impacts);
+        }
+    }
+    (th.abs() > std::f64::consts::FRAC_PI_6, impacts)
+}
+
+/// Lowest overturning amplitude of the reference, and its mode (impacts before overturning).
+/// The scan is fine (steps of 0.005 g tan α) because the overturning set has narrow islands:
+/// the slender column at 0.5 Hz overturns (after 3 impacts) for 1.35–1.365 m/s², then stands
+/// again up to 1.39 m/s²; a coarse scan steps over such an island. Scanned in parallel chunks,
+/// in order, up to the first chunk that overturns.
+fn housner_threshold(c: Column, f: f64) -> (f64, usize) {
+    let gt = G * c.b / c.h;
+    let n = 3000;
+    let grid: Vec<f64> = (0..n)
+        .map(|k| gt * (1.0 + 15.0 * k as f64 / (n - 1) as f64))
+        .collect();
+    let mut k = None;
+    for (ci, chunk) in grid.chunks(128).enumerate() {
+        let fell: Vec<bool> = chunk.par_iter().map(|&a| housner(c, a, f).0).collect();
+        if let Some(j) = fell.iter().position(|&x| x) {
+            k = Some(ci * 128 + j);
+            break;
+        }
+    }
+    let k = k.expect("the reference overturns in the scanned range");
+    assert!(k > 0, "the reference overturns at g tan α already");
+    let (mut s, mut fl) = (grid[k - 1], grid[k]);
+    while fl - s > 1e-4 * fl {
+        let m = 0.5 * (s + fl);
+        if housner(c, m, f).0 {
+            fl = m;
+        } else {
+            s = m;
+        }
+    }
+    (fl, housner(c, fl, f).1)
+}
+
+fn scene(c: Column, f: f64) -> ashlar::scene::Scene {
+    let blocks = json!([
+        { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
+        { "id": "column", "material": "stone", "block_model": "rigid",
+          "vertices": [[-c.b, 0.0], [c.b, 0.0], [c.b, 2.0 * c.h], [-c.b, 2.0 * c.h]] },
+    ]);
+    // Friction angle 85° (μ = 11.4): Housner's model has no sliding, and the stocky column's
+    // 4 Hz threshold (~4.6 g) would make a 75° joint (μ = 3.7) slide.
+    // Δt: 1 ms (the default) up to 1 Hz, 0.1 ms for the short pulses (2 and 4 Hz). Measured
+    // (`cargo run --example pga_probe -- 0.2 0.6 F A...`): at the default 1 ms the 4 Hz pulse of
+    // ~4.6 g puts the stocky column's threshold 2.4 % low, overturning after an impact that
+    // Housner's model (and the engine at Δt ≤ 2e-4 s) does not have; at 2 Hz the outcome just
+    // above the threshold flips between amplitudes 0.1 m/s² apart at Δt = 1e-3 and 5e-4 s (safe
+    // islands from the impact's resolution) and settles at 1e-4 s. A time-discretisation error
+    // of the engine near mode-2 thresholds, not a difference of restitution: the engine's
+    // effective restitution matches Housner's 1 − 1.5 sin²α within 0.5 %
+    // (`cargo run --example rocking_restitution`).
+    let dt = if f >= 2.0 { 1e-4 } else { 1e-3 };
+    parse(&scene_json(
+        blocks,
+        85.0,
+        json!({ "duration": 1.0 / f + AFTER, "time_step": dt }),
+    ))
+}
+
+fn pulse(f: f64) -> GroundMotion {
+    GroundMotion::horizontal(Signal::Pulse {
+        amplitude: 1.0,
+        period: 1.0 / f,
+        cycles: 1.0,
+        phase: 0.0,
+    })
+}
+
+/// Impacts (sign changes of the rotation past 1e-3 rad) before the engine's column passes 60°.
+fn dda_mode(c: Column, f: f64, a: f64) -> usize {
+    let sc = scene(c, f);
+    let gm = pulse(f).scaled_to_pga(a);
+    let mut s = sim(&sc, &gm);
+    let (mut last_sign, mut impacts) = (0.0f64, 0);
+    run_until(&mut s, 1.0 / f + AFTER, |s| {
+        let th = s.geoms[1].rotation;
+        if th.abs() > 1e-3 {
+            if last_sign != 0.0 && th.signum() != last_sign {
+                impacts += 1;
+            }
+            last_sign = th.signum();
+        }
+        th.abs() >= std::f64::consts::FRAC_PI_3
+    });
+    impacts
+}
+
+/// Returns the reference's mode (impacts before overturning).
+fn check(c: Column, f: f64) -> usize {
+    let (ha, h_impacts) = housner_threshold(c, f);
+    let req = PgaRequest {
+        criteria: vec![Criterion::parse("toppled:column").expect("criterion")],
+        combine: Combine::All,
+        // The 3 % band below the reference, and 10 % above, scanned every 0.57 %: the
+        // overturning islands near the thresholds (0.2 × 0.6 at 0.5 Hz: 3.615–3.645 m/s² in the
+        // engine, 3.613–… in Housner) are ~0.8 % wide, and a coarser scan steps over them and
+        // reports the next region up (+2 % there with 6 points over ±20 %).
+        min: 0.97 * ha,
+        max: 1.10 * ha,
+        tolerance: 0.004 * ha,
+        scan_points: 24,
+    };
+    let r = search(&scene(c, f), &pulse(f), &req, &RunOptions::default()).expect("search");
+    let (s, fl) = (
+        r.safe_pga.expect("the engine stands at 0.97 × Housner"),
+        r.failing_pga
+            .expect("the engine overturns below 1.10 × Housner"),
+    );
+    let da = 0.5 * (s + fl);
+    let d_impacts = dda_mode(c, f, fl);
+    let err = da / ha - 1.0;
+    let line = format!(
+        "b×h {}×{} f {f} Hz: Housner {ha:.3} m/s² ({:.2} g tanα, {h_impacts} impacts), DDA [{s:.3}, {fl:.3}] ({d_impacts} impacts), {:+.2} %",
+        c.b,
+        c.h,
+        ha / (G * c.b / c.h),
+        100.0 * err
+    );
+    eprintln!("{line}");
+    assert!(err.abs() < 0.03, "{line}");
+    assert_eq!(
+        h_impacts == 0,
+        d_impacts == 0,
+        "overturning mode differs: {line}"
+    );
+    h_impacts
+}
+
+#[test]
+fn stocky_column_frequency_sweep_with_mode_jump() {
+    let c = Column { b: 0.2, h: 0.6 };
+    let modes: Vec<usize> = [0.5, 1.0, 2.0, 4.0].iter().map(|&f| check(c, f)).collect();
+    // The jump: with an impact up to 2 Hz, without one at 4 Hz.
+    assert!(modes[2] > 0 && modes[3] == 0, "modes {modes:?}");
+}
+
+#[test]
+fn slender_column_frequency_sweep() {
+    let c = Column { b: 0.1, h: 0.8 };
+    for f in [0.5, 1.0, 2.0, 4.0] {
+        check(c, f);
+    }
+}
