@@ -324,10 +324,11 @@ fn arb_json() -> impl Strategy<Value = Value> {
             proptest::collection::vec(inner.clone(), 0..6).prop_map(Value::Array),
             proptest::collection::btree_map(
                 prop_oneof![
-                    Just("horizontal".to_string()), Just("vertical".to_string()), Just("scale".to_string()),
-                    Just("amplitude".to_string()), Just("period".to_string()), Just("frequency".to_string()),
-                    Just("cycles".to_string()), Just("samples".to_string()), Just("dt".to_string()),
-                    Just("units".to_string()), Just("factor".to_string()), Just("target_pga".to_string()),
+                    prop::sample::select(vec![
+                        "horizontal", "vertical", "scale", "amplitude", "period", "frequency",
+                        "cycles", "samples", "dt", "units", "factor", "target_pga", "pulse", "sine",
+                    ])
+                    .prop_map(String::from),
                     "[a-z]{1,6}",
                 ],
                 inner,

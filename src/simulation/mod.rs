@@ -48,6 +48,34 @@ pub enum SimError {
         block_a: String,
         block_b: String,
     },
+    /// A converged step left a vertex deeper inside a block than
+    /// `SimParams::max_penetration_ratio` of the thinner block: the penalty springs are too
+    /// soft for the loads, and carrying on would report a solution of overlapping blocks.
+    #[error("penetration of {depth:.3e} m at t = {time:.6} s between blocks {block_a:?} and {block_b:?} exceeds {ratio:.0}% of the thinner block ({thickness:.3e} m thick): the penalty stiffness {penalty:.3e} N/m is too soft for these loads; raise control.penalty_stiffness to at least {needed:.1e} N/m (or use \"auto\")")]
+    PenaltyTooSoft {
+        time: f64,
+        depth: f64,
+        /// Percent.
+        ratio: f64,
+        thickness: f64,
+        penalty: f64,
+        needed: f64,
+        block_a: String,
+        block_b: String,
+    },
+}
+
+/// 4·area / perimeter of a polygon, m: the side of a square, twice the thickness of a long slab
+/// or needle, whatever its orientation.
+fn thickness(v: &[nalgebra::Vector2<f64>]) -> f64 {
+    let n = v.len();
+    let (mut area2, mut perimeter) = (0.0, 0.0);
+    for k in 0..n {
+        let (a, b) = (v[k], v[(k + 1) % n]);
+        area2 += a.perp(&b);
+        perimeter += (b - a).norm();
+    }
+    2.0 * area2.abs() / perimeter
 }
 
 /// Wall time spent in each stage (accumulated over steps).
@@ -98,6 +126,9 @@ pub struct Simulation {
     pub dt: f64,
     /// Half the diagonal of the whole model's bounding box at the start, m.
     pub model_half_size: f64,
+    /// Per block: 4·area / perimeter at the start (the side of a square, twice the thickness
+    /// of a slab), m; the length penetrations are measured against.
+    pub thickness: Vec<f64>,
     pub stats: Stats,
     pub profile: StepProfile,
 }
@@ -172,6 +203,7 @@ impl Simulation {
             gap_tolerance: params.gap_tolerance_ratio * smallest_free_block,
         };
         let dt = scene.control.time_step;
+        let thickness = geoms.iter().map(|g| thickness(&g.vertices)).collect();
         Self {
             scene: scene.clone(),
             motion: motion.clone(),
@@ -193,6 +225,7 @@ impl Simulation {
             time: 0.0,
             dt,
             model_half_size,
+            thickness,
             stats: Stats {
                 min_dt: f64::INFINITY,
                 ..Default::default()
@@ -236,6 +269,9 @@ impl Simulation {
             }
             dt *= self.params.cut_factor;
             self.states.clone_from(&self.start_states);
+        }
+        if let Some(e) = self.too_soft(dt) {
+            return Err(e);
         }
         let t3 = Instant::now();
         self.integrate(dt);
@@ -448,6 +484,31 @@ impl Simulation {
         let deepened = -c.gap - (-c.g0).max(0.0);
         c.state.is_closed()
             && deepened > self.params.penetration_ratio * self.max_step_displacement()
+    }
+
+    /// A closed contact deeper than `max_penetration_ratio` of the thinner block after a
+    /// converged step (issue 8: a soft penalty used to complete silently with blocks sunk
+    /// into each other, see tests/regression_soft_penalty.rs).
+    fn too_soft(&self, dt: f64) -> Option<SimError> {
+        let ratio = self.params.max_penetration_ratio;
+        let c = self.contacts.contacts.iter().find(|c| {
+            let thin = self.thickness[c.vertex_block].min(self.thickness[c.edge_block]);
+            c.state.is_closed() && -c.gap > ratio * thin
+        })?;
+        let thickness = self.thickness[c.vertex_block].min(self.thickness[c.edge_block]);
+        let depth = -c.gap;
+        let penalty = self.springs.normal;
+        Some(SimError::PenaltyTooSoft {
+            time: self.time + dt,
+            depth,
+            ratio: 100.0 * ratio,
+            thickness,
+            penalty,
+            // Penetration under a given load scales as 1/k.
+            needed: penalty * depth / (ratio * thickness),
+            block_a: self.scene.blocks[c.vertex_block].id.clone(),
+            block_b: self.scene.blocks[c.edge_block].id.clone(),
+        })
     }
 
     fn not_converged(&self, cuts: u32, dt: f64, contact: Option<usize>) -> SimError {
