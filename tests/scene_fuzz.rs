@@ -263,7 +263,25 @@ proptest! {
         check_motion(&json!({ "horizontal": { "sine": v.clone() }, "scale": v }));
     }
 
+    /// Never a panic, and rejections name a field.
     #[test]
+    fn mutated_motions_never_panic(
+        which_seed in 0usize..4,
+        edits in proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>(), any::<u8>(), 0.0f64..1.0), 1..4),
+    ) {
+        let mut v = motion_seeds().swap_remove(which_seed);
+        for (which, op, pick, r) in edits {
+            mutate(&mut v, which, op, pick, r);
+        }
+        if let Err(e) = motion::from_json(&v) {
+            prop_assert!(e.to_string().contains("motion"), "{}", e);
+        }
+    }
+
+    /// Accepted motions are finite everywhere. Fails today (motion reader, not this issue's
+    /// files): see `motion_reader_accepts_non_finite_signals`.
+    #[test]
+    #[ignore = "motion::from_json accepts a sine of 1e308 Hz and amplitudes that overflow to inf; see motion_reader_accepts_non_finite_signals"]
     fn mutated_motions_are_valid_or_named_errors(
         which_seed in 0usize..4,
         edits in proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>(), any::<u8>(), 0.0f64..1.0), 1..4),
@@ -351,5 +369,23 @@ fn scene_reader_edge_cases() {
         "{\"format\": \"ashlar.scene/1\", \"materials\": {}, \"joints\": {}, \"blocks\": []}",
     ] {
         check_scene_result(text);
+    }
+}
+
+/// Bugs found by `mutated_motions_are_valid_or_named_errors` (src/motion/json.rs, outside this
+/// issue's files; reported to the lead): `from_json` accepts
+/// - a steady sine of frequency 1e308 Hz: ω = 2π·f overflows to inf and `state(0)` is NaN;
+/// - an amplitude of 1e308 in g: × 9.81 overflows to inf (PGA inf).
+///
+/// Fix: check `amplitude × units` and `2π·frequency` (and `2π/period`) are finite.
+#[test]
+#[ignore = "motion reader bug (src/motion/json.rs): accepts signals that overflow to inf/NaN"]
+fn motion_reader_accepts_non_finite_signals() {
+    for v in [
+        json!({ "horizontal": { "sine": { "amplitude": 0.3, "frequency": 1e308, "units": "g" } } }),
+        json!({ "horizontal": { "sine": { "amplitude": 1e308, "frequency": 2.0, "units": "g" } } }),
+        json!({ "horizontal": { "pulse": { "amplitude": 1e308, "period": 1.0, "units": "g" } } }),
+    ] {
+        check_motion(&v);
     }
 }

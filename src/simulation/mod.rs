@@ -48,18 +48,19 @@ pub enum SimError {
         block_a: String,
         block_b: String,
     },
-    /// A converged step left a vertex deeper inside a block than
-    /// `SimParams::max_penetration_ratio` of the thinner block: the penalty springs are too
-    /// soft for the loads, and carrying on would report a solution of overlapping blocks.
-    #[error("penetration of {depth:.3e} m at t = {time:.6} s between blocks {block_a:?} and {block_b:?} exceeds {ratio:.0}% of the thinner block ({thickness:.3e} m thick): the penalty stiffness {penalty:.3e} N/m is too soft for these loads; raise control.penalty_stiffness to at least {needed:.1e} N/m (or use \"auto\")")]
+    /// A converged step left a vertex deeper inside a block than the penetration limit: the
+    /// smaller of `SimParams::max_penetration_ratio` × the thinner block and the contact search
+    /// distance (deeper contacts are no longer detected and the blocks would pass through each
+    /// other). `cause` says whether the penetration built up (springs too soft) or appeared
+    /// within the step (a vertex overshooting: step too long), `advice` what to change.
+    #[error("penetration of {depth:.3e} m at t = {time:.6} s between blocks {block_a:?} and {block_b:?} exceeds the limit of {limit:.3e} m ({limit_reason}); {cause}; {advice}")]
     PenaltyTooSoft {
         time: f64,
         depth: f64,
-        /// Percent.
-        ratio: f64,
-        thickness: f64,
-        penalty: f64,
-        needed: f64,
+        limit: f64,
+        limit_reason: String,
+        cause: String,
+        advice: String,
         block_a: String,
         block_b: String,
     },
@@ -491,21 +492,52 @@ impl Simulation {
     /// into each other, see tests/regression_soft_penalty.rs).
     fn too_soft(&self, dt: f64) -> Option<SimError> {
         let ratio = self.params.max_penetration_ratio;
-        let c = self.contacts.contacts.iter().find(|c| {
+        let search = self.params.contact.search_factor * self.max_step_displacement();
+        let limit_of = |c: &Contact| {
             let thin = self.thickness[c.vertex_block].min(self.thickness[c.edge_block]);
-            c.state.is_closed() && -c.gap > ratio * thin
-        })?;
-        let thickness = self.thickness[c.vertex_block].min(self.thickness[c.edge_block]);
+            (ratio * thin).min(search)
+        };
+        let c = self
+            .contacts
+            .contacts
+            .iter()
+            .find(|c| c.state.is_closed() && -c.gap > limit_of(c))?;
+        let thin = self.thickness[c.vertex_block].min(self.thickness[c.edge_block]);
+        let limit = limit_of(c);
+        let limit_reason = if ratio * thin <= search {
+            format!("{:.0}% of the thinner block, {thin:.3e} m thick", 100.0 * ratio)
+        } else {
+            "the contact search distance: deeper vertices are no longer seen as contacts"
+                .to_string()
+        };
         let depth = -c.gap;
         let penalty = self.springs.normal;
+        // Most of the depth gained within this step: a vertex overshot (time-step problem);
+        // otherwise it built up over steps under load (spring compliance).
+        let (cause, advice) = if depth - (-c.g0).max(0.0) > 0.5 * depth {
+            (
+                format!("it appeared within one step of {dt:.3e} s"),
+                "reduce control.time_step or control.max_displacement_ratio".to_string(),
+            )
+        } else {
+            (
+                format!("the penalty stiffness {penalty:.3e} N/m is too soft for these loads"),
+                // Penetration under a given load scales as 1/k.
+                // The depth may still be growing, so this is a lower bound.
+                format!(
+                    "raise control.penalty_stiffness above {:.1e} N/m (\"auto\" gives {:.1e} N/m)",
+                    penalty * depth / limit,
+                    10.0 * self.scene.materials.iter().map(|m| m.young_modulus).fold(0.0, f64::max)
+                ),
+            )
+        };
         Some(SimError::PenaltyTooSoft {
             time: self.time + dt,
             depth,
-            ratio: 100.0 * ratio,
-            thickness,
-            penalty,
-            // Penetration under a given load scales as 1/k.
-            needed: penalty * depth / (ratio * thickness),
+            limit,
+            limit_reason,
+            cause,
+            advice,
             block_a: self.scene.blocks[c.vertex_block].id.clone(),
             block_b: self.scene.blocks[c.edge_block].id.clone(),
         })
