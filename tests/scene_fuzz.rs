@@ -389,3 +389,17 @@ fn motion_reader_accepts_non_finite_signals() {
         check_motion(&v);
     }
 }
+
+/// The unmutated seeds are valid and run: the "valid model" branch of the properties is live.
+#[test]
+fn seeds_are_valid_and_run() {
+    for v in seeds() {
+        let scene = parse_scene(&v.to_string()).unwrap_or_else(|e| panic!("seed invalid: {e}"));
+        run_a_few_steps(&scene);
+    }
+    for v in motion_seeds() {
+        let gm = motion::from_json(&v).unwrap_or_else(|e| panic!("motion seed invalid: {e}"));
+        assert!(gm.pga() > 0.0);
+        check_motion(&v);
+    }
+}
