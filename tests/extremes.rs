@@ -258,7 +258,12 @@ fn drive(name: &str, scene: &Scene, motion: &GroundMotion, check_every: u64) -> 
     let mut diagnostic = None;
     let mut non_finite = false;
     while s.time < duration * (1.0 - 1e-12) && s.stats.steps < budget {
-        let before: Vec<Vector2<f64>> = s.dofs.block_of.iter().map(|&b| s.geoms[b].centroid).collect();
+        let before: Vec<Vector2<f64>> = s
+            .dofs
+            .block_of
+            .iter()
+            .map(|&b| s.geoms[b].centroid)
+            .collect();
         if let Err(e) = s.step(duration - s.time) {
             diagnostic = Some(e.to_string());
             break;
@@ -322,7 +327,11 @@ enum Expect {
 /// The universal checks, then the case's expected outcome.
 fn check(o: &Outcome, expect: Expect) {
     print_row(o);
-    assert!(!o.non_finite, "{}: non-finite state after an accepted step", o.name);
+    assert!(
+        !o.non_finite,
+        "{}: non-finite state after an accepted step",
+        o.name
+    );
     match (&o.diagnostic, expect) {
         (None, Expect::Complete) => {
             assert!(
@@ -358,7 +367,10 @@ fn assert_useful_diagnostic(name: &str, m: &str) {
         "{name}: diagnostic says nothing to change: {m}"
     );
     assert!(!m.contains("NaN") && !m.contains("inf"), "{name}: {m}");
-    assert!(!m.contains("\"?\""), "{name}: diagnostic with an unknown block: {m}");
+    assert!(
+        !m.contains("\"?\""),
+        "{name}: diagnostic with an unknown block: {m}"
+    );
 }
 
 fn case(name: &str, k: &Knobs, expect: Expect) -> Outcome {
@@ -396,12 +408,54 @@ use Expect::{Complete, Diagnostic};
 #[test]
 fn penalty_stiffness_sweep() {
     run_cases(vec![
-        ("penalty 1e4 N/m", Knobs { penalty: Some(1e4), ..k() }, Diagnostic),
-        ("penalty 1e6 N/m", Knobs { penalty: Some(1e6), ..k() }, Diagnostic),
-        ("penalty 1e8 N/m", Knobs { penalty: Some(1e8), ..k() }, Complete),
-        ("penalty 1e10 N/m", Knobs { penalty: Some(1e10), ..k() }, Complete),
-        ("penalty 1e12 N/m", Knobs { penalty: Some(1e12), ..k() }, Complete),
-        ("penalty 1e15 N/m", Knobs { penalty: Some(1e15), ..k() }, Complete),
+        (
+            "penalty 1e4 N/m",
+            Knobs {
+                penalty: Some(1e4),
+                ..k()
+            },
+            Diagnostic,
+        ),
+        (
+            "penalty 1e6 N/m",
+            Knobs {
+                penalty: Some(1e6),
+                ..k()
+            },
+            Diagnostic,
+        ),
+        (
+            "penalty 1e8 N/m",
+            Knobs {
+                penalty: Some(1e8),
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "penalty 1e10 N/m",
+            Knobs {
+                penalty: Some(1e10),
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "penalty 1e12 N/m",
+            Knobs {
+                penalty: Some(1e12),
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "penalty 1e15 N/m",
+            Knobs {
+                penalty: Some(1e15),
+                ..k()
+            },
+            Complete,
+        ),
     ]);
 }
 
@@ -412,67 +466,258 @@ fn time_step_sweep() {
         ("Δt 1e-5 s", Knobs { dt: 1e-5, ..k() }, Complete),
         ("Δt 1e-3 s", Knobs { dt: 1e-3, ..k() }, Complete),
         ("Δt 1e-2 s", Knobs { dt: 1e-2, ..k() }, Complete),
-        ("Δt 0.1 s (adaptive)", Knobs { dt: 0.1, duration: 2.0, ..k() }, Complete),
-        ("Δt 0.1 s (fixed)", Knobs { dt: 0.1, adaptive: false, duration: 2.0, ..k() }, Complete),
+        (
+            "Δt 0.1 s (adaptive)",
+            Knobs {
+                dt: 0.1,
+                duration: 2.0,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "Δt 0.1 s (fixed)",
+            Knobs {
+                dt: 0.1,
+                adaptive: false,
+                duration: 2.0,
+                ..k()
+            },
+            Complete,
+        ),
     ]);
 }
 
 #[test]
 fn friction_sweep() {
     run_cases(vec![
-        ("friction 0°", Knobs { friction_deg: 0.0, ..k() }, Complete),
-        ("friction 10°", Knobs { friction_deg: 10.0, ..k() }, Complete),
-        ("friction 45°", Knobs { friction_deg: 45.0, ..k() }, Complete),
-        ("friction 80°", Knobs { friction_deg: 80.0, ..k() }, Complete),
-        ("friction 89°", Knobs { friction_deg: 89.0, ..k() }, Complete),
+        (
+            "friction 0°",
+            Knobs {
+                friction_deg: 0.0,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "friction 10°",
+            Knobs {
+                friction_deg: 10.0,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "friction 45°",
+            Knobs {
+                friction_deg: 45.0,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "friction 80°",
+            Knobs {
+                friction_deg: 80.0,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "friction 89°",
+            Knobs {
+                friction_deg: 89.0,
+                ..k()
+            },
+            Complete,
+        ),
     ]);
 }
 
 #[test]
 fn cohesion_and_tension_sweep() {
     run_cases(vec![
-        ("cohesion 1e4 Pa", Knobs { cohesion: 1e4, ..k() }, Complete),
-        ("cohesion 1e8 Pa", Knobs { cohesion: 1e8, ..k() }, Complete),
-        ("tensile 1e4 Pa", Knobs { tensile: 1e4, ..k() }, Complete),
-        ("tensile 1e8 Pa", Knobs { tensile: 1e8, ..k() }, Complete),
-        ("cohesion + tensile 1e8 Pa, 5 g", Knobs { cohesion: 1e8, tensile: 1e8, pga_g: 5.0, ..k() }, Complete),
+        (
+            "cohesion 1e4 Pa",
+            Knobs {
+                cohesion: 1e4,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "cohesion 1e8 Pa",
+            Knobs {
+                cohesion: 1e8,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "tensile 1e4 Pa",
+            Knobs {
+                tensile: 1e4,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "tensile 1e8 Pa",
+            Knobs {
+                tensile: 1e8,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "cohesion + tensile 1e8 Pa, 5 g",
+            Knobs {
+                cohesion: 1e8,
+                tensile: 1e8,
+                pga_g: 5.0,
+                ..k()
+            },
+            Complete,
+        ),
     ]);
 }
 
 #[test]
 fn aspect_ratio_sweep() {
     run_cases(vec![
-        ("slab 1:50", Knobs { width: 5.0, height: 0.1, ..k() }, Complete),
-        ("slab 1:500", Knobs { width: 5.0, height: 0.01, ..k() }, Complete),
-        ("needle 1:50", Knobs { width: 0.1, height: 5.0, ..k() }, Complete),
-        ("needle 1:500", Knobs { width: 0.01, height: 5.0, ..k() }, Diagnostic),
+        (
+            "slab 1:50",
+            Knobs {
+                width: 5.0,
+                height: 0.1,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "slab 1:500",
+            Knobs {
+                width: 5.0,
+                height: 0.01,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "needle 1:50",
+            Knobs {
+                width: 0.1,
+                height: 5.0,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "needle 1:500",
+            Knobs {
+                width: 0.01,
+                height: 5.0,
+                ..k()
+            },
+            Diagnostic,
+        ),
     ]);
 }
 
 #[test]
 fn block_size_sweep() {
     run_cases(vec![
-        ("size 1 mm", Knobs { width: 1e-3, height: 1e-3, ..k() }, Complete),
-        ("size 1 cm", Knobs { width: 1e-2, height: 1e-2, ..k() }, Complete),
-        ("size 10 m", Knobs { width: 10.0, height: 10.0, ..k() }, Complete),
-        ("size 100 m", Knobs { width: 100.0, height: 100.0, ..k() }, Complete),
+        (
+            "size 1 mm",
+            Knobs {
+                width: 1e-3,
+                height: 1e-3,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "size 1 cm",
+            Knobs {
+                width: 1e-2,
+                height: 1e-2,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "size 10 m",
+            Knobs {
+                width: 10.0,
+                height: 10.0,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "size 100 m",
+            Knobs {
+                width: 100.0,
+                height: 100.0,
+                ..k()
+            },
+            Complete,
+        ),
     ]);
 }
 
 #[test]
 fn density_sweep() {
     run_cases(vec![
-        ("density 1 kg/m³", Knobs { density: 1.0, ..k() }, Complete),
-        ("density 1e5 kg/m³", Knobs { density: 1e5, ..k() }, Complete),
+        (
+            "density 1 kg/m³",
+            Knobs {
+                density: 1.0,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "density 1e5 kg/m³",
+            Knobs {
+                density: 1e5,
+                ..k()
+            },
+            Complete,
+        ),
     ]);
 }
 
 #[test]
 fn young_modulus_sweep() {
     run_cases(vec![
-        ("E 1e5 Pa (deformable, auto penalty)", Knobs { young: 1e5, model: "deformable", ..k() }, Diagnostic),
-        ("E 1e7 Pa (deformable)", Knobs { young: 1e7, model: "deformable", ..k() }, Complete),
-        ("E 1e13 Pa (deformable)", Knobs { young: 1e13, model: "deformable", ..k() }, Complete),
+        (
+            "E 1e5 Pa (deformable, auto penalty)",
+            Knobs {
+                young: 1e5,
+                model: "deformable",
+                ..k()
+            },
+            Diagnostic,
+        ),
+        (
+            "E 1e7 Pa (deformable)",
+            Knobs {
+                young: 1e7,
+                model: "deformable",
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "E 1e13 Pa (deformable)",
+            Knobs {
+                young: 1e13,
+                model: "deformable",
+                ..k()
+            },
+            Complete,
+        ),
         ("E 1e13 Pa (rigid)", Knobs { young: 1e13, ..k() }, Complete),
     ]);
 }
@@ -492,7 +737,13 @@ fn pga_sweep() {
 fn quiet_scene_for_1e4_s() {
     run_cases(vec![(
         "quiet stack, 1e4 s at Δt ≤ 1 s",
-        Knobs { pga_g: 0.0, dt: 1.0, duration: 1e4, budget: 20_000, ..k() },
+        Knobs {
+            pga_g: 0.0,
+            dt: 1.0,
+            duration: 1e4,
+            budget: 20_000,
+            ..k()
+        },
         Complete,
     )]);
 }
@@ -503,18 +754,134 @@ fn quiet_scene_for_1e4_s() {
 #[test]
 fn hard_combinations() {
     run_cases(vec![
-        ("soft penalty 1e6 + 50 g", Knobs { penalty: Some(1e6), pga_g: 50.0, ..k() }, Diagnostic),
-        ("penalty 1e15 + Δt 1e-7", Knobs { penalty: Some(1e15), dt: 1e-7, ..k() }, Complete),
-        ("penalty 1e15 + Δt 0.1 + 5 g", Knobs { penalty: Some(1e15), dt: 0.1, pga_g: 5.0, duration: 1.0, ..k() }, Complete),
-        ("needle 1:500 + friction 89° + 50 g", Knobs { width: 0.01, height: 5.0, friction_deg: 89.0, pga_g: 50.0, ..k() }, Diagnostic),
-        ("slab 1:500 + friction 0° + 20 g", Knobs { width: 5.0, height: 0.01, friction_deg: 0.0, pga_g: 20.0, ..k() }, Complete),
-        ("1 mm + 1e5 kg/m³ + penalty 1e15", Knobs { width: 1e-3, height: 1e-3, density: 1e5, penalty: Some(1e15), ..k() }, Complete),
-        ("100 m + 1 kg/m³ + penalty 1e4", Knobs { width: 100.0, height: 100.0, density: 1.0, penalty: Some(1e4), ..k() }, Complete),
-        ("100 m + 1e5 kg/m³ + 50 g", Knobs { width: 100.0, height: 100.0, density: 1e5, pga_g: 50.0, ..k() }, Complete),
-        ("cohesion 1e8 + 50 g + Δt 0.1", Knobs { cohesion: 1e8, tensile: 1e8, pga_g: 50.0, dt: 0.1, duration: 1.0, ..k() }, Complete),
-        ("E 1e5 deformable + 20 g", Knobs { young: 1e5, model: "deformable", pga_g: 20.0, ..k() }, Diagnostic),
-        ("E 1e13 deformable + Δt 0.1 fixed", Knobs { young: 1e13, model: "deformable", dt: 0.1, adaptive: false, duration: 1.0, ..k() }, Complete),
-        ("trapezoidal + 50 g + friction 0°", Knobs { integrator: "trapezoidal", pga_g: 50.0, friction_deg: 0.0, ..k() }, Complete),
+        (
+            "soft penalty 1e6 + 50 g",
+            Knobs {
+                penalty: Some(1e6),
+                pga_g: 50.0,
+                ..k()
+            },
+            Diagnostic,
+        ),
+        (
+            "penalty 1e15 + Δt 1e-7",
+            Knobs {
+                penalty: Some(1e15),
+                dt: 1e-7,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "penalty 1e15 + Δt 0.1 + 5 g",
+            Knobs {
+                penalty: Some(1e15),
+                dt: 0.1,
+                pga_g: 5.0,
+                duration: 1.0,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "needle 1:500 + friction 89° + 50 g",
+            Knobs {
+                width: 0.01,
+                height: 5.0,
+                friction_deg: 89.0,
+                pga_g: 50.0,
+                ..k()
+            },
+            Diagnostic,
+        ),
+        (
+            "slab 1:500 + friction 0° + 20 g",
+            Knobs {
+                width: 5.0,
+                height: 0.01,
+                friction_deg: 0.0,
+                pga_g: 20.0,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "1 mm + 1e5 kg/m³ + penalty 1e15",
+            Knobs {
+                width: 1e-3,
+                height: 1e-3,
+                density: 1e5,
+                penalty: Some(1e15),
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "100 m + 1 kg/m³ + penalty 1e4",
+            Knobs {
+                width: 100.0,
+                height: 100.0,
+                density: 1.0,
+                penalty: Some(1e4),
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "100 m + 1e5 kg/m³ + 50 g",
+            Knobs {
+                width: 100.0,
+                height: 100.0,
+                density: 1e5,
+                pga_g: 50.0,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "cohesion 1e8 + 50 g + Δt 0.1",
+            Knobs {
+                cohesion: 1e8,
+                tensile: 1e8,
+                pga_g: 50.0,
+                dt: 0.1,
+                duration: 1.0,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "E 1e5 deformable + 20 g",
+            Knobs {
+                young: 1e5,
+                model: "deformable",
+                pga_g: 20.0,
+                ..k()
+            },
+            Diagnostic,
+        ),
+        (
+            "E 1e13 deformable + Δt 0.1 fixed",
+            Knobs {
+                young: 1e13,
+                model: "deformable",
+                dt: 0.1,
+                adaptive: false,
+                duration: 1.0,
+                ..k()
+            },
+            Complete,
+        ),
+        (
+            "trapezoidal + 50 g + friction 0°",
+            Knobs {
+                integrator: "trapezoidal",
+                pga_g: 50.0,
+                friction_deg: 0.0,
+                ..k()
+            },
+            Complete,
+        ),
     ]);
 }
 
@@ -537,7 +904,11 @@ fn base() -> Value {
 
 #[test]
 fn single_vertex_contacts() {
-    let k = Knobs { duration: 0.3, pga_g: 0.0, ..k() };
+    let k = Knobs {
+        duration: 0.3,
+        pga_g: 0.0,
+        ..k()
+    };
     // A square standing on one corner (a vertex on an edge): it must fall over, not hang.
     let diamond = json!([[0.0, 0.0], [0.35, 0.35], [0.0, 0.7], [-0.35, 0.35]]);
     geometry_case(
@@ -580,7 +951,10 @@ fn single_vertex_contacts() {
 
 #[test]
 fn collinear_edges_and_tiny_overlaps() {
-    let k = Knobs { duration: 0.2, ..k() };
+    let k = Knobs {
+        duration: 0.2,
+        ..k()
+    };
     // A row of three blocks with collinear top and bottom edges, a lintel spanning two joints:
     // the lintel's bottom edge is collinear with the row's top edges, the row's corners lie on
     // the lintel's edge.
@@ -634,7 +1008,10 @@ fn collinear_edges_and_tiny_overlaps() {
     let e = parse_scene(&bad.to_string()).expect_err("1 mm overlap must be rejected");
     let m = e.to_string();
     println!("| initial overlap 1e-3 m | scene error: {m} | – | – | 0 | – | – |");
-    assert!(m.contains("sunk") && m.contains("base") && m.contains("overlap"), "{m}");
+    assert!(
+        m.contains("sunk") && m.contains("base") && m.contains("overlap"),
+        "{m}"
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -657,7 +1034,10 @@ fn thousand_block_wall() {
     v["control"] = json!({ "time_step": 1e-3, "duration": 0.05, "max_steps": 20 });
     let scene = parse(&v);
     assert!(scene.blocks.len() >= 1000, "{} blocks", scene.blocks.len());
-    for (name, pga) in [("1010-block wall at rest", 0.0), ("1010-block wall, 0.5 g", 0.5)] {
+    for (name, pga) in [
+        ("1010-block wall at rest", 0.0),
+        ("1010-block wall, 0.5 g", 0.5),
+    ] {
         let k = Knobs { pga_g: pga, ..k() };
         let o = drive(name, &scene, &motion(&k), 5);
         if explore() {
@@ -672,7 +1052,9 @@ fn thousand_block_wall() {
 /// once: the lowest row lands after ~14 ms, the run stops at 30 ms or 60 steps.
 #[test]
 fn thousand_block_pile() {
-    let mut blocks = vec![json!({ "id": "floor", "material": "m", "fixed": true, "vertices": rect(-1.0, -0.5, 42.0, 0.5) })];
+    let mut blocks = vec![
+        json!({ "id": "floor", "material": "m", "fixed": true, "vertices": rect(-1.0, -0.5, 42.0, 0.5) }),
+    ];
     for r in 0..25 {
         for c in 0..40 {
             let x = c as f64 * 1.0 + if r % 2 == 1 { 0.3 } else { 0.0 };
@@ -680,7 +1062,12 @@ fn thousand_block_pile() {
             blocks.push(json!({ "id": format!("p{r}_{c}"), "material": "m", "block_model": "rigid", "vertices": rect(x, y, 0.8, 0.5) }));
         }
     }
-    let k = Knobs { duration: 0.03, budget: 60, pga_g: 0.0, ..k() };
+    let k = Knobs {
+        duration: 0.03,
+        budget: 60,
+        pga_g: 0.0,
+        ..k()
+    };
     let scene = parse(&scene_with(&k, Value::Array(blocks)));
     let o = drive("1000-block pile dropped", &scene, &motion(&k), 10);
     if explore() {
@@ -698,18 +1085,37 @@ fn thousand_block_pile() {
 #[test]
 fn run_entry_point_budget_summary_and_diagnostic() {
     use ashlar::analysis::run::{run, RunError, RunOptions};
-    let k = Knobs { dt: 1e-5, adaptive: false, duration: 10.0, budget: 300, pga_g: 5.0, ..k() };
+    let k = Knobs {
+        dt: 1e-5,
+        adaptive: false,
+        duration: 10.0,
+        budget: 300,
+        pga_g: 5.0,
+        ..k()
+    };
     let scene = parse(&stack(&k));
     let out = run(&scene, &motion(&k), &RunOptions::default()).expect("budgeted run");
     let s = &out.summary;
-    println!("| run entry point, budget 300 steps | stopped: {:?} | – | – | {} | {:.3e} s | {:.2} s |", s.stopped_reason, s.steps, s.simulated_time, s.wall_time_s);
+    println!(
+        "| run entry point, budget 300 steps | stopped: {:?} | – | – | {} | {:.3e} s | {:.2} s |",
+        s.stopped_reason, s.steps, s.simulated_time, s.wall_time_s
+    );
     assert_eq!(s.steps, 300);
-    assert!(s.stopped_reason.as_deref().is_some_and(|r| r.contains("control.max_steps")), "{:?}", s.stopped_reason);
+    assert!(
+        s.stopped_reason
+            .as_deref()
+            .is_some_and(|r| r.contains("control.max_steps")),
+        "{:?}",
+        s.stopped_reason
+    );
     let text = serde_json::to_string(s).expect("summary serializes");
     let v: Value = serde_json::from_str(&text).expect("summary is JSON");
     assert_all_finite(&v, "summary");
 
-    let soft = Knobs { penalty: Some(1e4), ..Knobs::default() };
+    let soft = Knobs {
+        penalty: Some(1e4),
+        ..Knobs::default()
+    };
     let scene = parse(&stack(&soft));
     match run(&scene, &motion(&soft), &RunOptions::default()) {
         Err(RunError::Simulation(m)) => {
@@ -724,7 +1130,10 @@ fn run_entry_point_budget_summary_and_diagnostic() {
 fn assert_all_finite(v: &Value, path: &str) {
     match v {
         Value::Number(n) => assert!(n.as_f64().is_some_and(f64::is_finite), "{path} = {n}"),
-        Value::Array(a) => a.iter().enumerate().for_each(|(i, x)| assert_all_finite(x, &format!("{path}[{i}]"))),
+        Value::Array(a) => a
+            .iter()
+            .enumerate()
+            .for_each(|(i, x)| assert_all_finite(x, &format!("{path}[{i}]"))),
         Value::Object(m) => m.iter().for_each(|(k, x)| {
             if !(x.is_null() && ["stopped_reason"].contains(&k.as_str())) {
                 assert!(!x.is_null(), "{path}.{k} is null (a non-finite number?)");

@@ -54,7 +54,10 @@ fn soft_penalty_stops_with_advice_that_works() {
         panic!("expected PenaltyTooSoft, got {e:?}");
     };
     // The limit is at most 5 % of the block's side (0.5 m, the thinner of the two).
-    assert!(limit <= 0.05 * 0.5 + 1e-15 && depth > limit, "depth {depth}, limit {limit}");
+    assert!(
+        limit <= 0.05 * 0.5 + 1e-15 && depth > limit,
+        "depth {depth}, limit {limit}"
+    );
     let mut ids = [block_a.as_str(), block_b.as_str()];
     ids.sort_unstable();
     assert_eq!(ids, ["base", "block"]);

@@ -314,10 +314,17 @@ fn motion_seeds() -> Vec<Value> {
 fn check_motion(v: &Value) {
     match motion::from_json(v) {
         Ok(gm) => {
-            assert!(gm.pga().is_finite(), "accepted motion with PGA {}", gm.pga());
+            assert!(
+                gm.pga().is_finite(),
+                "accepted motion with PGA {}",
+                gm.pga()
+            );
             for t in [0.0, 0.013, 0.5, 3.0, 100.0] {
                 for x in gm.state(t).iter().flatten() {
-                    assert!(x.is_finite(), "accepted motion non-finite at t = {t}: {gm:?}");
+                    assert!(
+                        x.is_finite(),
+                        "accepted motion non-finite at t = {t}: {gm:?}"
+                    );
                 }
             }
         }
@@ -332,10 +339,18 @@ fn arb_json() -> impl Strategy<Value = Value> {
     let leaf = prop_oneof![
         Just(Value::Null),
         any::<bool>().prop_map(Value::from),
-        any::<f64>().prop_map(|x| serde_json::Number::from_f64(x).map_or(Value::Null, Value::Number)),
+        any::<f64>()
+            .prop_map(|x| serde_json::Number::from_f64(x).map_or(Value::Null, Value::Number)),
         (-1e3f64..1e3).prop_map(Value::from),
         "[a-z_]{0,8}".prop_map(Value::from),
-        prop_oneof![Just("g"), Just("m/s2"), Just("sine"), Just("csv"), Just("NaN")].prop_map(Value::from),
+        prop_oneof![
+            Just("g"),
+            Just("m/s2"),
+            Just("sine"),
+            Just("csv"),
+            Just("NaN")
+        ]
+        .prop_map(Value::from),
     ];
     leaf.prop_recursive(3, 24, 6, |inner| {
         prop_oneof![
@@ -343,8 +358,20 @@ fn arb_json() -> impl Strategy<Value = Value> {
             proptest::collection::btree_map(
                 prop_oneof![
                     prop::sample::select(vec![
-                        "horizontal", "vertical", "scale", "amplitude", "period", "frequency",
-                        "cycles", "samples", "dt", "units", "factor", "target_pga", "pulse", "sine",
+                        "horizontal",
+                        "vertical",
+                        "scale",
+                        "amplitude",
+                        "period",
+                        "frequency",
+                        "cycles",
+                        "samples",
+                        "dt",
+                        "units",
+                        "factor",
+                        "target_pga",
+                        "pulse",
+                        "sine",
                     ])
                     .prop_map(String::from),
                     "[a-z]{1,6}",

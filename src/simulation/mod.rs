@@ -505,7 +505,10 @@ impl Simulation {
         let thin = self.thickness[c.vertex_block].min(self.thickness[c.edge_block]);
         let limit = limit_of(c);
         let limit_reason = if ratio * thin <= search {
-            format!("{:.0}% of the thinner block, {thin:.3e} m thick", 100.0 * ratio)
+            format!(
+                "{:.0}% of the thinner block, {thin:.3e} m thick",
+                100.0 * ratio
+            )
         } else {
             "the contact search distance: deeper vertices are no longer seen as contacts"
                 .to_string()
@@ -514,23 +517,24 @@ impl Simulation {
         let penalty = self.springs.normal;
         // Most of the depth gained within this step: a vertex overshot (time-step problem);
         // otherwise it built up over steps under load (spring compliance).
-        let (cause, advice) = if depth - (-c.g0).max(0.0) > 0.5 * depth {
-            (
-                format!("it appeared within one step of {dt:.3e} s"),
-                "reduce control.time_step or control.max_displacement_ratio".to_string(),
-            )
-        } else {
-            (
-                format!("the penalty stiffness {penalty:.3e} N/m is too soft for these loads"),
-                // Penetration under a given load scales as 1/k.
-                // The depth may still be growing, so this is a lower bound.
-                format!(
+        let (cause, advice) =
+            if depth - (-c.g0).max(0.0) > 0.5 * depth {
+                (
+                    format!("it appeared within one step of {dt:.3e} s"),
+                    "reduce control.time_step or control.max_displacement_ratio".to_string(),
+                )
+            } else {
+                (
+                    format!("the penalty stiffness {penalty:.3e} N/m is too soft for these loads"),
+                    // Penetration under a given load scales as 1/k.
+                    // The depth may still be growing, so this is a lower bound.
+                    format!(
                     "raise control.penalty_stiffness above {:.1e} N/m (\"auto\" gives {:.1e} N/m)",
                     penalty * depth / limit,
                     10.0 * self.scene.materials.iter().map(|m| m.young_modulus).fold(0.0, f64::max)
                 ),
-            )
-        };
+                )
+            };
         Some(SimError::PenaltyTooSoft {
             time: self.time + dt,
             depth,
