@@ -515,26 +515,37 @@ impl Simulation {
         };
         let depth = -c.gap;
         let penalty = self.springs.normal;
-        // Most of the depth gained within this step: a vertex overshot (time-step problem);
-        // otherwise it built up over steps under load (spring compliance).
-        let (cause, advice) =
-            if depth - (-c.g0).max(0.0) > 0.5 * depth {
-                (
-                    format!("it appeared within one step of {dt:.3e} s"),
-                    "reduce control.time_step or control.max_displacement_ratio".to_string(),
-                )
-            } else {
-                (
-                    format!("the penalty stiffness {penalty:.3e} N/m is too soft for these loads"),
-                    // Penetration under a given load scales as 1/k.
-                    // The depth may still be growing, so this is a lower bound.
-                    format!(
-                    "raise control.penalty_stiffness above {:.1e} N/m (\"auto\" gives {:.1e} N/m)",
-                    penalty * depth / limit,
-                    10.0 * self.scene.materials.iter().map(|m| m.young_modulus).fold(0.0, f64::max)
+        // Every accepted step leaves closed contacts within the limit, so a contact already
+        // beyond it at the step start was open or unseen: the vertex entered between contact
+        // detections (e.g. through a very thin block). Otherwise: most of the depth gained
+        // within this step is an overshoot (time-step problem), else it built up under load
+        // over steps (spring compliance).
+        let entered_unseen = -c.g0 > limit;
+        let overshoot = depth - (-c.g0).max(0.0) > 0.5 * depth;
+        let (cause, advice) = if entered_unseen || overshoot {
+            (
+                if entered_unseen {
+                    "the vertex was already this deep when its contact was found (it entered between contact detections)".to_string()
+                } else {
+                    format!("it appeared within one step of {dt:.3e} s")
+                },
+                "reduce control.max_displacement_ratio or control.time_step".to_string(),
+            )
+        } else {
+            let auto = 10.0
+                * (self.scene.materials.iter())
+                    .map(|m| m.young_modulus)
+                    .fold(0.0, f64::max);
+            (
+                format!("the penalty stiffness {penalty:.3e} N/m is too soft for these loads"),
+                // Penetration under a given load scales as 1/k; the depth may still be
+                // growing, so this is a lower bound.
+                format!(
+                    "raise control.penalty_stiffness above {:.1e} N/m (\"auto\" gives {auto:.1e} N/m)",
+                    penalty * depth / limit
                 ),
-                )
-            };
+            )
+        };
         Some(SimError::PenaltyTooSoft {
             time: self.time + dt,
             depth,
