@@ -532,10 +532,8 @@ impl Simulation {
                 "reduce control.max_displacement_ratio or control.time_step".to_string(),
             )
         } else {
-            let auto = 10.0
-                * (self.scene.materials.iter())
-                    .map(|m| m.young_modulus)
-                    .fold(0.0, f64::max);
+            let stiffest = self.scene.materials.iter().map(|m| m.young_modulus);
+            let auto = 10.0 * stiffest.fold(0.0, f64::max);
             (
                 format!("the penalty stiffness {penalty:.3e} N/m is too soft for these loads"),
                 // Penetration under a given load scales as 1/k; the depth may still be
