@@ -12,7 +12,7 @@
 //!   where (names a block) and what to change (a remedy verb).
 //!
 //! Never a NaN, never a panic, never a hang: every run has a step budget. The table in
-//! docs/stability.md is printed by `cargo test --release --test extremes -- --nocapture
+//! docs/stability.md is printed by `cargo test --test extremes -- --nocapture
 //! --test-threads 1` (rows start with `|`).
 use ashlar::motion::{GroundMotion, Signal};
 use ashlar::scene::{parse_scene, Scene};
