@@ -45,7 +45,7 @@ fn soft_penalty_stops_with_advice_that_works() {
     let SimError::PenaltyTooSoft {
         depth,
         limit,
-        advice,
+        explanation,
         block_a,
         block_b,
         ..
@@ -61,7 +61,7 @@ fn soft_penalty_stops_with_advice_that_works() {
     let mut ids = [block_a.as_str(), block_b.as_str()];
     ids.sort_unstable();
     assert_eq!(ids, ["base", "block"]);
-    assert!(advice.contains("control.penalty_stiffness"), "{msg}");
+    assert!(explanation.contains("control.penalty_stiffness"), "{msg}");
     // Following the advice ("auto": 10·E = 2e11 N/m): completes, penetration within the limit.
     let (r, pen) = run_to_end(json!("auto"));
     assert!(r.is_ok(), "auto penalty fails: {r:?}");

@@ -51,16 +51,15 @@ pub enum SimError {
     /// A converged step left a vertex deeper inside a block than the penetration limit: the
     /// smaller of `SimParams::max_penetration_ratio` × the thinner block and the contact search
     /// distance (deeper contacts are no longer detected and the blocks would pass through each
-    /// other). `cause` says whether the penetration built up (springs too soft) or appeared
-    /// within the step (a vertex overshooting: step too long), `advice` what to change.
-    #[error("penetration of {depth:.3e} m at t = {time:.6} s between blocks {block_a:?} and {block_b:?} exceeds the limit of {limit:.3e} m ({limit_reason}); {cause}; {advice}")]
+    /// other). `explanation` says why this limit, whether the penetration built up (springs too
+    /// soft) or appeared within a step (step too long), and what to change.
+    #[error("penetration of {depth:.3e} m at t = {time:.6} s between blocks {block_a:?} and {block_b:?} exceeds the limit of {limit:.3e} m ({explanation}")]
     PenaltyTooSoft {
         time: f64,
         depth: f64,
         limit: f64,
-        limit_reason: String,
-        cause: String,
-        advice: String,
+        /// "<why this limit>); <cause>; <what to change>" (one string keeps the error small).
+        explanation: String,
         block_a: String,
         block_b: String,
     },
@@ -548,9 +547,7 @@ impl Simulation {
             time: self.time + dt,
             depth,
             limit,
-            limit_reason,
-            cause,
-            advice,
+            explanation: format!("{limit_reason}); {cause}; {advice}"),
             block_a: self.scene.blocks[c.vertex_block].id.clone(),
             block_b: self.scene.blocks[c.edge_block].id.clone(),
         })
