@@ -48,6 +48,34 @@ pub enum SimError {
         block_a: String,
         block_b: String,
     },
+    /// A converged step left a vertex deeper inside a block than the penetration limit: the
+    /// smaller of `SimParams::max_penetration_ratio` × the thinner block and the contact search
+    /// distance (deeper contacts are no longer detected and the blocks would pass through each
+    /// other). `explanation` says why this limit, whether the penetration built up (springs too
+    /// soft) or appeared within a step (step too long), and what to change.
+    #[error("penetration of {depth:.3e} m at t = {time:.6} s between blocks {block_a:?} and {block_b:?} exceeds the limit of {limit:.3e} m ({explanation}")]
+    PenaltyTooSoft {
+        time: f64,
+        depth: f64,
+        limit: f64,
+        /// "<why this limit>); <cause>; <what to change>" (one string keeps the error small).
+        explanation: String,
+        block_a: String,
+        block_b: String,
+    },
+}
+
+/// 4·area / perimeter of a polygon, m: the side of a square, twice the thickness of a long slab
+/// or needle, whatever its orientation.
+fn thickness(v: &[nalgebra::Vector2<f64>]) -> f64 {
+    let n = v.len();
+    let (mut area2, mut perimeter) = (0.0, 0.0);
+    for k in 0..n {
+        let (a, b) = (v[k], v[(k + 1) % n]);
+        area2 += a.perp(&b);
+        perimeter += (b - a).norm();
+    }
+    2.0 * area2.abs() / perimeter
 }
 
 /// Wall time spent in each stage (accumulated over steps).
@@ -98,6 +126,9 @@ pub struct Simulation {
     pub dt: f64,
     /// Half the diagonal of the whole model's bounding box at the start, m.
     pub model_half_size: f64,
+    /// Per block: 4·area / perimeter at the start (the side of a square, twice the thickness
+    /// of a slab), m; the length penetrations are measured against.
+    pub thickness: Vec<f64>,
     pub stats: Stats,
     pub profile: StepProfile,
 }
@@ -172,6 +203,7 @@ impl Simulation {
             gap_tolerance: params.gap_tolerance_ratio * smallest_free_block,
         };
         let dt = scene.control.time_step;
+        let thickness = geoms.iter().map(|g| thickness(&g.vertices)).collect();
         Self {
             scene: scene.clone(),
             motion: motion.clone(),
@@ -193,6 +225,7 @@ impl Simulation {
             time: 0.0,
             dt,
             model_half_size,
+            thickness,
             stats: Stats {
                 min_dt: f64::INFINITY,
                 ..Default::default()
@@ -241,6 +274,9 @@ impl Simulation {
             }
             dt *= self.params.cut_factor;
             self.states.clone_from(&self.start_states);
+        }
+        if let Some(e) = self.too_soft(dt) {
+            return Err(e);
         }
         let t3 = Instant::now();
         self.integrate(dt);
@@ -459,6 +495,73 @@ impl Simulation {
         let deepened = -c.gap - (-c.g0).max(0.0);
         c.state.is_closed()
             && deepened > self.params.penetration_ratio * self.max_step_displacement()
+    }
+
+    /// A closed contact deeper than `max_penetration_ratio` of the thinner block after a
+    /// converged step (issue 8: a soft penalty used to complete silently with blocks sunk
+    /// into each other, see tests/regression_soft_penalty.rs).
+    fn too_soft(&self, dt: f64) -> Option<SimError> {
+        let ratio = self.params.max_penetration_ratio;
+        let search = self.params.contact.search_factor * self.max_step_displacement();
+        let limit_of = |c: &Contact| {
+            let thin = self.thickness[c.vertex_block].min(self.thickness[c.edge_block]);
+            (ratio * thin).min(search)
+        };
+        let c = self
+            .contacts
+            .contacts
+            .iter()
+            .find(|c| c.state.is_closed() && -c.gap > limit_of(c))?;
+        let thin = self.thickness[c.vertex_block].min(self.thickness[c.edge_block]);
+        let limit = limit_of(c);
+        let limit_reason = if ratio * thin <= search {
+            format!(
+                "{:.0}% of the thinner block, {thin:.3e} m thick",
+                100.0 * ratio
+            )
+        } else {
+            "the contact search distance: deeper vertices are no longer seen as contacts"
+                .to_string()
+        };
+        let depth = -c.gap;
+        let penalty = self.springs.normal;
+        // Every accepted step leaves closed contacts within the limit, so a contact already
+        // beyond it at the step start was open or unseen: the vertex entered between contact
+        // detections (e.g. through a very thin block). Otherwise: most of the depth gained
+        // within this step is an overshoot (time-step problem), else it built up under load
+        // over steps (spring compliance).
+        let entered_unseen = -c.g0 > limit;
+        let overshoot = depth - (-c.g0).max(0.0) > 0.5 * depth;
+        let (cause, advice) = if entered_unseen || overshoot {
+            (
+                if entered_unseen {
+                    "the vertex was already this deep when its contact was found (it entered between contact detections)".to_string()
+                } else {
+                    format!("it appeared within one step of {dt:.3e} s")
+                },
+                "reduce control.max_displacement_ratio or control.time_step".to_string(),
+            )
+        } else {
+            let stiffest = self.scene.materials.iter().map(|m| m.young_modulus);
+            let auto = 10.0 * stiffest.fold(0.0, f64::max);
+            (
+                format!("the penalty stiffness {penalty:.3e} N/m is too soft for these loads"),
+                // Penetration under a given load scales as 1/k; the depth may still be
+                // growing, so this is a lower bound.
+                format!(
+                    "raise control.penalty_stiffness above {:.1e} N/m (\"auto\" gives {auto:.1e} N/m)",
+                    penalty * depth / limit
+                ),
+            )
+        };
+        Some(SimError::PenaltyTooSoft {
+            time: self.time + dt,
+            depth,
+            limit,
+            explanation: format!("{limit_reason}); {cause}; {advice}"),
+            block_a: self.scene.blocks[c.vertex_block].id.clone(),
+            block_b: self.scene.blocks[c.edge_block].id.clone(),
+        })
     }
 
     fn not_converged(&self, cuts: u32, dt: f64, contact: Option<usize>) -> SimError {
