@@ -63,8 +63,28 @@ pub fn from_json_with(
             }
         }
     }
+    let pga = gm.pga();
+    if !(pga.is_finite() && pga <= MAX_PGA) {
+        let field = if obj.get("scale").is_some_and(|s| !s.is_null()) {
+            "motion.scale"
+        } else {
+            "motion.horizontal"
+        };
+        return Err(MotionError::new(
+            field,
+            None,
+            format!(
+                "peak acceleration {pga:e} m/s² is beyond the largest accepted, {MAX_PGA:e} m/s²"
+            ),
+        ));
+    }
     Ok(gm)
 }
+
+/// Largest peak ground acceleration accepted, m/s² (≈ 10⁵ g): far above any recorded motion
+/// (a few g) and the 50 g the engine is tested at, and low enough that the velocities and
+/// displacements of long records stay finite.
+pub const MAX_PGA: f64 = 1e6;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -124,6 +144,29 @@ fn one() -> f64 {
     1.0
 }
 
+/// An analytic signal of amplitude `a` (m/s²) and circular frequency `w` (rad/s) has velocity
+/// and displacement amplitudes a/w and a/w²: all must be finite numbers, or the engine would
+/// meet inf or NaN ground states (1e308 g, 1e308 Hz, a period of 1e-300 s).
+fn representable(path: &str, a: f64, w: f64) -> Result<(), MotionError> {
+    let ok = a.is_finite()
+        && w.is_finite()
+        && w > 0.0
+        && (a / w).is_finite()
+        && (a / (w * w)).is_finite();
+    if ok {
+        Ok(())
+    } else {
+        Err(MotionError::new(
+            path,
+            None,
+            format!(
+                "amplitude {a:e} m/s² at {w:e} rad/s is not representable: the acceleration, \
+                 velocity (a/ω) and displacement (a/ω²) amplitudes must be finite"
+            ),
+        ))
+    }
+}
+
 fn component(
     path: &str,
     v: &serde_json::Value,
@@ -162,6 +205,18 @@ fn component(
                 ))
             }
         };
+        representable(
+            &format!("{path}.pulse"),
+            p.amplitude * p.units.to_si(),
+            std::f64::consts::TAU / p.period,
+        )?;
+        if !(p.period * p.cycles).is_finite() {
+            return Err(MotionError::new(
+                format!("{path}.pulse"),
+                None,
+                "period × cycles overflows",
+            ));
+        }
         let sig = Signal::Pulse {
             amplitude: p.amplitude * p.units.to_si(),
             period: p.period,
@@ -187,6 +242,11 @@ fn component(
                 "amplitude must be finite and frequency > 0",
             ));
         }
+        representable(
+            &format!("{path}.sine"),
+            s.amplitude * s.units.to_si(),
+            std::f64::consts::TAU * s.frequency,
+        )?;
         let prov = format!(
             "steady sine, {} {} at {} Hz",
             s.amplitude,
