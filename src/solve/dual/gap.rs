@@ -66,17 +66,27 @@ impl GapFunction {
         dofs: &Dofs,
         flex: &[BlockFlex],
         prescribed: &[Prescribed],
+        inert: &[bool],
     ) {
-        let make = |(c, law): (&Contact, &JointLaw)| terms_of(c, law, geoms, dofs, flex, prescribed);
+        let make = |((c, law), &off): ((&Contact, &JointLaw), &bool)| {
+            let mut t = terms_of(c, law, geoms, dofs, flex, prescribed);
+            if off {
+                // No force and no incidence: the solver leaves it at zero.
+                (t.fi, t.fj, t.diag) = (None, None, [0.0; 2]);
+            }
+            t
+        };
         self.terms.clear();
         if contacts.len() >= self.parallel_from {
             contacts
                 .par_iter()
                 .zip(laws)
+                .zip(inert)
                 .map(make)
                 .collect_into_vec(&mut self.terms);
         } else {
-            self.terms.extend(contacts.iter().zip(laws).map(make));
+            self.terms
+                .extend(contacts.iter().zip(laws).zip(inert).map(make));
         }
         let nf = dofs.block_of.len();
         self.start.clear();

@@ -61,10 +61,6 @@ pub struct DualParams {
     /// Rounds of vertex–vertex switching per step (each re-solves warm-started): 4 allows a
     /// vertex to settle at a corner without letting it flip back and forth.
     pub max_switch_rounds: usize,
-    /// A vertex within this fraction of its edge's length from the edge's end is at the corner
-    /// (a vertex–vertex contact whose pair may switch): 1e-3 catches coincident corners of
-    /// stacked blocks after small relative motion, and no genuine edge contact.
-    pub switch_margin: f64,
     /// Items (blocks, contacts) from which per-block and per-contact loops run on rayon: below
     /// ~2000 the thread hand-off costs more than the work.
     pub parallel_from: usize,
@@ -82,7 +78,6 @@ impl Default for DualParams {
             beta_grow_below: 0.4,
             gamma: 1.8,
             max_switch_rounds: 4,
-            switch_margin: 1e-3,
             parallel_from: 2000,
         }
     }
@@ -135,6 +130,8 @@ pub struct DualSolver {
     gap: GapFunction,
     p: Vec<Pair>,
     scratch: iterate::Scratch,
+    /// Per contact: made inert by vertex–vertex switching for this step.
+    inert: Vec<bool>,
     warm: HashMap<Key, Pair>,
 }
 
@@ -167,6 +164,8 @@ impl DualSolver {
             switches: 0,
         };
         let mut switched_this_step = Vec::new();
+        self.inert.clear();
+        self.inert.resize(contacts.len(), false);
         for round in 0..=prm.max_switch_rounds {
             self.gap.build(
                 contacts,
@@ -175,6 +174,7 @@ impl DualSolver {
                 input.dofs,
                 &self.flex,
                 input.prescribed,
+                &self.inert,
             );
             self.p.clear();
             self.p.extend(
@@ -205,11 +205,11 @@ impl DualSolver {
             }
             let n = switch::vertex_vertex(
                 contacts,
+                &mut self.inert,
                 &self.gap,
                 &self.p,
                 &self.scratch.d,
                 input,
-                prm.switch_margin,
                 &mut switched_this_step,
             );
             if n == 0 {
@@ -242,7 +242,7 @@ impl DualSolver {
             c.gap = g;
             c.slip = s;
             let strength = projection::shear_strength(t, pn);
-            c.state = if g > tol && pn <= 0.0 {
+            c.state = if self.inert[k] || (g > tol && pn <= 0.0) {
                 ContactState::Open
             } else if s.abs() > tol && pt.abs() >= strength * (1.0 - 1e-9) {
                 ContactState::Sliding { dir: s.signum() }

@@ -3,9 +3,9 @@
 //! j that ends at E, or E against either edge of i that ends at V. Each is one separating line;
 //! the true condition is that *some* line separates the corners. Detection picks one pair from
 //! the step-start geometry; after a solve, the pair is re-chosen as the admissible line that
-//! the corners' relative motion (without this contact's own force) crosses least — the line
-//! needing the smallest correction, which is Bao and Zhao's argument for their four-block
-//! example — and the step is re-solved.
+//! the corners' relative motion (without this contact's own force) leaves the largest gap —
+//! the line needing the smallest correction, which is Bao and Zhao's argument for their
+//! four-block example — and the step is re-solved.
 use super::gap::{GapFunction, Pair};
 use super::DualInput;
 use crate::contact::{edge_points, Contact, ContactState};
@@ -15,36 +15,37 @@ use nalgebra::Vector2;
 /// A possible pair: vertex (block, index) against edge (block, index).
 type PairKey = (usize, usize, usize, usize);
 
-/// Re-choose the pair of every closed vertex–vertex contact; returns how many changed.
-/// `p`, `g`, `d`: the solved forces, gaps and block increments. Each corner switches at most
-/// once per step (`switched` remembers them), so a step cannot cycle.
+/// Re-choose the pair of every compressed vertex–vertex contact: the admissible line with the
+/// largest step-end gap (step-start distance plus the corners' relative motion). If that line
+/// is already another contact, this one is made inert for the step. Returns how many changed.
+/// `p`, `d`: the solved forces and block increments. Each corner switches at most once per
+/// step (`switched` remembers them), so a step cannot cycle.
 pub fn vertex_vertex(
     contacts: &mut [Contact],
+    inert: &mut [bool],
     gf: &GapFunction,
     p: &[Pair],
     d: &[Vec6],
     input: &DualInput,
-    margin: f64,
     switched: &mut Vec<(usize, usize)>,
 ) -> usize {
     let geoms = input.geoms;
     let sin_tol = input.contact.angle_tolerance.sin();
     let mut count = 0;
     for k in 0..contacts.len() {
-        let c = &contacts[k];
-        if p[k][0] <= 0.0 {
+        if inert[k] || p[k][0] <= 0.0 {
             continue;
         }
+        let c = &contacts[k];
         let gj = &geoms[c.edge_block];
         let nj = gj.vertices.len();
-        // Singular: the vertex sits at an end of its edge (within `margin` of its length).
-        let corner = if c.xi.abs() <= margin {
-            c.edge
-        } else if (1.0 - c.xi).abs() <= margin {
-            (c.edge + 1) % nj
-        } else {
+        let vi = geoms[c.vertex_block].vertices[c.vertex];
+        // Singular: the vertex is within the search distance of the nearer end E of its edge.
+        let corner = if c.xi < 0.5 { c.edge } else { (c.edge + 1) % nj };
+        let ej = gj.vertices[corner];
+        if (vi - ej).norm() > input.search {
             continue;
-        };
+        }
         if switched.contains(&(c.vertex_block, c.vertex)) || switched.contains(&(c.edge_block, corner))
         {
             continue;
@@ -52,61 +53,62 @@ pub fn vertex_vertex(
         // Relative motion of V with respect to E over the step, without this contact's force.
         let t = &gf.terms[k];
         let [pn, pt] = p[k];
-        let vi = &geoms[c.vertex_block].vertices[c.vertex];
-        let ej = &gj.vertices[corner];
         let mut delta = Vector2::zeros();
         if let Some(f) = t.fi {
             let di = d[f] - (t.kn_i * pn + t.kt_i * pt);
-            delta += displacement_matrix(*vi, geoms[c.vertex_block].centroid) * di;
+            delta += displacement_matrix(vi, geoms[c.vertex_block].centroid) * di;
         }
         if let Some(f) = t.fj {
             let dj = d[f] + (t.kn_j * pn + t.kt_j * pt);
-            delta -= displacement_matrix(*ej, gj.centroid) * dj;
+            delta -= displacement_matrix(ej, gj.centroid) * dj;
         }
-        let ni = geoms[c.vertex_block].vertices.len();
+        let gi = &geoms[c.vertex_block];
+        let ni = gi.vertices.len();
+        // Step-end gap of each admissible separating line through the two corners.
         let mut options: Vec<(PairKey, f64)> = Vec::with_capacity(4);
-        // V against the edges of j at E (violation −n·δ), E against the edges of i at V (n·δ).
         for e in [corner, (corner + nj - 1) % nj] {
             let n = outward_normal(gj, e);
-            if admissible(&geoms[c.vertex_block], c.vertex, &n, sin_tol) {
-                options.push(((c.vertex_block, c.vertex, c.edge_block, e), -n.dot(&delta)));
+            if admissible(gi, c.vertex, &n, sin_tol) {
+                let g0 = n.dot(&(vi - gj.vertices[e]));
+                options.push(((c.vertex_block, c.vertex, c.edge_block, e), g0 + n.dot(&delta)));
             }
         }
         for e in [c.vertex, (c.vertex + ni - 1) % ni] {
-            let n = outward_normal(&geoms[c.vertex_block], e);
+            let n = outward_normal(gi, e);
             if admissible(gj, corner, &n, sin_tol) {
-                options.push(((c.edge_block, corner, c.vertex_block, e), n.dot(&delta)));
+                let g0 = n.dot(&(ej - gi.vertices[e]));
+                options.push(((c.edge_block, corner, c.vertex_block, e), g0 - n.dot(&delta)));
             }
         }
         let current = (c.vertex_block, c.vertex, c.edge_block, c.edge);
-        let Some(&(best, best_violation)) = options
-            .iter()
-            .min_by(|x, y| x.1.total_cmp(&y.1))
-        else {
+        let Some(&(best, best_gap)) = options.iter().max_by(|x, y| x.1.total_cmp(&y.1)) else {
             continue;
         };
-        let current_violation = options
+        let current_gap = options
             .iter()
             .find(|o| o.0 == current)
-            .map_or(f64::INFINITY, |o| o.1);
+            .map_or(f64::NEG_INFINITY, |o| o.1);
         // Switch only for a clear gain (a tie keeps the detected pair).
-        if best == current || best_violation >= current_violation - 1e-12 * delta.norm() {
+        if best == current || best_gap <= current_gap + 1e-12 * (1.0 + delta.norm()) {
             continue;
         }
+        switched.push((c.vertex_block, c.vertex));
+        switched.push((c.edge_block, corner));
+        count += 1;
         let exists = contacts
             .iter()
             .any(|o| (o.vertex_block, o.vertex, o.edge_block, o.edge) == best);
         if exists {
+            // The better line is already a contact: this one is the wrong line of the same
+            // corner pair and carries no force this step.
+            inert[k] = true;
             continue;
         }
         let mut new = contacts[k].clone();
         (new.vertex_block, new.vertex, new.edge_block, new.edge) = best;
         new.state = ContactState::Locked;
         linearize(&mut new, geoms);
-        switched.push((c.vertex_block, c.vertex));
-        switched.push((c.edge_block, corner));
         contacts[k] = new;
-        count += 1;
     }
     count
 }
