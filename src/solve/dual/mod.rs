@@ -210,6 +210,7 @@ impl DualSolver {
                 &self.p,
                 &self.scratch.d,
                 input,
+                tol,
                 &mut switched_this_step,
             );
             if n == 0 {

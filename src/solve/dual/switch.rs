@@ -19,7 +19,8 @@ type PairKey = (usize, usize, usize, usize);
 /// largest step-end gap (step-start distance plus the corners' relative motion). If that line
 /// is already another contact, this one is made inert for the step. Returns how many changed.
 /// `p`, `d`: the solved forces and block increments. Each corner switches at most once per
-/// step (`switched` remembers them), so a step cannot cycle.
+/// step (`switched` remembers them), so a step cannot cycle; a switch needs a gap gain above
+/// `gain` (m), so round-off ties in aligned stacks keep the detected pair.
 pub fn vertex_vertex(
     contacts: &mut [Contact],
     inert: &mut [bool],
@@ -27,6 +28,7 @@ pub fn vertex_vertex(
     p: &[Pair],
     d: &[Vec6],
     input: &DualInput,
+    gain: f64,
     switched: &mut Vec<(usize, usize)>,
 ) -> usize {
     let geoms = input.geoms;
@@ -89,7 +91,7 @@ pub fn vertex_vertex(
             .find(|o| o.0 == current)
             .map_or(f64::NEG_INFINITY, |o| o.1);
         // Switch only for a clear gain (a tie keeps the detected pair).
-        if best == current || best_gap <= current_gap + 1e-12 * (1.0 + delta.norm()) {
+        if best == current || best_gap <= current_gap + gain {
             continue;
         }
         switched.push((c.vertex_block, c.vertex));
