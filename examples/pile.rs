@@ -51,9 +51,11 @@ pub fn pile_scene(solver: &str) -> Value {
     // Pointed projectile above the middle column, its tip 5 cm above the pile.
     let xm = (COLUMNS / 2) as f64 * W + 0.5 * W;
     let tip = height + 0.05;
-    blocks.push(json!({ "id": "projectile", "material": "heavy", "vertices": [
+    blocks.push(
+        json!({ "id": "projectile", "material": "heavy", "vertices": [
         [xm, tip], [xm + 0.5 * W, tip + 0.3], [xm + 0.5 * W, tip + 1.0],
-        [xm - 0.5 * W, tip + 1.0], [xm - 0.5 * W, tip + 0.3]] }));
+        [xm - 0.5 * W, tip + 1.0], [xm - 0.5 * W, tip + 0.3]] }),
+    );
     json!({
         "format": "ashlar.scene/1",
         "name": "pile",
@@ -106,7 +108,10 @@ fn main() {
     let steps: usize = arg("--steps").and_then(|s| s.parse().ok()).unwrap_or(280);
     let only = arg("--only");
     let blocks = scene("dual").blocks.len();
-    println!("pile: {blocks} blocks, {steps} steps, {} rayon threads", rayon::current_num_threads());
+    println!(
+        "pile: {blocks} blocks, {steps} steps, {} rayon threads",
+        rayon::current_num_threads()
+    );
     for solver in ["penalty", "dual"] {
         if only.as_deref().is_some_and(|o| o != solver) {
             continue;

@@ -47,7 +47,11 @@ fn two_equal_blocks_exchange_velocities_on_a_frictionless_table() {
     let scene = two_blocks(v0, 0.1, "dual");
     let mut s = sim(&scene, &GroundMotion::none());
     // Mass is density × the initial area (the current area changes with the blocks' strains).
-    let masses = [0.0, 2800.0 * s.geoms[1].moments.area, 2800.0 * s.geoms[2].moments.area];
+    let masses = [
+        0.0,
+        2800.0 * s.geoms[1].moments.area,
+        2800.0 * s.geoms[2].moments.area,
+    ];
     let m = |_: &ashlar::simulation::Simulation, b: usize| masses[b];
     let p0 = m(&s, 1) * v0;
     let mut worst_momentum: f64 = 0.0;
@@ -111,7 +115,9 @@ fn block_on_30_degree_ramp_at_a_hundredth_of_a_second() {
     eprintln!("dual:    worst relative error {dual:.2e}, max penetration {pen:.2e} m");
     for k in [2.0e11, 2.0e13] {
         let (e, pen) = ramp_error("penalty", Some(k));
-        eprintln!("penalty k = {k:.0e} N/m: worst relative error {e:.2e}, max penetration {pen:.2e} m");
+        eprintln!(
+            "penalty k = {k:.0e} N/m: worst relative error {e:.2e}, max penetration {pen:.2e} m"
+        );
     }
     assert!(dual < 0.005, "dual relative error {dual}");
 }
@@ -158,5 +164,8 @@ fn bao_zhao_vertex_moves_along_the_top_edge() {
         sim.stats.steps, sim.stats.dual_switches
     );
     assert!(x < 1.0 - 1e-4, "the vertex did not move left: x = {x}");
-    assert!(y > 1.0 - 1e-8, "the vertex went down the side edge: y = {y}");
+    assert!(
+        y > 1.0 - 1e-8,
+        "the vertex went down the side edge: y = {y}"
+    );
 }

@@ -396,9 +396,12 @@ impl Simulation {
             search: self.params.contact.search_factor * self.max_step_displacement(),
             contact: &self.params.contact,
         };
-        let r = self
-            .dual
-            .solve(&self.system, &input, &mut self.contacts.contacts, &mut self.x);
+        let r = self.dual.solve(
+            &self.system,
+            &input,
+            &mut self.contacts.contacts,
+            &mut self.x,
+        );
         match r {
             Ok(o) => {
                 self.stats.dual_iterations += o.iterations as u64;
@@ -527,7 +530,8 @@ impl Simulation {
             ),
             None => ("?".into(), "?".into()),
         };
-        if let (ContactSolver::Dual, Some(o)) = (self.scene.control.contact_solver, self.last_dual) {
+        if let (ContactSolver::Dual, Some(o)) = (self.scene.control.contact_solver, self.last_dual)
+        {
             if !o.converged {
                 return SimError::DualNotConverged {
                     time: self.time,

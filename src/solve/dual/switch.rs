@@ -43,12 +43,17 @@ pub fn vertex_vertex(
         let nj = gj.vertices.len();
         let vi = geoms[c.vertex_block].vertices[c.vertex];
         // Singular: the vertex is within the search distance of the nearer end E of its edge.
-        let corner = if c.xi < 0.5 { c.edge } else { (c.edge + 1) % nj };
+        let corner = if c.xi < 0.5 {
+            c.edge
+        } else {
+            (c.edge + 1) % nj
+        };
         let ej = gj.vertices[corner];
         if (vi - ej).norm() > input.search {
             continue;
         }
-        if switched.contains(&(c.vertex_block, c.vertex)) || switched.contains(&(c.edge_block, corner))
+        if switched.contains(&(c.vertex_block, c.vertex))
+            || switched.contains(&(c.edge_block, corner))
         {
             continue;
         }
@@ -72,14 +77,20 @@ pub fn vertex_vertex(
             let n = outward_normal(gj, e);
             if admissible(gi, c.vertex, &n, sin_tol) {
                 let g0 = n.dot(&(vi - gj.vertices[e]));
-                options.push(((c.vertex_block, c.vertex, c.edge_block, e), g0 + n.dot(&delta)));
+                options.push((
+                    (c.vertex_block, c.vertex, c.edge_block, e),
+                    g0 + n.dot(&delta),
+                ));
             }
         }
         for e in [c.vertex, (c.vertex + ni - 1) % ni] {
             let n = outward_normal(gi, e);
             if admissible(gj, corner, &n, sin_tol) {
                 let g0 = n.dot(&(ej - gi.vertices[e]));
-                options.push(((c.edge_block, corner, c.vertex_block, e), g0 - n.dot(&delta)));
+                options.push((
+                    (c.edge_block, corner, c.vertex_block, e),
+                    g0 - n.dot(&delta),
+                ));
             }
         }
         let current = (c.vertex_block, c.vertex, c.edge_block, c.edge);
