@@ -7,8 +7,9 @@
 //! Per step: (1) invert each block's matrix ([`flexibility`]); (2) per-contact gap and slide
 //! terms ([`gap`]); (3) solve the quasi-variational inequality for the contact forces by the
 //! projection–contraction "compatibility iteration" ([`iterate`], projections in
-//! [`projection`]); (4) switch vertex–vertex contact pairs whose vertex left its edge and
-//! re-solve ([`switch`]); (5) block increments `d_i = f_i + K_i⁻¹ C_i p_i` into `x`.
+//! [`projection`]); (4) re-choose the pair of each compressed vertex–vertex contact (the
+//! separating line with the largest step-end gap) and re-solve ([`switch`]); (5) block
+//! increments `d_i = f_i + K_i⁻¹ C_i p_i` into `x`.
 //! The non-penetration condition holds to the stated tolerance (a length), with no stiffness
 //! parameter anywhere.
 //!
