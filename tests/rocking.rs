@@ -2,7 +2,8 @@
 //! h = 0.6 m on a fixed base, under a half-sine acceleration pulse a(t) = A sin(2πt) for
 //! 0 ≤ t ≤ 0.5 s. Reference: Housner's equation of rocking integrated here by RK4 (step 1e-5 s)
 //! with Housner's restitution at impacts. Tolerances: rotation up to the first impact within
-//! 2 % of the peak rotation; overturning amplitude within 2 % (both from the issue).
+//! 2 % of the peak rotation; overturning amplitude within 2 % (both from the issue), within 1 %
+//! with the dual solver (`ASHLAR_CONTACT_SOLVER=dual`, no penalty stiffness to tune).
 mod common;
 use ashlar::motion::{GroundMotion, Signal};
 use common::*;
@@ -155,5 +156,7 @@ fn overturning_amplitude_matches_housner() {
         "overturning amplitude: Housner {housner_a:.3} m/s², DDA {dda_a:.3} m/s² ({:+.2} %)",
         100.0 * (dda_a / housner_a - 1.0)
     );
-    assert!((dda_a - housner_a).abs() < 0.02 * housner_a);
+    // The dual solver has no penalty stiffness to tune: the issue asks for 1 % there.
+    let tol = if dual_under_test() { 0.01 } else { 0.02 };
+    assert!((dda_a - housner_a).abs() < tol * housner_a);
 }

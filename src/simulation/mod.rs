@@ -14,7 +14,8 @@ use crate::contact::{Contact, ContactSet, ContactState, Mobility};
 use crate::geometry::{displacement_matrix, BlockGeometry, Vec6};
 use crate::integrate;
 use crate::motion::GroundMotion;
-use crate::scene::{BlockKind, BlockModel, Excitation, Scene};
+use crate::scene::{BlockKind, BlockModel, ContactSolver, Excitation, Scene};
+use crate::solve::dual::{DualInput, DualOutcome, DualSolver};
 use crate::solve::open_close::{self, OpenClose};
 use crate::solve::{LinearSolver, SolveError};
 use nalgebra::Matrix3;
@@ -38,6 +39,18 @@ pub enum SimError {
         time: f64,
         error: SolveError,
         block: String,
+    },
+    #[error(
+        "dual contact solver did not converge at t = {time:.6} s after {cuts} time-step cuts (Δt = {dt:.3e} s, {iterations} iterations, remaining violation {residual:.3e} m) at the contact between blocks {block_a:?} and {block_b:?}; try a smaller time_step, or raise SimParams.dual.max_iterations / tolerance"
+    )]
+    DualNotConverged {
+        time: f64,
+        cuts: u32,
+        dt: f64,
+        iterations: usize,
+        residual: f64,
+        block_a: String,
+        block_b: String,
     },
     #[error("non-finite state at t = {time:.6} s in block {block:?}; reduce the time step or the penalty stiffness")]
     NonFinite { time: f64, block: String },
@@ -93,6 +106,10 @@ pub struct Stats {
     pub steps: u64,
     pub time_step_cuts: u64,
     pub open_close_iterations: u64,
+    /// Compatibility iterations of the dual solver (all steps).
+    pub dual_iterations: u64,
+    /// Vertex–vertex contact pairs switched by the dual solver.
+    pub dual_switches: u64,
     /// Deepest penetration after a converged step, m.
     pub max_penetration: f64,
     pub min_dt: f64,
@@ -116,6 +133,11 @@ pub struct Simulation {
     pub springs: SpringParams,
     system: BlockSystem,
     solver: LinearSolver,
+    dual: DualSolver,
+    /// Last dual solve (for diagnostics on failure).
+    last_dual: Option<DualOutcome>,
+    /// Smallest free block's half size, m (length scale of tolerances).
+    smallest_free_block: f64,
     x: Vec<f64>,
     prescribed: Vec<Prescribed>,
     start_states: Vec<BlockState>,
@@ -218,6 +240,9 @@ impl Simulation {
             springs,
             system: BlockSystem::default(),
             solver: LinearSolver::new(params.solver),
+            dual: DualSolver::new(params.dual),
+            last_dual: None,
+            smallest_free_block,
             x: Vec::new(),
             prescribed: vec![[0.0; 2]; scene.blocks.len()],
             start_states: Vec::new(),
@@ -258,12 +283,19 @@ impl Simulation {
         loop {
             self.assemble(dt);
             let t2 = Instant::now();
-            let outcome = self.open_close()?;
-            self.profile.solve += t2.elapsed();
-            let trouble = match outcome {
-                OpenClose::Converged { .. } => self.check_step(),
-                OpenClose::NotConverged { contact, .. } => Some(contact),
+            let trouble = match self.scene.control.contact_solver {
+                ContactSolver::Penalty => match self.open_close()? {
+                    OpenClose::Converged { .. } => self.check_step(),
+                    OpenClose::NotConverged { contact, .. } => Some(contact),
+                },
+                ContactSolver::Dual => match self.dual_solve()? {
+                    DualOutcome {
+                        converged: true, ..
+                    } => self.check_step(),
+                    DualOutcome { worst, .. } => Some(worst),
+                },
             };
+            self.profile.solve += t2.elapsed();
             let Some(bad_contact) = trouble else { break };
             cuts += 1;
             self.stats.time_step_cuts += 1;
@@ -382,6 +414,46 @@ impl Simulation {
                 let (OpenClose::Converged { iterations }
                 | OpenClose::NotConverged { iterations, .. }) = o;
                 self.stats.open_close_iterations += iterations as u64;
+                Ok(o)
+            }
+            Err(error) => {
+                let dof = match error {
+                    SolveError::NotPositiveDefinite { dof } | SolveError::NonFinite { dof } => dof,
+                    SolveError::Backend(_) => 0,
+                };
+                Err(SimError::Solve {
+                    time: self.time,
+                    error,
+                    block: self.block_of_dof(dof),
+                })
+            }
+        }
+    }
+
+    /// The dual form's solve stage: contact forces as unknowns (no springs), per-block
+    /// flexibilities, the compatibility iteration; writes the increments into `x`.
+    fn dual_solve(&mut self) -> Result<DualOutcome, SimError> {
+        self.system.reset_to_blocks();
+        let input = DualInput {
+            dofs: &self.dofs,
+            geoms: &self.geoms,
+            laws: &self.laws,
+            prescribed: &self.prescribed,
+            length_scale: self.smallest_free_block,
+            search: self.params.contact.search_factor * self.max_step_displacement(),
+            contact: &self.params.contact,
+        };
+        let r = self.dual.solve(
+            &self.system,
+            &input,
+            &mut self.contacts.contacts,
+            &mut self.x,
+        );
+        match r {
+            Ok(o) => {
+                self.stats.dual_iterations += o.iterations as u64;
+                self.stats.dual_switches += o.switches as u64;
+                self.last_dual = Some(o);
                 Ok(o)
             }
             Err(error) => {
@@ -572,6 +644,20 @@ impl Simulation {
             ),
             None => ("?".into(), "?".into()),
         };
+        if let (ContactSolver::Dual, Some(o)) = (self.scene.control.contact_solver, self.last_dual)
+        {
+            if !o.converged {
+                return SimError::DualNotConverged {
+                    time: self.time,
+                    cuts,
+                    dt,
+                    iterations: o.iterations,
+                    residual: o.residual,
+                    block_a: a,
+                    block_b: b,
+                };
+            }
+        }
         if let Some(c) = contact.and_then(|k| self.contacts.contacts.get(k)) {
             if self.overshot(c) {
                 return SimError::Penetration {

@@ -1,6 +1,7 @@
 //! Engine tuning knobs and the automatic penalty stiffness.
 use crate::contact::ContactParams;
 use crate::scene::{Penalty, Scene};
+use crate::solve::dual::DualParams;
 use crate::solve::open_close::OpenCloseParams;
 use crate::solve::SolverParams;
 
@@ -10,6 +11,8 @@ pub struct SimParams {
     pub contact: ContactParams,
     pub open_close: OpenCloseParams,
     pub solver: SolverParams,
+    /// The dual (penalty-free) contact solver, used when `control.contact_solver = "dual"`.
+    pub dual: DualParams,
     /// Shear spring stiffness as a fraction of the normal one: Shi's code uses 1/2.5.
     pub shear_ratio: f64,
     /// Cuts of one step before giving up: 0.3¹² ≈ 5e-7, so a 1 ms step can shrink to ~0.5 ns.
@@ -42,6 +45,7 @@ impl Default for SimParams {
             contact: ContactParams::default(),
             open_close: OpenCloseParams::default(),
             solver: SolverParams::default(),
+            dual: DualParams::default(),
             shear_ratio: 0.4,
             max_cuts: 12,
             cut_factor: 0.3,

@@ -3,6 +3,7 @@
 //! behind [`LinearSolver`]: a dense Cholesky for small systems, faer's sparse Cholesky with a
 //! reused symbolic factorization for large ones.
 mod dense_cholesky;
+pub mod dual;
 pub mod open_close;
 mod sparse_cholesky;
 

@@ -19,7 +19,25 @@ pub fn scene_json(blocks: Value, friction_deg: f64, control: Value) -> Value {
     })
 }
 
+/// The contact solver the physics suites run with: `ASHLAR_CONTACT_SOLVER=dual cargo test
+/// --test incline …` runs the same benchmarks, against the same references and tolerances, with
+/// the dual (penalty-free) solver. Unset: the scene's own choice (default penalty).
+pub fn solver_under_test() -> Option<String> {
+    std::env::var("ASHLAR_CONTACT_SOLVER").ok()
+}
+
+/// True when the suites run with the dual solver.
+pub fn dual_under_test() -> bool {
+    solver_under_test().as_deref() == Some("dual")
+}
+
 pub fn parse(v: &Value) -> Scene {
+    let mut v = v.clone();
+    if let Some(solver) = solver_under_test() {
+        if v["control"].get("contact_solver").is_none() {
+            v["control"]["contact_solver"] = Value::String(solver);
+        }
+    }
     match parse_scene(&v.to_string()) {
         Ok(s) => s,
         Err(e) => panic!("test scene invalid: {e}"),

@@ -1,0 +1,225 @@
+//! Gap function of the dual form (seed 003 Eqs. 18–31): for contact forces `p`, the normal
+//! gap and tangential slide of every contact at the end of the step, `G(p) = c + W p`,
+//! evaluated block by block (`d_i = f_i + K_i⁻¹ C_i p_i`) without forming W.
+//!
+//! Conventions (as in `contact`): contact k joins vertex P of the vertex block i to edge AB of
+//! the edge block j; `n` is the edge's outward normal, `t` the edge direction A→B. The contact
+//! force on the vertex block is `p_n·n + p_t·t` (N per metre of thickness; p_n > 0 pushes the
+//! blocks apart), the edge block receives the opposite. The gap `g = n·(P − Q)` (m, > 0 open)
+//! and the slide `s = t·(ΔP − ΔQ)` (m, the vertex's motion along the edge relative to its
+//! projection Q during the step).
+use super::flexibility::BlockFlex;
+use crate::assembly::contact_springs::{constants, JointLaw, Prescribed};
+use crate::assembly::Dofs;
+use crate::contact::{edge_points, Contact};
+use crate::geometry::{displacement_matrix, BlockGeometry, Vec6};
+use rayon::prelude::*;
+
+/// A pair of contact quantities: [normal, tangential].
+pub type Pair = [f64; 2];
+
+/// Per-step terms of one contact.
+#[derive(Debug, Clone, Copy)]
+pub struct PairTerms {
+    pub fi: Option<usize>,
+    pub fj: Option<usize>,
+    /// Generalized force directions (= gap gradients): `T_i(P)ᵀn`, `T_i(P)ᵀt`, `T_j(Q)ᵀn`,
+    /// `T_j(Q)ᵀt`.
+    pub wn_i: Vec6,
+    pub wt_i: Vec6,
+    pub wn_j: Vec6,
+    pub wt_j: Vec6,
+    /// The same directions premultiplied by the block flexibility K⁻¹ (the seed's n_ki, τ_ki).
+    pub kn_i: Vec6,
+    pub kt_i: Vec6,
+    pub kn_j: Vec6,
+    pub kt_j: Vec6,
+    /// Gap and slide constants (step-start gap, driven blocks' prescribed motion), m.
+    pub constant: Pair,
+    /// Diagonal of W: the contact's own flexibility in n and t, m/N.
+    pub diag: Pair,
+    /// Coulomb friction tan φ.
+    pub tan_phi: f64,
+    /// Cohesion (N) and tensile strength (N) of an intact bond; zero once broken.
+    pub cohesion: f64,
+    pub tension: f64,
+}
+
+/// The contact terms of a step plus the block incidence used to gather forces per block.
+#[derive(Debug, Default)]
+pub struct GapFunction {
+    pub terms: Vec<PairTerms>,
+    /// Per free block, the (contact, is-vertex-side) entries in `incidence[start[f]..start[f+1]]`.
+    start: Vec<usize>,
+    incidence: Vec<(u32, bool)>,
+    /// Item count from which loops run on rayon.
+    pub parallel_from: usize,
+}
+
+impl GapFunction {
+    /// Build the terms of every contact from the step-start geometry and the flexibilities.
+    pub fn build(
+        &mut self,
+        contacts: &[Contact],
+        geoms: &[BlockGeometry],
+        laws: &[JointLaw],
+        dofs: &Dofs,
+        flex: &[BlockFlex],
+        prescribed: &[Prescribed],
+        inert: &[bool],
+    ) {
+        let make = |((c, law), &off): ((&Contact, &JointLaw), &bool)| {
+            let mut t = terms_of(c, law, geoms, dofs, flex, prescribed);
+            if off {
+                // No force and no incidence: the solver leaves it at zero.
+                (t.fi, t.fj, t.diag) = (None, None, [0.0; 2]);
+            }
+            t
+        };
+        self.terms.clear();
+        if contacts.len() >= self.parallel_from {
+            contacts
+                .par_iter()
+                .zip(laws)
+                .zip(inert)
+                .map(make)
+                .collect_into_vec(&mut self.terms);
+        } else {
+            self.terms
+                .extend(contacts.iter().zip(laws).zip(inert).map(make));
+        }
+        let nf = dofs.block_of.len();
+        self.start.clear();
+        self.start.resize(nf + 1, 0);
+        for t in &self.terms {
+            for f in [t.fi, t.fj].into_iter().flatten() {
+                self.start[f + 1] += 1;
+            }
+        }
+        for f in 0..nf {
+            self.start[f + 1] += self.start[f];
+        }
+        self.incidence.clear();
+        self.incidence.resize(self.start[nf], (0, false));
+        let mut fill = self.start.clone();
+        for (k, t) in self.terms.iter().enumerate() {
+            if let Some(f) = t.fi {
+                self.incidence[fill[f]] = (k as u32, true);
+                fill[f] += 1;
+            }
+            if let Some(f) = t.fj {
+                self.incidence[fill[f]] = (k as u32, false);
+                fill[f] += 1;
+            }
+        }
+    }
+
+    /// Block increments `d_f = f_f + Σ K⁻¹ w p` for contact forces `p`.
+    pub fn displacements(&self, flex: &[BlockFlex], p: &[Pair], d: &mut Vec<Vec6>) {
+        d.resize(flex.len(), Vec6::zeros());
+        let one = |(f, out): (usize, &mut Vec6)| {
+            let mut v = flex[f].free;
+            for &(k, vertex_side) in &self.incidence[self.start[f]..self.start[f + 1]] {
+                let t = &self.terms[k as usize];
+                let [pn, pt] = p[k as usize];
+                if vertex_side {
+                    v += t.kn_i * pn + t.kt_i * pt;
+                } else {
+                    v -= t.kn_j * pn + t.kt_j * pt;
+                }
+            }
+            *out = v;
+        };
+        if flex.len() >= self.parallel_from {
+            d.par_iter_mut().enumerate().for_each(one);
+        } else {
+            d.iter_mut().enumerate().for_each(one);
+        }
+    }
+
+    /// `G(p)`: gap and slide of every contact for the block increments `d`
+    /// (from [`GapFunction::displacements`]).
+    pub fn eval(&self, d: &[Vec6], out: &mut Vec<Pair>) {
+        out.resize(self.terms.len(), [0.0; 2]);
+        let one = |(t, g): (&PairTerms, &mut Pair)| {
+            let mut gn = t.constant[0];
+            let mut gt = t.constant[1];
+            if let Some(f) = t.fi {
+                gn += t.wn_i.dot(&d[f]);
+                gt += t.wt_i.dot(&d[f]);
+            }
+            if let Some(f) = t.fj {
+                gn -= t.wn_j.dot(&d[f]);
+                gt -= t.wt_j.dot(&d[f]);
+            }
+            *g = [gn, gt];
+        };
+        if self.terms.len() >= self.parallel_from {
+            self.terms.par_iter().zip(out.par_iter_mut()).for_each(one);
+        } else {
+            self.terms.iter().zip(out.iter_mut()).for_each(one);
+        }
+    }
+}
+
+fn terms_of(
+    c: &Contact,
+    law: &JointLaw,
+    geoms: &[BlockGeometry],
+    dofs: &Dofs,
+    flex: &[BlockFlex],
+    prescribed: &[Prescribed],
+) -> PairTerms {
+    let gi = &geoms[c.vertex_block];
+    let gj = &geoms[c.edge_block];
+    let p = gi.vertices[c.vertex];
+    let (a, b) = edge_points(gj, c.edge);
+    let q = a + (b - a) * c.xi;
+    let ti = displacement_matrix(p, gi.centroid).transpose();
+    let tj = displacement_matrix(q, gj.centroid).transpose();
+    let (wn_i, wt_i) = (ti * c.n, ti * c.t);
+    let (wn_j, wt_j) = (tj * c.n, tj * c.t);
+    let fi = dofs.free_index[c.vertex_block];
+    let fj = dofs.free_index[c.edge_block];
+    let (mut kn_i, mut kt_i, mut kn_j, mut kt_j) =
+        (Vec6::zeros(), Vec6::zeros(), Vec6::zeros(), Vec6::zeros());
+    let mut diag = [0.0; 2];
+    if let Some(f) = fi {
+        kn_i = flex[f].kinv * wn_i;
+        kt_i = flex[f].kinv * wt_i;
+        diag[0] += wn_i.dot(&kn_i);
+        diag[1] += wt_i.dot(&kt_i);
+    }
+    if let Some(f) = fj {
+        kn_j = flex[f].kinv * wn_j;
+        kt_j = flex[f].kinv * wt_j;
+        diag[0] += wn_j.dot(&kn_j);
+        diag[1] += wt_j.dot(&kt_j);
+    }
+    // The step-start slide is zero by definition (Q is the vertex's projection); only driven
+    // blocks' prescribed motion contributes to the slide constant.
+    let (g0, s_with_ref) = constants(c, prescribed);
+    let slide_prescribed = s_with_ref - c.s0;
+    let (cohesion, tension) = if c.bonded {
+        (law.cohesion * c.length, law.tensile_strength * c.length)
+    } else {
+        (0.0, 0.0)
+    };
+    PairTerms {
+        fi,
+        fj,
+        wn_i,
+        wt_i,
+        wn_j,
+        wt_j,
+        kn_i,
+        kt_i,
+        kn_j,
+        kt_j,
+        constant: [g0, slide_prescribed],
+        diag,
+        tan_phi: law.tan_phi,
+        cohesion,
+        tension,
+    }
+}

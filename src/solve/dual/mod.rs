@@ -1,0 +1,257 @@
+//! Dual form of DDA (seed 003, "DDA-d"): the contact forces are the unknowns, no penalty
+//! springs. The solve-stage alternative to `open_close`, chosen by
+//! `control.contact_solver = "dual"`; called once per step attempt after
+//! `BlockSystem::assemble_blocks` + `reset_to_blocks` (which give each block's Newmark matrix
+//! and load) and before `integrate` (which consumes the increments written to `x`).
+//!
+//! Per step: (1) invert each block's matrix ([`flexibility`]); (2) per-contact gap and slide
+//! terms ([`gap`]); (3) solve the quasi-variational inequality for the contact forces by the
+//! projection–contraction "compatibility iteration" ([`iterate`], projections in
+//! [`projection`]); (4) re-choose the pair of each compressed vertex–vertex contact (the
+//! separating line with the largest step-end gap) and re-solve ([`switch`]); (5) block
+//! increments `d_i = f_i + K_i⁻¹ C_i p_i` into `x`.
+//! The non-penetration condition holds to the stated tolerance (a length), with no stiffness
+//! parameter anywhere.
+//!
+//! Units: forces N per metre of thickness (normal compression positive; shear along the edge
+//! direction `t`, acting on the vertex block), lengths m.
+mod flexibility;
+mod gap;
+mod iterate;
+mod projection;
+mod switch;
+
+pub use flexibility::{invert, BlockFlex};
+pub use gap::{GapFunction, Pair, PairTerms};
+pub use iterate::IterReport;
+
+use super::SolveError;
+use crate::assembly::contact_springs::{JointLaw, Prescribed};
+use crate::assembly::{BlockSystem, Dofs};
+use crate::contact::{Contact, ContactParams, ContactState};
+use crate::geometry::BlockGeometry;
+use std::collections::HashMap;
+
+/// Tuning of the dual solver. Each default says why.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DualParams {
+    /// Stopping tolerance of the compatibility iteration, as a fraction of the smallest free
+    /// block's half size: the largest remaining violation of a contact condition (penetration,
+    /// gap under a compressive force, slip of a sticking contact) must be below it. 1e-9
+    /// (a nanometre on a metre block) is invisible in any result and still far above round-off
+    /// (1e-16 of the model size), so the iteration can always reach it.
+    pub tolerance: f64,
+    /// Iterations of one solve before the caller cuts the time step (which stiffens the
+    /// inertia and improves the conditioning). Warm-started steps need tens; 20 000 bounds a
+    /// hopeless step to well under a second for thousands of contacts.
+    pub max_iterations: usize,
+    /// First step size β of the projection (in the unit-diagonal metric, 1 is the natural
+    /// scale; it adapts from there).
+    pub initial_beta: f64,
+    /// He's admissibility bound ν < 1 on ‖β ΔG‖ / ‖Δp‖: 0.9 is the customary value (larger
+    /// steps, still contracting).
+    pub nu: f64,
+    /// Factor on β when the bound fails (×min(1, 1/ratio) too): 0.7 as in He's method.
+    pub beta_shrink: f64,
+    /// β grows by `beta_grow` after an iteration whose ratio was below `beta_grow_below`
+    /// (1.5 and 0.4: He's values, so β does not stay needlessly small).
+    pub beta_grow: f64,
+    pub beta_grow_below: f64,
+    /// Relaxation γ ∈ (0, 2) of the contraction step: 1.8 converges fastest in He's tests.
+    pub gamma: f64,
+    /// Rounds of vertex–vertex switching per step (each re-solves warm-started): 4 allows a
+    /// vertex to settle at a corner without letting it flip back and forth.
+    pub max_switch_rounds: usize,
+    /// Items (blocks, contacts) from which per-block and per-contact loops run on rayon: below
+    /// ~2000 the thread hand-off costs more than the work.
+    pub parallel_from: usize,
+}
+
+impl Default for DualParams {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-9,
+            max_iterations: 20_000,
+            initial_beta: 1.0,
+            nu: 0.9,
+            beta_shrink: 0.7,
+            beta_grow: 1.5,
+            beta_grow_below: 0.4,
+            gamma: 1.8,
+            max_switch_rounds: 4,
+            parallel_from: 2000,
+        }
+    }
+}
+
+/// Result of one dual solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DualOutcome {
+    pub converged: bool,
+    /// Compatibility iterations over all switching rounds.
+    pub iterations: usize,
+    /// Largest remaining contact-condition violation, m.
+    pub residual: f64,
+    /// Contact with the largest residual.
+    pub worst: Option<usize>,
+    /// Vertex–vertex pairs switched.
+    pub switches: usize,
+}
+
+/// Everything the dual solve reads besides the block system.
+#[derive(Debug, Clone, Copy)]
+pub struct DualInput<'a> {
+    pub dofs: &'a Dofs,
+    pub geoms: &'a [BlockGeometry],
+    pub laws: &'a [JointLaw],
+    pub prescribed: &'a [Prescribed],
+    /// Length scale of the tolerances (smallest free block's half size), m.
+    pub length_scale: f64,
+    /// Search distance and contact parameters (for finding the alternative vertex–vertex pair).
+    pub search: f64,
+    pub contact: &'a ContactParams,
+}
+
+type Key = (u32, u32, u32, u32);
+
+fn key(c: &Contact) -> Key {
+    (
+        c.vertex_block as u32,
+        c.vertex as u32,
+        c.edge_block as u32,
+        c.edge as u32,
+    )
+}
+
+/// The dual solver with its scratch and the forces of the last step (warm start).
+#[derive(Debug, Default)]
+pub struct DualSolver {
+    pub params: DualParams,
+    flex: Vec<BlockFlex>,
+    gap: GapFunction,
+    p: Vec<Pair>,
+    scratch: iterate::Scratch,
+    /// Per contact: made inert by vertex–vertex switching for this step.
+    inert: Vec<bool>,
+    warm: HashMap<Key, Pair>,
+}
+
+impl DualSolver {
+    pub fn new(params: DualParams) -> Self {
+        Self {
+            params,
+            ..Default::default()
+        }
+    }
+
+    /// Solve one step: contact forces, contact states and the block increments `x` (global
+    /// layout of `dofs`). `sys` holds the block terms only (after `reset_to_blocks`).
+    pub fn solve(
+        &mut self,
+        sys: &BlockSystem,
+        input: &DualInput,
+        contacts: &mut [Contact],
+        x: &mut Vec<f64>,
+    ) -> Result<DualOutcome, SolveError> {
+        let prm = self.params;
+        let tol = prm.tolerance * input.length_scale;
+        self.gap.parallel_from = prm.parallel_from;
+        flexibility::flexibilities(sys, input.dofs, prm.parallel_from, &mut self.flex)?;
+        let mut outcome = DualOutcome {
+            converged: false,
+            iterations: 0,
+            residual: f64::INFINITY,
+            worst: None,
+            switches: 0,
+        };
+        let mut switched_this_step = Vec::new();
+        self.inert.clear();
+        self.inert.resize(contacts.len(), false);
+        for round in 0..=prm.max_switch_rounds {
+            self.gap.build(
+                contacts,
+                input.geoms,
+                input.laws,
+                input.dofs,
+                &self.flex,
+                input.prescribed,
+                &self.inert,
+            );
+            self.p.clear();
+            self.p.extend(
+                contacts
+                    .iter()
+                    .map(|c| self.warm.get(&key(c)).copied().unwrap_or([0.0; 2])),
+            );
+            let r = iterate::compatibility(
+                &self.gap,
+                &self.flex,
+                &mut self.p,
+                &prm,
+                tol,
+                &mut self.scratch,
+            );
+            outcome.iterations += r.iterations;
+            outcome.converged = r.converged;
+            outcome.residual = r.residual;
+            outcome.worst = r.worst;
+            if !r.converged {
+                return Ok(outcome);
+            }
+            for (c, p) in contacts.iter().zip(&self.p) {
+                self.warm.insert(key(c), *p);
+            }
+            if round == prm.max_switch_rounds {
+                break;
+            }
+            let n = switch::vertex_vertex(
+                contacts,
+                &mut self.inert,
+                &self.gap,
+                &self.p,
+                &self.scratch.d,
+                input,
+                tol,
+                &mut switched_this_step,
+            );
+            if n == 0 {
+                break;
+            }
+            outcome.switches += n;
+        }
+        self.finish(input, contacts, x, tol);
+        Ok(outcome)
+    }
+
+    /// Write increments, forces and states; keep the forces for the next step's warm start.
+    fn finish(&mut self, input: &DualInput, contacts: &mut [Contact], x: &mut Vec<f64>, tol: f64) {
+        let dofs = input.dofs;
+        x.clear();
+        x.resize(dofs.n, 0.0);
+        for (f, d) in self.scratch.d.iter().enumerate() {
+            for k in 0..dofs.ndof[f] {
+                x[dofs.offset[f] + k] = d[k];
+            }
+        }
+        self.warm.clear();
+        for (k, c) in contacts.iter_mut().enumerate() {
+            let [pn, pt] = self.p[k];
+            let [g, s] = self.scratch.g[k];
+            let t = &self.gap.terms[k];
+            c.normal_force = pn;
+            c.friction_normal = pn;
+            c.shear_force = pt;
+            c.gap = g;
+            c.slip = s;
+            let strength = projection::shear_strength(t, pn);
+            c.state = if self.inert[k] || (g > tol && pn <= 0.0) {
+                ContactState::Open
+            } else if s.abs() > tol && pt.abs() >= strength * (1.0 - 1e-9) {
+                ContactState::Sliding { dir: s.signum() }
+            } else {
+                ContactState::Locked
+            };
+            self.warm.insert(key(c), [pn, pt]);
+        }
+    }
+}
