@@ -2,3 +2,5 @@
 //! Sits on top of `simulation`, `motion` and `record`; the service and CLI call in here.
 pub mod pga;
 pub mod run;
+pub mod reduced;
+pub mod study;
