@@ -133,6 +133,9 @@ pub struct Point {
     /// Relative error against the scene's reference (see `Scene::metric`), `None` when the
     /// run failed or was over budget.
     pub error: Option<f64>,
+    /// The measured quantity itself (final displacement m, peak |x| m, peak |θ| rad, or the
+    /// overturning amplitude m/s²), to compare two settings directly.
+    pub value: Option<f64>,
     pub wall_time_s: f64,
     pub steps: u64,
     pub open_close_iterations_mean: f64,
@@ -146,6 +149,91 @@ pub struct StudyResult {
     pub quick: bool,
     pub scenes: Vec<SceneInfo>,
     pub points: Vec<Point>,
+    /// The restitution the rocking column shows, by method: Housner's law, and the constant
+    /// coefficient that makes the reduced model best match a DDA run over 2 s (through the
+    /// impacts), per integrator.
+    pub restitution: Vec<RestitutionFit>,
+}
+
+/// One restitution figure.
+#[derive(Debug, Clone, Serialize)]
+pub struct RestitutionFit {
+    pub source: String,
+    /// Ratio of angular velocities after/before an impact.
+    pub coefficient: f64,
+    /// RMS rotation difference (rad) of the best fit over the run.
+    pub rms_misfit: f64,
+}
+
+/// The constant restitution coefficient with which the reduced rocking model best reproduces
+/// `theta` (rotation at 0.01 s frames of the column under the 5 m/s² pulse): a scan of e in
+/// steps of 0.0025 over [0.5, 1].
+fn fit_restitution(theta: &[f64], duration: f64) -> Result<(f64, f64), String> {
+    let mut v = column_scene();
+    v["control"] = json!({ "duration": duration, "model": "rocking", "output_interval": 0.01 });
+    let scene = scene_from_value(&v).map_err(|e| e.to_string())?;
+    let mut best = (f64::NAN, f64::INFINITY);
+    for i in 0..=200 {
+        let e = 0.5 + 0.0025 * i as f64;
+        let frames = Mutex::new(Vec::new());
+        let record = |f: &Frame| {
+            if let Ok(mut fr) = frames.lock() {
+                fr.push(f.blocks[1].rotation);
+            }
+        };
+        let opts = RunOptions {
+            on_frame: Some(&record),
+            reduced_params: Some(ReducedParams {
+                restitution: super::reduced::Restitution::Coefficient(e),
+                ..ReducedParams::default()
+            }),
+            ..Default::default()
+        };
+        run(&scene, &pulse(5.0), &opts).map_err(|e| e.to_string())?;
+        let red = frames.into_inner().unwrap_or_default();
+        let n = red.len().min(theta.len()).max(1);
+        let rms = (red.iter().zip(theta).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / n as f64).sqrt();
+        if rms < best.1 {
+            best = (e, rms);
+        }
+    }
+    Ok(best)
+}
+
+fn restitution_study(quick: bool) -> Result<Vec<RestitutionFit>, String> {
+    let alpha = (COL_B / COL_H).atan();
+    let mut out = vec![RestitutionFit {
+        source: "Housner's law, 1 − 1.5 sin²α (the reduced model's default)".into(),
+        coefficient: 1.0 - 1.5 * alpha.sin().powi(2),
+        rms_misfit: 0.0,
+    }];
+    let duration = 2.0;
+    for integ in ["dda", "trapezoidal"] {
+        for block_model in ["rigid", "deformable"] {
+            if quick && block_model == "deformable" {
+                continue;
+            }
+            let mut v = column_scene();
+            v["control"] = json!({ "duration": duration, "integrator": integ, "block_model": block_model, "output_interval": 0.01 });
+            let scene = scene_from_value(&v).map_err(|e| e.to_string())?;
+            let frames = Mutex::new(Vec::new());
+            let record = |f: &Frame| {
+                if let Ok(mut fr) = frames.lock() {
+                    fr.push(f.blocks[1].rotation);
+                }
+            };
+            let opts = RunOptions { on_frame: Some(&record), ..Default::default() };
+            run(&scene, &pulse(5.0), &opts).map_err(|e| e.to_string())?;
+            let theta = frames.into_inner().unwrap_or_default();
+            let (e, rms) = fit_restitution(&theta, duration)?;
+            out.push(RestitutionFit {
+                source: format!("DDA ({integ} integrator, {block_model} blocks, other controls at defaults), fitted"),
+                coefficient: e,
+                rms_misfit: rms,
+            });
+        }
+    }
+    Ok(out)
 }
 
 /// A benchmark scene as reported.
@@ -578,6 +666,7 @@ fn history_error(frames: &[(f64, f64, f64, f64)], reference: &[(f64, f64)], pick
 
 struct Evaluated {
     error: Option<f64>,
+    value: Option<f64>,
     summary: super::run::Summary,
     note: String,
     wall: f64,
@@ -625,14 +714,15 @@ fn evaluate(bench: &Bench, setting: &Setting, reference_frames: Option<&[(f64, f
             let summary = last.ok_or_else(|| failure.clone().unwrap_or_else(|| "no run".into()))?;
             let wall = t0.elapsed().as_secs_f64();
             if let Some(f) = failure {
-                return Ok(Evaluated { error: None, summary, note: f, wall, steps });
+                return Ok(Evaluated { error: None, value: None, summary, note: f, wall, steps });
             }
             if !bracket {
-                return Ok(Evaluated { error: None, summary, note: "no overturning in [4, 8] m/s²".into(), wall, steps });
+                return Ok(Evaluated { error: None, value: None, summary, note: "no overturning in [4, 8] m/s²".into(), wall, steps });
             }
             let found = 0.5 * (safe + fail);
             Ok(Evaluated {
                 error: Some(((found - exact) / exact).abs()),
+                value: Some(found),
                 summary,
                 note: format!("overturning amplitude {found:.3} m/s²"),
                 wall,
@@ -649,19 +739,34 @@ fn evaluate(bench: &Bench, setting: &Setting, reference_frames: Option<&[(f64, f
             let steps = m.summary.steps;
             if m.over_budget || !m.summary.completed {
                 let note = if m.over_budget { format!("over the {budget} s budget at t = {:.2} s", m.summary.simulated_time) } else { m.summary.stopped_reason.clone().unwrap_or_default() };
-                return Ok(Evaluated { error: None, summary: m.summary, note, wall, steps });
+                return Ok(Evaluated { error: None, value: None, summary: m.summary, note, wall, steps });
             }
+            let peak = |pick: fn(&(f64, f64, f64, f64)) -> f64, until: f64| {
+                m.frames.iter().filter(|f| f.0 <= until + 1e-9).fold(0.0f64, |a, f| a.max(pick(f).abs()))
+            };
+            let mut value = None;
             let error = match metric {
                 Metric::FinalAlong { dir, exact } => {
                     let d = m.summary.blocks.iter().find(|b| b.id == "block").map(|b| b.final_displacement).unwrap_or([0.0; 2]);
-                    Some(((d[0] * dir[0] + d[1] * dir[1] - exact) / exact).abs())
+                    let along = d[0] * dir[0] + d[1] * dir[1];
+                    value = Some(along);
+                    Some(((along - exact) / exact).abs())
                 }
-                Metric::HistoryX { reference } => history_error(&m.frames, reference, |f| f.1, f64::INFINITY),
-                Metric::Rotation { reference, until } => history_error(&m.frames, reference, |f| f.3, *until),
-                Metric::Finest { .. } => reference_frames.and_then(|r| history_error(&m.frames, r, |f| f.1, f64::INFINITY)),
+                Metric::HistoryX { reference } => {
+                    value = Some(peak(|f| f.1, f64::INFINITY));
+                    history_error(&m.frames, reference, |f| f.1, f64::INFINITY)
+                }
+                Metric::Rotation { reference, until } => {
+                    value = Some(peak(|f| f.3, *until));
+                    history_error(&m.frames, reference, |f| f.3, *until)
+                }
+                Metric::Finest { .. } => {
+                    value = Some(peak(|f| f.1, f64::INFINITY));
+                    reference_frames.and_then(|r| history_error(&m.frames, r, |f| f.1, f64::INFINITY))
+                }
                 Metric::Overturning { .. } => None,
             };
-            Ok(Evaluated { error, summary: m.summary, note: String::new(), wall, steps })
+            Ok(Evaluated { error, value, summary: m.summary, note: String::new(), wall, steps })
         }
     }
 }
@@ -741,6 +846,7 @@ pub fn run_study(opts: &StudyOptions) -> Result<StudyResult, String> {
                     label: setting.label(),
                     model_ran: ev.summary.model.clone(),
                     error: ev.error,
+                    value: ev.value,
                     wall_time_s: ev.wall,
                     steps: ev.steps,
                     open_close_iterations_mean: ev.summary.diagnostics.open_close_iterations_mean,
@@ -754,6 +860,7 @@ pub fn run_study(opts: &StudyOptions) -> Result<StudyResult, String> {
                     label: setting.label(),
                     model_ran: String::new(),
                     error: None,
+                    value: None,
                     wall_time_s: 0.0,
                     steps: 0,
                     open_close_iterations_mean: 0.0,
@@ -777,7 +884,13 @@ pub fn run_study(opts: &StudyOptions) -> Result<StudyResult, String> {
             points.push(p);
         }
     }
-    Ok(StudyResult { quick: opts.quick, scenes, points })
+    let restitution = restitution_study(opts.quick)?;
+    if opts.verbose {
+        for r in &restitution {
+            eprintln!("restitution: {} = {:.4} (RMS misfit {:.2e} rad)", r.source, r.coefficient, r.rms_misfit);
+        }
+    }
+    Ok(StudyResult { quick: opts.quick, scenes, points, restitution })
 }
 
 /// Points on the Pareto front (no other point is both faster and more accurate), by wall time.
@@ -1014,6 +1127,7 @@ pub fn report(result: &StudyResult, svg_dir: &str, command: &str) -> String {
         "Generated by `{command}` (release build, on the project's 2-core machine shared with other jobs, so wall times carry some noise; ratios within one run are meaningful). Data: [`points.csv`]({svg_dir}/points.csv), [`points.json`]({svg_dir}/points.json).\n\n"
     );
     s += "Every point is one run (or, for the overturning amplitude, one bisection of runs) of a benchmark scene with one numerical control changed from the project's defaults (`time_step` 1e-3 s, `max_displacement_ratio` (g2) 1e-3, `penalty_stiffness` \"auto\" = 10 E, `integrator` \"dda\", `block_model` \"deformable\", `contact_solver` \"penalty\"); the `time_step` sweep is run for both integrators. *reduced* points run the reduced rocking/sliding models (`\"model\": \"auto\"`) at a given ODE tolerance. The error is measured against a reference independent of the engine and of the reduced models (below). Points marked `-` failed or exceeded their time budget; the note says why.\n\n";
+    s += &summary_tables(result);
     for sc in &result.scenes {
         let pts: Vec<&Point> = result.points.iter().filter(|p| p.scene == sc.name).collect();
         s += &format!("## {}\n\n{}.\n\n*Reference:* {}. *Error:* {}.\n\n", sc.name, sc.description, sc.reference, sc.metric);
@@ -1059,4 +1173,124 @@ pub fn report(result: &StudyResult, svg_dir: &str, command: &str) -> String {
         s += "\n";
     }
     s
+}
+
+fn pct(e: Option<f64>) -> String {
+    e.map(|e| format!("{:.3} %", 100.0 * e)).unwrap_or_else(|| "-".into())
+}
+
+/// The findings drawn from the points: defaults against the 1 % target, rigid against
+/// deformable blocks, reduced against full models, and the restitution comparison.
+fn summary_tables(result: &StudyResult) -> String {
+    let find = |scene: &str, pred: &dyn Fn(&Point) -> bool| result.points.iter().find(|p| p.scene == scene && pred(p));
+    let mut s = String::from("## Summary\n\n### The defaults against the 1 % target\n\n| scene | defaults: error | wall (s) | steps | cheapest full-DDA point within 1 % | its wall (s) |\n|---|---|---|---|---|---|\n");
+    for sc in &result.scenes {
+        let d = find(&sc.name, &|p| p.sweep == "defaults");
+        let best = result
+            .points
+            .iter()
+            .filter(|p| p.scene == sc.name && p.sweep != "reduced" && p.error.is_some_and(|e| e <= 0.01))
+            .min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s));
+        s += &format!(
+            "| {} | {} | {} | {} | {} | {} |\n",
+            sc.name,
+            pct(d.and_then(|p| p.error)),
+            d.map(|p| format!("{:.3}", p.wall_time_s)).unwrap_or_default(),
+            d.map(|p| p.steps.to_string()).unwrap_or_default(),
+            best.map(|p| format!("`{}` ({})", p.label, pct(p.error))).unwrap_or_else(|| "none".into()),
+            best.map(|p| format!("{:.3}", p.wall_time_s)).unwrap_or_default(),
+        );
+    }
+    s += "\n### Rigid against deformable blocks (stone, E = 20 GPa; other controls at defaults)\n\n| scene | deformable: error, wall (s) | rigid: error, wall (s) | speed-up | answer difference |\n|---|---|---|---|---|\n";
+    for sc in &result.scenes {
+        let base = find(&sc.name, &|p| p.sweep == "time_step" && p.setting == Setting::baseline());
+        let rigid = find(&sc.name, &|p| p.sweep == "block_model");
+        if let (Some(d), Some(r)) = (base, rigid) {
+            let diff = match (d.value, r.value) {
+                (Some(a), Some(b)) if a != 0.0 => format!("{:.3} %", 100.0 * ((b - a) / a).abs()),
+                _ => "-".into(),
+            };
+            s += &format!(
+                "| {} | {}, {:.3} | {}, {:.3} | {:.2}× | {} |\n",
+                sc.name,
+                pct(d.error),
+                d.wall_time_s,
+                pct(r.error),
+                r.wall_time_s,
+                d.wall_time_s / r.wall_time_s.max(1e-9),
+                diff
+            );
+        }
+    }
+    s += "\n### Reduced models against the full engine (`\"model\": \"auto\"` against the defaults)\n\n| scene | model ran | reduced: error, wall (s) | full DDA defaults: error, wall (s) | speed-up |\n|---|---|---|---|---|\n";
+    for sc in &result.scenes {
+        let red = result
+            .points
+            .iter()
+            .filter(|p| p.scene == sc.name && p.sweep == "reduced")
+            .min_by(|a, b| a.setting.reduced_rtol.unwrap_or(1.0).total_cmp(&b.setting.reduced_rtol.unwrap_or(1.0)));
+        let d = find(&sc.name, &|p| p.sweep == "defaults");
+        if let (Some(r), Some(d)) = (red, d) {
+            s += &format!(
+                "| {} | {} | {}, {:.5} | {}, {:.3} | {:.0}× |\n",
+                sc.name,
+                r.model_ran,
+                pct(r.error),
+                r.wall_time_s,
+                pct(d.error),
+                d.wall_time_s,
+                d.wall_time_s / r.wall_time_s.max(1e-9)
+            );
+        }
+    }
+    s += "\n### Restitution at the rocking column's impacts\n\nThe reduced rocking model uses Housner's angular-momentum law by default. DDA has no restitution coefficient: energy is lost through the penalty springs and the integrator. The coefficient below is the constant e with which the reduced model best reproduces the DDA rotation history over 2 s (scan of e in steps of 0.0025).\n\n| source | e | RMS misfit (rad) |\n|---|---|---|\n";
+    for r in &result.restitution {
+        s += &format!("| {} | {:.4} | {:.2e} |\n", r.source, r.coefficient, r.rms_misfit);
+    }
+    s += "\n";
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(wall: f64, error: Option<f64>) -> Point {
+        Point {
+            scene: "s".into(),
+            sweep: "time_step".into(),
+            label: String::new(),
+            setting: Setting::baseline(),
+            model_ran: "dda".into(),
+            error,
+            value: None,
+            wall_time_s: wall,
+            steps: 0,
+            open_close_iterations_mean: 0.0,
+            time_step_cuts: 0,
+            note: String::new(),
+        }
+    }
+
+    #[test]
+    fn pareto_keeps_only_points_nobody_beats_on_both() {
+        let pts = [
+            point(1.0, Some(0.1)),
+            point(2.0, Some(0.2)),  // slower and worse than the first: dominated
+            point(3.0, Some(0.01)),
+            point(0.5, None),       // failed: not on the front
+            point(4.0, Some(0.001)),
+        ];
+        let refs: Vec<&Point> = pts.iter().collect();
+        assert_eq!(pareto(&refs), vec![0, 2, 4]);
+    }
+
+    #[test]
+    fn convergence_order_recovers_a_power_law() {
+        // e = 3 Δt²: slope exactly 2 (to round-off, 1e-12); points under the floor ignored.
+        let pts: Vec<(f64, f64)> = [1e-2, 1e-3, 1e-4, 1e-5].iter().map(|&h: &f64| (h, 3.0 * h * h)).collect();
+        let o = convergence_order(&pts, 1e-9).expect("order");
+        assert!((o - 2.0).abs() < 1e-12, "{o}");
+        assert_eq!(convergence_order(&pts[..1], 1e-9), None);
+    }
 }

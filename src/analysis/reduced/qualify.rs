@@ -140,7 +140,7 @@ pub fn qualify(scene: &Scene, params: &ReducedParams) -> Result<SingleBlock, Str
                 continue;
             }
             let along = |p: Vector2<f64>| (p - q0).dot(&tq);
-            let inside = |s: f64| s >= -tol && s <= lq + tol;
+            let inside = |s: f64| (-tol..=lq + tol).contains(&s);
             if !inside(along(p0)) || !inside(along(p1)) {
                 return Err(format!(
                     "block {:?} overhangs the edge of base {:?}; the reduced models need its whole bottom edge on the base",
