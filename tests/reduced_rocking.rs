@@ -102,13 +102,10 @@ fn column(model: &str, duration: f64) -> ashlar::scene::Scene {
 }
 
 /// Rotation of the column at every 0.01 s frame, and the summary.
-fn rotations(
-    model: &str,
-    a: f64,
-    duration: f64,
-) -> (Vec<f64>, ashlar::analysis::run::Summary) {
+fn rotations(model: &str, a: f64, duration: f64) -> (Vec<f64>, ashlar::analysis::run::Summary) {
     let frames = Mutex::new(Vec::new());
-    let record = |f: &ashlar::record::Frame| frames.lock().expect("lock").push(f.blocks[1].rotation);
+    let record =
+        |f: &ashlar::record::Frame| frames.lock().expect("lock").push(f.blocks[1].rotation);
     let opts = RunOptions {
         on_frame: Some(&record),
         ..Default::default()
@@ -120,7 +117,10 @@ fn rotations(
 #[test]
 fn history_through_impacts_matches_housner_rk4() {
     let (reference, impact, fell) = housner(5.0, 2.0);
-    assert!(!fell && impact.is_some(), "the reference must rock and land");
+    assert!(
+        !fell && impact.is_some(),
+        "the reference must rock and land"
+    );
     let (theta, summary) = rotations("rocking", 5.0, 2.0);
     assert_eq!(summary.model, "rocking");
     assert_eq!(theta.len(), reference.len());

@@ -26,16 +26,29 @@ fn column(control: Value) -> Value {
 }
 
 fn pulse(a: f64) -> GroundMotion {
-    GroundMotion::horizontal(Signal::Pulse { amplitude: a, period: 1.0, cycles: 0.5, phase: 0.0 })
+    GroundMotion::horizontal(Signal::Pulse {
+        amplitude: a,
+        period: 1.0,
+        cycles: 0.5,
+        phase: 0.0,
+    })
 }
 
 #[test]
 fn auto_runs_the_rocking_model_on_a_column_and_says_why() {
-    let s = run(&parse(&column(json!({ "duration": 2.0, "model": "auto" }))), &pulse(5.0), &RunOptions::default())
-        .expect("run")
-        .summary;
+    let s = run(
+        &parse(&column(json!({ "duration": 2.0, "model": "auto" }))),
+        &pulse(5.0),
+        &RunOptions::default(),
+    )
+    .expect("run")
+    .summary;
     assert_eq!(s.model, "rocking");
-    assert!(s.model_reason.contains("auto") && s.model_reason.contains("Housner"), "{}", s.model_reason);
+    assert!(
+        s.model_reason.contains("auto") && s.model_reason.contains("Housner"),
+        "{}",
+        s.model_reason
+    );
     // Housner's e for b/h = 1/3 (1 − 1.5 sin²α = 0.85), to round-off.
     let alpha = (0.2f64 / 0.6).atan();
     let e = s.diagnostics.restitution.expect("restitution reported");
@@ -44,35 +57,56 @@ fn auto_runs_the_rocking_model_on_a_column_and_says_why() {
 
 #[test]
 fn dda_is_the_default_and_forced_by_dda() {
-    let s = run(&parse(&column(json!({ "duration": 0.1 }))), &pulse(5.0), &RunOptions::default()).expect("run").summary;
+    let s = run(
+        &parse(&column(json!({ "duration": 0.1 }))),
+        &pulse(5.0),
+        &RunOptions::default(),
+    )
+    .expect("run")
+    .summary;
     assert_eq!(s.model, "dda");
 }
 
 #[test]
 fn auto_falls_back_to_dda_on_a_wall_naming_why() {
-    let spec = running_bond_wall(&WallParams { courses: 2, blocks_per_course: 2, ..Default::default() });
+    let spec = running_bond_wall(&WallParams {
+        courses: 2,
+        blocks_per_course: 2,
+        ..Default::default()
+    });
     let mut v = serde_json::to_value(&spec).expect("json");
     v["control"] = json!({ "duration": 0.05, "model": "auto" });
-    let s = run(&parse(&v), &pulse(1.0), &RunOptions::default()).expect("run").summary;
+    let s = run(&parse(&v), &pulse(1.0), &RunOptions::default())
+        .expect("run")
+        .summary;
     assert_eq!(s.model, "dda");
     assert!(s.model_reason.contains("free blocks"), "{}", s.model_reason);
 }
 
 #[test]
 fn forced_rocking_on_a_wall_is_a_clear_error() {
-    let spec = running_bond_wall(&WallParams { courses: 2, blocks_per_course: 2, ..Default::default() });
+    let spec = running_bond_wall(&WallParams {
+        courses: 2,
+        blocks_per_course: 2,
+        ..Default::default()
+    });
     let mut v = serde_json::to_value(&spec).expect("json");
     v["control"] = json!({ "duration": 0.05, "model": "rocking" });
     let e = run(&parse(&v), &pulse(1.0), &RunOptions::default()).expect_err("must refuse");
     let msg = e.to_string();
-    assert!(msg.contains("control.model") && msg.contains("rocking") && msg.contains("free blocks"), "{msg}");
+    assert!(
+        msg.contains("control.model") && msg.contains("rocking") && msg.contains("free blocks"),
+        "{msg}"
+    );
 }
 
 #[test]
 fn cohesive_joint_and_gap_disqualify() {
     let mut v = column(json!({ "duration": 0.05, "model": "auto" }));
     v["joints"]["j"]["cohesion"] = json!(1000.0);
-    let s = run(&parse(&v), &pulse(1.0), &RunOptions::default()).expect("run").summary;
+    let s = run(&parse(&v), &pulse(1.0), &RunOptions::default())
+        .expect("run")
+        .summary;
     assert_eq!(s.model, "dda");
     assert!(s.model_reason.contains("cohesion"), "{}", s.model_reason);
     let mut v = column(json!({ "duration": 0.05, "model": "sliding" }));
@@ -84,15 +118,30 @@ fn cohesive_joint_and_gap_disqualify() {
 #[test]
 fn reduced_run_writes_the_same_outputs_as_dda() {
     let dir = std::env::temp_dir().join(format!("ashlar-reduced-out-{}", std::process::id()));
-    let opts = RunOptions { out_dir: Some(&dir), ..Default::default() };
-    let s = run(&parse(&column(json!({ "duration": 1.0, "model": "rocking", "output_interval": 0.1 }))), &pulse(5.0), &opts)
-        .expect("run")
-        .summary;
+    let opts = RunOptions {
+        out_dir: Some(&dir),
+        ..Default::default()
+    };
+    let s = run(
+        &parse(&column(
+            json!({ "duration": 1.0, "model": "rocking", "output_interval": 0.1 }),
+        )),
+        &pulse(5.0),
+        &opts,
+    )
+    .expect("run")
+    .summary;
     let csv = std::fs::read_to_string(dir.join("histories.csv")).expect("histories");
     let lines: Vec<&str> = csv.lines().collect();
-    assert!(lines[0].starts_with("time,column.x,column.y,column.rotation"), "{}", lines[0]);
+    assert!(
+        lines[0].starts_with("time,column.x,column.y,column.rotation"),
+        "{}",
+        lines[0]
+    );
     assert_eq!(lines.len(), 1 + 11, "header and frames at 0, 0.1, …, 1.0 s");
-    let summary: Value = serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).expect("summary")).expect("json");
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).expect("summary"))
+            .expect("json");
     assert_eq!(summary["model"], "rocking");
     assert_eq!(summary["blocks"][0]["id"], "column");
     let mcap = std::fs::read(dir.join("trajectory.mcap")).expect("mcap");
@@ -144,7 +193,11 @@ fn reduced_first_motion(alpha: f64, k: f64, delta: f64, phi: f64) -> Result<Mode
         { "id": "slope", "material": "stone", "fixed": true, "vertices": [p(-1.5, 0.0), p(2.5, 0.0), p(2.5, -0.5), p(-1.5, -0.5)] },
         { "id": "block", "material": "stone", "block_model": "rigid", "vertices": [p(0.0, 0.0), p(w, 0.0), p(w, h), p(0.0, h)] },
     ]);
-    let scene = parse(&scene_json(blocks, phi, json!({ "duration": 0.3, "model": "auto" })));
+    let scene = parse(&scene_json(
+        blocks,
+        phi,
+        json!({ "duration": 0.3, "model": "auto" }),
+    ));
     let motion = if k == 0.0 {
         GroundMotion::none()
     } else {
@@ -159,7 +212,11 @@ fn reduced_first_motion(alpha: f64, k: f64, delta: f64, phi: f64) -> Result<Mode
     while t < 0.3 - 1e-12 {
         t += 1e-3;
         if let Err(v) = m.advance(t) {
-            return if v.what.contains("together") { Ok(Mode::SlidingToppling) } else { Err(v.what) };
+            return if v.what.contains("together") {
+                Ok(Mode::SlidingToppling)
+            } else {
+                Err(v.what)
+            };
         }
         let (_, rot, _, _) = m.kinematics();
         if m.slid > 1e-3 || l * rot.abs() > 1e-3 {
@@ -197,12 +254,18 @@ fn first_motion_matches_yeungs_chart() {
         for dp in [-3.0, 0.0, 3.0] {
             for dd in [-3.0, 0.0, 3.0] {
                 for df in [-3.0, 0.0, 3.0] {
-                    assert_eq!(chart(r(psi + dp), r(delta + dd), r(phi + df)), expected, "case too close to a boundary: {alpha} {k} {delta} {phi}");
+                    assert_eq!(
+                        chart(r(psi + dp), r(delta + dd), r(phi + df)),
+                        expected,
+                        "case too close to a boundary: {alpha} {k} {delta} {phi}"
+                    );
                 }
             }
         }
         let got = reduced_first_motion(alpha, k, delta, phi).expect("reduced run");
-        eprintln!("α={alpha} k={k} δ={delta} φ={phi} (ψ={psi:.1}): chart {expected:?}, reduced {got:?}");
+        eprintln!(
+            "α={alpha} k={k} δ={delta} φ={phi} (ψ={psi:.1}): chart {expected:?}, reduced {got:?}"
+        );
         assert_eq!(got, expected, "α={alpha} k={k} δ={delta} φ={phi}");
         seen.insert(expected as u8);
     }

@@ -48,13 +48,21 @@ fn newmark_reference(alpha: f64, phi: f64, a: f64, f: f64, t_end: f64) -> f64 {
     s
 }
 
-fn incline_run(model: &str, alpha: f64, phi: f64, motion: &GroundMotion, t_end: f64) -> (f64, Summary) {
+fn incline_run(
+    model: &str,
+    alpha: f64,
+    phi: f64,
+    motion: &GroundMotion,
+    t_end: f64,
+) -> (f64, Summary) {
     let (v, d) = incline(
         alpha,
         phi,
         json!({ "duration": t_end, "model": model, "block_model": "rigid", "time_step": 1e-3 }),
     );
-    let s = run(&parse(&v), motion, &RunOptions::default()).expect("run").summary;
+    let s = run(&parse(&v), motion, &RunOptions::default())
+        .expect("run")
+        .summary;
     let u = s.blocks[0].final_displacement;
     (u[0] * d[0] + u[1] * d[1], s)
 }
@@ -66,7 +74,10 @@ fn incline_under_gravity_matches_closed_form() {
         let (a, f) = (alpha.to_radians(), phi.to_radians());
         let exact = 0.5 * G * (a.sin() - a.cos() * f.tan());
         let err = ((num - exact) / exact).abs();
-        eprintln!("α={alpha} φ={phi}: {num:.9} m vs {exact:.9} m, error {err:.1e}, {} steps", s.steps);
+        eprintln!(
+            "α={alpha} φ={phi}: {num:.9} m vs {exact:.9} m, error {err:.1e}, {} steps",
+            s.steps
+        );
         assert_eq!(s.model, "sliding");
         assert_eq!(s.failure_mode, "sliding");
         assert!(err < 1e-6, "α={alpha} φ={phi}: {err}");
@@ -83,7 +94,10 @@ fn stable_incline_does_not_move() {
 }
 
 fn sine(a: f64, f: f64) -> GroundMotion {
-    GroundMotion::horizontal(Signal::Sine { amplitude: a, frequency: f })
+    GroundMotion::horizontal(Signal::Sine {
+        amplitude: a,
+        frequency: f,
+    })
 }
 
 #[test]
@@ -154,7 +168,11 @@ fn shaking_foundation_matches_eq_17() {
             { "id": "foundation", "material": "stone", "vertices": [[-8.0, -0.5], [8.0, -0.5], [8.0, 0.0], [-8.0, 0.0]] },
             { "id": "block", "material": "stone", "vertices": [[-1.0, 0.0], [1.0, 0.0], [1.0, 0.1], [-1.0, 0.1]] },
         ]);
-        let mut v = scene_json(blocks, f64::atan(mu).to_degrees(), json!({ "duration": t_end, "model": "auto" }));
+        let mut v = scene_json(
+            blocks,
+            f64::atan(mu).to_degrees(),
+            json!({ "duration": t_end, "model": "auto" }),
+        );
         v["excitation"] = json!({ "type": "driven_block", "block": "foundation" });
         let motion = GroundMotion::horizontal(Signal::Pulse {
             amplitude: a * w * w,
@@ -164,14 +182,23 @@ fn shaking_foundation_matches_eq_17() {
         });
         let xs = Mutex::new(Vec::new());
         let rec = |fr: &ashlar::record::Frame| xs.lock().expect("lock").push(fr.blocks[1].x);
-        let opts = RunOptions { on_frame: Some(&rec), ..Default::default() };
+        let opts = RunOptions {
+            on_frame: Some(&rec),
+            ..Default::default()
+        };
         let s = run(&parse(&v), &motion, &opts).expect("run").summary;
         assert_eq!(s.model, "sliding", "{}", s.model_reason);
         let xs = xs.into_inner().expect("lock");
         let r = foundation_reference(a, f, mu, t_end, 1e-6);
         let peak = r.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let worst = xs.iter().zip(&r).fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
-        eprintln!("A={a} f={f} μ={mu}: peak {peak:.4} m, worst {worst:.2e} m ({:.4} %)", 100.0 * worst / peak);
+        let worst = xs
+            .iter()
+            .zip(&r)
+            .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+        eprintln!(
+            "A={a} f={f} μ={mu}: peak {peak:.4} m, worst {worst:.2e} m ({:.4} %)",
+            100.0 * worst / peak
+        );
         assert_eq!(xs.len(), r.len());
         assert!(worst < 1e-3 * peak, "{worst} vs {peak}");
     }

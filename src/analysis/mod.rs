@@ -1,6 +1,6 @@
 //! Analysis: drives the simulation for a user question (a run, failure modes, PGA searches).
 //! Sits on top of `simulation`, `motion` and `record`; the service and CLI call in here.
 pub mod pga;
-pub mod run;
 pub mod reduced;
+pub mod run;
 pub mod study;

@@ -1,14 +1,14 @@
 //! One run of a scene under a ground motion: drives the simulation to the end, records frames
 //! (histories, trajectory), classifies the outcome and writes `summary.json` (FORMAT.md §3).
+use crate::analysis::reduced::{
+    self, record::ReducedError, Modes, ReducedParams, Restitution, SingleBlock,
+};
 use crate::contact::{ContactState, Mobility};
 use crate::motion::GroundMotion;
 use crate::record::histories::HistoryWriter;
 use crate::record::mcap::{McapParams, McapRecorder};
 use crate::record::{
     BlockFrame, BlockMotionState, Frame, FrameBlockKind, GroundFrame, RecordHeader,
-};
-use crate::analysis::reduced::{
-    self, record::ReducedError, Modes, ReducedParams, Restitution, SingleBlock,
 };
 use crate::scene::{ModelChoice, Scene};
 use crate::simulation::{SimParams, Simulation};

@@ -102,7 +102,11 @@ impl Setting {
             Some(k) => json!(k),
             None => json!("auto"),
         };
-        let model = if self.model == "reduced" { "auto" } else { "dda" };
+        let model = if self.model == "reduced" {
+            "auto"
+        } else {
+            "dda"
+        };
         let mut c = json!({
             "duration": duration,
             "time_step": self.time_step,
@@ -192,7 +196,13 @@ fn fit_restitution(theta: &[f64], duration: f64) -> Result<(f64, f64), String> {
         run(&scene, &pulse(5.0), &opts).map_err(|e| e.to_string())?;
         let red = frames.into_inner().unwrap_or_default();
         let n = red.len().min(theta.len()).max(1);
-        let rms = (red.iter().zip(theta).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / n as f64).sqrt();
+        let rms = (red
+            .iter()
+            .zip(theta)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>()
+            / n as f64)
+            .sqrt();
         if rms < best.1 {
             best = (e, rms);
         }
@@ -222,7 +232,10 @@ fn restitution_study(quick: bool) -> Result<Vec<RestitutionFit>, String> {
                     fr.push(f.blocks[1].rotation);
                 }
             };
-            let opts = RunOptions { on_frame: Some(&record), ..Default::default() };
+            let opts = RunOptions {
+                on_frame: Some(&record),
+                ..Default::default()
+            };
             run(&scene, &pulse(5.0), &opts).map_err(|e| e.to_string())?;
             let theta = frames.into_inner().unwrap_or_default();
             let (e, rms) = fit_restitution(&theta, duration)?;
@@ -462,7 +475,11 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
     // 1. Incline under gravity (seed 000 Eq. 14).
     let (alpha, phi, t_end) = (28.0f64, 20.0f64, 1.0);
     let (blocks, d) = incline_blocks(alpha);
-    let exact = 0.5 * G * (alpha.to_radians().sin() - alpha.to_radians().cos() * phi.to_radians().tan()) * t_end * t_end;
+    let exact = 0.5
+        * G
+        * (alpha.to_radians().sin() - alpha.to_radians().cos() * phi.to_radians().tan())
+        * t_end
+        * t_end;
     out.push(Bench {
         name: "incline-gravity".into(),
         description: format!("1 × 0.5 m block on a {alpha}° incline, φ = {phi}°, sliding from rest under gravity for {t_end} s"),
@@ -544,7 +561,9 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
         reducible: true,
     });
     // 6. Masonry wall under a shared record.
-    let record = opts.ground_motions.join("northridge-1994-mulholland-009.at2");
+    let record = opts
+        .ground_motions
+        .join("northridge-1994-mulholland-009.at2");
     let gm = motion::load_path(&record).map_err(|e| format!("{}: {e}", record.display()))?;
     let gm = gm.scaled_to_pga(0.4 * motion::STANDARD_GRAVITY);
     let wall = running_bond_wall(&WallParams {
@@ -636,7 +655,8 @@ fn run_once(
         ..Default::default()
     };
     let out = run(&scene, motion, &opts).map_err(|e| e.to_string())?;
-    let over_budget = start.elapsed().as_secs_f64() > budget && out.summary.stopped_reason.is_some();
+    let over_budget =
+        start.elapsed().as_secs_f64() > budget && out.summary.stopped_reason.is_some();
     Ok(Measured {
         frames: frames.into_inner().unwrap_or_default(),
         summary: out.summary,
@@ -644,7 +664,12 @@ fn run_once(
     })
 }
 
-fn history_error(frames: &[(f64, f64, f64, f64)], reference: &[(f64, f64)], pick: impl Fn(&(f64, f64, f64, f64)) -> f64, until: f64) -> Option<f64> {
+fn history_error(
+    frames: &[(f64, f64, f64, f64)],
+    reference: &[(f64, f64)],
+    pick: impl Fn(&(f64, f64, f64, f64)) -> f64,
+    until: f64,
+) -> Option<f64> {
     let peak = reference
         .iter()
         .filter(|p| p.0 <= until + 1e-9)
@@ -673,7 +698,12 @@ struct Evaluated {
     steps: u64,
 }
 
-fn evaluate(bench: &Bench, setting: &Setting, reference_frames: Option<&[(f64, f64)]>, opts: &StudyOptions) -> Result<Evaluated, String> {
+fn evaluate(
+    bench: &Bench,
+    setting: &Setting,
+    reference_frames: Option<&[(f64, f64)]>,
+    opts: &StudyOptions,
+) -> Result<Evaluated, String> {
     let budget = opts.point_budget_s;
     match &bench.metric {
         Metric::Overturning { exact, tolerance } => {
@@ -714,10 +744,24 @@ fn evaluate(bench: &Bench, setting: &Setting, reference_frames: Option<&[(f64, f
             let summary = last.ok_or_else(|| failure.clone().unwrap_or_else(|| "no run".into()))?;
             let wall = t0.elapsed().as_secs_f64();
             if let Some(f) = failure {
-                return Ok(Evaluated { error: None, value: None, summary, note: f, wall, steps });
+                return Ok(Evaluated {
+                    error: None,
+                    value: None,
+                    summary,
+                    note: f,
+                    wall,
+                    steps,
+                });
             }
             if !bracket {
-                return Ok(Evaluated { error: None, value: None, summary, note: "no overturning in [4, 8] m/s²".into(), wall, steps });
+                return Ok(Evaluated {
+                    error: None,
+                    value: None,
+                    summary,
+                    note: "no overturning in [4, 8] m/s²".into(),
+                    wall,
+                    steps,
+                });
             }
             let found = 0.5 * (safe + fail);
             Ok(Evaluated {
@@ -738,16 +782,39 @@ fn evaluate(bench: &Bench, setting: &Setting, reference_frames: Option<&[(f64, f
             let wall = m.summary.wall_time_s;
             let steps = m.summary.steps;
             if m.over_budget || !m.summary.completed {
-                let note = if m.over_budget { format!("over the {budget} s budget at t = {:.2} s", m.summary.simulated_time) } else { m.summary.stopped_reason.clone().unwrap_or_default() };
-                return Ok(Evaluated { error: None, value: None, summary: m.summary, note, wall, steps });
+                let note = if m.over_budget {
+                    format!(
+                        "over the {budget} s budget at t = {:.2} s",
+                        m.summary.simulated_time
+                    )
+                } else {
+                    m.summary.stopped_reason.clone().unwrap_or_default()
+                };
+                return Ok(Evaluated {
+                    error: None,
+                    value: None,
+                    summary: m.summary,
+                    note,
+                    wall,
+                    steps,
+                });
             }
             let peak = |pick: fn(&(f64, f64, f64, f64)) -> f64, until: f64| {
-                m.frames.iter().filter(|f| f.0 <= until + 1e-9).fold(0.0f64, |a, f| a.max(pick(f).abs()))
+                m.frames
+                    .iter()
+                    .filter(|f| f.0 <= until + 1e-9)
+                    .fold(0.0f64, |a, f| a.max(pick(f).abs()))
             };
             let mut value = None;
             let error = match metric {
                 Metric::FinalAlong { dir, exact } => {
-                    let d = m.summary.blocks.iter().find(|b| b.id == "block").map(|b| b.final_displacement).unwrap_or([0.0; 2]);
+                    let d = m
+                        .summary
+                        .blocks
+                        .iter()
+                        .find(|b| b.id == "block")
+                        .map(|b| b.final_displacement)
+                        .unwrap_or([0.0; 2]);
                     let along = d[0] * dir[0] + d[1] * dir[1];
                     value = Some(along);
                     Some(((along - exact) / exact).abs())
@@ -762,11 +829,19 @@ fn evaluate(bench: &Bench, setting: &Setting, reference_frames: Option<&[(f64, f
                 }
                 Metric::Finest { .. } => {
                     value = Some(peak(|f| f.1, f64::INFINITY));
-                    reference_frames.and_then(|r| history_error(&m.frames, r, |f| f.1, f64::INFINITY))
+                    reference_frames
+                        .and_then(|r| history_error(&m.frames, r, |f| f.1, f64::INFINITY))
                 }
                 Metric::Overturning { .. } => None,
             };
-            Ok(Evaluated { error, value, summary: m.summary, note: String::new(), wall, steps })
+            Ok(Evaluated {
+                error,
+                value,
+                summary: m.summary,
+                note: String::new(),
+                wall,
+                steps,
+            })
         }
     }
 }
@@ -791,24 +866,70 @@ fn settings(bench: &Bench, quick: bool) -> Vec<(String, Setting)> {
     };
     for integ in ["dda", "trapezoidal"] {
         for &dt in &dts {
-            out.push(("time_step".into(), Setting { integrator: integ.into(), time_step: dt, ..base.clone() }));
+            out.push((
+                "time_step".into(),
+                Setting {
+                    integrator: integ.into(),
+                    time_step: dt,
+                    ..base.clone()
+                },
+            ));
         }
     }
-    let penalties: Vec<f64> = if quick { vec![1e9] } else { vec![1e7, 1e8, 1e9, 1e10, 1e11, 1e12] };
+    let penalties: Vec<f64> = if quick {
+        vec![1e9]
+    } else {
+        vec![1e7, 1e8, 1e9, 1e10, 1e11, 1e12]
+    };
     for k in penalties {
-        out.push(("penalty".into(), Setting { penalty_stiffness: Some(k), ..base.clone() }));
+        out.push((
+            "penalty".into(),
+            Setting {
+                penalty_stiffness: Some(k),
+                ..base.clone()
+            },
+        ));
     }
     if !quick {
         for g2 in [1e-2, 1e-4] {
-            out.push(("g2".into(), Setting { max_displacement_ratio: g2, ..base.clone() }));
+            out.push((
+                "g2".into(),
+                Setting {
+                    max_displacement_ratio: g2,
+                    ..base.clone()
+                },
+            ));
         }
     }
-    out.push(("block_model".into(), Setting { block_model: "rigid".into(), ..base.clone() }));
-    out.push(("contact_solver".into(), Setting { contact_solver: "dual".into(), ..base.clone() }));
+    out.push((
+        "block_model".into(),
+        Setting {
+            block_model: "rigid".into(),
+            ..base.clone()
+        },
+    ));
+    out.push((
+        "contact_solver".into(),
+        Setting {
+            contact_solver: "dual".into(),
+            ..base.clone()
+        },
+    ));
     if bench.reducible {
-        let tols: Vec<f64> = if quick { vec![1e-10] } else { vec![1e-3, 1e-4, 1e-6, 1e-8, 1e-10] };
+        let tols: Vec<f64> = if quick {
+            vec![1e-10]
+        } else {
+            vec![1e-3, 1e-4, 1e-6, 1e-8, 1e-10]
+        };
         for rtol in tols {
-            out.push(("reduced".into(), Setting { model: "reduced".into(), reduced_rtol: Some(rtol), ..base.clone() }));
+            out.push((
+                "reduced".into(),
+                Setting {
+                    model: "reduced".into(),
+                    reduced_rtol: Some(rtol),
+                    ..base.clone()
+                },
+            ));
         }
     }
     out
@@ -827,12 +948,25 @@ pub fn run_study(opts: &StudyOptions) -> Result<StudyResult, String> {
             reference: bench.reference_text.clone(),
         });
         let reference_frames = match &bench.metric {
-            Metric::Finest { observed, reference } => {
+            Metric::Finest {
+                observed,
+                reference,
+            } => {
                 let mut budget_opts = opts.clone();
                 budget_opts.point_budget_s = opts.point_budget_s * 20.0;
-                let m = run_once(bench, reference, &bench.motion, *observed, budget_opts.point_budget_s, None)?;
+                let m = run_once(
+                    bench,
+                    reference,
+                    &bench.motion,
+                    *observed,
+                    budget_opts.point_budget_s,
+                    None,
+                )?;
                 if opts.verbose {
-                    eprintln!("{}: reference run {:.1} s, {} steps", bench.name, m.summary.wall_time_s, m.summary.steps);
+                    eprintln!(
+                        "{}: reference run {:.1} s, {} steps",
+                        bench.name, m.summary.wall_time_s, m.summary.steps
+                    );
                 }
                 Some(m.frames.iter().map(|f| (f.0, f.1)).collect::<Vec<_>>())
             }
@@ -875,7 +1009,9 @@ pub fn run_study(opts: &StudyOptions) -> Result<StudyResult, String> {
                     p.scene,
                     p.sweep,
                     p.label,
-                    p.error.map(|e| format!("{:.3e}", e)).unwrap_or_else(|| "-".into()),
+                    p.error
+                        .map(|e| format!("{:.3e}", e))
+                        .unwrap_or_else(|| "-".into()),
                     p.wall_time_s,
                     p.steps,
                     p.note
@@ -887,15 +1023,25 @@ pub fn run_study(opts: &StudyOptions) -> Result<StudyResult, String> {
     let restitution = restitution_study(opts.quick)?;
     if opts.verbose {
         for r in &restitution {
-            eprintln!("restitution: {} = {:.4} (RMS misfit {:.2e} rad)", r.source, r.coefficient, r.rms_misfit);
+            eprintln!(
+                "restitution: {} = {:.4} (RMS misfit {:.2e} rad)",
+                r.source, r.coefficient, r.rms_misfit
+            );
         }
     }
-    Ok(StudyResult { quick: opts.quick, scenes, points, restitution })
+    Ok(StudyResult {
+        quick: opts.quick,
+        scenes,
+        points,
+        restitution,
+    })
 }
 
 /// Points on the Pareto front (no other point is both faster and more accurate), by wall time.
 pub fn pareto(points: &[&Point]) -> Vec<usize> {
-    let mut idx: Vec<usize> = (0..points.len()).filter(|&i| points[i].error.is_some_and(|e| e.is_finite())).collect();
+    let mut idx: Vec<usize> = (0..points.len())
+        .filter(|&i| points[i].error.is_some_and(|e| e.is_finite()))
+        .collect();
     idx.sort_by(|&a, &b| points[a].wall_time_s.total_cmp(&points[b].wall_time_s));
     let mut front = Vec::new();
     let mut best = f64::INFINITY;
@@ -921,7 +1067,10 @@ pub fn convergence_order(points: &[(f64, f64)], floor: f64) -> Option<f64> {
         return None;
     }
     let n = pts.len() as f64;
-    let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
+    let (mx, my) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
     let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
     let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
     (sxx > 0.0).then(|| sxy / sxx)
@@ -930,7 +1079,8 @@ pub fn convergence_order(points: &[(f64, f64)], floor: f64) -> Option<f64> {
 /// Write `points.json`, `points.csv` and the SVG plots into `dir`.
 pub fn write_outputs(result: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>, String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let io = |p: &Path, text: &str| std::fs::write(p, text).map_err(|e| format!("{}: {e}", p.display()));
+    let io =
+        |p: &Path, text: &str| std::fs::write(p, text).map_err(|e| format!("{}: {e}", p.display()));
     let mut written = Vec::new();
     let json = serde_json::to_string_pretty(result).map_err(|e| e.to_string())?;
     let p = dir.join("points.json");
@@ -949,7 +1099,9 @@ pub fn write_outputs(result: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>, S
             s.block_model,
             s.contact_solver,
             s.time_step,
-            s.penalty_stiffness.map(|k| k.to_string()).unwrap_or_else(|| "auto".into()),
+            s.penalty_stiffness
+                .map(|k| k.to_string())
+                .unwrap_or_else(|| "auto".into()),
             s.max_displacement_ratio,
             s.reduced_rtol.map(|r| r.to_string()).unwrap_or_default(),
             p.error.map(|e| format!("{e:.6e}")).unwrap_or_default(),
@@ -964,7 +1116,11 @@ pub fn write_outputs(result: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>, S
     io(&p, &csv)?;
     written.push(p);
     for scene in &result.scenes {
-        let pts: Vec<&Point> = result.points.iter().filter(|p| p.scene == scene.name).collect();
+        let pts: Vec<&Point> = result
+            .points
+            .iter()
+            .filter(|p| p.scene == scene.name)
+            .collect();
         let p = dir.join(format!("pareto-{}.svg", scene.name));
         io(&p, &svg::pareto(&scene.name, &pts))?;
         written.push(p);
@@ -1005,15 +1161,25 @@ mod svg {
     impl Axes {
         fn fit(xs: &[f64], ys: &[f64]) -> Self {
             let range = |v: &[f64]| {
-                let lo = v.iter().cloned().filter(|x| *x > 0.0).fold(f64::INFINITY, f64::min);
+                let lo = v
+                    .iter()
+                    .cloned()
+                    .filter(|x| *x > 0.0)
+                    .fold(f64::INFINITY, f64::min);
                 let hi = v.iter().cloned().filter(|x| *x > 0.0).fold(0.0, f64::max);
                 if !lo.is_finite() || hi <= 0.0 {
                     (0.0, 1.0)
                 } else {
-                    (lo.log10().floor(), hi.log10().ceil().max(lo.log10().floor() + 1.0))
+                    (
+                        lo.log10().floor(),
+                        hi.log10().ceil().max(lo.log10().floor() + 1.0),
+                    )
                 }
             };
-            Self { x: range(xs), y: range(ys) }
+            Self {
+                x: range(xs),
+                y: range(ys),
+            }
         }
         fn px(&self, x: f64) -> f64 {
             L + (x.max(1e-300).log10() - self.x.0) / (self.x.1 - self.x.0) * (W - L - R)
@@ -1035,7 +1201,11 @@ mod svg {
                 let y = self.py(10f64.powi(d));
                 s += &format!("<line x1=\"{L}\" y1=\"{y:.1}\" x2=\"{}\" y2=\"{y:.1}\" stroke=\"#ddd\"/><text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">1e{d}</text>\n", W - R, L - 5.0, y + 4.0);
             }
-            s += &format!("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{xl}</text>\n", (W - R + L) / 2.0, H - 12.0);
+            s += &format!(
+                "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{xl}</text>\n",
+                (W - R + L) / 2.0,
+                H - 12.0
+            );
             s += &format!("<text x=\"15\" y=\"{}\" text-anchor=\"middle\" transform=\"rotate(-90 15 {})\">{yl}</text>\n", (H - B + T) / 2.0, (H - B + T) / 2.0);
             // The 1 % line.
             if self.y.0 <= -2.0 && self.y.1 >= -2.0 {
@@ -1058,22 +1228,46 @@ mod svg {
     ];
 
     fn color(sweep: &str) -> &'static str {
-        COLORS.iter().find(|c| c.0 == sweep).map(|c| c.1).unwrap_or("#7f7f7f")
+        COLORS
+            .iter()
+            .find(|c| c.0 == sweep)
+            .map(|c| c.1)
+            .unwrap_or("#7f7f7f")
     }
 
     fn esc(s: &str) -> String {
-        s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+        s.replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
     }
 
     pub fn pareto(scene: &str, pts: &[&Point]) -> String {
-        let ok: Vec<&Point> = pts.iter().copied().filter(|p| p.error.is_some_and(|e| e.is_finite())).collect();
+        let ok: Vec<&Point> = pts
+            .iter()
+            .copied()
+            .filter(|p| p.error.is_some_and(|e| e.is_finite()))
+            .collect();
         let xs: Vec<f64> = ok.iter().map(|p| p.wall_time_s.max(1e-6)).collect();
-        let ys: Vec<f64> = ok.iter().map(|p| p.error.unwrap_or(1.0).max(1e-12)).collect();
+        let ys: Vec<f64> = ok
+            .iter()
+            .map(|p| p.error.unwrap_or(1.0).max(1e-12))
+            .collect();
         let ax = Axes::fit(&xs, &ys);
-        let mut s = ax.draw(&format!("{scene}: error against wall time"), "wall time (s)", "relative error");
+        let mut s = ax.draw(
+            &format!("{scene}: error against wall time"),
+            "wall time (s)",
+            "relative error",
+        );
         for p in &ok {
-            let (x, y) = (ax.px(p.wall_time_s.max(1e-6)), ax.py(p.error.unwrap_or(1.0).max(1e-12)));
-            let shape = if p.setting.integrator == "trapezoidal" && p.sweep == "time_step" { "rect" } else { "circle" };
+            let (x, y) = (
+                ax.px(p.wall_time_s.max(1e-6)),
+                ax.py(p.error.unwrap_or(1.0).max(1e-12)),
+            );
+            let shape = if p.setting.integrator == "trapezoidal" && p.sweep == "time_step" {
+                "rect"
+            } else {
+                "circle"
+            };
             if shape == "rect" {
                 s += &format!("<rect x=\"{:.1}\" y=\"{:.1}\" width=\"7\" height=\"7\" fill=\"{}\" opacity=\"0.8\"><title>{}</title></rect>\n", x - 3.5, y - 3.5, color(&p.sweep), esc(&p.label));
             } else {
@@ -1083,9 +1277,18 @@ mod svg {
         let front = super::pareto(&ok);
         let line: Vec<String> = front
             .iter()
-            .map(|&i| format!("{:.1},{:.1}", ax.px(ok[i].wall_time_s.max(1e-6)), ax.py(ok[i].error.unwrap_or(1.0).max(1e-12))))
+            .map(|&i| {
+                format!(
+                    "{:.1},{:.1}",
+                    ax.px(ok[i].wall_time_s.max(1e-6)),
+                    ax.py(ok[i].error.unwrap_or(1.0).max(1e-12))
+                )
+            })
             .collect();
-        s += &format!("<polyline points=\"{}\" fill=\"none\" stroke=\"black\" stroke-width=\"1.2\"/>\n", line.join(" "));
+        s += &format!(
+            "<polyline points=\"{}\" fill=\"none\" stroke=\"black\" stroke-width=\"1.2\"/>\n",
+            line.join(" ")
+        );
         let mut y = T + 10.0;
         for (name, c) in COLORS.iter().take(7) {
             s += &format!("<circle cx=\"{}\" cy=\"{y}\" r=\"4\" fill=\"{c}\"/><text x=\"{}\" y=\"{}\">{name}</text>\n", W - R + 15.0, W - R + 25.0, y + 4.0);
@@ -1103,15 +1306,31 @@ mod svg {
         let xs: Vec<f64> = data.iter().flatten().map(|p| p.0).collect();
         let ys: Vec<f64> = data.iter().flatten().map(|p| p.1).collect();
         let ax = Axes::fit(&xs, &ys);
-        let mut s = ax.draw(&format!("{scene}: error against time step"), "maximum time step Δt (s)", "relative error");
+        let mut s = ax.draw(
+            &format!("{scene}: error against time step"),
+            "maximum time step Δt (s)",
+            "relative error",
+        );
         let mut y = T + 10.0;
         for ((name, c), d) in series.iter().zip(&data) {
-            let line: Vec<String> = d.iter().map(|p| format!("{:.1},{:.1}", ax.px(p.0), ax.py(p.1))).collect();
-            s += &format!("<polyline points=\"{}\" fill=\"none\" stroke=\"{c}\" stroke-width=\"1.5\"/>\n", line.join(" "));
+            let line: Vec<String> = d
+                .iter()
+                .map(|p| format!("{:.1},{:.1}", ax.px(p.0), ax.py(p.1)))
+                .collect();
+            s += &format!(
+                "<polyline points=\"{}\" fill=\"none\" stroke=\"{c}\" stroke-width=\"1.5\"/>\n",
+                line.join(" ")
+            );
             for p in d {
-                s += &format!("<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"3.5\" fill=\"{c}\"/>\n", ax.px(p.0), ax.py(p.1));
+                s += &format!(
+                    "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"3.5\" fill=\"{c}\"/>\n",
+                    ax.px(p.0),
+                    ax.py(p.1)
+                );
             }
-            let order = convergence_order(d, 1e-9).map(|o| format!("order {o:.2}")).unwrap_or_else(|| "order n/a".into());
+            let order = convergence_order(d, 1e-9)
+                .map(|o| format!("order {o:.2}"))
+                .unwrap_or_else(|| "order n/a".into());
             s += &format!("<line x1=\"{}\" y1=\"{y}\" x2=\"{}\" y2=\"{y}\" stroke=\"{c}\" stroke-width=\"2\"/><text x=\"{}\" y=\"{}\">{name}: {order}</text>\n", W - R + 8.0, W - R + 20.0, W - R + 25.0, y + 4.0);
             y += 16.0;
         }
@@ -1123,19 +1342,39 @@ mod svg {
 /// the report).
 pub fn report(result: &StudyResult, svg_dir: &str, command: &str) -> String {
     let mut s = String::from("# Accuracy against speed\n\n");
+    let profile = if cfg!(debug_assertions) {
+        "debug build: ashlar at opt-level 1, dependencies at opt-level 2; a release build is several times faster, uniformly"
+    } else {
+        "release build"
+    };
     s += &format!(
-        "Generated by `{command}` (release build, on the project's 2-core machine shared with other jobs, so wall times carry some noise; ratios within one run are meaningful). Data: [`points.csv`]({svg_dir}/points.csv), [`points.json`]({svg_dir}/points.json).\n\n"
+        "Generated by `{command}` ({profile}; on the project's 2-core machine shared with other jobs, so wall times carry some noise; ratios within one run are meaningful). Data: [`points.csv`]({svg_dir}/points.csv), [`points.json`]({svg_dir}/points.json).\n\n"
     );
-    s += "Every point is one run (or, for the overturning amplitude, one bisection of runs) of a benchmark scene with one numerical control changed from the project's defaults (`time_step` 1e-3 s, `max_displacement_ratio` (g2) 1e-3, `penalty_stiffness` \"auto\" = 10 E, `integrator` \"dda\", `block_model` \"deformable\", `contact_solver` \"penalty\"); the `time_step` sweep is run for both integrators. *reduced* points run the reduced rocking/sliding models (`\"model\": \"auto\"`) at a given ODE tolerance. The error is measured against a reference independent of the engine and of the reduced models (below). Points marked `-` failed or exceeded their time budget; the note says why.\n\n";
+    s += "Every point is one run (or, for the overturning amplitude, one bisection of runs) of a benchmark scene with one numerical control changed from the project's defaults (`time_step` 1e-3 s, `max_displacement_ratio` (g2) 1e-3, `penalty_stiffness` \"auto\" = 10 E, `integrator` \"dda\", `block_model` \"deformable\", `contact_solver` \"penalty\"); the `time_step` sweep is run for both integrators. *reduced* points run the reduced rocking/sliding models (`\"model\": \"auto\"`) at a given ODE tolerance. The error is measured against a reference independent of the engine and of the reduced models (below). Points marked `-` failed or exceeded their time budget; the note says why. The `contact_solver` point asks for `\"dual\"`: where its result is identical to the default's, this build's engine does not yet implement the dual solver (another issue) and ran the penalty solver.\n\n";
     s += &summary_tables(result);
     for sc in &result.scenes {
-        let pts: Vec<&Point> = result.points.iter().filter(|p| p.scene == sc.name).collect();
-        s += &format!("## {}\n\n{}.\n\n*Reference:* {}. *Error:* {}.\n\n", sc.name, sc.description, sc.reference, sc.metric);
-        s += &format!("![error against wall time]({svg_dir}/pareto-{}.svg)\n", sc.name);
-        s += &format!("![error against time step]({svg_dir}/convergence-{}.svg)\n\n", sc.name);
+        let pts: Vec<&Point> = result
+            .points
+            .iter()
+            .filter(|p| p.scene == sc.name)
+            .collect();
+        s += &format!(
+            "## {}\n\n{}.\n\n*Reference:* {}. *Error:* {}.\n\n",
+            sc.name, sc.description, sc.reference, sc.metric
+        );
+        s += &format!(
+            "![error against wall time]({svg_dir}/pareto-{}.svg)\n",
+            sc.name
+        );
+        s += &format!(
+            "![error against time step]({svg_dir}/convergence-{}.svg)\n\n",
+            sc.name
+        );
         for integ in ["dda", "trapezoidal"] {
             if let Some(o) = convergence_order(&dt_series(&pts, integ), 1e-9) {
-                s += &format!("Observed order of convergence in Δt, {integ} integrator: **{o:.2}**. ");
+                s += &format!(
+                    "Observed order of convergence in Δt, {integ} integrator: **{o:.2}**. "
+                );
             }
         }
         s += "\n\n";
@@ -1143,17 +1382,39 @@ pub fn report(result: &StudyResult, svg_dir: &str, command: &str) -> String {
         if let Some(d) = pts.iter().find(|p| p.sweep == "defaults") {
             s += &format!(
                 "Defaults: error {}, {:.3} s, {} steps (model {}).",
-                d.error.map(|e| format!("{:.3} %", 100.0 * e)).unwrap_or_else(|| "-".into()),
+                d.error
+                    .map(|e| format!("{:.3} %", 100.0 * e))
+                    .unwrap_or_else(|| "-".into()),
                 d.wall_time_s,
                 d.steps,
                 d.model_ran
             );
         }
-        if let Some(best) = pts.iter().filter(|p| ok(p)).filter(|p| p.sweep != "reduced").min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s)) {
-            s += &format!(" Cheapest full-DDA point within 1 %: `{}` ({:.3} %, {:.3} s).", best.label, 100.0 * best.error.unwrap_or(0.0), best.wall_time_s);
+        if let Some(best) = pts
+            .iter()
+            .filter(|p| ok(p))
+            .filter(|p| p.sweep != "reduced")
+            .min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s))
+        {
+            s += &format!(
+                " Cheapest full-DDA point within 1 %: `{}` ({:.3} %, {:.3} s).",
+                best.label,
+                100.0 * best.error.unwrap_or(0.0),
+                best.wall_time_s
+            );
         }
-        if let Some(best) = pts.iter().filter(|p| ok(p)).filter(|p| p.sweep == "reduced").min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s)) {
-            s += &format!(" Cheapest reduced point within 1 %: `{}` ({:.2e}, {:.4} s).", best.label, best.error.unwrap_or(0.0), best.wall_time_s);
+        if let Some(best) = pts
+            .iter()
+            .filter(|p| ok(p))
+            .filter(|p| p.sweep == "reduced")
+            .min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s))
+        {
+            s += &format!(
+                " Cheapest reduced point within 1 %: `{}` ({:.2e}, {:.4} s).",
+                best.label,
+                best.error.unwrap_or(0.0),
+                best.wall_time_s
+            );
         }
         s += "\n\n| sweep | setting | model ran | error | wall (s) | steps | open–close it./step | Δt cuts | note |\n|---|---|---|---|---|---|---|---|---|\n";
         for p in &pts {
@@ -1162,7 +1423,9 @@ pub fn report(result: &StudyResult, svg_dir: &str, command: &str) -> String {
                 p.sweep,
                 p.label,
                 p.model_ran,
-                p.error.map(|e| format!("{e:.2e}")).unwrap_or_else(|| "-".into()),
+                p.error
+                    .map(|e| format!("{e:.2e}"))
+                    .unwrap_or_else(|| "-".into()),
                 p.wall_time_s,
                 p.steps,
                 p.open_close_iterations_mean,
@@ -1176,34 +1439,44 @@ pub fn report(result: &StudyResult, svg_dir: &str, command: &str) -> String {
 }
 
 fn pct(e: Option<f64>) -> String {
-    e.map(|e| format!("{:.3} %", 100.0 * e)).unwrap_or_else(|| "-".into())
+    e.map(|e| format!("{:.3} %", 100.0 * e))
+        .unwrap_or_else(|| "-".into())
 }
 
 /// The findings drawn from the points: defaults against the 1 % target, rigid against
 /// deformable blocks, reduced against full models, and the restitution comparison.
 fn summary_tables(result: &StudyResult) -> String {
-    let find = |scene: &str, pred: &dyn Fn(&Point) -> bool| result.points.iter().find(|p| p.scene == scene && pred(p));
+    let find = |scene: &str, pred: &dyn Fn(&Point) -> bool| {
+        result.points.iter().find(|p| p.scene == scene && pred(p))
+    };
     let mut s = String::from("## Summary\n\n### The defaults against the 1 % target\n\n| scene | defaults: error | wall (s) | steps | cheapest full-DDA point within 1 % | its wall (s) |\n|---|---|---|---|---|---|\n");
     for sc in &result.scenes {
         let d = find(&sc.name, &|p| p.sweep == "defaults");
         let best = result
             .points
             .iter()
-            .filter(|p| p.scene == sc.name && p.sweep != "reduced" && p.error.is_some_and(|e| e <= 0.01))
+            .filter(|p| {
+                p.scene == sc.name && p.sweep != "reduced" && p.error.is_some_and(|e| e <= 0.01)
+            })
             .min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s));
         s += &format!(
             "| {} | {} | {} | {} | {} | {} |\n",
             sc.name,
             pct(d.and_then(|p| p.error)),
-            d.map(|p| format!("{:.3}", p.wall_time_s)).unwrap_or_default(),
+            d.map(|p| format!("{:.3}", p.wall_time_s))
+                .unwrap_or_default(),
             d.map(|p| p.steps.to_string()).unwrap_or_default(),
-            best.map(|p| format!("`{}` ({})", p.label, pct(p.error))).unwrap_or_else(|| "none".into()),
-            best.map(|p| format!("{:.3}", p.wall_time_s)).unwrap_or_default(),
+            best.map(|p| format!("`{}` ({})", p.label, pct(p.error)))
+                .unwrap_or_else(|| "none".into()),
+            best.map(|p| format!("{:.3}", p.wall_time_s))
+                .unwrap_or_default(),
         );
     }
     s += "\n### Rigid against deformable blocks (stone, E = 20 GPa; other controls at defaults)\n\n| scene | deformable: error, wall (s) | rigid: error, wall (s) | speed-up | answer difference |\n|---|---|---|---|---|\n";
     for sc in &result.scenes {
-        let base = find(&sc.name, &|p| p.sweep == "time_step" && p.setting == Setting::baseline());
+        let base = find(&sc.name, &|p| {
+            p.sweep == "time_step" && p.setting == Setting::baseline()
+        });
         let rigid = find(&sc.name, &|p| p.sweep == "block_model");
         if let (Some(d), Some(r)) = (base, rigid) {
             let diff = match (d.value, r.value) {
@@ -1228,7 +1501,12 @@ fn summary_tables(result: &StudyResult) -> String {
             .points
             .iter()
             .filter(|p| p.scene == sc.name && p.sweep == "reduced")
-            .min_by(|a, b| a.setting.reduced_rtol.unwrap_or(1.0).total_cmp(&b.setting.reduced_rtol.unwrap_or(1.0)));
+            .min_by(|a, b| {
+                a.setting
+                    .reduced_rtol
+                    .unwrap_or(1.0)
+                    .total_cmp(&b.setting.reduced_rtol.unwrap_or(1.0))
+            });
         let d = find(&sc.name, &|p| p.sweep == "defaults");
         if let (Some(r), Some(d)) = (red, d) {
             s += &format!(
@@ -1245,7 +1523,10 @@ fn summary_tables(result: &StudyResult) -> String {
     }
     s += "\n### Restitution at the rocking column's impacts\n\nThe reduced rocking model uses Housner's angular-momentum law by default. DDA has no restitution coefficient: energy is lost through the penalty springs and the integrator. The coefficient below is the constant e with which the reduced model best reproduces the DDA rotation history over 2 s (scan of e in steps of 0.0025).\n\n| source | e | RMS misfit (rad) |\n|---|---|---|\n";
     for r in &result.restitution {
-        s += &format!("| {} | {:.4} | {:.2e} |\n", r.source, r.coefficient, r.rms_misfit);
+        s += &format!(
+            "| {} | {:.4} | {:.2e} |\n",
+            r.source, r.coefficient, r.rms_misfit
+        );
     }
     s += "\n";
     s
@@ -1276,9 +1557,9 @@ mod tests {
     fn pareto_keeps_only_points_nobody_beats_on_both() {
         let pts = [
             point(1.0, Some(0.1)),
-            point(2.0, Some(0.2)),  // slower and worse than the first: dominated
+            point(2.0, Some(0.2)), // slower and worse than the first: dominated
             point(3.0, Some(0.01)),
-            point(0.5, None),       // failed: not on the front
+            point(0.5, None), // failed: not on the front
             point(4.0, Some(0.001)),
         ];
         let refs: Vec<&Point> = pts.iter().collect();
@@ -1288,7 +1569,10 @@ mod tests {
     #[test]
     fn convergence_order_recovers_a_power_law() {
         // e = 3 Δt²: slope exactly 2 (to round-off, 1e-12); points under the floor ignored.
-        let pts: Vec<(f64, f64)> = [1e-2, 1e-3, 1e-4, 1e-5].iter().map(|&h: &f64| (h, 3.0 * h * h)).collect();
+        let pts: Vec<(f64, f64)> = [1e-2, 1e-3, 1e-4, 1e-5]
+            .iter()
+            .map(|&h: &f64| (h, 3.0 * h * h))
+            .collect();
         let o = convergence_order(&pts, 1e-9).expect("order");
         assert!((o - 2.0).abs() < 1e-12, "{o}");
         assert_eq!(convergence_order(&pts[..1], 1e-9), None);

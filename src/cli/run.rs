@@ -109,7 +109,9 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
     let mut scene = load_scene(&args.scene)?;
     if let Some(i) = args.output_interval {
         if !(i.is_finite() && i > 0.0) {
-            return Err(format!("--output-interval {i}: must be a positive number of seconds"));
+            return Err(format!(
+                "--output-interval {i}: must be a positive number of seconds"
+            ));
         }
         scene.control.output_interval = i;
     }

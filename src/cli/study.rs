@@ -28,7 +28,9 @@ pub struct StudyArgs {
 pub fn run(args: &StudyArgs) -> Result<(), String> {
     let budget = args.budget.unwrap_or(if args.quick { 10.0 } else { 120.0 });
     if !(budget.is_finite() && budget > 0.0) {
-        return Err(format!("--budget {budget}: must be a positive number of seconds"));
+        return Err(format!(
+            "--budget {budget}: must be a positive number of seconds"
+        ));
     }
     if !args.ground_motions.is_dir() {
         return Err(format!(

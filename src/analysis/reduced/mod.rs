@@ -83,11 +83,21 @@ pub enum Modes {
 pub enum Phase {
     Rest,
     /// On pivot 0 or 1: θ (rad) and ω (rad/s).
-    Rocking { pivot: usize, theta: f64, omega: f64 },
+    Rocking {
+        pivot: usize,
+        theta: f64,
+        omega: f64,
+    },
     /// Slip rate (m/s) and direction (±1).
-    Sliding { rate: f64, dir: f64 },
+    Sliding {
+        rate: f64,
+        dir: f64,
+    },
     /// Lying on another face after overturning about `pivot` at rotation `theta`.
-    Fallen { pivot: usize, theta: f64 },
+    Fallen {
+        pivot: usize,
+        theta: f64,
+    },
 }
 
 /// A case the reduced models do not represent, at time `time` (s).
@@ -138,7 +148,12 @@ type Onset = (Option<usize>, Option<f64>, bool);
 const BISECTIONS: usize = 60;
 
 impl Reduced {
-    pub fn new(block: SingleBlock, motion: &GroundMotion, params: ReducedParams, modes: Modes) -> Self {
+    pub fn new(
+        block: SingleBlock,
+        motion: &GroundMotion,
+        params: ReducedParams,
+        modes: Modes,
+    ) -> Self {
         let v0 = block.initial_slip_rate;
         let phase = if v0 != 0.0 && modes != Modes::Rocking {
             Phase::Sliding {
@@ -304,7 +319,12 @@ impl Reduced {
                 let r = rocking::reaction(&self.block, k, 0.0, 0.0, self.load(t));
                 if r.y > 0.0 && r.x.abs() <= self.block.mu * r.y {
                     o.1 = None;
-                } else if self.violate(t, format!("rocking and sliding start together at t = {t:.6} s (the pivot would slip)")) {
+                } else if self.violate(
+                    t,
+                    format!(
+                        "rocking and sliding start together at t = {t:.6} s (the pivot would slip)"
+                    ),
+                ) {
                     return true;
                 } else {
                     o.1 = None;
@@ -330,7 +350,12 @@ impl Reduced {
 
     /// One adaptive step of `f` from the current state, at most to `target`; returns the step
     /// taken and the new state.
-    fn ode_step(&mut self, f: &impl Fn(f64, State) -> State, y: State, target: f64) -> (f64, State) {
+    fn ode_step(
+        &mut self,
+        f: &impl Fn(f64, State) -> State,
+        y: State,
+        target: f64,
+    ) -> (f64, State) {
         let t = self.time;
         loop {
             let proposal = self.h.min(self.params.max_step);
@@ -339,7 +364,11 @@ impl Reduced {
             if err <= 1.0 || h < 1e-12 {
                 let next = ode::next_h(h, err).max(1e-12);
                 // A step clipped by the target must not shrink the next proposal.
-                self.h = if h < proposal { next.max(proposal) } else { next };
+                self.h = if h < proposal {
+                    next.max(proposal)
+                } else {
+                    next
+                };
                 self.count_step(h);
                 return (h, y1);
             }
@@ -375,7 +404,12 @@ impl Reduced {
     }
 
     fn rock(&mut self, target: f64) -> bool {
-        let Phase::Rocking { pivot: k, theta, omega } = self.phase else {
+        let Phase::Rocking {
+            pivot: k,
+            theta,
+            omega,
+        } = self.phase
+        else {
             return false;
         };
         let blk = self.block.clone();
@@ -415,11 +449,19 @@ impl Reduced {
             self.time += h;
             if !rocking::beyond_tipping(&b, k, y[0]) {
                 let t = self.time;
-                if self.violate(t, format!("another face of the block reaches the base while rocking at t = {t:.6} s")) {
+                if self.violate(
+                    t,
+                    format!(
+                        "another face of the block reaches the base while rocking at t = {t:.6} s"
+                    ),
+                ) {
                     return true;
                 }
             }
-            self.phase = Phase::Fallen { pivot: k, theta: y[0] };
+            self.phase = Phase::Fallen {
+                pivot: k,
+                theta: y[0],
+            };
             return false;
         }
         self.time += h;
@@ -433,9 +475,15 @@ impl Reduced {
             let r = rocking::reaction(&b, k, y1[0], y1[1], a);
             let t = self.time;
             if r.y < 0.0 {
-                return self.violate(t, format!("the pivot loses contact (the block would jump) at t = {t:.6} s"));
+                return self.violate(
+                    t,
+                    format!("the pivot loses contact (the block would jump) at t = {t:.6} s"),
+                );
             }
-            if self.modes == Modes::Auto && r.x.abs() > b.mu * r.y && !rocking::beyond_tipping(&b, k, y1[0]) {
+            if self.modes == Modes::Auto
+                && r.x.abs() > b.mu * r.y
+                && !rocking::beyond_tipping(&b, k, y1[0])
+            {
                 return self.violate(t, format!("the pivot slips while rocking at t = {t:.6} s (friction demand {:.3} above μ = {:.3}): sliding and rocking together", r.x.abs() / r.y, b.mu));
             }
         }
@@ -477,7 +525,10 @@ impl Reduced {
         }
         if sliding::pressure(self.load(self.time)) <= 0.0 {
             let t = self.time;
-            return self.violate(t, format!("the block loses contact (vertical load exceeds gravity) at t = {t:.6} s"));
+            return self.violate(
+                t,
+                format!("the block loses contact (vertical load exceeds gravity) at t = {t:.6} s"),
+            );
         }
         false
     }
@@ -489,10 +540,19 @@ impl Reduced {
         match self.phase {
             Phase::Rest => (slip, 0.0, Vector2::zeros(), 0.0),
             Phase::Sliding { rate, .. } => (slip, 0.0, Vector2::new(rate, 0.0), 0.0),
-            Phase::Rocking { pivot, theta, omega } => {
+            Phase::Rocking {
+                pivot,
+                theta,
+                omega,
+            } => {
                 let c = rocking::centroid(b, pivot, theta, self.slip);
                 let r = c - Vector2::new(b.pivots[pivot] + self.slip, 0.0);
-                (c - b.centroid, theta, Vector2::new(-r.y, r.x) * omega, omega)
+                (
+                    c - b.centroid,
+                    theta,
+                    Vector2::new(-r.y, r.x) * omega,
+                    omega,
+                )
             }
             Phase::Fallen { pivot, theta } => {
                 let c = rocking::centroid(b, pivot, theta, self.slip);

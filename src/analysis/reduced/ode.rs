@@ -66,7 +66,13 @@ pub struct Tolerance {
 
 /// One step of size `h` from (t, y): the fifth-order solution and the scaled error norm
 /// (≤ 1 means the step meets the tolerance).
-pub fn step(f: &impl Fn(f64, State) -> State, t: f64, y: State, h: f64, tol: Tolerance) -> (State, f64) {
+pub fn step(
+    f: &impl Fn(f64, State) -> State,
+    t: f64,
+    y: State,
+    h: f64,
+    tol: Tolerance,
+) -> (State, f64) {
     let mut k = [[0.0; 2]; 7];
     for s in 0..7 {
         let mut ys = y;
@@ -110,7 +116,10 @@ mod tests {
         // ẍ = −x from (1, 0): after 2π the state returns to (1, 0). The error of a fifth-order
         // method falls 32× when h halves (tolerance: the observed ratio within 25…40).
         let f = |_t: f64, y: State| [y[1], -y[0]];
-        let tol = Tolerance { rtol: 1.0, atol: 1.0 };
+        let tol = Tolerance {
+            rtol: 1.0,
+            atol: 1.0,
+        };
         let run = |n: usize| {
             let h = 2.0 * std::f64::consts::PI / n as f64;
             let mut y = [1.0, 0.0];
@@ -121,6 +130,9 @@ mod tests {
         };
         let (e1, e2) = (run(20), run(40));
         let ratio = e1 / e2;
-        assert!((25.0..40.0).contains(&ratio), "ratio {ratio}, errors {e1} {e2}");
+        assert!(
+            (25.0..40.0).contains(&ratio),
+            "ratio {ratio}, errors {e1} {e2}"
+        );
     }
 }

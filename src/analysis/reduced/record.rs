@@ -336,8 +336,8 @@ pub fn run(
         control: serde_json::to_value(&scene.control).unwrap_or_default(),
     };
     if let Some(dir) = opts.out_dir {
-        let text = serde_json::to_string_pretty(&summary)
-            .map_err(|e| RunError::Io(e.to_string()))?;
+        let text =
+            serde_json::to_string_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;
         std::fs::write(dir.join("summary.json"), text + "\n")
             .map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
     }

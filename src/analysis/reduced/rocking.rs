@@ -154,6 +154,9 @@ mod tests {
         let th = 0.1;
         let acc = angular_acceleration(&b, 0, th, Vector2::new(0.0, -9.81));
         let exact = -3.0 * 9.81 / (4.0 * r) * (alpha - th).sin();
-        assert!((acc - exact).abs() < 1e-12 * exact.abs(), "{acc} vs {exact}");
+        assert!(
+            (acc - exact).abs() < 1e-12 * exact.abs(),
+            "{acc} vs {exact}"
+        );
     }
 }
