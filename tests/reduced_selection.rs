@@ -249,7 +249,7 @@ fn first_motion_matches_yeungs_chart() {
     let mut seen = std::collections::HashSet::new();
     for (alpha, k, delta, phi) in cases {
         let psi = alpha + f64::atan(k).to_degrees();
-        let r = |x: f64| f64::to_radians(x);
+        let r = f64::to_radians;
         let expected = chart(r(psi), r(delta), r(phi));
         for dp in [-3.0, 0.0, 3.0] {
             for dd in [-3.0, 0.0, 3.0] {

@@ -225,7 +225,7 @@ pub enum ModelPlan {
     Dda(String),
     /// A reduced model of the single block, which motions it may use, and why.
     Reduced {
-        block: SingleBlock,
+        block: Box<SingleBlock>,
         modes: Modes,
         reason: String,
     },
@@ -270,7 +270,7 @@ pub fn choose_model(scene: &Scene, params: &ReducedParams) -> Result<ModelPlan, 
                     describe(&b, Modes::Auto)
                 );
                 Ok(ModelPlan::Reduced {
-                    block: b,
+                    block: Box::new(b),
                     modes: Modes::Auto,
                     reason,
                 })
@@ -292,7 +292,7 @@ pub fn choose_model(scene: &Scene, params: &ReducedParams) -> Result<ModelPlan, 
             })?;
             let reason = format!("control.model is \"{name}\": {}", describe(&b, modes));
             Ok(ModelPlan::Reduced {
-                block: b,
+                block: Box::new(b),
                 modes,
                 reason,
             })
@@ -370,7 +370,7 @@ pub fn run(
             block,
             modes,
             reason,
-        } => match reduced::record::run(scene, motion, opts, block, modes, rparams, &reason) {
+        } => match reduced::record::run(scene, motion, opts, *block, modes, rparams, &reason) {
             Ok(outcome) => Ok(outcome),
             Err(ReducedError::Run(e)) => Err(e),
             Err(ReducedError::Violation(v)) => run_dda(

@@ -686,7 +686,7 @@ fn history_error(
         worst = worst.max((pick(f) - r.1).abs());
         n += 1;
     }
-    (n > 0 && peak > 0.0).then(|| worst / peak)
+    (n > 0 && peak > 0.0).then_some(worst / peak)
 }
 
 struct Evaluated {
@@ -1073,7 +1073,7 @@ pub fn convergence_order(points: &[(f64, f64)], floor: f64) -> Option<f64> {
     );
     let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
     let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    (sxx > 0.0).then(|| sxy / sxx)
+    (sxx > 0.0).then_some(sxy / sxx)
 }
 
 /// Write `points.json`, `points.csv` and the SVG plots into `dir`.

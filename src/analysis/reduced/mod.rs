@@ -244,7 +244,7 @@ impl Reduced {
     /// Is nothing starting under the onset `o`? (Loss of contact only stops `Auto` runs; the
     /// forced models keep the block on its base through it.)
     fn quiet(&self, o: &Onset) -> bool {
-        o.0.is_none() && o.1.is_none() && !(o.2 && self.modes == Modes::Auto)
+        o.0.is_none() && o.1.is_none() && (!o.2 || self.modes != Modes::Auto)
     }
 
     /// At rest: scan for the first instant a motion starts, locate it by bisection.

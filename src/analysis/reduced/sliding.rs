@@ -18,7 +18,7 @@ pub fn acceleration(b: &SingleBlock, dir: f64, a: Vector2<f64>) -> f64 {
 
 /// Would a block at rest start to slide under `a`? Returns the direction (±1) if so.
 pub fn slips(b: &SingleBlock, a: Vector2<f64>) -> Option<f64> {
-    (a.x.abs() > b.mu * pressure(a)).then(|| a.x.signum())
+    (a.x.abs() > b.mu * pressure(a)).then_some(a.x.signum())
 }
 
 /// Does a block sliding in `dir` stay flat? In the frame sliding with it the load is tilted by
