@@ -2,4 +2,6 @@
 //! Sits on top of `simulation`, `motion` and `record`; the service and CLI call in here.
 pub mod fragility;
 pub mod pga;
+pub mod reduced;
 pub mod run;
+pub mod study;

@@ -1,5 +1,8 @@
 //! One run of a scene under a ground motion: drives the simulation to the end, records frames
 //! (histories, trajectory), classifies the outcome and writes `summary.json` (FORMAT.md §3).
+use crate::analysis::reduced::{
+    self, record::ReducedError, Modes, ReducedParams, Restitution, SingleBlock,
+};
 use crate::contact::{ContactState, Mobility};
 use crate::motion::GroundMotion;
 use crate::record::histories::HistoryWriter;
@@ -45,6 +48,12 @@ pub struct Diagnostics {
     pub min_time_step: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_time_step: Option<f64>,
+    /// Rocking model only: the ratio of angular velocities after/before an impact used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub restitution: Option<f64>,
+    /// Rocking model only: number of impacts (changes of pivot).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub impacts: Option<u64>,
 }
 
 /// `summary.json` (FORMAT.md §3).
@@ -86,6 +95,10 @@ pub struct RunOptions<'a> {
     pub stop_when: Option<&'a (dyn Fn(&Tracker) -> bool + Sync)>,
     /// Engine knobs (defaults when `None`).
     pub sim_params: Option<SimParams>,
+    /// Called with every recorded frame (studies compare histories without files).
+    pub on_frame: Option<&'a (dyn Fn(&Frame) + Sync)>,
+    /// Knobs of the reduced models (defaults when `None`).
+    pub reduced_params: Option<ReducedParams>,
 }
 
 /// How a run can fail (the message names where).
@@ -205,27 +218,95 @@ pub fn duration(scene: &Scene, motion: &GroundMotion) -> Result<f64, RunError> {
     }
 }
 
-/// Which model runs, and why.
-fn choose_model(scene: &Scene) -> Result<(String, String), RunError> {
+/// The model a run uses, decided from the scene alone (FORMAT.md §1 `control.model`).
+#[derive(Debug, Clone)]
+pub enum ModelPlan {
+    /// The full DDA engine, and why.
+    Dda(String),
+    /// A reduced model of the single block, which motions it may use, and why.
+    Reduced {
+        block: Box<SingleBlock>,
+        modes: Modes,
+        reason: String,
+    },
+}
+
+/// Which model runs, and why (a forced reduced model on a scene it cannot represent is an
+/// error naming the reason).
+pub fn choose_model(scene: &Scene, params: &ReducedParams) -> Result<ModelPlan, RunError> {
+    let law = match params.restitution {
+        Restitution::Housner => "Housner's angular-momentum impact law",
+        Restitution::Coefficient(_) => "a given restitution coefficient",
+    };
+    let describe = |b: &SingleBlock, modes: Modes| {
+        let e = reduced::rocking::restitution(b, 0, params.restitution);
+        let (a0, a1) = (b.slenderness(0), b.slenderness(1));
+        let rock = format!(
+            "Housner's rocking equation (slenderness α = {:.2}°/{:.2}°) with {law}, e = {e:.4} (1 − 1.5 sin²α = {:.4} for a rectangle)",
+            a0.to_degrees(),
+            a1.to_degrees(),
+            1.0 - 1.5 * a0.sin().powi(2)
+        );
+        let slide = format!(
+            "rigid-plastic Newmark sliding (μ = tan φ = {:.4}, contact slope {:.2}°)",
+            b.mu,
+            b.slope.to_degrees()
+        );
+        match modes {
+            Modes::Rocking => rock,
+            Modes::Sliding => slide,
+            Modes::Auto => format!("{rock}, or {slide}, whichever the first-motion check starts"),
+        }
+    };
     match scene.control.model {
-        ModelChoice::Dda => Ok(("dda".into(), "control.model is \"dda\": the full DDA engine".into())),
-        ModelChoice::Auto => Ok((
-            "dda".into(),
-            "control.model is \"auto\": no reduced model is available in this version, so the full DDA engine ran".into(),
+        ModelChoice::Dda => Ok(ModelPlan::Dda(
+            "control.model is \"dda\": the full DDA engine".into(),
         )),
-        ModelChoice::Rocking | ModelChoice::Sliding => Err(RunError::Invalid(
-            "control.model: the reduced \"rocking\" and \"sliding\" models are not available in this version; use \"dda\" or \"auto\"".into(),
-        )),
+        ModelChoice::Auto => match reduced::qualify(scene, params) {
+            Ok(b) => {
+                let reason = format!(
+                    "control.model is \"auto\" and the scene is one rigid block on a {} base: {}",
+                    if b.driven { "driven" } else { "fixed" },
+                    describe(&b, Modes::Auto)
+                );
+                Ok(ModelPlan::Reduced {
+                    block: Box::new(b),
+                    modes: Modes::Auto,
+                    reason,
+                })
+            }
+            Err(why) => Ok(ModelPlan::Dda(format!(
+                "control.model is \"auto\" but no reduced model represents the scene ({why}): the full DDA engine ran"
+            ))),
+        },
+        ModelChoice::Rocking | ModelChoice::Sliding => {
+            let (name, modes) = if scene.control.model == ModelChoice::Rocking {
+                ("rocking", Modes::Rocking)
+            } else {
+                ("sliding", Modes::Sliding)
+            };
+            let b = reduced::qualify(scene, params).map_err(|why| {
+                RunError::Invalid(format!(
+                    "control.model: the scene does not qualify for the reduced \"{name}\" model: {why}"
+                ))
+            })?;
+            let reason = format!("control.model is \"{name}\": {}", describe(&b, modes));
+            Ok(ModelPlan::Reduced {
+                block: Box::new(b),
+                modes,
+                reason,
+            })
+        }
     }
 }
 
-struct Writers {
+pub(crate) struct Writers {
     histories: Option<HistoryWriter<std::io::BufWriter<std::fs::File>>>,
     mcap: Option<McapRecorder>,
 }
 
 impl Writers {
-    fn open(
+    pub(crate) fn open(
         out: Option<&Path>,
         header: &RecordHeader,
         no_trajectory: bool,
@@ -253,7 +334,7 @@ impl Writers {
         Ok(Self { histories, mcap })
     }
 
-    fn write(&mut self, frame: &Frame) -> Result<(), RunError> {
+    pub(crate) fn write(&mut self, frame: &Frame) -> Result<(), RunError> {
         if let Some(h) = &mut self.histories {
             h.write_frame(frame)
                 .map_err(|e| RunError::Io(e.to_string()))?;
@@ -265,7 +346,7 @@ impl Writers {
         Ok(())
     }
 
-    fn finish(self) -> Result<(), RunError> {
+    pub(crate) fn finish(self) -> Result<(), RunError> {
         if let Some(h) = self.histories {
             h.finish().map_err(|e| RunError::Io(e.to_string()))?;
         }
@@ -282,8 +363,38 @@ pub fn run(
     motion: &GroundMotion,
     opts: &RunOptions,
 ) -> Result<RunOutcome, RunError> {
+    let rparams = opts.reduced_params.unwrap_or_default();
+    match choose_model(scene, &rparams)? {
+        ModelPlan::Dda(reason) => run_dda(scene, motion, opts, reason),
+        ModelPlan::Reduced {
+            block,
+            modes,
+            reason,
+        } => match reduced::record::run(scene, motion, opts, *block, modes, rparams, &reason) {
+            Ok(outcome) => Ok(outcome),
+            Err(ReducedError::Run(e)) => Err(e),
+            Err(ReducedError::Violation(v)) => run_dda(
+                scene,
+                motion,
+                opts,
+                format!(
+                    "control.model is \"auto\" and the scene is one block on a base, but the first-motion check found a case the reduced models do not represent ({}): the full DDA engine ran",
+                    v.what
+                ),
+            ),
+        },
+    }
+}
+
+/// Run the full DDA engine.
+fn run_dda(
+    scene: &Scene,
+    motion: &GroundMotion,
+    opts: &RunOptions,
+    model_reason: String,
+) -> Result<RunOutcome, RunError> {
     let wall = Instant::now();
-    let (model, model_reason) = choose_model(scene)?;
+    let model = "dda".to_string();
     let duration = duration(scene, motion)?;
     let params = opts.sim_params.unwrap_or_default();
     let failure = FailureParams::default();
@@ -293,7 +404,11 @@ pub fn run(
     let mut tracker = Tracker::new(&sim);
     let interval = scene.control.output_interval;
     let mut frame_index: u64 = 0;
-    writers.write(&frame(&sim, &failure))?;
+    let f0 = frame(&sim, &failure);
+    writers.write(&f0)?;
+    if let Some(cb) = opts.on_frame {
+        cb(&f0);
+    }
     let mut stopped_reason = None;
     let mut cancelled = false;
     let mut failure_msg = None;
@@ -322,7 +437,11 @@ pub fn run(
         tracker.update(&sim);
         if sim.time >= next_frame - 1e-9 * interval {
             frame_index += 1;
-            writers.write(&frame(&sim, &failure))?;
+            let fr = frame(&sim, &failure);
+            writers.write(&fr)?;
+            if let Some(cb) = opts.on_frame {
+                cb(&fr);
+            }
             if let Some(p) = opts.progress {
                 p((sim.time / duration).min(1.0));
             }
@@ -535,6 +654,7 @@ fn summarize(
             },
             min_time_step: (st.steps > 0).then_some(st.min_dt),
             max_time_step: (st.steps > 0).then_some(st.max_dt),
+            ..Default::default()
         },
         model,
         model_reason,

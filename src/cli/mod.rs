@@ -1,5 +1,6 @@
 //! Command line: a thin layer that parses arguments and calls `analysis` / `service`.
 mod run;
+mod study;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -25,6 +26,8 @@ pub enum Command {
     Motion(crate::motion::command::MotionArgs),
     /// Serve the HTTP API.
     Serve(crate::service::ServeArgs),
+    /// Measure accuracy against speed over the benchmark scenes (docs/accuracy-vs-speed.md).
+    Study(study::StudyArgs),
 }
 
 /// Run the CLI; errors go to stderr as one clear line.
@@ -35,6 +38,7 @@ pub fn main() -> ExitCode {
         Command::Pga(args) => run::pga(&args),
         Command::Motion(args) => crate::motion::command::run(&args),
         Command::Serve(args) => crate::service::serve_cli(args),
+        Command::Study(args) => study::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -28,6 +28,12 @@ pub struct RunArgs {
     /// Do not write trajectory.mcap.
     #[arg(long)]
     pub no_trajectory: bool,
+    /// Write histories only for these free blocks (comma-separated ids; default: all).
+    #[arg(long, value_delimiter = ',')]
+    pub blocks: Option<Vec<String>>,
+    /// Seconds between recorded frames (overrides the scene's control.output_interval).
+    #[arg(long)]
+    pub output_interval: Option<f64>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -178,11 +184,20 @@ fn load_motion(args: &RunArgs) -> Result<GroundMotion, String> {
 }
 
 pub fn run(args: &RunArgs) -> Result<(), String> {
-    let scene = load_scene(&args.scene)?;
+    let mut scene = load_scene(&args.scene)?;
+    if let Some(i) = args.output_interval {
+        if !(i.is_finite() && i > 0.0) {
+            return Err(format!(
+                "--output-interval {i}: must be a positive number of seconds"
+            ));
+        }
+        scene.control.output_interval = i;
+    }
     let gm = load_motion(args)?;
     let opts = RunOptions {
         out_dir: Some(&args.out),
         no_trajectory: args.no_trajectory,
+        history_blocks: args.blocks.clone(),
         ..Default::default()
     };
     let outcome = run_scene(&scene, &gm, &opts).map_err(|e| e.to_string())?;

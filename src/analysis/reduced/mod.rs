@@ -1,0 +1,578 @@
+//! Reduced models: scenes that are exactly one classic problem — one rigid block on a fixed or
+//! driven base — run as an ODE instead of the full DDA engine (FORMAT.md §1 `control.model`).
+//! Sits beside `analysis::run`, which chooses between them; shares its outputs (summary,
+//! histories, trajectory) so callers (CLI, service, PGA search) cannot tell the difference
+//! except by `model` and the cost.
+//!
+//! The block is in one of four states: at rest, rocking on a corner (Housner's equation with an
+//! impact law), sliding (rigid-plastic Newmark), or fallen on its side. From rest the combined
+//! first-motion check decides which motion starts: rocking when the load's moment about a
+//! corner tips the block, sliding when the tangential load exceeds friction; both at once, slip
+//! of the pivot while rocking, a sliding block whose leading corner lifts, or loss of contact
+//! are the coupled cases the reduced models do not represent (a *violation*: `auto` then runs
+//! the full engine).
+pub mod ode;
+pub mod qualify;
+pub mod record;
+pub mod rocking;
+pub mod sliding;
+
+pub use qualify::{qualify, SingleBlock};
+pub use rocking::Restitution;
+
+use crate::motion::GroundMotion;
+use nalgebra::Vector2;
+use ode::{State, Tolerance};
+
+/// Knobs of the reduced models. Each default says why.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReducedParams {
+    /// Impact law of the rocking model: Housner's angular-momentum law by default, the law his
+    /// equation was published with (and the reference of the seed's rocking benchmark).
+    pub restitution: Restitution,
+    /// ODE tolerance: 1e-10 relative keeps the integration error four orders below the 1 %
+    /// accuracy target at a cost of microseconds per simulated second.
+    pub tolerance: Tolerance,
+    /// Largest ODE step, s: 2 ms so a step cannot jump over a record's feature (records are
+    /// sampled at 5–20 ms) or an output frame.
+    pub max_step: f64,
+    /// Scan step of the at-rest state, s: onset conditions are checked this often and then
+    /// located by bisection (0.5 ms resolves any acceleration pulse a record can carry).
+    pub rest_scan: f64,
+    /// Angular speed (rad/s) below which a rocking block that lands is at rest: it would lift
+    /// again by less than ω²/(2θ̈) ~ 1e-10 rad.
+    pub rest_angular_speed: f64,
+    /// Contact detection tolerance for qualification, as a fraction of the block size: 1e-6
+    /// accepts scenes written with rounded coordinates and rejects visible gaps.
+    pub contact_tolerance: f64,
+    /// A deformable block is treated as rigid when its self-weight strain ρgH/E is below this:
+    /// 1e-4 changes the geometry by 0.01 %, two orders below the 1 % accuracy target.
+    pub rigid_strain: f64,
+}
+
+impl Default for ReducedParams {
+    fn default() -> Self {
+        Self {
+            restitution: Restitution::Housner,
+            tolerance: Tolerance {
+                rtol: 1e-10,
+                atol: 1e-12,
+            },
+            max_step: 2e-3,
+            rest_scan: 5e-4,
+            rest_angular_speed: 1e-5,
+            contact_tolerance: 1e-6,
+            rigid_strain: 1e-4,
+        }
+    }
+}
+
+/// Which motions the run may use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Modes {
+    /// Both, with the coupled cases reported as violations that stop the run (`auto`).
+    Auto,
+    /// Rocking only (`"model": "rocking"`): friction never lets the block slide.
+    Rocking,
+    /// Sliding only (`"model": "sliding"`): the block never rotates.
+    Sliding,
+}
+
+/// The block's state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Phase {
+    Rest,
+    /// On pivot 0 or 1: θ (rad) and ω (rad/s).
+    Rocking {
+        pivot: usize,
+        theta: f64,
+        omega: f64,
+    },
+    /// Slip rate (m/s) and direction (±1).
+    Sliding {
+        rate: f64,
+        dir: f64,
+    },
+    /// Lying on another face after overturning about `pivot` at rotation `theta`.
+    Fallen {
+        pivot: usize,
+        theta: f64,
+    },
+}
+
+/// A case the reduced models do not represent, at time `time` (s).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Violation {
+    pub time: f64,
+    pub what: String,
+}
+
+/// Counters of a reduced run.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ReducedStats {
+    /// Accepted ODE steps plus at-rest scan steps.
+    pub steps: u64,
+    pub rejected_steps: u64,
+    pub impacts: u64,
+    pub min_dt: f64,
+    pub max_dt: f64,
+    /// Time of the first rocking and first sliding onset, s.
+    pub first_rocking: Option<f64>,
+    pub first_sliding: Option<f64>,
+}
+
+/// The running state of a reduced model.
+#[derive(Debug, Clone)]
+pub struct Reduced {
+    pub block: SingleBlock,
+    pub motion: GroundMotion,
+    pub params: ReducedParams,
+    pub modes: Modes,
+    pub time: f64,
+    pub phase: Phase,
+    /// Accumulated slip along t, m (shifts the block for rocking after sliding).
+    pub slip: f64,
+    /// Total sliding distance, m.
+    pub slid: f64,
+    h: f64,
+    pub stats: ReducedStats,
+    /// Violations met so far (only the first stops an `Auto` run; the forced models keep
+    /// going and report them).
+    pub violations: Vec<Violation>,
+}
+
+/// What would start at an instant: rocking on a pivot, sliding in a direction, loss of contact.
+type Onset = (Option<usize>, Option<f64>, bool);
+
+/// Bisection depth of event location: 2⁻⁶⁰ of a step is below round-off of the time.
+const BISECTIONS: usize = 60;
+
+impl Reduced {
+    pub fn new(
+        block: SingleBlock,
+        motion: &GroundMotion,
+        params: ReducedParams,
+        modes: Modes,
+    ) -> Self {
+        let v0 = block.initial_slip_rate;
+        let phase = if v0 != 0.0 && modes != Modes::Rocking {
+            Phase::Sliding {
+                rate: v0,
+                dir: v0.signum(),
+            }
+        } else {
+            Phase::Rest
+        };
+        Self {
+            h: params.max_step.min(1e-4),
+            block,
+            motion: motion.clone(),
+            params,
+            modes,
+            time: 0.0,
+            phase,
+            slip: 0.0,
+            slid: 0.0,
+            stats: ReducedStats {
+                min_dt: f64::INFINITY,
+                ..Default::default()
+            },
+            violations: Vec::new(),
+        }
+    }
+
+    /// Effective load per unit mass at t in local coordinates (m/s²): gravity and the inertial
+    /// load −a_g of the moving base.
+    pub fn load(&self, t: f64) -> Vector2<f64> {
+        let ag = self.motion.acceleration(t);
+        let world = Vector2::new(-ag[0], -self.block.gravity - ag[1]);
+        self.block.to_local(world)
+    }
+
+    fn violate(&mut self, time: f64, what: String) -> bool {
+        if self.violations.len() < 8 {
+            self.violations.push(Violation { time, what });
+        }
+        self.modes == Modes::Auto
+    }
+
+    /// Advance to `target` (s). Returns the violation that stopped an `Auto` run.
+    pub fn advance(&mut self, target: f64) -> Result<(), Violation> {
+        while self.time < target - 1e-12 {
+            let stop = match self.phase {
+                Phase::Rest => self.rest(target),
+                Phase::Rocking { .. } => self.rock(target),
+                Phase::Sliding { .. } => self.slide(target),
+                Phase::Fallen { .. } => {
+                    self.time = target;
+                    false
+                }
+            };
+            if stop {
+                return Err(self.violations.last().cloned().unwrap_or(Violation {
+                    time: self.time,
+                    what: "unknown".into(),
+                }));
+            }
+        }
+        Ok(())
+    }
+
+    fn count_step(&mut self, h: f64) {
+        self.stats.steps += 1;
+        self.stats.min_dt = self.stats.min_dt.min(h);
+        self.stats.max_dt = self.stats.max_dt.max(h);
+    }
+
+    /// Which motion would start at t: (rocking pivot, sliding direction), each if any.
+    fn onset(&self, t: f64) -> Onset {
+        let a = self.load(t);
+        let lift = sliding::pressure(a) <= 0.0;
+        let rock = if self.modes == Modes::Sliding {
+            None
+        } else {
+            (0..2).find(|&k| rocking::tips(&self.block, k, a))
+        };
+        let slide = if self.modes == Modes::Rocking {
+            None
+        } else {
+            sliding::slips(&self.block, a)
+        };
+        (rock, slide, lift)
+    }
+
+    /// Is nothing starting under the onset `o`? (Loss of contact only stops `Auto` runs; the
+    /// forced models keep the block on its base through it.)
+    fn quiet(&self, o: &Onset) -> bool {
+        o.0.is_none() && o.1.is_none() && (!o.2 || self.modes != Modes::Auto)
+    }
+
+    /// At rest: scan for the first instant a motion starts, locate it by bisection.
+    fn rest(&mut self, target: f64) -> bool {
+        let t0 = self.time;
+        let first = self.onset(t0);
+        if !self.quiet(&first) {
+            return self.start(t0, first);
+        }
+        let h = self.params.rest_scan.min(target - t0);
+        let t1 = t0 + h;
+        let end = self.onset(t1);
+        self.count_step(h);
+        if self.quiet(&end) {
+            self.time = t1;
+            return false;
+        }
+        // Bisection for each condition separately, so "both at once" is decided at the
+        // precision of the time, not of the scan.
+        let locate = |pred: &dyn Fn(&Onset) -> bool| {
+            let (mut lo, mut hi) = (t0, t1);
+            if !pred(&self.onset(hi)) {
+                return f64::INFINITY;
+            }
+            for _ in 0..BISECTIONS {
+                let mid = 0.5 * (lo + hi);
+                if mid <= lo || mid >= hi {
+                    break;
+                }
+                if pred(&self.onset(mid)) {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            hi
+        };
+        let auto = self.modes == Modes::Auto;
+        let tr = locate(&|o| o.0.is_some());
+        let ts = locate(&|o| o.1.is_some());
+        let tl = locate(&|o| o.2 && auto);
+        let t = tr.min(ts).min(tl);
+        let mut o = self.onset(t);
+        if tr.is_finite() && ts.is_finite() && (tr - ts).abs() > 1e-9 {
+            // Only the first of the two starts.
+            if tr < ts {
+                o.1 = None;
+            } else {
+                o.0 = None;
+            }
+        }
+        self.time = t;
+        self.start(t, o)
+    }
+
+    /// Start the motion `o` found at `t`. Returns true when an `Auto` run must stop.
+    fn start(&mut self, t: f64, o: Onset) -> bool {
+        if o.2 && self.modes == Modes::Auto {
+            return self.violate(
+                t,
+                format!("the block loses contact (vertical load exceeds gravity) at t = {t:.6} s"),
+            );
+        }
+        let mut o = o;
+        if let (Some(k), Some(dir)) = (o.0, o.1) {
+            // Both conditions hold (Yeung's region): a block whose leading corner stays down
+            // while sliding slides; one whose pivot sticks at the onset of rocking rocks;
+            // otherwise it slides and rocks together.
+            if sliding::stays_flat(&self.block, dir) {
+                o.0 = None;
+            } else {
+                let r = rocking::reaction(&self.block, k, 0.0, 0.0, self.load(t));
+                if r.y > 0.0 && r.x.abs() <= self.block.mu * r.y {
+                    o.1 = None;
+                } else if self.violate(
+                    t,
+                    format!(
+                        "rocking and sliding start together at t = {t:.6} s (the pivot would slip)"
+                    ),
+                ) {
+                    return true;
+                } else {
+                    o.1 = None;
+                }
+            }
+        }
+        if let Some(dir) = o.1 {
+            self.stats.first_sliding.get_or_insert(t);
+            if self.modes == Modes::Auto && !sliding::stays_flat(&self.block, dir) {
+                return self.violate(t, format!("the block slides at t = {t:.6} s and its leading corner lifts (friction angle above its slenderness angle): sliding and rocking together"));
+            }
+            self.phase = Phase::Sliding { rate: 0.0, dir };
+        } else if let Some(k) = o.0 {
+            self.stats.first_rocking.get_or_insert(t);
+            self.phase = Phase::Rocking {
+                pivot: k,
+                theta: 0.0,
+                omega: 0.0,
+            };
+        }
+        false
+    }
+
+    /// One adaptive step of `f` from the current state, at most to `target`; returns the step
+    /// taken and the new state.
+    fn ode_step(
+        &mut self,
+        f: &impl Fn(f64, State) -> State,
+        y: State,
+        target: f64,
+    ) -> (f64, State) {
+        let t = self.time;
+        loop {
+            let proposal = self.h.min(self.params.max_step);
+            let h = proposal.min(target - t);
+            let (y1, err) = ode::step(f, t, y, h, self.params.tolerance);
+            if err <= 1.0 || h < 1e-12 {
+                let next = ode::next_h(h, err).max(1e-12);
+                // A step clipped by the target must not shrink the next proposal.
+                self.h = if h < proposal {
+                    next.max(proposal)
+                } else {
+                    next
+                };
+                self.count_step(h);
+                return (h, y1);
+            }
+            self.stats.rejected_steps += 1;
+            self.h = ode::next_h(h, err);
+        }
+    }
+
+    /// Smallest step in (0, h] at which `crossed(state)` holds, by bisection.
+    fn locate(
+        &self,
+        f: &impl Fn(f64, State) -> State,
+        y: State,
+        h: f64,
+        crossed: impl Fn(&State) -> bool,
+    ) -> (f64, State) {
+        let (mut lo, mut hi) = (0.0, h);
+        let mut yh = ode::step(f, self.time, y, h, self.params.tolerance).0;
+        for _ in 0..BISECTIONS {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            let ym = ode::step(f, self.time, y, mid, self.params.tolerance).0;
+            if crossed(&ym) {
+                hi = mid;
+                yh = ym;
+            } else {
+                lo = mid;
+            }
+        }
+        (hi, yh)
+    }
+
+    fn rock(&mut self, target: f64) -> bool {
+        let Phase::Rocking {
+            pivot: k,
+            theta,
+            omega,
+        } = self.phase
+        else {
+            return false;
+        };
+        let blk = self.block.clone();
+        let motion = self.motion.clone();
+        let g = blk.gravity;
+        let load = move |t: f64| {
+            let ag = motion.acceleration(t);
+            blk.to_local(Vector2::new(-ag[0], -g - ag[1]))
+        };
+        let b = self.block.clone();
+        let f = |t: f64, y: State| [y[1], rocking::angular_acceleration(&b, k, y[0], load(t))];
+        let s = rocking::side(k);
+        let lift = 1e-9 * b.pivots[1];
+        let landed = |y: &State| s * y[0] < 0.0;
+        let on_side = |y: &State| rocking::side_clearance(&b, k, y[0], lift) < 0.0;
+        let (h, y1) = self.ode_step(&f, [theta, omega], target);
+        if landed(&y1) {
+            let (h, y) = self.locate(&f, [theta, omega], h, landed);
+            self.time += h;
+            let w = rocking::restitution(&b, k, self.params.restitution) * y[1];
+            self.stats.impacts += 1;
+            self.phase = if w.abs() < self.params.rest_angular_speed {
+                Phase::Rest
+            } else {
+                Phase::Rocking {
+                    pivot: 1 - k,
+                    theta: 0.0,
+                    omega: w,
+                }
+            };
+            // Restart the step size after the velocity jump.
+            self.h = self.params.max_step.min(1e-4);
+            return false;
+        }
+        if on_side(&y1) {
+            let (h, y) = self.locate(&f, [theta, omega], h, on_side);
+            self.time += h;
+            if !rocking::beyond_tipping(&b, k, y[0]) {
+                let t = self.time;
+                if self.violate(
+                    t,
+                    format!(
+                        "another face of the block reaches the base while rocking at t = {t:.6} s"
+                    ),
+                ) {
+                    return true;
+                }
+            }
+            self.phase = Phase::Fallen {
+                pivot: k,
+                theta: y[0],
+            };
+            return false;
+        }
+        self.time += h;
+        self.phase = Phase::Rocking {
+            pivot: k,
+            theta: y1[0],
+            omega: y1[1],
+        };
+        if self.modes != Modes::Sliding {
+            let a = self.load(self.time);
+            let r = rocking::reaction(&b, k, y1[0], y1[1], a);
+            let t = self.time;
+            if r.y < 0.0 {
+                return self.violate(
+                    t,
+                    format!("the pivot loses contact (the block would jump) at t = {t:.6} s"),
+                );
+            }
+            if self.modes == Modes::Auto
+                && r.x.abs() > b.mu * r.y
+                && !rocking::beyond_tipping(&b, k, y1[0])
+            {
+                return self.violate(t, format!("the pivot slips while rocking at t = {t:.6} s (friction demand {:.3} above μ = {:.3}): sliding and rocking together", r.x.abs() / r.y, b.mu));
+            }
+        }
+        false
+    }
+
+    fn slide(&mut self, target: f64) -> bool {
+        let Phase::Sliding { rate, dir } = self.phase else {
+            return false;
+        };
+        let blk = self.block.clone();
+        let motion = self.motion.clone();
+        let g = blk.gravity;
+        let load = move |t: f64| {
+            let ag = motion.acceleration(t);
+            blk.to_local(Vector2::new(-ag[0], -g - ag[1]))
+        };
+        let b = self.block.clone();
+        let f = |t: f64, y: State| [y[1], sliding::acceleration(&b, dir, load(t))];
+        let stopped = |y: &State| dir * y[1] <= 0.0;
+        let (h, y1) = self.ode_step(&f, [self.slip, rate], target);
+        let (h, y1) = if stopped(&y1) {
+            self.locate(&f, [self.slip, rate], h, stopped)
+        } else {
+            (h, y1)
+        };
+        self.time += h;
+        self.slid += (y1[0] - self.slip).abs();
+        self.slip = y1[0];
+        if stopped(&y1) {
+            let a = self.load(self.time);
+            self.phase = match sliding::slips(&b, a) {
+                Some(d) if d != dir => Phase::Sliding { rate: 0.0, dir: d },
+                _ => Phase::Rest,
+            };
+            self.h = self.params.max_step.min(1e-4);
+        } else {
+            self.phase = Phase::Sliding { rate: y1[1], dir };
+        }
+        if sliding::pressure(self.load(self.time)) <= 0.0 {
+            let t = self.time;
+            return self.violate(
+                t,
+                format!("the block loses contact (vertical load exceeds gravity) at t = {t:.6} s"),
+            );
+        }
+        false
+    }
+
+    /// Local centroid displacement (m), rotation (rad) and their rates (m/s, rad/s).
+    pub fn kinematics(&self) -> (Vector2<f64>, f64, Vector2<f64>, f64) {
+        let b = &self.block;
+        let slip = Vector2::new(self.slip, 0.0);
+        match self.phase {
+            Phase::Rest => (slip, 0.0, Vector2::zeros(), 0.0),
+            Phase::Sliding { rate, .. } => (slip, 0.0, Vector2::new(rate, 0.0), 0.0),
+            Phase::Rocking {
+                pivot,
+                theta,
+                omega,
+            } => {
+                let c = rocking::centroid(b, pivot, theta, self.slip);
+                let r = c - Vector2::new(b.pivots[pivot] + self.slip, 0.0);
+                (
+                    c - b.centroid,
+                    theta,
+                    Vector2::new(-r.y, r.x) * omega,
+                    omega,
+                )
+            }
+            Phase::Fallen { pivot, theta } => {
+                let c = rocking::centroid(b, pivot, theta, self.slip);
+                (c - b.centroid, theta, Vector2::zeros(), 0.0)
+            }
+        }
+    }
+
+    /// Local outline of the block now.
+    pub fn outline(&self) -> Vec<Vector2<f64>> {
+        match self.phase {
+            Phase::Rocking { pivot, theta, .. } | Phase::Fallen { pivot, theta } => {
+                rocking::vertices(&self.block, pivot, theta, self.slip)
+            }
+            _ => self
+                .block
+                .vertices
+                .iter()
+                .map(|v| v + Vector2::new(self.slip, 0.0))
+                .collect(),
+        }
+    }
+}

@@ -1,0 +1,345 @@
+//! Reduced models, outputs: drives a [`Reduced`] model frame by frame and writes the same
+//! outputs as a DDA run (summary, histories, trajectory) through `analysis::run`'s writers.
+use super::{Modes, Phase, Reduced, ReducedParams, SingleBlock, Violation};
+use crate::analysis::run::{
+    duration, failure_mode, BlockSummary, Diagnostics, FailureParams, RunError, RunOptions,
+    RunOutcome, Summary, Tracker, Writers,
+};
+use crate::motion::GroundMotion;
+use crate::record::{
+    BlockFrame, BlockMotionState, Frame, FrameBlockKind, GroundFrame, RecordHeader,
+};
+use crate::scene::Scene;
+use nalgebra::Vector2;
+use std::sync::atomic::Ordering;
+use std::time::Instant;
+
+/// How a reduced run ended when it did not produce an outcome.
+#[derive(Debug)]
+pub enum ReducedError {
+    /// An `Auto` run met a case the reduced models do not represent.
+    Violation(Violation),
+    Run(RunError),
+}
+
+impl From<RunError> for ReducedError {
+    fn from(e: RunError) -> Self {
+        ReducedError::Run(e)
+    }
+}
+
+/// World state of the free block: centroid displacement (m), rotation (rad), velocity (m/s),
+/// angular velocity (rad/s), outline (m); ground-relative for a fixed base, absolute for a
+/// driven one.
+struct BlockNow {
+    d: Vector2<f64>,
+    rotation: f64,
+    v: Vector2<f64>,
+    omega: f64,
+    outline: Vec<[f64; 2]>,
+}
+
+fn block_now(m: &Reduced) -> BlockNow {
+    let b = &m.block;
+    let (d, rotation, v, omega) = m.kinematics();
+    let (mut d, mut v) = (b.to_world(d), b.to_world(v));
+    let mut shift = Vector2::zeros();
+    if b.driven {
+        let gs = m.motion.state(m.time);
+        shift = Vector2::new(gs[2][0], gs[2][1]);
+        d += shift;
+        v += Vector2::new(gs[1][0], gs[1][1]);
+    }
+    let outline = m
+        .outline()
+        .iter()
+        .map(|p| {
+            let w = b.origin + b.to_world(*p) + shift;
+            [w.x, w.y]
+        })
+        .collect();
+    BlockNow {
+        d,
+        rotation,
+        v,
+        omega,
+        outline,
+    }
+}
+
+fn frame(scene: &Scene, m: &Reduced, now: &BlockNow, failure: &FailureParams) -> Frame {
+    let b = &m.block;
+    let gs = m.motion.state(m.time);
+    let shift = if b.driven {
+        Vector2::new(gs[2][0], gs[2][1])
+    } else {
+        Vector2::zeros()
+    };
+    let blocks = (0..scene.blocks.len())
+        .map(|i| {
+            if i == b.free {
+                let state = if now.rotation.abs() > failure.toppled_rotation {
+                    BlockMotionState::Toppled
+                } else if now.omega.abs() > failure.rocking_speed {
+                    BlockMotionState::Rocking
+                } else if matches!(m.phase, Phase::Sliding { .. }) {
+                    BlockMotionState::Sliding
+                } else {
+                    BlockMotionState::AtRest
+                };
+                BlockFrame {
+                    x: now.d.x,
+                    y: now.d.y,
+                    rotation: now.rotation,
+                    vx: now.v.x,
+                    vy: now.v.y,
+                    angular_velocity: now.omega,
+                    state,
+                    outline: now.outline.clone(),
+                }
+            } else {
+                let (vx, vy) = if b.driven {
+                    (gs[1][0], gs[1][1])
+                } else {
+                    (0.0, 0.0)
+                };
+                BlockFrame {
+                    x: shift.x,
+                    y: shift.y,
+                    rotation: 0.0,
+                    vx,
+                    vy,
+                    angular_velocity: 0.0,
+                    state: BlockMotionState::AtRest,
+                    outline: scene.blocks[i]
+                        .vertices
+                        .iter()
+                        .map(|p| [p.x + shift.x, p.y + shift.y])
+                        .collect(),
+                }
+            }
+        })
+        .collect();
+    Frame {
+        time: m.time,
+        blocks,
+        ground: GroundFrame {
+            acceleration: gs[0],
+            velocity: gs[1],
+            displacement: gs[2],
+        },
+    }
+}
+
+fn header(
+    scene: &Scene,
+    b: &SingleBlock,
+    motion: &GroundMotion,
+    opts: &RunOptions,
+    model: &str,
+) -> Result<RecordHeader, RunError> {
+    if let Some(ids) = &opts.history_blocks {
+        for id in ids {
+            if scene.block_index(id) != Some(b.free) {
+                return Err(RunError::Invalid(format!(
+                    "history block {id:?}: no free block with that id"
+                )));
+            }
+        }
+    }
+    let history_blocks = match &opts.history_blocks {
+        Some(ids) if ids.is_empty() => Vec::new(),
+        _ => vec![b.free],
+    };
+    let mut metadata = std::collections::BTreeMap::new();
+    metadata.insert(
+        "scene".into(),
+        serde_json::to_string(&scene.spec).unwrap_or_default(),
+    );
+    metadata.insert("motion_provenance".into(), motion.provenance.clone());
+    metadata.insert("motion_scale".into(), format!("{}", motion.scale));
+    metadata.insert("pga_m_s2".into(), format!("{}", motion.pga()));
+    metadata.insert(
+        "solver".into(),
+        serde_json::to_string(&scene.control).unwrap_or_default(),
+    );
+    metadata.insert("model".into(), model.into());
+    metadata.insert("code_version".into(), env!("CARGO_PKG_VERSION").into());
+    Ok(RecordHeader {
+        block_ids: scene.blocks.iter().map(|b| b.id.clone()).collect(),
+        block_kinds: (0..scene.blocks.len())
+            .map(|i| {
+                if i == b.free {
+                    FrameBlockKind::Free
+                } else if b.driven {
+                    FrameBlockKind::Driven
+                } else {
+                    FrameBlockKind::Fixed
+                }
+            })
+            .collect(),
+        history_blocks,
+        metadata,
+    })
+}
+
+fn track(tr: &mut Tracker, now: &BlockNow, slid: f64) {
+    tr.final_displacement[0] = [now.d.x, now.d.y];
+    tr.final_rotation[0] = now.rotation;
+    tr.max_displacement[0] = tr.max_displacement[0].max(now.d.norm());
+    tr.max_rotation[0] = tr.max_rotation[0].max(now.rotation.abs());
+    tr.sliding_distance[0] = slid;
+}
+
+/// The model name a finished reduced run reports: the motion it showed, or for a block that
+/// never moved the one that would start first under a growing horizontal load.
+fn model_name(m: &Reduced) -> &'static str {
+    match m.modes {
+        Modes::Rocking => "rocking",
+        Modes::Sliding => "sliding",
+        Modes::Auto => {
+            if m.stats.first_rocking.is_some() {
+                "rocking"
+            } else if m.stats.first_sliding.is_some() {
+                "sliding"
+            } else if m.block.mu > m.block.slenderness(0).min(m.block.slenderness(1)).tan() {
+                "rocking"
+            } else {
+                "sliding"
+            }
+        }
+    }
+}
+
+/// Run the reduced model of `scene` (already qualified as `block`) under `motion`. `reason`
+/// is the start of `model_reason`; the run appends what happened.
+pub fn run(
+    scene: &Scene,
+    motion: &GroundMotion,
+    opts: &RunOptions,
+    block: SingleBlock,
+    modes: Modes,
+    params: ReducedParams,
+    reason: &str,
+) -> Result<RunOutcome, ReducedError> {
+    let wall = Instant::now();
+    let duration = duration(scene, motion)?;
+    let failure = FailureParams::default();
+    let mut m = Reduced::new(block, motion, params, modes);
+    let provisional = match modes {
+        Modes::Rocking => "rocking",
+        Modes::Sliding => "sliding",
+        Modes::Auto => "auto",
+    };
+    let hdr = header(scene, &m.block, motion, opts, provisional)?;
+    let mut writers = Writers::open(opts.out_dir, &hdr, opts.no_trajectory)?;
+    let mut tr = Tracker {
+        free: vec![m.block.free],
+        ids: vec![scene.blocks[m.block.free].id.clone()],
+        max_displacement: vec![0.0],
+        max_rotation: vec![0.0],
+        sliding_distance: vec![0.0],
+        final_displacement: vec![[0.0; 2]],
+        final_rotation: vec![0.0],
+    };
+    let interval = scene.control.output_interval;
+    let mut frame_index: u64 = 0;
+    let now = block_now(&m);
+    let f0 = frame(scene, &m, &now, &failure);
+    writers.write(&f0)?;
+    if let Some(cb) = opts.on_frame {
+        cb(&f0);
+    }
+    let mut stopped_reason = None;
+    let mut cancelled = false;
+    while m.time < duration - 1e-12 {
+        if opts.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            cancelled = true;
+            stopped_reason = Some("cancelled".to_string());
+            break;
+        }
+        let next = ((frame_index + 1) as f64 * interval).min(duration);
+        if let Err(v) = m.advance(next) {
+            writers.finish()?;
+            return Err(ReducedError::Violation(v));
+        }
+        frame_index += 1;
+        let now = block_now(&m);
+        track(&mut tr, &now, m.slid);
+        let fr = frame(scene, &m, &now, &failure);
+        writers.write(&fr)?;
+        if let Some(cb) = opts.on_frame {
+            cb(&fr);
+        }
+        if let Some(p) = opts.progress {
+            p((m.time / duration).min(1.0));
+        }
+        if opts.stop_when.is_some_and(|f| f(&tr)) {
+            stopped_reason = Some("decided".to_string());
+            break;
+        }
+    }
+    writers.finish()?;
+    let model = model_name(&m);
+    let mut why = reason.to_string();
+    if let Some(t) = m.stats.first_rocking {
+        why += &format!("; rocking started at t = {t:.4} s");
+    }
+    if let Some(t) = m.stats.first_sliding {
+        why += &format!("; sliding started at t = {t:.4} s");
+    }
+    if m.stats.first_rocking.is_none() && m.stats.first_sliding.is_none() {
+        why += "; the block did not move";
+    }
+    if matches!(m.phase, Phase::Fallen { .. }) {
+        why += "; it overturned onto another face";
+    }
+    if let Some(v) = m.violations.first() {
+        why += &format!(
+            "; WARNING: outside the forced model's assumptions: {} ({} such events)",
+            v.what,
+            m.violations.len()
+        );
+    }
+    let blocks = vec![BlockSummary {
+        id: tr.ids[0].clone(),
+        max_displacement: tr.max_displacement[0],
+        final_displacement: tr.final_displacement[0],
+        max_rotation: tr.max_rotation[0],
+        final_rotation: tr.final_rotation[0],
+        toppled: tr.final_rotation[0].abs() > failure.toppled_rotation,
+        sliding_distance: tr.sliding_distance[0],
+    }];
+    let st = &m.stats;
+    let restitution = super::rocking::restitution(&m.block, 0, params.restitution);
+    let summary = Summary {
+        completed: stopped_reason.is_none() && m.time >= duration - 1e-9,
+        simulated_time: m.time,
+        steps: st.steps,
+        wall_time_s: wall.elapsed().as_secs_f64(),
+        pga: motion.pga(),
+        failure_mode: failure_mode(&blocks, &failure).into(),
+        blocks,
+        diagnostics: Diagnostics {
+            penalty_stiffness: 0.0,
+            time_step_cuts: st.rejected_steps,
+            max_penetration: 0.0,
+            open_close_iterations_mean: 0.0,
+            min_time_step: (st.steps > 0).then_some(st.min_dt),
+            max_time_step: (st.steps > 0).then_some(st.max_dt),
+            restitution: (model == "rocking").then_some(restitution),
+            impacts: (model == "rocking").then_some(st.impacts),
+        },
+        model: model.into(),
+        model_reason: why,
+        stopped_reason,
+        control: serde_json::to_value(&scene.control).unwrap_or_default(),
+    };
+    if let Some(dir) = opts.out_dir {
+        let text =
+            serde_json::to_string_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;
+        std::fs::write(dir.join("summary.json"), text + "\n")
+            .map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
+    }
+    Ok(RunOutcome { summary, cancelled })
+}

@@ -1,0 +1,81 @@
+//! `ashlar study`: the speed/accuracy sweep of `analysis::study`, written as data, plots and
+//! (optionally) the Markdown report.
+use crate::analysis::study::{report, run_study, write_outputs, StudyOptions};
+use std::path::PathBuf;
+
+#[derive(Debug, clap::Args)]
+pub struct StudyArgs {
+    /// The reduced sweep (CI: under 2 minutes in a release build on 2 cores).
+    #[arg(long)]
+    pub quick: bool,
+    /// Output directory for points.json, points.csv and the SVG plots.
+    #[arg(long, default_value = "ashlar-study")]
+    pub out: PathBuf,
+    /// Also write the Markdown report here (its plots are linked relative to it).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Directory of the shared ground-motion records (the wall benchmark's record).
+    #[arg(long, default_value = "../shared/ground-motions")]
+    pub ground_motions: PathBuf,
+    /// Wall-clock budget of one point, s (a point over budget is reported as such).
+    #[arg(long)]
+    pub budget: Option<f64>,
+    /// Print each point as it is measured.
+    #[arg(long, short)]
+    pub verbose: bool,
+}
+
+pub fn run(args: &StudyArgs) -> Result<(), String> {
+    let budget = args.budget.unwrap_or(if args.quick { 10.0 } else { 120.0 });
+    if !(budget.is_finite() && budget > 0.0) {
+        return Err(format!(
+            "--budget {budget}: must be a positive number of seconds"
+        ));
+    }
+    if !args.ground_motions.is_dir() {
+        return Err(format!(
+            "--ground-motions {}: not a directory (the shared records, ../shared/ground-motions)",
+            args.ground_motions.display()
+        ));
+    }
+    let opts = StudyOptions {
+        quick: args.quick,
+        ground_motions: args.ground_motions.clone(),
+        point_budget_s: budget,
+        verbose: args.verbose,
+    };
+    let result = run_study(&opts)?;
+    let written = write_outputs(&result, &args.out)?;
+    if let Some(path) = &args.report {
+        let base = path.parent().unwrap_or(std::path::Path::new("."));
+        let rel = pathdiff(&args.out, base);
+        let command = format!(
+            "ashlar study{} --out {} --report {}",
+            if args.quick { " --quick" } else { "" },
+            args.out.display(),
+            path.display()
+        );
+        std::fs::write(path, report(&result, &rel, &command))
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    let failed = result.points.iter().filter(|p| p.error.is_none()).count();
+    println!(
+        "{} points over {} scenes ({} without an error value); wrote {}",
+        result.points.len(),
+        result.scenes.len(),
+        failed,
+        written
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    Ok(())
+}
+
+/// `out` relative to `base` when it lies under it, else `out` as given.
+fn pathdiff(out: &std::path::Path, base: &std::path::Path) -> String {
+    out.strip_prefix(base)
+        .map(|p| p.display().to_string())
+        .unwrap_or_else(|_| out.display().to_string())
+}
