@@ -287,3 +287,15 @@ pub fn search(
         runs,
     })
 }
+
+/// The verdict of `criteria` (all must hold) on a finished run's summary: the same test
+/// [`evaluate`] applies, for callers that ran the scene themselves (batch sweeps).
+pub fn met_by_summary(criteria: &[Criterion], summary: &super::run::Summary) -> bool {
+    let mut tr = Tracker::default();
+    for b in &summary.blocks {
+        tr.ids.push(b.id.clone());
+        tr.final_rotation.push(b.final_rotation);
+        tr.final_displacement.push(b.final_displacement);
+    }
+    all_met(criteria, &tr)
+}

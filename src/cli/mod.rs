@@ -1,5 +1,7 @@
 //! Command line: a thin layer that parses arguments and calls `analysis` / `service`.
 mod run;
+mod sweep;
+mod worker;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -25,6 +27,10 @@ pub enum Command {
     Motion(crate::motion::command::MotionArgs),
     /// Serve the HTTP API.
     Serve(crate::service::ServeArgs),
+    /// Run jobs from a PostgreSQL queue shared with `ashlar serve --database postgres://…`.
+    Worker(worker::WorkerArgs),
+    /// Batch systems: run line N of a manifest (`--index N`), or gather results (`--collect DIR`).
+    Sweep(sweep::SweepArgs),
 }
 
 /// Run the CLI; errors go to stderr as one clear line.
@@ -35,6 +41,8 @@ pub fn main() -> ExitCode {
         Command::Pga(args) => run::pga(&args),
         Command::Motion(args) => crate::motion::command::run(&args),
         Command::Serve(args) => crate::service::serve_cli(args),
+        Command::Worker(args) => worker::run(&args),
+        Command::Sweep(args) => sweep::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

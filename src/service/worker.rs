@@ -148,6 +148,12 @@ pub struct Core {
     pub workers_alive: AtomicUsize,
     /// False after a store operation of a worker failed, true again after one succeeds.
     pub store_healthy: AtomicBool,
+    /// Jobs are run by other processes sharing the store (`ashlar worker`): an API process
+    /// with no worker threads of its own can still take jobs.
+    pub remote_workers: AtomicBool,
+    /// Where finished jobs' artifacts are published for every process (None: they stay in
+    /// `data_dir`, which all processes then share).
+    pub artifacts: Option<Arc<super::artifacts::ArtifactStore>>,
 }
 
 impl Core {
@@ -171,6 +177,24 @@ impl Core {
             shutdown_signal: tokio::sync::watch::channel(false).0,
             workers_alive: AtomicUsize::new(0),
             store_healthy: AtomicBool::new(true),
+            remote_workers: AtomicBool::new(false),
+            artifacts: None,
+        }
+    }
+
+    /// Ids of the jobs running in this process.
+    pub fn running_ids(&self) -> Vec<Uuid> {
+        self.running
+            .lock()
+            .map(|m| m.keys().copied().collect())
+            .unwrap_or_default()
+    }
+
+    /// Stop a running job whose lease this process lost (another worker may be rerunning it):
+    /// stopped like at shutdown, so nothing is recorded for it here.
+    pub fn signal_lost(&self, id: Uuid) {
+        if let Some(c) = self.running.lock().ok().and_then(|m| m.get(&id).cloned()) {
+            c.throw(STOP_SHUTDOWN);
         }
     }
 
@@ -354,6 +378,12 @@ fn run_job(core: &Core, job: JobRecord) {
         let input = parse_stored(core, &job)?;
         execute(core, id, &input, &dir, &ctl)
     });
+    let outcome = match (outcome, &core.artifacts) {
+        (Ok(o), Some(a)) if ctl.reason.load(Ordering::SeqCst) != STOP_SHUTDOWN => {
+            a.publish_dir(id, &dir).map(|()| o)
+        }
+        (o, _) => o,
+    };
     let reason = ctl.reason.load(Ordering::SeqCst);
     core.unregister(id);
     let finish = match outcome {
