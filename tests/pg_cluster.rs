@@ -139,7 +139,10 @@ fn comparable(text: &str) -> Value {
 fn close_json(a: &Value, b: &Value, rel: f64) -> bool {
     match (a, b) {
         (Value::Number(x), Value::Number(y)) => {
-            let (x, y) = (x.as_f64().unwrap_or(f64::NAN), y.as_f64().unwrap_or(f64::NAN));
+            let (x, y) = (
+                x.as_f64().unwrap_or(f64::NAN),
+                y.as_f64().unwrap_or(f64::NAN),
+            );
             x == y || (x - y).abs() <= rel * x.abs().max(y.abs()) + 1e-300
         }
         (Value::Array(x), Value::Array(y)) => {
@@ -157,7 +160,10 @@ fn close_json(a: &Value, b: &Value, rel: f64) -> bool {
 fn wait_until(what: &str, timeout: Duration, mut done: impl FnMut() -> bool) {
     let start = Instant::now();
     while !done() {
-        assert!(start.elapsed() < timeout, "timed out after {timeout:?}: {what}");
+        assert!(
+            start.elapsed() < timeout,
+            "timed out after {timeout:?}: {what}"
+        );
         std::thread::sleep(Duration::from_millis(50));
     }
 }
@@ -188,9 +194,11 @@ fn embedded_results(bodies: &[Value]) -> Vec<String> {
             id
         })
         .collect();
-    wait_until("the embedded store finishes", Duration::from_secs(600), || {
-        core.store.counts().expect("counts").succeeded == ids.len() as u64
-    });
+    wait_until(
+        "the embedded store finishes",
+        Duration::from_secs(600),
+        || core.store.counts().expect("counts").succeeded == ids.len() as u64,
+    );
     let out = ids
         .iter()
         .map(|&id| {
@@ -219,7 +227,16 @@ fn hundred_jobs_three_workers_one_killed() {
     let shared = format!("file://{}", root.join("shared").display());
     let api = Server::start(
         &root.join("api"),
-        &["--database", &url, "--workers", "0", "--lease", "2", "--artifacts", &shared],
+        &[
+            "--database",
+            &url,
+            "--workers",
+            "0",
+            "--lease",
+            "2",
+            "--artifacts",
+            &shared,
+        ],
     );
     let mut workers: Vec<Worker> = (0..3)
         .map(|k| {
@@ -251,7 +268,10 @@ fn hundred_jobs_three_workers_one_killed() {
 
     wait_until("all 100 jobs succeed", Duration::from_secs(600), || {
         let c: i64 = db
-            .query_one("SELECT count(*) FROM jobs WHERE status IN ('succeeded', 'failed', 'cancelled')", &[])
+            .query_one(
+                "SELECT count(*) FROM jobs WHERE status IN ('succeeded', 'failed', 'cancelled')",
+                &[],
+            )
             .expect("query")
             .get(0);
         c == 100
@@ -273,8 +293,13 @@ fn hundred_jobs_three_workers_one_killed() {
     assert_eq!(rows.len(), 100);
     let mut expired_total = 0;
     for r in &rows {
-        let (id, ok, expired, other): (String, i64, i64, i64) = (r.get(0), r.get(1), r.get(2), r.get(3));
-        assert_eq!((ok, other), (1, 0), "job {id}: {ok} successful and {other} other attempts");
+        let (id, ok, expired, other): (String, i64, i64, i64) =
+            (r.get(0), r.get(1), r.get(2), r.get(3));
+        assert_eq!(
+            (ok, other),
+            (1, 0),
+            "job {id}: {ok} successful and {other} other attempts"
+        );
         expired_total += expired;
     }
     let victim_expired: i64 = db
@@ -304,11 +329,18 @@ fn hundred_jobs_three_workers_one_killed() {
     // Artifacts: the API process ran nothing, yet serves every job's histories (fetched from
     // the shared store); spot-check the first and the last.
     for id in [&ids[0], &ids[99]] {
-        let (status, csv) =
-            http(&api.addr, "GET", &format!("/v1/jobs/{id}/histories?format=csv"), None)
-                .expect("GET");
+        let (status, csv) = http(
+            &api.addr,
+            "GET",
+            &format!("/v1/jobs/{id}/histories?format=csv"),
+            None,
+        )
+        .expect("GET");
         assert_eq!(status, 200, "{csv}");
-        assert!(csv.starts_with("time,column.x,column.y,column.rotation"), "{csv:.200}");
+        assert!(
+            csv.starts_with("time,column.x,column.y,column.rotation"),
+            "{csv:.200}"
+        );
     }
     for w in workers.drain(1..) {
         assert!(w.terminate().success(), "SIGTERM stops a worker cleanly");
@@ -335,17 +367,27 @@ fn lease_expiry_requeues_and_discards_the_late_result() {
     };
     a.insert(&job).expect("insert");
     assert_eq!(a.claim().expect("claim").expect("job").id, job.id);
-    assert!(b.claim().expect("claim").is_none(), "a claimed job is not claimed twice");
+    assert!(
+        b.claim().expect("claim").is_none(),
+        "a claimed job is not claimed twice"
+    );
 
     // Heartbeats keep the lease alive past its length.
     for _ in 0..4 {
         std::thread::sleep(Duration::from_millis(500));
         let hb = a.heartbeat(&[job.id]).expect("heartbeat");
         assert!(hb.lost.is_empty() && hb.cancel.is_empty(), "{hb:?}");
-        assert_eq!(b.recover(3).expect("reap"), (0, 0), "a live lease is not reaped");
+        assert_eq!(
+            b.recover(3).expect("reap"),
+            (0, 0),
+            "a live lease is not reaped"
+        );
     }
     let left = a.lease_remaining(job.id).expect("lease").expect("running");
-    assert!(left > 1.0 && left <= 1.5, "lease extended to ~1.5 s, {left} s left");
+    assert!(
+        left > 1.0 && left <= 1.5,
+        "lease extended to ~1.5 s, {left} s left"
+    );
 
     // Silence: the lease expires, another process reaps and reruns the job.
     std::thread::sleep(Duration::from_millis(1700));
@@ -353,10 +395,18 @@ fn lease_expiry_requeues_and_discards_the_late_result() {
     let again = b.claim().expect("claim").expect("requeued job");
     assert_eq!((again.id, again.attempts), (job.id, 2));
     // The first owner wakes up: it learns it lost the job, and its result is discarded.
-    assert_eq!(a.heartbeat(&[job.id]).expect("heartbeat").lost, vec![job.id]);
-    a.finish(job.id, &Finish::Succeeded(json!({"by": "a"}))).expect("finish a");
-    assert_eq!(a.get(job.id).expect("get").expect("job").status, JobStatus::Running);
-    b.finish(job.id, &Finish::Succeeded(json!({"by": "b"}))).expect("finish b");
+    assert_eq!(
+        a.heartbeat(&[job.id]).expect("heartbeat").lost,
+        vec![job.id]
+    );
+    a.finish(job.id, &Finish::Succeeded(json!({"by": "a"})))
+        .expect("finish a");
+    assert_eq!(
+        a.get(job.id).expect("get").expect("job").status,
+        JobStatus::Running
+    );
+    b.finish(job.id, &Finish::Succeeded(json!({"by": "b"})))
+        .expect("finish b");
     let r = b.get(job.id).expect("get").expect("job");
     assert_eq!(r.status, JobStatus::Succeeded);
     assert_eq!(r.result.as_deref(), Some(r#"{"by":"b"}"#));
@@ -373,7 +423,10 @@ fn lease_expiry_requeues_and_discards_the_late_result() {
     for attempt in 1..=2u32 {
         assert_eq!(a.claim().expect("claim").expect("job").attempts, attempt);
         std::thread::sleep(Duration::from_millis(1600));
-        assert_eq!(b.recover(2).expect("reap"), if attempt < 2 { (1, 0) } else { (0, 1) });
+        assert_eq!(
+            b.recover(2).expect("reap"),
+            if attempt < 2 { (1, 0) } else { (0, 1) }
+        );
     }
     let r = b.get(doomed.id).expect("get").expect("job");
     assert_eq!(r.status, JobStatus::Failed);
@@ -398,7 +451,10 @@ fn store_contract_matches_the_embedded_store() {
     s.insert(&a).expect("insert");
     s.insert(&b).expect("insert");
     let first = s.claim().expect("claim").expect("a job");
-    assert_eq!((first.id, first.status, first.attempts), (a.id, JobStatus::Running, 1));
+    assert_eq!(
+        (first.id, first.status, first.attempts),
+        (a.id, JobStatus::Running, 1)
+    );
     assert_eq!(first.request, json!({"a": 1}));
     let second = s.claim().expect("claim").expect("a job");
     assert_eq!((second.id, second.kind), (b.id, JobKind::PgaSearch));
@@ -408,25 +464,41 @@ fn store_contract_matches_the_embedded_store() {
     assert_eq!(s.get(a.id).expect("get").expect("job").progress, 0.5);
     s.requeue(a.id, true).expect("requeue");
     let r = s.get(a.id).expect("get").expect("job");
-    assert_eq!((r.status, r.attempts, r.progress), (JobStatus::Queued, 0, 0.0));
+    assert_eq!(
+        (r.status, r.attempts, r.progress),
+        (JobStatus::Queued, 0, 0.0)
+    );
     s.claim().expect("claim");
-    s.finish(a.id, &Finish::Succeeded(json!({"ok": true}))).expect("finish");
+    s.finish(a.id, &Finish::Succeeded(json!({"ok": true})))
+        .expect("finish");
     let r = s.get(a.id).expect("get").expect("job");
     assert_eq!((r.status, r.progress), (JobStatus::Succeeded, 1.0));
     assert_eq!(r.result.as_deref(), Some(r#"{"ok":true}"#));
     use ashlar::service::store::CancelOutcome;
     let q = job(JobKind::Run);
     s.insert(&q).expect("insert");
-    assert_eq!(s.request_cancel(q.id).expect("cancel"), CancelOutcome::CancelledQueued);
-    assert!(s.claim().expect("claim").is_none(), "a cancelled job is never claimed");
-    assert_eq!(s.request_cancel(b.id).expect("cancel"), CancelOutcome::Requested);
+    assert_eq!(
+        s.request_cancel(q.id).expect("cancel"),
+        CancelOutcome::CancelledQueued
+    );
+    assert!(
+        s.claim().expect("claim").is_none(),
+        "a cancelled job is never claimed"
+    );
+    assert_eq!(
+        s.request_cancel(b.id).expect("cancel"),
+        CancelOutcome::Requested
+    );
     assert!(s.get(b.id).expect("get").expect("job").cancel_requested);
     s.finish(b.id, &Finish::Cancelled(None)).expect("finish");
     assert_eq!(
         s.request_cancel(b.id).expect("cancel"),
         CancelOutcome::AlreadyFinished(JobStatus::Cancelled)
     );
-    assert_eq!(s.request_cancel(Uuid::new_v4()).expect("cancel"), CancelOutcome::NotFound);
+    assert_eq!(
+        s.request_cancel(Uuid::new_v4()).expect("cancel"),
+        CancelOutcome::NotFound
+    );
 }
 
 #[test]
@@ -438,21 +510,43 @@ fn cancel_and_progress_cross_processes() {
     let root = temp_dir("pg-cancel");
     let api = Server::start(&root.join("api"), &["--database", &url, "--workers", "0"]);
     // The fake runner: 500 ms per simulated second, a 60 s scene runs 30 s unless cancelled.
-    let _worker = Worker::start(&url, &root.join("w"), &["--workers", "1", "--fake-runner-ms", "500"]);
-    let id = submit(&api.addr, &json!({"scene": column_scene(60.0), "motion": pulse(2.0)}));
+    let _worker = Worker::start(
+        &url,
+        &root.join("w"),
+        &["--workers", "1", "--fake-runner-ms", "500"],
+    );
+    let id = submit(
+        &api.addr,
+        &json!({"scene": column_scene(60.0), "motion": pulse(2.0)}),
+    );
     // The API process follows the remote job's progress: through GET and through SSE.
     let addr = api.addr.clone();
     let path = format!("/v1/jobs/{id}/events");
     let sse = std::thread::spawn(move || http(&addr, "GET", &path, None).expect("SSE"));
-    wait_until("progress written by the worker process shows in the API", Duration::from_secs(30), || {
-        get_json(&api.addr, &format!("/v1/jobs/{id}"))["progress"].as_f64().unwrap_or(0.0) > 0.02
-    });
+    wait_until(
+        "progress written by the worker process shows in the API",
+        Duration::from_secs(30),
+        || {
+            get_json(&api.addr, &format!("/v1/jobs/{id}"))["progress"]
+                .as_f64()
+                .unwrap_or(0.0)
+                > 0.02
+        },
+    );
     let asked = Instant::now();
-    let (status, body) = http(&api.addr, "POST", &format!("/v1/jobs/{id}/cancel"), Some("")).expect("cancel");
+    let (status, body) = http(
+        &api.addr,
+        "POST",
+        &format!("/v1/jobs/{id}/cancel"),
+        Some(""),
+    )
+    .expect("cancel");
     assert!(status == 202 || status == 200, "{status} {body}");
-    wait_until("the worker process stops the job", Duration::from_secs(10), || {
-        get_json(&api.addr, &format!("/v1/jobs/{id}"))["status"] == "cancelled"
-    });
+    wait_until(
+        "the worker process stops the job",
+        Duration::from_secs(10),
+        || get_json(&api.addr, &format!("/v1/jobs/{id}"))["status"] == "cancelled",
+    );
     // NOTIFY reaches the worker at once; the heartbeat (10 s) would be the fallback.
     assert!(
         asked.elapsed() < Duration::from_secs(5),
@@ -470,10 +564,15 @@ fn cancel_and_progress_cross_processes() {
         .filter_map(|d| serde_json::from_str(d.trim()).ok())
         .collect();
     assert!(
-        data.iter().any(|d| d["status"] == "running" && d["progress"].as_f64().unwrap_or(0.0) > 0.0),
+        data.iter()
+            .any(|d| d["status"] == "running" && d["progress"].as_f64().unwrap_or(0.0) > 0.0),
         "the stream showed the remote job's progress: {events}"
     );
-    assert_eq!(data.last().map(|d| d["status"].clone()), Some(json!("cancelled")), "{events}");
+    assert_eq!(
+        data.last().map(|d| d["status"].clone()),
+        Some(json!("cancelled")),
+        "{events}"
+    );
     drop(api);
     std::fs::remove_dir_all(root).ok();
 }
@@ -489,7 +588,14 @@ fn notify_wakes_an_idle_worker() {
     let _worker = Worker::start(
         &url,
         &root.join("w"),
-        &["--workers", "1", "--idle-poll", "120", "--fake-runner-ms", "1"],
+        &[
+            "--workers",
+            "1",
+            "--idle-poll",
+            "120",
+            "--fake-runner-ms",
+            "1",
+        ],
     );
     std::thread::sleep(Duration::from_secs(1)); // idle, waiting
     let store = PgStore::open(&url, LeaseParams::default()).expect("open");
@@ -497,12 +603,19 @@ fn notify_wakes_an_idle_worker() {
         let id = Uuid::new_v4();
         let body = json!({"scene": column_scene(0.5), "motion": pulse(2.0)});
         store
-            .insert(&NewJob { id, kind: JobKind::Run, request: body, motion: json!({"pga": 2.0}) })
+            .insert(&NewJob {
+                id,
+                kind: JobKind::Run,
+                request: body,
+                motion: json!({"pga": 2.0}),
+            })
             .expect("insert");
         let t = Instant::now();
-        wait_until("the woken worker finishes the job", Duration::from_secs(20), || {
-            store.get(id).expect("get").expect("job").status == JobStatus::Succeeded
-        });
+        wait_until(
+            "the woken worker finishes the job",
+            Duration::from_secs(20),
+            || store.get(id).expect("get").expect("job").status == JobStatus::Succeeded,
+        );
         assert!(
             t.elapsed() < Duration::from_secs(5),
             "round {round}: picked up after {:?}, not by notification",
@@ -528,7 +641,10 @@ fn migrates_a_version_1_database() {
     assert_eq!(s.schema_version().expect("version"), SCHEMA_VERSION);
     let mut c = sql(&url);
     let versions: Vec<i32> = c
-        .query("SELECT version FROM ashlar_schema_version ORDER BY version", &[])
+        .query(
+            "SELECT version FROM ashlar_schema_version ORDER BY version",
+            &[],
+        )
         .expect("versions")
         .iter()
         .map(|r| r.get(0))
@@ -543,23 +659,34 @@ fn migrates_a_version_1_database() {
     let first = s.claim().expect("claim").expect("job");
     assert_eq!(first.id.to_string(), "00000000-0000-4000-8000-000000000001");
     let second = s.claim().expect("claim").expect("job");
-    assert_eq!(second.id.to_string(), "00000000-0000-4000-8000-000000000002");
+    assert_eq!(
+        second.id.to_string(),
+        "00000000-0000-4000-8000-000000000002"
+    );
     assert_eq!(second.attempts, 2, "the old attempt still counts");
     // Opening again is a no-op; a newer schema is refused with a clear message.
     drop(s);
     PgStore::open(&url, LeaseParams::default()).expect("reopen");
-    c.execute("INSERT INTO ashlar_schema_version (version) VALUES (99)", &[])
-        .expect("bump");
+    c.execute(
+        "INSERT INTO ashlar_schema_version (version) VALUES (99)",
+        &[],
+    )
+    .expect("bump");
     let e = PgStore::open(&url, LeaseParams::default())
         .err()
         .expect("refused");
-    assert!(e.0.contains("version 99") && e.0.contains("upgrade ashlar"), "{e}");
+    assert!(
+        e.0.contains("version 99") && e.0.contains("upgrade ashlar"),
+        "{e}"
+    );
 }
 
 #[test]
 fn bad_database_urls_are_named() {
     // No server needed.
-    let e = PgStore::open("mysql://x", LeaseParams::default()).err().expect("refused");
+    let e = PgStore::open("mysql://x", LeaseParams::default())
+        .err()
+        .expect("refused");
     assert!(e.0.contains("--database"), "{e}");
     let out = Command::new(env!("CARGO_BIN_EXE_ashlar"))
         .args(["worker", "--database", "sqlite:/tmp/x.sqlite"])

@@ -81,7 +81,11 @@ pub fn run(args: &SweepArgs) -> Result<(), String> {
 }
 
 fn index_from_env() -> Result<usize, String> {
-    for var in ["SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX", "ASHLAR_SWEEP_INDEX"] {
+    for var in [
+        "SLURM_ARRAY_TASK_ID",
+        "JOB_COMPLETION_INDEX",
+        "ASHLAR_SWEEP_INDEX",
+    ] {
         if let Ok(v) = std::env::var(var) {
             return v
                 .trim()
@@ -145,19 +149,25 @@ fn run_line(args: &SweepArgs, manifest: &Path) -> Result<(), String> {
         .map_err(|e| format!("{at}: scene {}: {e}", scene_path.display()))?;
     let scene = parse_scene(&scene_text).map_err(|e| format!("{at}: scene {}: {e}", line.scene))?;
     let mut gm = match &line.record {
-        Some(r) => motion::load_path(&base.join(r)).map_err(|e| format!("{at}: record {r}: {e}"))?,
+        Some(r) => {
+            motion::load_path(&base.join(r)).map_err(|e| format!("{at}: record {r}: {e}"))?
+        }
         None => GroundMotion::none(),
     };
     match &line.amplitude {
         None | Some(Value::Null) => {}
         Some(Value::Number(n)) => {
-            let a = n.as_f64().filter(|a| a.is_finite() && *a >= 0.0).ok_or_else(|| {
-                format!("{at}: amplitude must be a number ≥ 0 (m/s²) or a string like \"0.3g\"")
-            })?;
+            let a = n
+                .as_f64()
+                .filter(|a| a.is_finite() && *a >= 0.0)
+                .ok_or_else(|| {
+                    format!("{at}: amplitude must be a number ≥ 0 (m/s²) or a string like \"0.3g\"")
+                })?;
             gm = gm.scaled_to_pga(a);
         }
         Some(Value::String(s)) => {
-            gm = gm.scaled_to_pga(parse_acceleration(s).map_err(|e| format!("{at}: amplitude: {e}"))?)
+            gm = gm
+                .scaled_to_pga(parse_acceleration(s).map_err(|e| format!("{at}: amplitude: {e}"))?)
         }
         Some(_) => {
             return Err(format!(
@@ -208,8 +218,7 @@ fn run_line(args: &SweepArgs, manifest: &Path) -> Result<(), String> {
     std::fs::write(tmp.join("line.json"), format!("{json}\n"))
         .map_err(|e| format!("{}: {e}", tmp.display()))?;
     if final_dir.exists() {
-        std::fs::remove_dir_all(&final_dir)
-            .map_err(|e| format!("{}: {e}", final_dir.display()))?;
+        std::fs::remove_dir_all(&final_dir).map_err(|e| format!("{}: {e}", final_dir.display()))?;
     }
     std::fs::rename(&tmp, &final_dir).map_err(|e| format!("{}: {e}", final_dir.display()))?;
     println!("{json}");
@@ -266,7 +275,8 @@ pub fn bracket(criterion: &str, runs: &[PgaRun]) -> PgaResult {
 }
 
 fn collect(args: &SweepArgs, dir: &Path) -> Result<(), String> {
-    let entries = std::fs::read_dir(dir).map_err(|e| format!("--collect {}: {e}", dir.display()))?;
+    let entries =
+        std::fs::read_dir(dir).map_err(|e| format!("--collect {}: {e}", dir.display()))?;
     let mut results: Vec<(LineResult, Summary)> = Vec::new();
     for e in entries {
         let e = e.map_err(|e| format!("--collect {}: {e}", dir.display()))?;
@@ -288,7 +298,8 @@ fn collect(args: &SweepArgs, dir: &Path) -> Result<(), String> {
     let mut missing = Vec::new();
     if let Some(m) = &args.with_manifest {
         let n = read_manifest(m)?.len();
-        let have: std::collections::BTreeSet<usize> = results.iter().map(|(l, _)| l.index).collect();
+        let have: std::collections::BTreeSet<usize> =
+            results.iter().map(|(l, _)| l.index).collect();
         missing = (0..n).filter(|k| !have.contains(k)).collect();
         if !missing.is_empty() && !args.allow_missing {
             return Err(format!(
@@ -355,12 +366,33 @@ mod tests {
     #[test]
     fn bracket_follows_the_search_rules() {
         // Hand-worked: lowest failure at 3, highest safe below it 2; 4 safe above 3 → not monotonic.
-        let b = bracket("toppled:c", &[r(4.0, false), r(1.0, false), r(3.0, true), r(2.0, false), r(5.0, true)]);
-        assert_eq!((b.safe_pga, b.failing_pga, b.monotonic), (Some(2.0), Some(3.0), false));
-        assert_eq!(b.runs.iter().map(|r| r.pga).collect::<Vec<_>>(), vec![1.0, 2.0, 3.0, 4.0, 5.0]);
+        let b = bracket(
+            "toppled:c",
+            &[
+                r(4.0, false),
+                r(1.0, false),
+                r(3.0, true),
+                r(2.0, false),
+                r(5.0, true),
+            ],
+        );
+        assert_eq!(
+            (b.safe_pga, b.failing_pga, b.monotonic),
+            (Some(2.0), Some(3.0), false)
+        );
+        assert_eq!(
+            b.runs.iter().map(|r| r.pga).collect::<Vec<_>>(),
+            vec![1.0, 2.0, 3.0, 4.0, 5.0]
+        );
         let all_safe = bracket("c", &[r(1.0, false), r(2.0, false)]);
-        assert_eq!((all_safe.safe_pga, all_safe.failing_pga, all_safe.monotonic), (Some(2.0), None, true));
+        assert_eq!(
+            (all_safe.safe_pga, all_safe.failing_pga, all_safe.monotonic),
+            (Some(2.0), None, true)
+        );
         let all_fail = bracket("c", &[r(1.0, true), r(2.0, true)]);
-        assert_eq!((all_fail.safe_pga, all_fail.failing_pga, all_fail.monotonic), (None, Some(1.0), true));
+        assert_eq!(
+            (all_fail.safe_pga, all_fail.failing_pga, all_fail.monotonic),
+            (None, Some(1.0), true)
+        );
     }
 }

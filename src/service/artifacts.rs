@@ -62,7 +62,9 @@ impl ArtifactStore {
             url.to_string()
         };
         let parsed = url::Url::parse(&full).map_err(|e| {
-            format!("--artifacts {url:?}: not a URL ({e}); expected file:///DIR or s3://BUCKET/PREFIX")
+            format!(
+                "--artifacts {url:?}: not a URL ({e}); expected file:///DIR or s3://BUCKET/PREFIX"
+            )
         })?;
         if parsed.scheme() == "file" {
             // The local store does not create its root; workers must agree on it existing.
@@ -86,7 +88,11 @@ impl ArtifactStore {
     }
 
     fn location(&self, id: Uuid, name: &str) -> StorePath {
-        let mut parts: Vec<String> = self.prefix.parts().map(|p| p.as_ref().to_string()).collect();
+        let mut parts: Vec<String> = self
+            .prefix
+            .parts()
+            .map(|p| p.as_ref().to_string())
+            .collect();
         parts.push("jobs".into());
         parts.push(id.hyphenated().to_string());
         parts.push(name.to_string());
@@ -192,11 +198,21 @@ mod tests {
             .enable_all()
             .build()
             .expect("rt");
-        let got = rt.block_on(store.fetch(id, "histories.csv")).expect("fetch");
+        let got = rt
+            .block_on(store.fetch(id, "histories.csv"))
+            .expect("fetch");
         assert_eq!(got.as_deref(), Some(&b"time,a.x\n0,0\n"[..]));
-        assert_eq!(rt.block_on(store.fetch(id, "trajectory.mcap")).expect("fetch"), None);
+        assert_eq!(
+            rt.block_on(store.fetch(id, "trajectory.mcap"))
+                .expect("fetch"),
+            None
+        );
         assert!(
-            !root.join("shared/jobs").join(id.to_string()).join("unrelated.txt").exists(),
+            !root
+                .join("shared/jobs")
+                .join(id.to_string())
+                .join("unrelated.txt")
+                .exists(),
             "only artifact names are published"
         );
         std::fs::remove_dir_all(root).ok();

@@ -300,7 +300,9 @@ pub fn lease_params(secs: f64) -> Result<pg_store::LeaseParams, String> {
             "--lease must be a number of seconds between 1 and 86400, got {secs}"
         ));
     }
-    Ok(pg_store::LeaseParams::with_lease(Duration::from_secs_f64(secs)))
+    Ok(pg_store::LeaseParams::with_lease(Duration::from_secs_f64(
+        secs,
+    )))
 }
 
 /// Resolves on SIGINT or SIGTERM.

@@ -347,8 +347,12 @@ fn migrate(c: &mut Client) -> Result<(), StoreError> {
         )));
     }
     for &(version, sql) in MIGRATIONS.iter().filter(|(k, _)| *k > v) {
-        tx.batch_execute(sql)
-            .map_err(|e| StoreError(format!("schema migration {version}: {}", StoreError::from(e).0)))?;
+        tx.batch_execute(sql).map_err(|e| {
+            StoreError(format!(
+                "schema migration {version}: {}",
+                StoreError::from(e).0
+            ))
+        })?;
         tx.execute(
             "INSERT INTO ashlar_schema_version (version) VALUES ($1)",
             &[&version],

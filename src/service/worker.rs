@@ -211,9 +211,14 @@ impl Core {
         self.wake.1.notify_one();
     }
 
-    fn wait_for_work(&self, timeout: Duration) {
+    /// The wake-up counter, read before looking at the queue: a wake-up that arrives between
+    /// an empty claim and the wait is then not missed.
+    fn wake_seq(&self) -> u64 {
+        self.wake.0.lock().map(|g| *g).unwrap_or(0)
+    }
+
+    fn wait_for_work(&self, seen: u64, timeout: Duration) {
         if let Ok(g) = self.wake.0.lock() {
-            let seen = *g;
             let _ = self.wake.1.wait_timeout_while(g, timeout, |n| {
                 *n == seen && !self.shutting_down.load(Ordering::SeqCst)
             });
@@ -328,12 +333,13 @@ impl Pool {
 
 fn worker_loop(core: &Core) {
     while !core.shutting_down.load(Ordering::SeqCst) {
+        let seen = core.wake_seq();
         match core.store.claim() {
             Ok(Some(job)) => {
                 core.store_healthy.store(true, Ordering::Relaxed);
                 run_job(core, job);
             }
-            Ok(None) => core.wait_for_work(core.params.idle_poll),
+            Ok(None) => core.wait_for_work(seen, core.params.idle_poll),
             Err(e) => {
                 core.store_result::<()>("claiming a job", Err(e));
                 std::thread::sleep(core.params.idle_poll);

@@ -1,59 +1,9 @@
 #!/usr/bin/env bash
 # Runs the PostgreSQL cluster tests (tests/pg_cluster.rs) against a throwaway PostgreSQL on
-# loopback: installs Debian's `postgresql` package if no server binaries are found, creates a
-# cluster in a temporary directory (owned by an unprivileged user when run as root, since
-# postgres refuses to run as root), starts it on a free port, sets ASHLAR_TEST_DATABASE_URL,
-# runs the tests, and removes the cluster. Fails if the tests were skipped.
+# loopback (see server.sh). Fails if the tests were skipped.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-
-find_bin() {
-    local d
-    for d in "$(pg_config --bindir 2>/dev/null || true)" /usr/lib/postgresql/*/bin /usr/local/bin /usr/bin; do
-        if [ -n "$d" ] && [ -x "$d/initdb" ] && [ -x "$d/pg_ctl" ] && [ -x "$d/postgres" ]; then
-            echo "$d"
-            return 0
-        fi
-    done
-    return 1
-}
-
-BIN="$(find_bin || true)"
-if [ -z "$BIN" ]; then
-    echo "tests/pg/run.sh: installing PostgreSQL from Debian's packages"
-    export DEBIAN_FRONTEND=noninteractive
-    apt-get update -qq
-    apt-get install -y -qq postgresql >/dev/null
-    BIN="$(find_bin)"
-fi
-echo "tests/pg/run.sh: PostgreSQL binaries in $BIN ($("$BIN/postgres" --version))"
-
-TMP="$(mktemp -d /tmp/ashlar-pg.XXXXXX)"
-RUN=()
-if [ "$(id -u)" = 0 ]; then
-    # postgres will not run as root: a dedicated system user owns the throwaway cluster.
-    id ashlarpg >/dev/null 2>&1 || useradd --system --no-create-home --shell /usr/sbin/nologin ashlarpg
-    chown ashlarpg "$TMP"
-    chmod 755 "$TMP"
-    RUN=(runuser -u ashlarpg --)
-fi
-PORT="${ASHLAR_PG_PORT:-$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')}"
-
-stop() {
-    "${RUN[@]}" "$BIN/pg_ctl" -D "$TMP/data" -m immediate stop >/dev/null 2>&1 || true
-    rm -rf "$TMP"
-}
-trap stop EXIT
-
-"${RUN[@]}" "$BIN/initdb" -D "$TMP/data" -U ashlar --auth=trust -E UTF8 --no-sync >"$TMP/initdb.log" 2>&1 \
-    || { cat "$TMP/initdb.log"; exit 1; }
-# fsync off: a throwaway cluster; the tests kill workers, not the database server.
-"${RUN[@]}" "$BIN/pg_ctl" -D "$TMP/data" -l "$TMP/server.log" -w -t 60 \
-    -o "-p $PORT -k $TMP -c listen_addresses=127.0.0.1 -c fsync=off -c max_connections=300" start >/dev/null \
-    || { cat "$TMP/server.log"; exit 1; }
-
-export ASHLAR_TEST_DATABASE_URL="postgresql://ashlar@127.0.0.1:$PORT/postgres"
-echo "tests/pg/run.sh: server on 127.0.0.1:$PORT"
+source tests/pg/server.sh
 LOG="$TMP/test.log"
 # Two test threads: the cluster tests spawn their own worker processes.
 set +e
