@@ -10,4 +10,4 @@ DIR=debug; [ "$PROFILE" = dev ] || DIR="$PROFILE"
 export ASHLAR_PG_FSYNC=on
 source tests/pg/server.sh
 export PATH="$BIN:$PATH"
-python3 scripts/cluster_bench.py "target/$DIR/ashlar" "$ASHLAR_TEST_DATABASE_URL" "$@"
+python3 -u scripts/cluster_bench.py "target/$DIR/ashlar" "$ASHLAR_TEST_DATABASE_URL" "$@"
