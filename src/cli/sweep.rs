@@ -274,6 +274,9 @@ pub fn bracket(criterion: &str, runs: &[PgaRun]) -> PgaResult {
     }
 }
 
+/// Scene, record, criterion.
+type GroupKey = (String, Option<String>, Option<String>);
+
 fn collect(args: &SweepArgs, dir: &Path) -> Result<(), String> {
     let entries =
         std::fs::read_dir(dir).map_err(|e| format!("--collect {}: {e}", dir.display()))?;
@@ -310,8 +313,7 @@ fn collect(args: &SweepArgs, dir: &Path) -> Result<(), String> {
             ));
         }
     }
-    let mut groups: BTreeMap<(String, Option<String>, Option<String>), Vec<&LineResult>> =
-        BTreeMap::new();
+    let mut groups: BTreeMap<GroupKey, Vec<&LineResult>> = BTreeMap::new();
     for (l, _) in &results {
         groups
             .entry((l.scene.clone(), l.record.clone(), l.criterion.clone()))

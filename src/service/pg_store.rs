@@ -244,7 +244,7 @@ impl PgStore {
 
     /// The installed schema version (0 when none).
     pub fn schema_version(&self) -> Result<i32, StoreError> {
-        self.with(|c| current_version(c))
+        self.with(current_version)
     }
 
     /// Extend the leases of `ids` (jobs this process runs); see [`Heartbeat`].
