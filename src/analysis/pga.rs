@@ -498,6 +498,18 @@ pub fn fragility_svg(r: &MultiResult) -> Option<String> {
     ))
 }
 
+/// The verdict of `criteria` (all must hold) on a finished run's summary: the same test
+/// [`evaluate`] applies, for callers that ran the scene themselves (batch sweeps).
+pub fn met_by_summary(criteria: &[Criterion], summary: &super::run::Summary) -> bool {
+    let mut tr = Tracker::default();
+    for b in &summary.blocks {
+        tr.ids.push(b.id.clone());
+        tr.final_rotation.push(b.final_rotation);
+        tr.final_displacement.push(b.final_displacement);
+    }
+    Combine::All.verdict(criteria.iter().map(|c| c.met(&tr)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

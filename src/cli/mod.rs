@@ -1,6 +1,8 @@
 //! Command line: a thin layer that parses arguments and calls `analysis` / `service`.
 mod run;
 mod study;
+mod sweep;
+mod worker;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -28,6 +30,10 @@ pub enum Command {
     Serve(crate::service::ServeArgs),
     /// Measure accuracy against speed over the benchmark scenes (docs/accuracy-vs-speed.md).
     Study(study::StudyArgs),
+    /// Run jobs from a PostgreSQL queue shared with `ashlar serve --database postgres://…`.
+    Worker(worker::WorkerArgs),
+    /// Batch systems: run line N of a manifest (`--index N`), or gather results (`--collect DIR`).
+    Sweep(sweep::SweepArgs),
 }
 
 /// Run the CLI; errors go to stderr as one clear line.
@@ -39,6 +45,8 @@ pub fn main() -> ExitCode {
         Command::Motion(args) => crate::motion::command::run(&args),
         Command::Serve(args) => crate::service::serve_cli(args),
         Command::Study(args) => study::run(&args),
+        Command::Worker(args) => worker::run(&args),
+        Command::Sweep(args) => sweep::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

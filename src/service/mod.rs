@@ -3,9 +3,11 @@
 //!
 //! `routes` answers requests (async, no simulation work), `store` keeps every job durably,
 //! `worker` runs jobs on std threads through a `JobRunner`, `events` streams progress.
+pub mod artifacts;
 pub mod events;
 pub mod fake;
 pub mod histories;
+pub mod pg_store;
 pub mod problem;
 pub mod request;
 pub mod routes;
@@ -32,10 +34,19 @@ pub struct ServeArgs {
     /// Directory for the embedded job store (`jobs.sqlite`) and artifacts (`jobs/<uuid>/`).
     #[arg(long, default_value = "./ashlar-data")]
     pub data: PathBuf,
-    /// Job store URL instead of the embedded default: `sqlite:PATH` (artifacts go to --data).
+    /// Job store URL instead of the embedded default: `sqlite:PATH` (artifacts go to --data),
+    /// or `postgres://USER@HOST:PORT/DBNAME` to share one queue with `ashlar worker` processes.
     #[arg(long)]
     pub database: Option<String>,
-    /// Worker threads running jobs (default: the number of cores).
+    /// Shared artifact storage (`file:///DIR`, or `s3://BUCKET/PREFIX` with the `s3` feature):
+    /// workers publish finished jobs' files there and the API serves them from there.
+    #[arg(long)]
+    pub artifacts: Option<String>,
+    /// PostgreSQL store: seconds a claimed job stays leased without a heartbeat.
+    #[arg(long, default_value_t = 30.0)]
+    pub lease: f64,
+    /// Worker threads running jobs (default: the number of cores; 0 with a PostgreSQL
+    /// database: an API-only process, `ashlar worker` processes run the jobs).
     #[arg(long)]
     pub workers: Option<usize>,
     /// Largest request body, bytes (413 beyond).
@@ -70,6 +81,11 @@ pub struct ServiceConfig {
     pub database: Option<PathBuf>,
     pub limits: Limits,
     pub workers: WorkerParams,
+    /// A PostgreSQL URL: the cluster store instead of SQLite (`database` is then ignored).
+    pub postgres: Option<String>,
+    /// Shared artifact storage URL (see [`artifacts::ArtifactStore::open`]).
+    pub artifacts: Option<String>,
+    pub lease: pg_store::LeaseParams,
 }
 
 impl ServiceConfig {
@@ -79,6 +95,9 @@ impl ServiceConfig {
             database: None,
             limits: Limits::default(),
             workers: WorkerParams::default(),
+            postgres: None,
+            artifacts: None,
+            lease: pg_store::LeaseParams::default(),
         }
     }
 }
@@ -87,6 +106,7 @@ impl ServiceConfig {
 pub struct Service {
     state: AppState,
     pool: worker::Pool,
+    cluster: Option<pg_store::ClusterThreads>,
 }
 
 impl Service {
@@ -95,11 +115,28 @@ impl Service {
         let jobs_dir = config.data_dir.join("jobs");
         std::fs::create_dir_all(&jobs_dir)
             .map_err(|e| format!("--data {}: {e}", config.data_dir.display()))?;
-        let db = config
-            .database
-            .clone()
-            .unwrap_or_else(|| config.data_dir.join("jobs.sqlite"));
-        let store = SqliteStore::open(&db).map_err(|e| e.to_string())?;
+        let (store, pg): (Arc<dyn JobStore>, Option<Arc<pg_store::PgStore>>) =
+            match &config.postgres {
+                Some(url) => {
+                    let pg = Arc::new(
+                        pg_store::PgStore::open(url, config.lease.clone())
+                            .map_err(|e| e.to_string())?,
+                    );
+                    (pg.clone(), Some(pg))
+                }
+                None => {
+                    let db = config
+                        .database
+                        .clone()
+                        .unwrap_or_else(|| config.data_dir.join("jobs.sqlite"));
+                    (
+                        Arc::new(SqliteStore::open(&db).map_err(|e| e.to_string())?),
+                        None,
+                    )
+                }
+            };
+        // Embedded store: every job left running belongs to a dead server. Cluster store:
+        // only those whose lease expired (the reaper keeps doing this while we run).
         let (requeued, failed) = store
             .recover(config.workers.max_attempts)
             .map_err(|e| e.to_string())?;
@@ -110,18 +147,28 @@ impl Service {
                 "recovered jobs left running by a previous server"
             );
         }
-        let store: Arc<dyn JobStore> = Arc::new(store);
-        let core = Arc::new(worker::Core::new(
+        let mut core = worker::Core::new(
             store,
             config.data_dir,
             config.limits,
             config.workers,
             runner,
-        ));
+        );
+        if let Some(url) = &config.artifacts {
+            core.artifacts = Some(Arc::new(artifacts::ArtifactStore::open(url)?));
+        }
+        core.remote_workers
+            .store(pg.is_some(), std::sync::atomic::Ordering::SeqCst);
+        let core = Arc::new(core);
+        let cluster = match pg {
+            Some(pg) => Some(pg_store::ClusterThreads::start(core.clone(), pg)?),
+            None => None,
+        };
         let pool = worker::Pool::start(core.clone())?;
         Ok(Self {
             state: AppState { core },
             pool,
+            cluster,
         })
     }
 
@@ -131,8 +178,28 @@ impl Service {
 
     /// Stop gracefully (see [`worker::Pool::shutdown`]); returns how many jobs were requeued.
     pub fn shutdown(self, grace: Duration) -> usize {
-        self.pool.shutdown(grace)
+        let n = self.pool.shutdown(grace);
+        if let Some(c) = self.cluster {
+            c.stop();
+        }
+        n
     }
+}
+
+/// Which store a `--database` URL names.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Database {
+    Sqlite(PathBuf),
+    Postgres(String),
+}
+
+/// Parse a `--database` URL.
+pub fn parse_database(url: &str) -> Result<Database, String> {
+    if url.starts_with("postgres://") || url.starts_with("postgresql://") {
+        pg_store::parse_url(url)?;
+        return Ok(Database::Postgres(url.to_string()));
+    }
+    database_path(url).map(Database::Sqlite)
 }
 
 fn database_path(url: &str) -> Result<PathBuf, String> {
@@ -145,10 +212,9 @@ fn database_path(url: &str) -> Result<PathBuf, String> {
         }
         return Ok(PathBuf::from(p));
     }
-    if url.starts_with("postgres://") || url.starts_with("postgresql://") {
-        return Err("--database: PostgreSQL is not built into this ashlar yet; use sqlite:PATH or --data DIR".into());
-    }
-    Err(format!("--database {url:?}: expected sqlite:PATH"))
+    Err(format!(
+        "--database {url:?}: expected sqlite:PATH or postgres://USER@HOST:PORT/DBNAME"
+    ))
 }
 
 /// Entry point of `ashlar serve`: blocks until SIGINT/SIGTERM, then shuts down gracefully.
@@ -161,7 +227,13 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
         .with_writer(std::io::stderr)
         .try_init();
     let mut config = ServiceConfig::new(&args.data);
-    config.database = args.database.as_deref().map(database_path).transpose()?;
+    match args.database.as_deref().map(parse_database).transpose()? {
+        Some(Database::Sqlite(p)) => config.database = Some(p),
+        Some(Database::Postgres(url)) => config.postgres = Some(url),
+        None => {}
+    }
+    config.artifacts = args.artifacts.clone();
+    config.lease = lease_params(args.lease)?;
     config.limits = Limits {
         max_body_bytes: args.max_body_bytes,
         max_blocks: args.max_blocks,
@@ -171,8 +243,8 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
         ..Limits::default()
     };
     if let Some(n) = args.workers {
-        if n == 0 {
-            return Err("--workers must be at least 1".into());
+        if n == 0 && config.postgres.is_none() {
+            return Err("--workers must be at least 1 (0 only with a PostgreSQL --database, whose `ashlar worker` processes run the jobs)".into());
         }
         config.workers.workers = n;
     }
@@ -222,7 +294,20 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
     served.map_err(|e| format!("serving: {e}"))
 }
 
-async fn wait_for_signal() {
+/// `--lease SECONDS` as lease parameters.
+pub fn lease_params(secs: f64) -> Result<pg_store::LeaseParams, String> {
+    if !(secs.is_finite() && (1.0..=86_400.0).contains(&secs)) {
+        return Err(format!(
+            "--lease must be a number of seconds between 1 and 86400, got {secs}"
+        ));
+    }
+    Ok(pg_store::LeaseParams::with_lease(Duration::from_secs_f64(
+        secs,
+    )))
+}
+
+/// Resolves on SIGINT or SIGTERM.
+pub async fn wait_for_signal() {
     let ctrl_c = async {
         if tokio::signal::ctrl_c().await.is_err() {
             std::future::pending::<()>().await;

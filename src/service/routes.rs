@@ -512,6 +512,7 @@ async fn get_histories(
         .collect();
     let j = load(&s, id, JobKind::Run).await?;
     artifact_available(&j, "histories")?;
+    super::artifacts::ensure_local(&s.core, id, "histories.csv").await;
     let path = s.core.job_dir(id).join("histories.csv");
     let text = match tokio::fs::read_to_string(&path).await {
         Ok(t) => t,
@@ -593,6 +594,7 @@ async fn get_trajectory(
     let id = parse_id(id)?;
     let j = load(&s, id, JobKind::Run).await?;
     artifact_available(&j, "trajectory")?;
+    super::artifacts::ensure_local(&s.core, id, "trajectory.mcap").await;
     let path = s.core.job_dir(id).join("trajectory.mcap");
     let bytes = match tokio::fs::read(&path).await {
         Ok(b) => b,
@@ -674,7 +676,7 @@ async fn healthz(State(s): State<AppState>) -> ApiResult {
     if c.shutting_down.load(Ordering::SeqCst) {
         return Err(ApiError::unavailable("the server is shutting down", 5));
     }
-    if alive == 0 {
+    if alive == 0 && !c.remote_workers.load(Ordering::SeqCst) {
         return Err(ApiError::unavailable("no worker thread is running", 5));
     }
     if !c.store_healthy.load(Ordering::Relaxed) {

@@ -173,6 +173,12 @@ pub struct Core {
     pub workers_alive: AtomicUsize,
     /// False after a store operation of a worker failed, true again after one succeeds.
     pub store_healthy: AtomicBool,
+    /// Jobs are run by other processes sharing the store (`ashlar worker`): an API process
+    /// with no worker threads of its own can still take jobs.
+    pub remote_workers: AtomicBool,
+    /// Where finished jobs' artifacts are published for every process (None: they stay in
+    /// `data_dir`, which all processes then share).
+    pub artifacts: Option<Arc<super::artifacts::ArtifactStore>>,
 }
 
 impl Core {
@@ -196,6 +202,24 @@ impl Core {
             shutdown_signal: tokio::sync::watch::channel(false).0,
             workers_alive: AtomicUsize::new(0),
             store_healthy: AtomicBool::new(true),
+            remote_workers: AtomicBool::new(false),
+            artifacts: None,
+        }
+    }
+
+    /// Ids of the jobs running in this process.
+    pub fn running_ids(&self) -> Vec<Uuid> {
+        self.running
+            .lock()
+            .map(|m| m.keys().copied().collect())
+            .unwrap_or_default()
+    }
+
+    /// Stop a running job whose lease this process lost (another worker may be rerunning it):
+    /// stopped like at shutdown, so nothing is recorded for it here.
+    pub fn signal_lost(&self, id: Uuid) {
+        if let Some(c) = self.running.lock().ok().and_then(|m| m.get(&id).cloned()) {
+            c.throw(STOP_SHUTDOWN);
         }
     }
 
@@ -212,9 +236,14 @@ impl Core {
         self.wake.1.notify_one();
     }
 
-    fn wait_for_work(&self, timeout: Duration) {
+    /// The wake-up counter, read before looking at the queue: a wake-up that arrives between
+    /// an empty claim and the wait is then not missed.
+    fn wake_seq(&self) -> u64 {
+        self.wake.0.lock().map(|g| *g).unwrap_or(0)
+    }
+
+    fn wait_for_work(&self, seen: u64, timeout: Duration) {
         if let Ok(g) = self.wake.0.lock() {
-            let seen = *g;
             let _ = self.wake.1.wait_timeout_while(g, timeout, |n| {
                 *n == seen && !self.shutting_down.load(Ordering::SeqCst)
             });
@@ -329,12 +358,13 @@ impl Pool {
 
 fn worker_loop(core: &Core) {
     while !core.shutting_down.load(Ordering::SeqCst) {
+        let seen = core.wake_seq();
         match core.store.claim() {
             Ok(Some(job)) => {
                 core.store_healthy.store(true, Ordering::Relaxed);
                 run_job(core, job);
             }
-            Ok(None) => core.wait_for_work(core.params.idle_poll),
+            Ok(None) => core.wait_for_work(seen, core.params.idle_poll),
             Err(e) => {
                 core.store_result::<()>("claiming a job", Err(e));
                 std::thread::sleep(core.params.idle_poll);
@@ -379,6 +409,12 @@ fn run_job(core: &Core, job: JobRecord) {
         let input = parse_stored(core, &job)?;
         execute(core, id, &input, &dir, &ctl)
     });
+    let outcome = match (outcome, &core.artifacts) {
+        (Ok(o), Some(a)) if ctl.reason.load(Ordering::SeqCst) != STOP_SHUTDOWN => {
+            a.publish_dir(id, &dir).map(|()| o)
+        }
+        (o, _) => o,
+    };
     let reason = ctl.reason.load(Ordering::SeqCst);
     core.unregister(id);
     let finish = match outcome {

@@ -1,0 +1,114 @@
+//! `ashlar worker`: a process that only runs jobs, from a PostgreSQL queue shared with
+//! `ashlar serve --database postgres://…` and any number of other workers. Thin: the service's
+//! worker pool and cluster threads without the HTTP layer.
+use crate::service::{self, Limits, ServiceConfig};
+use std::path::PathBuf;
+use std::time::Duration;
+
+#[derive(Debug, clap::Args)]
+pub struct WorkerArgs {
+    /// The shared queue: postgres://USER@HOST:PORT/DBNAME.
+    #[arg(long)]
+    pub database: String,
+    /// Local scratch directory for the artifacts of the jobs this worker runs (`jobs/<uuid>/`);
+    /// give every process the same shared directory, or use --artifacts.
+    #[arg(long, default_value = "./ashlar-data")]
+    pub data: PathBuf,
+    /// Shared artifact storage (`file:///DIR`, `s3://BUCKET/PREFIX` with the `s3` feature).
+    #[arg(long)]
+    pub artifacts: Option<String>,
+    /// Jobs run at once (default: the number of cores).
+    #[arg(long)]
+    pub workers: Option<usize>,
+    /// Seconds a claimed job stays leased without a heartbeat (heartbeat: a third of it).
+    #[arg(long, default_value_t = 30.0)]
+    pub lease: f64,
+    /// Seconds running jobs get to finish on SIGINT/SIGTERM before they are requeued.
+    #[arg(long, default_value_t = 20.0)]
+    pub shutdown_grace: f64,
+    /// Most blocks in a scene (must match the API's --max-blocks).
+    #[arg(long, default_value_t = Limits::default().max_blocks)]
+    pub max_blocks: usize,
+    /// Most samples in a record (must match the API's --max-record-samples).
+    #[arg(long, default_value_t = Limits::default().max_record_samples)]
+    pub max_record_samples: usize,
+    /// Most steps of one run (must match the API's --max-total-steps).
+    #[arg(long, default_value_t = Limits::default().max_total_steps)]
+    pub max_total_steps: u64,
+    /// Seconds between looks at the queue when no notification came (NOTIFY wakes idle
+    /// workers at once; this only bounds the delay if a notification is lost).
+    #[arg(long, default_value_t = 5.0)]
+    pub idle_poll: f64,
+    /// Testing aid: the service's deterministic fake runner, N ms per simulated second.
+    #[arg(long, hide = true)]
+    pub fake_runner_ms: Option<u64>,
+}
+
+pub fn run(args: &WorkerArgs) -> Result<(), String> {
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env()
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
+        )
+        .with_writer(std::io::stderr)
+        .try_init();
+    let url = match service::parse_database(&args.database)? {
+        service::Database::Postgres(url) => url,
+        service::Database::Sqlite(_) => {
+            return Err(
+                "--database: `ashlar worker` needs a PostgreSQL queue (postgres://…); with the embedded store, `ashlar serve` runs the jobs itself"
+                    .into(),
+            )
+        }
+    };
+    let mut config = ServiceConfig::new(&args.data);
+    config.postgres = Some(url);
+    config.artifacts = args.artifacts.clone();
+    config.lease = service::lease_params(args.lease)?;
+    config.limits = Limits {
+        max_blocks: args.max_blocks,
+        max_record_samples: args.max_record_samples,
+        max_total_steps: args.max_total_steps,
+        ..Limits::default()
+    };
+    if let Some(n) = args.workers {
+        if n == 0 {
+            return Err("--workers must be at least 1".into());
+        }
+        config.workers.workers = n;
+    }
+    if !(args.idle_poll.is_finite() && args.idle_poll > 0.0 && args.idle_poll <= 3600.0) {
+        return Err(format!(
+            "--idle-poll must be a number of seconds in (0, 3600], got {}",
+            args.idle_poll
+        ));
+    }
+    config.workers.idle_poll = Duration::from_secs_f64(args.idle_poll);
+    if !(args.shutdown_grace.is_finite() && args.shutdown_grace >= 0.0) {
+        return Err(format!(
+            "--shutdown-grace must be a number of seconds ≥ 0, got {}",
+            args.shutdown_grace
+        ));
+    }
+    let runner = match args.fake_runner_ms {
+        Some(ms) => service::fake::fake_runner(Duration::from_millis(ms)),
+        None => service::analysis_runner(),
+    };
+    let workers = config.workers.workers;
+    let svc = service::Service::start(config, runner)?;
+    // One line on stdout that scripts (and the tests) wait for.
+    println!("ashlar worker: running {workers} job(s) at a time");
+    tracing::info!(workers, "worker started");
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .map_err(|e| format!("starting the signal runtime: {e}"))?;
+    runtime.block_on(service::wait_for_signal());
+    tracing::info!(
+        "stopping: no new claims; running jobs get {} s",
+        args.shutdown_grace
+    );
+    let requeued = svc.shutdown(Duration::from_secs_f64(args.shutdown_grace));
+    tracing::info!(requeued, "stopped");
+    Ok(())
+}

@@ -1,0 +1,230 @@
+//! Shared artifact storage: where a worker publishes a finished job's files (histories,
+//! MCAP, summary) so that the API process on another machine can serve them. Beside `store`
+//! under `worker`/`routes`; built on `object_store` (a local or shared directory as
+//! `file:///…`, or S3-compatible storage as `s3://bucket/prefix` when built with the `s3`
+//! feature).
+//!
+//! Without `--artifacts`, artifacts stay in each process's `--data DIR/jobs/<uuid>/`, which is
+//! enough when every process is given the same (shared) directory.
+use super::worker::Core;
+use object_store::path::Path as StorePath;
+use object_store::{ObjectStore, PutPayload};
+use std::path::Path;
+use std::sync::{Arc, OnceLock};
+use uuid::Uuid;
+
+/// Artifact files a job may leave, the only names ever published or fetched.
+pub const ARTIFACT_NAMES: &[&str] = &[
+    "summary.json",
+    "result.json",
+    "histories.csv",
+    "trajectory.mcap",
+];
+
+/// An object store plus the prefix jobs live under (`<prefix>/jobs/<uuid>/<file>`).
+pub struct ArtifactStore {
+    store: Arc<dyn ObjectStore>,
+    prefix: StorePath,
+    url: String,
+}
+
+impl std::fmt::Debug for ArtifactStore {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ArtifactStore")
+            .field("url", &self.url)
+            .finish()
+    }
+}
+
+/// The runtime blocking callers (worker threads) drive object-store futures on. A static, so
+/// it is never dropped inside an async context.
+fn runtime() -> Result<&'static tokio::runtime::Runtime, String> {
+    static RT: OnceLock<Result<tokio::runtime::Runtime, String>> = OnceLock::new();
+    RT.get_or_init(|| {
+        tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(1)
+            .thread_name("ashlar-artifacts")
+            .enable_all()
+            .build()
+            .map_err(|e| format!("starting the artifact runtime: {e}"))
+    })
+    .as_ref()
+    .map_err(Clone::clone)
+}
+
+impl ArtifactStore {
+    /// Open `file:///ABSOLUTE/DIR` or `s3://BUCKET/PREFIX` (credentials from the usual
+    /// `AWS_*` environment variables). A plain absolute path is taken as a directory.
+    pub fn open(url: &str) -> Result<Self, String> {
+        let full = if url.starts_with('/') {
+            format!("file://{url}")
+        } else {
+            url.to_string()
+        };
+        let parsed = url::Url::parse(&full).map_err(|e| {
+            format!(
+                "--artifacts {url:?}: not a URL ({e}); expected file:///DIR or s3://BUCKET/PREFIX"
+            )
+        })?;
+        if parsed.scheme() == "file" {
+            // The local store does not create its root; workers must agree on it existing.
+            std::fs::create_dir_all(parsed.path())
+                .map_err(|e| format!("--artifacts {url}: {e}"))?;
+        }
+        let (store, prefix) = if parsed.scheme() == "s3" {
+            object_store::parse_url_opts(&parsed, std::env::vars().filter(|(k, _)| k.starts_with("AWS_")).map(|(k, v)| (k.to_ascii_lowercase(), v)))
+        } else {
+            object_store::parse_url(&parsed)
+        }
+        .map_err(|e| match parsed.scheme() {
+            "s3" if !cfg!(feature = "s3") => format!("--artifacts {url}: this ashlar was built without S3 support (cargo build --features s3)"),
+            _ => format!("--artifacts {url}: {e}"),
+        })?;
+        Ok(Self {
+            store: Arc::from(store),
+            prefix,
+            url: url.to_string(),
+        })
+    }
+
+    fn location(&self, id: Uuid, name: &str) -> StorePath {
+        let mut parts: Vec<String> = self
+            .prefix
+            .parts()
+            .map(|p| p.as_ref().to_string())
+            .collect();
+        parts.push("jobs".into());
+        parts.push(id.hyphenated().to_string());
+        parts.push(name.to_string());
+        StorePath::from_iter(parts)
+    }
+
+    /// Upload the artifacts found in a job's directory (blocking; worker threads).
+    pub fn publish_dir(&self, id: Uuid, dir: &Path) -> Result<(), String> {
+        let rt = runtime()?;
+        for name in ARTIFACT_NAMES {
+            let path = dir.join(name);
+            let bytes = match std::fs::read(&path) {
+                Ok(b) => b,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                Err(e) => {
+                    tracing::error!(path = %path.display(), error = %e, "reading an artifact");
+                    return Err("the server could not read the job's artifacts".into());
+                }
+            };
+            let loc = self.location(id, name);
+            rt.block_on(self.store.put(&loc, PutPayload::from(bytes)))
+                .map_err(|e| {
+                    tracing::error!(url = %self.url, error = %e, "publishing an artifact");
+                    "the server could not publish the job's artifacts to shared storage".to_string()
+                })?;
+        }
+        Ok(())
+    }
+
+    /// Download one artifact, None when absent.
+    pub async fn fetch(&self, id: Uuid, name: &str) -> Result<Option<bytes::Bytes>, String> {
+        let loc = self.location(id, name);
+        let store = self.store.clone();
+        // On the artifact runtime: an S3 client's connections belong to one runtime.
+        let task = runtime()?.spawn(async move {
+            match store.get(&loc).await {
+                Ok(r) => r.bytes().await.map(Some),
+                Err(object_store::Error::NotFound { .. }) => Ok(None),
+                Err(e) => Err(e),
+            }
+        });
+        task.await
+            .map_err(|e| format!("artifact fetch task: {e}"))?
+            .map_err(|e| format!("{}: {e}", self.url))
+    }
+}
+
+/// Make sure `<data>/jobs/<id>/<name>` exists locally, downloading it from the shared artifact
+/// store when this process did not run the job. Errors are logged; the caller then answers as
+/// if the artifact were missing.
+pub async fn ensure_local(core: &Core, id: Uuid, name: &str) {
+    let Some(a) = &core.artifacts else {
+        return;
+    };
+    let path = core.job_dir(id).join(name);
+    if tokio::fs::try_exists(&path).await.unwrap_or(false) {
+        return;
+    }
+    match a.fetch(id, name).await {
+        Ok(Some(bytes)) => {
+            let dir = core.job_dir(id);
+            // Written under a temporary name then renamed: a concurrent reader never sees half.
+            let tmp = dir.join(format!(".{name}.{}", Uuid::new_v4().simple()));
+            let res = async {
+                tokio::fs::create_dir_all(&dir).await?;
+                tokio::fs::write(&tmp, &bytes).await?;
+                tokio::fs::rename(&tmp, &path).await
+            }
+            .await;
+            if let Err(e) = res {
+                tracing::error!(path = %path.display(), error = %e, "caching an artifact");
+            }
+        }
+        Ok(None) => {}
+        Err(e) => tracing::error!(error = %e, "fetching an artifact"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn publishes_and_fetches_through_a_directory() {
+        let root = std::env::temp_dir().join(format!("ashlar-artifacts-{}", Uuid::new_v4()));
+        let src = root.join("src");
+        std::fs::create_dir_all(&src).expect("dir");
+        std::fs::write(src.join("histories.csv"), "time,a.x\n0,0\n").expect("write");
+        std::fs::write(src.join("unrelated.txt"), "x").expect("write");
+        let store = ArtifactStore::open(&format!("file://{}", root.join("shared").display()))
+            .expect("open");
+        let id = Uuid::new_v4();
+        store.publish_dir(id, &src).expect("publish");
+        let on_disk = root
+            .join("shared/jobs")
+            .join(id.to_string())
+            .join("histories.csv");
+        assert_eq!(
+            std::fs::read_to_string(on_disk).expect("published"),
+            "time,a.x\n0,0\n"
+        );
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .expect("rt");
+        let got = rt
+            .block_on(store.fetch(id, "histories.csv"))
+            .expect("fetch");
+        assert_eq!(got.as_deref(), Some(&b"time,a.x\n0,0\n"[..]));
+        assert_eq!(
+            rt.block_on(store.fetch(id, "trajectory.mcap"))
+                .expect("fetch"),
+            None
+        );
+        assert!(
+            !root
+                .join("shared/jobs")
+                .join(id.to_string())
+                .join("unrelated.txt")
+                .exists(),
+            "only artifact names are published"
+        );
+        std::fs::remove_dir_all(root).ok();
+    }
+
+    #[test]
+    fn bad_urls_are_named() {
+        let e = ArtifactStore::open("not a url").expect_err("rejected");
+        assert!(e.contains("--artifacts"), "{e}");
+        if !cfg!(feature = "s3") {
+            let e = ArtifactStore::open("s3://bucket/x").expect_err("rejected");
+            assert!(e.contains("without S3"), "{e}");
+        }
+    }
+}

@@ -1,0 +1,750 @@
+//! The cluster job store: [`JobStore`] on PostgreSQL, for any number of API and worker
+//! processes on any number of machines (`ashlar serve|worker --database postgres://…`).
+//! Sits beside `store` (the embedded SQLite store) under `worker`/`routes`.
+//!
+//! - **Claim**: `UPDATE … FROM (SELECT … FOR UPDATE SKIP LOCKED LIMIT 1)`: concurrent claimers
+//!   skip each other's locked rows, so two workers never get the same job and never wait.
+//! - **Lease**: a claim stamps the job with a fresh token, the claimer's name and an expiry
+//!   (database clock, so machines' clocks need not agree). The owner's heartbeat extends it;
+//!   progress, finish and requeue only apply while the token still matches, so a worker that
+//!   lost its lease (paused, partitioned) can never overwrite the result of the worker that
+//!   reran the job: each result is recorded exactly once.
+//! - **Reaper**: any process requeues running jobs whose lease expired (their worker died),
+//!   failing those already started `max_attempts` times.
+//! - **Wake-up and cancel**: `NOTIFY ashlar_work` on every new or requeued job wakes idle
+//!   workers at once; `NOTIFY ashlar_cancel, '<id>'` reaches the process running the job.
+//! - **Migrations**: `migrations/NNNN_*.sql`, applied in order under an advisory lock, the
+//!   version kept in `ashlar_schema_version`.
+//!
+//! The sync `postgres` client fits the sync [`JobStore`] trait, which is called from worker
+//! threads and `spawn_blocking` (never from the async runtime's own threads).
+use super::store::{
+    now_ms, CancelOutcome, Counts, Finish, JobKind, JobRecord, JobStatus, JobStore, NewJob,
+    StoreError,
+};
+use super::worker::Core;
+use postgres::fallible_iterator::FallibleIterator;
+use postgres::{Client, NoTls, Row};
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+use uuid::Uuid;
+
+/// Schema migrations, in order; migration k brings the schema to version k.
+pub const MIGRATIONS: &[(i32, &str)] = &[
+    (1, include_str!("migrations/0001_jobs.sql")),
+    (2, include_str!("migrations/0002_leases.sql")),
+];
+
+/// The schema version this binary works with.
+pub const SCHEMA_VERSION: i32 = 2;
+
+/// Advisory-lock key serialising migrations of concurrently starting processes ("ashlar" in ASCII).
+const MIGRATION_LOCK: i64 = 0x61_73_68_6c_61_72;
+
+/// Notification channels.
+pub const CHANNEL_WORK: &str = "ashlar_work";
+pub const CHANNEL_CANCEL: &str = "ashlar_cancel";
+pub const CHANNEL_DONE: &str = "ashlar_done";
+
+/// Tuning of leases.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LeaseParams {
+    /// How long a claim stays valid without a heartbeat. 30 s: a dead worker's job is rerun
+    /// within half a minute, while a worker stalled by a slow disk or a GC-paused database
+    /// (seconds) keeps its job.
+    pub lease: Duration,
+    /// Heartbeat period: a third of the lease, so two heartbeats may be lost before expiry.
+    pub heartbeat: Duration,
+    /// How often each process looks for expired leases (cheap: an index on running jobs).
+    pub reap_every: Duration,
+}
+
+impl Default for LeaseParams {
+    fn default() -> Self {
+        Self {
+            lease: Duration::from_secs(30),
+            heartbeat: Duration::from_secs(10),
+            reap_every: Duration::from_secs(5),
+        }
+    }
+}
+
+impl LeaseParams {
+    /// A lease of `lease`, heartbeat a third of it, reaping twice per lease.
+    pub fn with_lease(lease: Duration) -> Self {
+        Self {
+            lease,
+            heartbeat: lease / 3,
+            reap_every: lease / 2,
+        }
+    }
+}
+
+/// What one heartbeat learnt.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Heartbeat {
+    /// Jobs whose lease this process no longer holds (reaped, maybe rerun elsewhere): stop them.
+    pub lost: Vec<Uuid>,
+    /// Jobs with a cancel request (in case the notification was missed).
+    pub cancel: Vec<Uuid>,
+}
+
+/// PostgreSQL job store. Connections are pooled (one per concurrently calling thread).
+pub struct PgStore {
+    config: postgres::Config,
+    pool: Mutex<Vec<Client>>,
+    /// `host:pid`, recorded with each claim.
+    worker_name: String,
+    params: LeaseParams,
+    /// Lease tokens of the jobs this process claimed and still runs.
+    tokens: Mutex<HashMap<Uuid, Uuid>>,
+}
+
+impl From<postgres::Error> for StoreError {
+    fn from(e: postgres::Error) -> Self {
+        // `Display` of a server error is terse; the source carries the server's message.
+        match e.as_db_error() {
+            Some(db) => StoreError(format!("postgres: {}", db.message())),
+            None => StoreError(format!("postgres: {e}")),
+        }
+    }
+}
+
+const COLUMNS: &str = "id, kind, status, request, motion, progress, result, error, cancel_requested, attempts, created_ms, started_ms, finished_ms";
+
+fn row_to_record(row: &Row) -> Result<JobRecord, StoreError> {
+    let json = |k: usize, what: &str| -> Result<serde_json::Value, StoreError> {
+        let s: String = row.try_get(k)?;
+        serde_json::from_str(&s).map_err(|e| StoreError(format!("corrupt {what} column: {e}")))
+    };
+    let kind: String = row.try_get(1)?;
+    let status: String = row.try_get(2)?;
+    let attempts: i32 = row.try_get(9)?;
+    Ok(JobRecord {
+        id: row.try_get(0)?,
+        kind: parse_kind(&kind)?,
+        status: parse_status(&status)?,
+        request: json(3, "request")?,
+        motion: json(4, "motion")?,
+        progress: row.try_get(5)?,
+        result: row.try_get(6)?,
+        error: row.try_get(7)?,
+        cancel_requested: row.try_get(8)?,
+        attempts: u32::try_from(attempts).unwrap_or(0),
+        created_ms: row.try_get(10)?,
+        started_ms: row.try_get(11)?,
+        finished_ms: row.try_get(12)?,
+    })
+}
+
+fn parse_kind(s: &str) -> Result<JobKind, StoreError> {
+    match s {
+        "run" => Ok(JobKind::Run),
+        "pga_search" => Ok(JobKind::PgaSearch),
+        other => Err(StoreError(format!(
+            "unknown job kind {other:?} in the store"
+        ))),
+    }
+}
+
+fn parse_status(s: &str) -> Result<JobStatus, StoreError> {
+    Ok(match s {
+        "queued" => JobStatus::Queued,
+        "running" => JobStatus::Running,
+        "succeeded" => JobStatus::Succeeded,
+        "failed" => JobStatus::Failed,
+        "cancelled" => JobStatus::Cancelled,
+        other => {
+            return Err(StoreError(format!(
+                "unknown job status {other:?} in the store"
+            )))
+        }
+    })
+}
+
+/// Check a `--database` URL names PostgreSQL and parse it (credentials are never echoed).
+pub fn parse_url(url: &str) -> Result<postgres::Config, String> {
+    if !(url.starts_with("postgres://") || url.starts_with("postgresql://")) {
+        return Err("--database: expected postgres://USER@HOST:PORT/DBNAME".into());
+    }
+    url.parse::<postgres::Config>()
+        .map_err(|e| format!("--database: not a valid PostgreSQL URL: {e}"))
+}
+
+impl PgStore {
+    /// Connect, create or upgrade the schema, and return the store.
+    pub fn open(url: &str, params: LeaseParams) -> Result<Self, StoreError> {
+        let config = parse_url(url).map_err(StoreError)?;
+        let host = std::env::var("HOSTNAME")
+            .ok()
+            .or_else(|| {
+                std::fs::read_to_string("/etc/hostname")
+                    .ok()
+                    .map(|s| s.trim().to_string())
+            })
+            .filter(|s| !s.is_empty())
+            .unwrap_or_else(|| "localhost".into());
+        let store = Self {
+            config,
+            pool: Mutex::new(Vec::new()),
+            worker_name: format!("{host}:{}", std::process::id()),
+            params,
+            tokens: Mutex::new(HashMap::new()),
+        };
+        store.with(migrate)?;
+        Ok(store)
+    }
+
+    /// The name this process claims jobs under (`host:pid`).
+    pub fn worker_name(&self) -> &str {
+        &self.worker_name
+    }
+
+    pub fn lease_params(&self) -> &LeaseParams {
+        &self.params
+    }
+
+    /// A new connection (also used for `LISTEN`).
+    pub fn connect(&self) -> Result<Client, StoreError> {
+        self.config
+            .connect(NoTls)
+            .map_err(|e| StoreError(format!("connecting to PostgreSQL: {e}")))
+    }
+
+    /// Run `f` on a pooled connection; a connection that broke is dropped, not returned.
+    fn with<T>(
+        &self,
+        f: impl FnOnce(&mut Client) -> Result<T, StoreError>,
+    ) -> Result<T, StoreError> {
+        let pooled = self.pool.lock().ok().and_then(|mut p| p.pop());
+        let mut client = match pooled {
+            Some(c) if !c.is_closed() => c,
+            _ => self.connect()?,
+        };
+        let out = f(&mut client);
+        if !client.is_closed() {
+            if let Ok(mut p) = self.pool.lock() {
+                p.push(client);
+            }
+        }
+        out
+    }
+
+    fn token(&self, id: Uuid) -> Option<Uuid> {
+        self.tokens.lock().ok().and_then(|t| t.get(&id).copied())
+    }
+
+    fn drop_token(&self, id: Uuid) {
+        if let Ok(mut t) = self.tokens.lock() {
+            t.remove(&id);
+        }
+    }
+
+    /// The installed schema version (0 when none).
+    pub fn schema_version(&self) -> Result<i32, StoreError> {
+        self.with(current_version)
+    }
+
+    /// Extend the leases of `ids` (jobs this process runs); see [`Heartbeat`].
+    pub fn heartbeat(&self, ids: &[Uuid]) -> Result<Heartbeat, StoreError> {
+        let mine: Vec<(Uuid, Uuid)> = ids
+            .iter()
+            .filter_map(|&id| self.token(id).map(|t| (id, t)))
+            .collect();
+        if mine.is_empty() {
+            return Ok(Heartbeat::default());
+        }
+        let tokens: Vec<Uuid> = mine.iter().map(|&(_, t)| t).collect();
+        let secs = self.params.lease.as_secs_f64();
+        let rows = self.with(|c| {
+            Ok(c.query(
+                "UPDATE jobs SET lease_until = now() + make_interval(secs => $2)
+                 WHERE lease_token = ANY($1) AND status = 'running'
+                 RETURNING id, cancel_requested",
+                &[&tokens, &secs],
+            )?)
+        })?;
+        let mut out = Heartbeat::default();
+        let held: HashMap<Uuid, bool> = rows
+            .iter()
+            .filter_map(|r| Some((r.try_get(0).ok()?, r.try_get(1).ok()?)))
+            .collect();
+        for (id, _) in mine {
+            match held.get(&id) {
+                None => {
+                    self.drop_token(id);
+                    out.lost.push(id);
+                }
+                Some(true) => out.cancel.push(id),
+                Some(false) => {}
+            }
+        }
+        Ok(out)
+    }
+
+    /// Seconds left on a job's lease (negative when expired; None when not running). For tests
+    /// and operators.
+    pub fn lease_remaining(&self, id: Uuid) -> Result<Option<f64>, StoreError> {
+        self.with(|c| {
+            let row = c.query_opt(
+                "SELECT EXTRACT(EPOCH FROM (lease_until - now()))::float8 FROM jobs
+                 WHERE id = $1 AND status = 'running' AND lease_until IS NOT NULL",
+                &[&id],
+            )?;
+            Ok(row.map(|r| r.try_get(0)).transpose()?)
+        })
+    }
+
+    /// Every claim of a job, oldest first: (worker, outcome). `outcome` is None while running.
+    pub fn attempts_of(&self, id: Uuid) -> Result<Vec<(String, Option<String>)>, StoreError> {
+        self.with(|c| {
+            let rows = c.query(
+                "SELECT worker, outcome FROM job_attempts WHERE job_id = $1 ORDER BY claimed_at",
+                &[&id],
+            )?;
+            rows.iter()
+                .map(|r| Ok((r.try_get(0)?, r.try_get(1)?)))
+                .collect()
+        })
+    }
+}
+
+fn current_version(c: &mut Client) -> Result<i32, StoreError> {
+    let exists: bool = c
+        .query_one(
+            "SELECT to_regclass('ashlar_schema_version') IS NOT NULL",
+            &[],
+        )?
+        .try_get(0)?;
+    if !exists {
+        return Ok(0);
+    }
+    let v: Option<i32> = c
+        .query_one("SELECT max(version) FROM ashlar_schema_version", &[])?
+        .try_get(0)?;
+    Ok(v.unwrap_or(0))
+}
+
+/// Bring the schema to [`SCHEMA_VERSION`], one transaction per migration, under an advisory
+/// lock so that processes starting together migrate once.
+fn migrate(c: &mut Client) -> Result<(), StoreError> {
+    let mut tx = c.transaction()?;
+    tx.execute("SELECT pg_advisory_xact_lock($1)", &[&MIGRATION_LOCK])?;
+    tx.batch_execute(
+        "CREATE TABLE IF NOT EXISTS ashlar_schema_version (
+             version INTEGER PRIMARY KEY,
+             applied_at TIMESTAMPTZ NOT NULL DEFAULT now())",
+    )?;
+    let v: Option<i32> = tx
+        .query_one("SELECT max(version) FROM ashlar_schema_version", &[])?
+        .try_get(0)?;
+    let v = v.unwrap_or(0);
+    if v > SCHEMA_VERSION {
+        return Err(StoreError(format!(
+            "the database schema is version {v}, newer than this ashlar understands ({SCHEMA_VERSION}); upgrade ashlar"
+        )));
+    }
+    for &(version, sql) in MIGRATIONS.iter().filter(|(k, _)| *k > v) {
+        tx.batch_execute(sql).map_err(|e| {
+            StoreError(format!(
+                "schema migration {version}: {}",
+                StoreError::from(e).0
+            ))
+        })?;
+        tx.execute(
+            "INSERT INTO ashlar_schema_version (version) VALUES ($1)",
+            &[&version],
+        )?;
+        tracing::info!(version, "applied schema migration");
+    }
+    tx.commit()?;
+    Ok(())
+}
+
+impl JobStore for PgStore {
+    fn insert(&self, job: &NewJob) -> Result<(), StoreError> {
+        self.with(|c| {
+            let mut tx = c.transaction()?;
+            tx.execute(
+                "INSERT INTO jobs (id, kind, status, request, motion, created_ms) VALUES ($1, $2, 'queued', $3, $4, $5)",
+                &[&job.id, &job.kind.as_str(), &job.request.to_string(), &job.motion.to_string(), &now_ms()],
+            )?;
+            // Delivered at commit: a woken worker always finds the row.
+            tx.execute("SELECT pg_notify($1, '')", &[&CHANNEL_WORK])?;
+            tx.commit()?;
+            Ok(())
+        })
+    }
+
+    fn get(&self, id: Uuid) -> Result<Option<JobRecord>, StoreError> {
+        self.with(|c| {
+            let sql = format!("SELECT {COLUMNS} FROM jobs WHERE id = $1");
+            c.query_opt(&sql, &[&id])?
+                .map(|r| row_to_record(&r))
+                .transpose()
+        })
+    }
+
+    fn list_recent(
+        &self,
+        limit: usize,
+        kind: Option<JobKind>,
+    ) -> Result<Vec<JobRecord>, StoreError> {
+        // The request body can be large and the listing does not show it.
+        let cols = COLUMNS.replace("request,", "'null',");
+        let limit = i64::try_from(limit).unwrap_or(i64::MAX);
+        let kind = kind.map(JobKind::as_str);
+        self.with(|c| {
+            let sql = format!(
+                "SELECT {cols} FROM jobs WHERE $1::TEXT IS NULL OR kind = $1 ORDER BY seq DESC LIMIT $2"
+            );
+            c.query(&sql, &[&kind, &limit])?
+                .iter()
+                .map(row_to_record)
+                .collect()
+        })
+    }
+
+    fn claim(&self) -> Result<Option<JobRecord>, StoreError> {
+        let token = Uuid::new_v4();
+        let secs = self.params.lease.as_secs_f64();
+        let rec = self.with(|c| {
+            let mut tx = c.transaction()?;
+            let sql = format!(
+                "UPDATE jobs j SET status = 'running', attempts = j.attempts + 1, started_ms = $1,
+                        progress = 0, lease_token = $2, worker = $3,
+                        lease_until = now() + make_interval(secs => $4)
+                 FROM (SELECT seq FROM jobs WHERE status = 'queued' ORDER BY seq
+                       LIMIT 1 FOR UPDATE SKIP LOCKED) next
+                 WHERE j.seq = next.seq
+                 RETURNING {}",
+                COLUMNS
+                    .split(", ")
+                    .map(|c| format!("j.{c}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+            let row = tx.query_opt(&sql, &[&now_ms(), &token, &self.worker_name, &secs])?;
+            let Some(row) = row else {
+                return Ok(None);
+            };
+            let rec = row_to_record(&row)?;
+            tx.execute(
+                "INSERT INTO job_attempts (token, job_id, worker) VALUES ($1, $2, $3)",
+                &[&token, &rec.id, &self.worker_name],
+            )?;
+            tx.commit()?;
+            Ok(Some(rec))
+        })?;
+        if let Some(r) = &rec {
+            if let Ok(mut t) = self.tokens.lock() {
+                t.insert(r.id, token);
+            }
+        }
+        Ok(rec)
+    }
+
+    fn set_progress(&self, id: Uuid, progress: f64) -> Result<(), StoreError> {
+        let Some(token) = self.token(id) else {
+            return Ok(());
+        };
+        self.with(|c| {
+            c.execute(
+                "UPDATE jobs SET progress = $2 WHERE id = $1 AND status = 'running' AND lease_token = $3",
+                &[&id, &progress.clamp(0.0, 1.0), &token],
+            )?;
+            Ok(())
+        })
+    }
+
+    fn finish(&self, id: Uuid, finish: &Finish) -> Result<(), StoreError> {
+        let Some(token) = self.token(id) else {
+            tracing::warn!(%id, "finishing a job this process does not hold; result discarded");
+            return Ok(());
+        };
+        let (status, result, error, progress) = match finish {
+            Finish::Succeeded(v) => ("succeeded", Some(v.to_string()), None, Some(1.0f64)),
+            Finish::Failed(e) => ("failed", None, Some(e.clone()), None),
+            Finish::Cancelled(v) => ("cancelled", v.as_ref().map(|v| v.to_string()), None, None),
+        };
+        let n = self.with(|c| {
+            let mut tx = c.transaction()?;
+            let n = tx.execute(
+                "UPDATE jobs SET status = $2, result = $3, error = $4, progress = COALESCE($5, progress),
+                        finished_ms = $6, lease_token = NULL, lease_until = NULL
+                 WHERE id = $1 AND status = 'running' AND lease_token = $7",
+                &[&id, &status, &result, &error, &progress, &now_ms(), &token],
+            )?;
+            if n == 1 {
+                tx.execute(
+                    "UPDATE job_attempts SET outcome = $2, ended_at = now() WHERE token = $1",
+                    &[&token, &status],
+                )?;
+                tx.execute("SELECT pg_notify($1, $2)", &[&CHANNEL_DONE, &id.to_string()])?;
+            }
+            tx.commit()?;
+            Ok(n)
+        })?;
+        self.drop_token(id);
+        if n == 0 {
+            tracing::warn!(%id, "this worker's lease had expired; its result was discarded (the job was requeued)");
+        }
+        Ok(())
+    }
+
+    fn requeue(&self, id: Uuid, refund: bool) -> Result<(), StoreError> {
+        let Some(token) = self.token(id) else {
+            return Ok(());
+        };
+        self.with(|c| {
+            let mut tx = c.transaction()?;
+            let n = tx.execute(
+                "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL,
+                        lease_token = NULL, lease_until = NULL, worker = NULL,
+                        attempts = CASE WHEN $2 THEN GREATEST(attempts - 1, 0) ELSE attempts END
+                 WHERE id = $1 AND status = 'running' AND lease_token = $3",
+                &[&id, &refund, &token],
+            )?;
+            if n == 1 {
+                tx.execute(
+                    "UPDATE job_attempts SET outcome = 'requeued', ended_at = now() WHERE token = $1",
+                    &[&token],
+                )?;
+                tx.execute("SELECT pg_notify($1, '')", &[&CHANNEL_WORK])?;
+            }
+            tx.commit()?;
+            Ok(())
+        })?;
+        self.drop_token(id);
+        Ok(())
+    }
+
+    fn request_cancel(&self, id: Uuid) -> Result<CancelOutcome, StoreError> {
+        self.with(|c| {
+            let mut tx = c.transaction()?;
+            let row = tx.query_opt("SELECT status FROM jobs WHERE id = $1 FOR UPDATE", &[&id])?;
+            let Some(row) = row else {
+                return Ok(CancelOutcome::NotFound);
+            };
+            let status: String = row.try_get(0)?;
+            let out = match parse_status(&status)? {
+                JobStatus::Queued => {
+                    tx.execute(
+                        "UPDATE jobs SET status = 'cancelled', cancel_requested = TRUE, finished_ms = $2 WHERE id = $1",
+                        &[&id, &now_ms()],
+                    )?;
+                    tx.execute("SELECT pg_notify($1, $2)", &[&CHANNEL_DONE, &id.to_string()])?;
+                    CancelOutcome::CancelledQueued
+                }
+                JobStatus::Running => {
+                    tx.execute(
+                        "UPDATE jobs SET cancel_requested = TRUE WHERE id = $1",
+                        &[&id],
+                    )?;
+                    // Reaches the process running the job, wherever it is.
+                    tx.execute("SELECT pg_notify($1, $2)", &[&CHANNEL_CANCEL, &id.to_string()])?;
+                    CancelOutcome::Requested
+                }
+                s => CancelOutcome::AlreadyFinished(s),
+            };
+            tx.commit()?;
+            Ok(out)
+        })
+    }
+
+    /// The reaper: running jobs whose lease expired go back to the queue (or fail after
+    /// `max_attempts` starts; or end cancelled when a cancel was requested). Unlike the
+    /// embedded store's start-up recovery, jobs with a live lease are left alone: their
+    /// workers, in other processes, are running them.
+    fn recover(&self, max_attempts: u32) -> Result<(usize, usize), StoreError> {
+        let max = i32::try_from(max_attempts).unwrap_or(i32::MAX);
+        self.with(|c| {
+            let mut tx = c.transaction()?;
+            let rows = tx.query(
+                "SELECT seq, lease_token, attempts, cancel_requested FROM jobs
+                 WHERE status = 'running' AND (lease_until IS NULL OR lease_until < now())
+                 FOR UPDATE SKIP LOCKED",
+                &[],
+            )?;
+            let (mut requeued, mut failed) = (0, 0);
+            for r in &rows {
+                let seq: i64 = r.try_get(0)?;
+                let token: Option<Uuid> = r.try_get(1)?;
+                let attempts: i32 = r.try_get(2)?;
+                let cancel: bool = r.try_get(3)?;
+                if let Some(t) = token {
+                    tx.execute(
+                        "UPDATE job_attempts SET outcome = 'expired', ended_at = now() WHERE token = $1",
+                        &[&t],
+                    )?;
+                }
+                if cancel {
+                    tx.execute(
+                        "UPDATE jobs SET status = 'cancelled', finished_ms = $2, lease_token = NULL, lease_until = NULL WHERE seq = $1",
+                        &[&seq, &now_ms()],
+                    )?;
+                    failed += 1;
+                } else if attempts >= max {
+                    tx.execute(
+                        "UPDATE jobs SET status = 'failed', finished_ms = $2, lease_token = NULL, lease_until = NULL,
+                                error = 'the worker running this job died ' || attempts || ' times; not retried again'
+                         WHERE seq = $1",
+                        &[&seq, &now_ms()],
+                    )?;
+                    failed += 1;
+                } else {
+                    tx.execute(
+                        "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL,
+                                lease_token = NULL, lease_until = NULL, worker = NULL
+                         WHERE seq = $1",
+                        &[&seq],
+                    )?;
+                    requeued += 1;
+                }
+            }
+            if requeued > 0 {
+                tx.execute("SELECT pg_notify($1, '')", &[&CHANNEL_WORK])?;
+            }
+            tx.commit()?;
+            if requeued + failed > 0 {
+                tracing::info!(requeued, failed, "reaped jobs whose worker's lease expired");
+            }
+            Ok((requeued, failed))
+        })
+    }
+
+    fn counts(&self) -> Result<Counts, StoreError> {
+        self.with(|c| {
+            let mut out = Counts::default();
+            for r in c.query("SELECT status, count(*) FROM jobs GROUP BY status", &[])? {
+                let s: String = r.try_get(0)?;
+                let n: i64 = r.try_get(1)?;
+                let n = u64::try_from(n).unwrap_or(0);
+                match parse_status(&s)? {
+                    JobStatus::Queued => out.queued = n,
+                    JobStatus::Running => out.running = n,
+                    JobStatus::Succeeded => out.succeeded = n,
+                    JobStatus::Failed => out.failed = n,
+                    JobStatus::Cancelled => out.cancelled = n,
+                }
+            }
+            Ok(out)
+        })
+    }
+}
+
+/// The background threads of a process on the cluster store: the listener (wake-ups and
+/// cancels from other processes) and the keeper (heartbeats and the reaper).
+pub struct ClusterThreads {
+    stop: Arc<AtomicBool>,
+    handles: Vec<std::thread::JoinHandle<()>>,
+}
+
+impl ClusterThreads {
+    /// Start both threads for `core`, whose store is `store`.
+    pub fn start(core: Arc<Core>, store: Arc<PgStore>) -> Result<Self, String> {
+        let stop = Arc::new(AtomicBool::new(false));
+        let mut handles = Vec::new();
+        {
+            let (core, store, stop) = (core.clone(), store.clone(), stop.clone());
+            handles.push(
+                std::thread::Builder::new()
+                    .name("ashlar-listen".into())
+                    .spawn(move || listen_loop(&core, &store, &stop))
+                    .map_err(|e| format!("starting the listener thread: {e}"))?,
+            );
+        }
+        {
+            let stop2 = stop.clone();
+            handles.push(
+                std::thread::Builder::new()
+                    .name("ashlar-lease".into())
+                    .spawn(move || keeper_loop(&core, &store, &stop2))
+                    .map_err(|e| format!("starting the lease thread: {e}"))?,
+            );
+        }
+        Ok(Self { stop, handles })
+    }
+
+    pub fn stop(self) {
+        self.stop.store(true, Ordering::SeqCst);
+        for h in self.handles {
+            let _ = h.join();
+        }
+    }
+}
+
+fn listen_loop(core: &Core, store: &PgStore, stop: &AtomicBool) {
+    let mut backoff = Duration::from_millis(200);
+    while !stop.load(Ordering::SeqCst) {
+        let mut client = match store.connect().and_then(|mut c| {
+            c.batch_execute(&format!("LISTEN {CHANNEL_WORK}; LISTEN {CHANNEL_CANCEL}"))?;
+            Ok(c)
+        }) {
+            Ok(c) => c,
+            Err(e) => {
+                tracing::warn!(error = %e, "LISTEN connection failed; retrying");
+                std::thread::sleep(backoff);
+                backoff = (backoff * 2).min(Duration::from_secs(5));
+                continue;
+            }
+        };
+        backoff = Duration::from_millis(200);
+        // A wake-up may have been sent before LISTEN took effect: look once.
+        core.notify_work();
+        while !stop.load(Ordering::SeqCst) {
+            let mut n = client.notifications();
+            let mut it = n.timeout_iter(Duration::from_millis(500));
+            match it.next() {
+                Ok(Some(note)) => match note.channel() {
+                    CHANNEL_WORK => core.notify_work(),
+                    CHANNEL_CANCEL => {
+                        if let Ok(id) = Uuid::parse_str(note.payload()) {
+                            core.signal_cancel(id);
+                        }
+                    }
+                    _ => {}
+                },
+                Ok(None) => {}
+                Err(e) => {
+                    tracing::warn!(error = %e, "LISTEN connection lost; reconnecting");
+                    break;
+                }
+            }
+        }
+    }
+}
+
+fn keeper_loop(core: &Core, store: &PgStore, stop: &AtomicBool) {
+    let p = store.lease_params().clone();
+    let mut next_beat = Instant::now() + p.heartbeat;
+    let mut next_reap = Instant::now();
+    while !stop.load(Ordering::SeqCst) {
+        let now = Instant::now();
+        if now >= next_beat {
+            next_beat = now + p.heartbeat;
+            let ids = core.running_ids();
+            match store.heartbeat(&ids) {
+                Ok(hb) => {
+                    for id in hb.lost {
+                        tracing::warn!(%id, "lost the lease of a running job; stopping it");
+                        core.signal_lost(id);
+                    }
+                    for id in hb.cancel {
+                        core.signal_cancel(id);
+                    }
+                }
+                Err(e) => tracing::warn!(error = %e, "heartbeat failed"),
+            }
+        }
+        if now >= next_reap {
+            next_reap = now + p.reap_every;
+            if let Err(e) = store.recover(core.params.max_attempts) {
+                tracing::warn!(error = %e, "reaping expired leases failed");
+            }
+        }
+        std::thread::sleep(Duration::from_millis(100).min(p.heartbeat));
+    }
+}
