@@ -533,6 +533,9 @@ fn cancel_and_progress_cross_processes() {
     let addr = api.addr.clone();
     let path = format!("/v1/jobs/{id}/events");
     let sse = std::thread::spawn(move || http(&addr, "GET", &path, None).expect("SSE"));
+    // Progress 0.1 is 3 s of running: the SSE stream re-reads the store every second
+    // (`EventParams::poll`), so it has seen the job running by then. (Waiting for 0.02, 0.6 s,
+    // let the cancel overtake the stream's first poll on a loaded machine.)
     wait_until(
         "progress written by the worker process shows in the API",
         Duration::from_secs(30),
@@ -540,7 +543,7 @@ fn cancel_and_progress_cross_processes() {
             get_json(&api.addr, &format!("/v1/jobs/{id}"))["progress"]
                 .as_f64()
                 .unwrap_or(0.0)
-                > 0.02
+                > 0.1
         },
     );
     let asked = Instant::now();
