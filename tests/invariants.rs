@@ -225,27 +225,24 @@ fn frictionless_bounce_keeps_energy_under_the_trapezoidal_rule() {
 
 /// Friction angle exactly 0, never a gain beyond round-off: see the φ = 10° case below.
 #[test]
-#[ignore = "engine limitation: trapezoidal energy error at contact switches (~1e-4 of the drop energy per impact, sometimes a gain)"]
 fn frictionless_bounce_never_gains_energy_under_the_trapezoidal_rule() {
     check_bounce(0.0, true);
 }
 
 /// Loss ≤ 1 % over 10 impacts with φ = 10° (the impact is normal, so friction can only take
-/// energy away): runs today and guards the 1 % bound and the penetration tolerance.
+/// energy away): guards the 1 % bound and the penetration tolerance.
 #[test]
 fn bounce_loses_at_most_one_percent_in_10_impacts() {
     check_bounce(10.0, false);
 }
 
-/// "Never gains" at 1e-6 with φ = 10°. Fails today: each impact changes the flight energy by
-/// about ±1e-4 (+7.5e-5 after the first impact, +3.3e-4 after ten). Suspected cause: the
-/// trapezoidal step carries a₀ across contact switches (src/assembly/mod.rs `assemble_blocks`
-/// builds the history term from `st.acc` of the previous step): in the step where a spring
-/// opens, the work ½(F₀ + F₁)·D still includes the spring force F₀ = −k·g₀ that no longer
-/// acts, adding ½k|g₀|g₁; the closing step removes ½k·g₀|g₁|. The two do not cancel; bound
-/// ≈ 2k(vΔt)² per impact. A fix needs an energy-consistent treatment of the switching step.
+/// "Never gains" at 1e-6 with φ = 10°. This failed before the release correction: the
+/// trapezoidal step carried a₀ across contact switches, so in the step where a spring opens the
+/// work ½(F₀ + F₁)·D still included the spring force F₀ = −k·g₀ that no longer acts, adding
+/// ½k|g₀|g₁ (+7.5e-5 of the drop energy after the first impact, +3.3e-4 after ten). The engine
+/// now keeps only the discrete-gradient share λ = |g₀|/(|g₀| + g₁) of F₀ in a releasing step
+/// (`contact_springs::release_load`); what remains is the closing step's small loss.
 #[test]
-#[ignore = "engine limitation: trapezoidal energy error at contact switches (~1e-4 of the drop energy per impact, sometimes a gain)"]
 fn bounce_never_gains_energy_under_the_trapezoidal_rule() {
     check_bounce(10.0, true);
 }

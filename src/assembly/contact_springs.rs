@@ -16,6 +16,10 @@ pub struct SpringParams {
     /// below −tol, so joints at a round-off gap (blocks side by side) do not flip each
     /// iteration.
     pub gap_tolerance: f64,
+    /// Weight of the step-start forces against the step-end ones in the integrator's averages,
+    /// (1 − γ)/γ: 1 for the trapezoidal rule, 0 for Shi's DDA integrator (γ = 1), whose steps
+    /// do not remember the start forces. Used by [`release_load`].
+    pub release_weight: f64,
 }
 
 /// Friction data of a contact's joint.
@@ -44,6 +48,21 @@ pub fn constants(c: &Contact, prescribed: &[Prescribed]) -> (f64, f64) {
     (g, s)
 }
 
+/// Extra normal load (N, along the gap gradient, positive pushes apart) on a contact that was
+/// compressed at the step start and opens during the step. The trapezoidal rule averages the
+/// start force N₀ (inside a₀) with the end force 0, returning k|g₀|/2 · Δg of work while the
+/// spring held only k g₀²/2: a spurious energy gain at every release. The discrete gradient of
+/// the penalty energy keeps only the fraction λ = |g₀|/(|g₀| + g₁) of N₀ (the spring acts
+/// until the gap closes at zero); this load, weighted like a₀, removes the rest.
+#[inline]
+pub fn release_load(c: &Contact, springs: &SpringParams) -> f64 {
+    if springs.release_weight > 0.0 && c.start_normal_force > 0.0 && c.release_factor < 1.0 {
+        springs.release_weight * (c.release_factor - 1.0) * c.start_normal_force
+    } else {
+        0.0
+    }
+}
+
 /// Coulomb limit of the shear force of a contact, N (≥ 0).
 #[inline]
 pub fn shear_limit(c: &Contact, law: &JointLaw, normal_force: f64) -> f64 {
@@ -66,6 +85,15 @@ pub fn add_contacts(
 ) {
     for (k, (c, law)) in contacts.iter().zip(laws).enumerate() {
         if !c.state.is_closed() {
+            let l = release_load(c, springs);
+            if l != 0.0 {
+                if let Some(i) = dofs.free_index[c.vertex_block] {
+                    sys.rhs[i] += c.e_i * l;
+                }
+                if let Some(j) = dofs.free_index[c.edge_block] {
+                    sys.rhs[j] -= c.e_j * l;
+                }
+            }
             continue;
         }
         let fi = dofs.free_index[c.vertex_block];

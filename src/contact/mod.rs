@@ -119,6 +119,12 @@ pub struct Contact {
     pub slide_offset: f64,
     /// State changes within the current open–close loop (cycle detection).
     pub flips: u32,
+    /// Normal force carried into the step, N: its share of the stored acceleration a₀ that the
+    /// trapezoidal rule averages with the step-end forces.
+    pub start_normal_force: f64,
+    /// For a contact that opens during the step: the fraction of `start_normal_force` that the
+    /// step's force average keeps (1 = all; see `contact_springs::release_load`).
+    pub release_factor: f64,
 }
 
 /// All contacts of the scene, carried from step to step.
@@ -276,6 +282,8 @@ fn new_contact(cand: &Candidate) -> Contact {
         slip: 0.0,
         slide_offset: 0.0,
         flips: 0,
+        start_normal_force: 0.0,
+        release_factor: 1.0,
     }
 }
 

@@ -223,6 +223,10 @@ impl Simulation {
             normal: penalty,
             shear: penalty * params.shear_ratio,
             gap_tolerance: params.gap_tolerance_ratio * smallest_free_block,
+            release_weight: {
+                let nm = Newmark::of(scene.control.integrator);
+                (1.0 - nm.gamma) / nm.gamma
+            },
         };
         let dt = scene.control.time_step;
         let thickness = geoms.iter().map(|g| thickness(&g.vertices)).collect();
@@ -515,6 +519,33 @@ impl Simulation {
         }
         if let Excitation::DrivenBlock(b) = self.scene.excitation {
             integrate::translate_block(&mut self.geoms[b], self.prescribed[b]);
+        }
+        self.remove_release_loads();
+    }
+
+    /// The release loads of contacts that opened in this step (see
+    /// `contact_springs::release_load`) correct the step's force average, not the forces at
+    /// its end: take them out of the stored acceleration a₁, which the next step averages as
+    /// its a₀.
+    fn remove_release_loads(&mut self) {
+        for c in &self.contacts.contacts {
+            let l = crate::assembly::contact_springs::release_load(c, &self.springs);
+            if l == 0.0 {
+                continue;
+            }
+            for (block, load) in [(c.vertex_block, c.e_i * l), (c.edge_block, c.e_j * -l)] {
+                let Some(f) = self.dofs.free_index[block] else {
+                    continue;
+                };
+                let n = self.dofs.ndof[f];
+                let m = self.system.mass[f].view((0, 0), (n, n)).clone_owned();
+                let rhs = load.rows(0, n).clone_owned();
+                if let Some(da) = m.cholesky().map(|ch| ch.solve(&rhs)) {
+                    for k in 0..n {
+                        self.states[f].acc[k] -= da[k];
+                    }
+                }
+            }
         }
     }
 
