@@ -346,6 +346,24 @@ impl Writers {
         Ok(())
     }
 
+    /// Record one frame, hand it to the caller's `on_frame` and report `progress` (0..1, none
+    /// for the initial frame): the per-frame duties of every run loop, DDA or reduced.
+    pub(crate) fn emit(
+        &mut self,
+        frame: &Frame,
+        opts: &RunOptions,
+        progress: Option<f64>,
+    ) -> Result<(), RunError> {
+        self.write(frame)?;
+        if let Some(cb) = opts.on_frame {
+            cb(frame);
+        }
+        if let (Some(p), Some(x)) = (opts.progress, progress) {
+            p(x.min(1.0));
+        }
+        Ok(())
+    }
+
     pub(crate) fn finish(self) -> Result<(), RunError> {
         if let Some(h) = self.histories {
             h.finish().map_err(|e| RunError::Io(e.to_string()))?;
@@ -404,11 +422,7 @@ fn run_dda(
     let mut tracker = Tracker::new(&sim);
     let interval = scene.control.output_interval;
     let mut frame_index: u64 = 0;
-    let f0 = frame(&sim, &failure);
-    writers.write(&f0)?;
-    if let Some(cb) = opts.on_frame {
-        cb(&f0);
-    }
+    writers.emit(&frame(&sim, &failure), opts, None)?;
     let mut stopped_reason = None;
     let mut cancelled = false;
     let mut failure_msg = None;
@@ -437,14 +451,7 @@ fn run_dda(
         tracker.update(&sim);
         if sim.time >= next_frame - 1e-9 * interval {
             frame_index += 1;
-            let fr = frame(&sim, &failure);
-            writers.write(&fr)?;
-            if let Some(cb) = opts.on_frame {
-                cb(&fr);
-            }
-            if let Some(p) = opts.progress {
-                p((sim.time / duration).min(1.0));
-            }
+            writers.emit(&frame(&sim, &failure), opts, Some(sim.time / duration))?;
         }
         if opts.stop_when.is_some_and(|f| f(&tracker)) {
             stopped_reason = Some("decided".to_string());

@@ -245,11 +245,7 @@ pub fn run(
     let interval = scene.control.output_interval;
     let mut frame_index: u64 = 0;
     let now = block_now(&m);
-    let f0 = frame(scene, &m, &now, &failure);
-    writers.write(&f0)?;
-    if let Some(cb) = opts.on_frame {
-        cb(&f0);
-    }
+    writers.emit(&frame(scene, &m, &now, &failure), opts, None)?;
     let mut stopped_reason = None;
     let mut cancelled = false;
     while m.time < duration - 1e-12 {
@@ -266,14 +262,11 @@ pub fn run(
         frame_index += 1;
         let now = block_now(&m);
         track(&mut tr, &now, m.slid);
-        let fr = frame(scene, &m, &now, &failure);
-        writers.write(&fr)?;
-        if let Some(cb) = opts.on_frame {
-            cb(&fr);
-        }
-        if let Some(p) = opts.progress {
-            p((m.time / duration).min(1.0));
-        }
+        writers.emit(
+            &frame(scene, &m, &now, &failure),
+            opts,
+            Some(m.time / duration),
+        )?;
         if opts.stop_when.is_some_and(|f| f(&tr)) {
             stopped_reason = Some("decided".to_string());
             break;
