@@ -132,7 +132,7 @@ pub fn add_contacts(
 fn add_spring(
     sys: &mut BlockSystem,
     dofs: &Dofs,
-    (fi, fj, slot): (Option<usize>, Option<usize>, CouplingSlot),
+    (fi, fj, slot): (Option<usize>, Option<usize>, Option<CouplingSlot>),
     a: &Vec6,
     b: &Vec6,
     k: f64,
@@ -147,7 +147,7 @@ fn add_spring(
         rank_one(&mut sys.diag[j], k, b, b, rigid(j));
         sys.rhs[j] += b * (k * m0);
     }
-    if let (Some(i), Some(j)) = (fi, fj) {
+    if let (Some(i), Some(j), Some(slot)) = (fi, fj, slot) {
         let both_rigid = rigid(i) && rigid(j);
         let off = &mut sys.off[slot.slot];
         if slot.vertex_is_row {

@@ -132,7 +132,8 @@ pub struct BlockSystem {
     pub mass: Vec<Mat6>,
     /// Per contact (in `ContactSet` order): where its coupling block goes, found once per step
     /// by [`BlockSystem::bind_contacts`] rather than once per spring and iteration.
-    pub contact_slots: Vec<CouplingSlot>,
+    /// `None` for a contact with a fixed or driven block (no coupling block).
+    pub contact_slots: Vec<Option<CouplingSlot>>,
 }
 
 /// Where the coupling block of a contact between free blocks i (vertex) and j (edge) is
@@ -218,14 +219,11 @@ impl BlockSystem {
                 dofs.free_index[c.vertex_block],
                 dofs.free_index[c.edge_block],
             ) {
-                (Some(i), Some(j)) if i != j => CouplingSlot {
+                (Some(i), Some(j)) if i != j => Some(CouplingSlot {
                     slot: self.slot(i.min(j), i.max(j)),
                     vertex_is_row: i < j,
-                },
-                _ => CouplingSlot {
-                    slot: usize::MAX,
-                    vertex_is_row: true,
-                },
+                }),
+                _ => None,
             };
             slots.push(s);
         }
@@ -238,24 +236,10 @@ impl BlockSystem {
     /// # Panics
     /// If the pair was not declared by [`BlockSystem::set_pattern`]: a bug, not bad input.
     #[inline]
-    pub fn slot(&self, a: usize, b: usize) -> usize {
+    fn slot(&self, a: usize, b: usize) -> usize {
         match self.pairs.binary_search(&(a, b)) {
             Ok(k) => k,
             Err(_) => panic!("block pair ({a}, {b}) missing from the declared pattern"),
-        }
-    }
-
-    /// Add `m` to block (a, b) of the global matrix (and implicitly its transpose).
-    #[inline]
-    pub fn add_block(&mut self, a: usize, b: usize, m: &Mat6) {
-        if a == b {
-            self.diag[a] += m;
-        } else if a < b {
-            let k = self.slot(a, b);
-            self.off[k] += m;
-        } else {
-            let k = self.slot(b, a);
-            self.off[k] += m.transpose();
         }
     }
 }
