@@ -219,14 +219,12 @@ impl Simulation {
             .map(|&b| geoms[b].half_size)
             .fold(f64::INFINITY, f64::min);
         let penalty = resolve_penalty(scene);
+        let newmark = Newmark::of(scene.control.integrator);
         let springs = SpringParams {
             normal: penalty,
             shear: penalty * params.shear_ratio,
             gap_tolerance: params.gap_tolerance_ratio * smallest_free_block,
-            release_weight: {
-                let nm = Newmark::of(scene.control.integrator);
-                (1.0 - nm.gamma) / nm.gamma
-            },
+            release_weight: (1.0 - newmark.gamma) / newmark.gamma,
         };
         let dt = scene.control.time_step;
         let thickness = geoms.iter().map(|g| thickness(&g.vertices)).collect();
@@ -250,7 +248,7 @@ impl Simulation {
             x: Vec::new(),
             prescribed: vec![[0.0; 2]; scene.blocks.len()],
             start_states: Vec::new(),
-            newmark: Newmark::of(scene.control.integrator),
+            newmark,
             time: 0.0,
             dt,
             model_half_size,
@@ -267,6 +265,12 @@ impl Simulation {
     /// Work counters of the sparse linear solver (factorizations, reused-factor iterations).
     pub fn solver_counts(&self) -> crate::solve::SparseCounts {
         self.solver.sparse_counts()
+    }
+
+    /// Contact search distance, m: Shi's search factor × the largest step displacement. One
+    /// definition for detection, the dual solver and the penetration check.
+    pub fn search_distance(&self) -> f64 {
+        self.params.contact.search_factor * self.max_step_displacement()
     }
 
     /// Largest displacement allowed in one step (Shi's g2 × model half size), m.
@@ -323,7 +327,7 @@ impl Simulation {
 
     /// Broad and narrow phase, then the per-step contact linearization and joint laws.
     fn detect_contacts(&mut self) {
-        let search = self.params.contact.search_factor * self.max_step_displacement();
+        let search = self.search_distance();
         let scene = &self.scene;
         let first = self.stats.steps == 0;
         let rebuilt = self.contacts.detect(
@@ -444,7 +448,7 @@ impl Simulation {
             laws: &self.laws,
             prescribed: &self.prescribed,
             length_scale: self.smallest_free_block,
-            search: self.params.contact.search_factor * self.max_step_displacement(),
+            search: self.search_distance(),
             contact: &self.params.contact,
         };
         let r = self.dual.solve(
@@ -605,7 +609,7 @@ impl Simulation {
     /// into each other, see tests/regression_soft_penalty.rs).
     fn too_soft(&self, dt: f64) -> Option<SimError> {
         let ratio = self.params.max_penetration_ratio;
-        let search = self.params.contact.search_factor * self.max_step_displacement();
+        let search = self.search_distance();
         let limit_of = |c: &Contact| {
             let thin = self.thickness[c.vertex_block].min(self.thickness[c.edge_block]);
             (ratio * thin).min(search)
