@@ -4,6 +4,9 @@
 //! does not meet the criterion, and at `failing_pga` it does. The verdict is recomputed here
 //! from `summary.json`'s fields, independently of the search's own evaluation.
 //!
+//! The scenes run with the default model, as a user's would: the single-block column and
+//! incline run the reduced models, the two-column scene the full engine.
+//!
 //! Exact check (no tolerance): the criterion is a threshold on the summary; both runs are
 //! deterministic.
 mod common;

@@ -2,6 +2,8 @@
 //! engine issue, the bracket must contain Housner's overturning amplitude, 5.64 m/s² (its
 //! independent RK4 value is checked in tests/rocking.rs), within 2 %; and the bracket must be
 //! honest: a run at `safe_pga` does not meet the criterion, a run at `failing_pga` does.
+//! Checked for the full engine (`"model": "dda"`) and for the scene's default model (`"auto"`,
+//! which runs the reduced rocking model on this column), the same tolerance for both.
 mod common;
 use ashlar::analysis::pga::{evaluate, search, Combine, Criterion, PgaRequest};
 use ashlar::analysis::run::RunOptions;
@@ -9,12 +11,21 @@ use ashlar::motion::{GroundMotion, Signal};
 use common::*;
 use serde_json::json;
 
-fn column() -> ashlar::scene::Scene {
+/// The column; `model` is `control.model`, None for the default.
+fn column_with(model: Option<&str>) -> ashlar::scene::Scene {
     let blocks = json!([
         { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
         { "id": "column", "material": "stone", "block_model": "rigid", "vertices": [[-0.2, 0.0], [0.2, 0.0], [0.2, 1.2], [-0.2, 1.2]] },
     ]);
-    parse(&scene_json(blocks, 75.0, json!({ "duration": 3.0 })))
+    let mut control = json!({ "duration": 3.0 });
+    if let Some(m) = model {
+        control["model"] = json!(m);
+    }
+    parse(&scene_json(blocks, 75.0, control))
+}
+
+fn column() -> ashlar::scene::Scene {
+    column_with(Some("dda"))
 }
 
 /// The half-sine pulse of the engine issue at unit amplitude (the search rescales it).
@@ -29,7 +40,18 @@ fn unit_pulse() -> GroundMotion {
 
 #[test]
 fn rocking_column_bracket_contains_housner_and_is_honest() {
-    let scene = column();
+    bracket_contains_housner_and_is_honest(&column_with(Some("dda")));
+}
+
+#[test]
+fn default_model_bracket_contains_housner_and_is_honest() {
+    let scene = column_with(None);
+    let run = ashlar::analysis::run::run(&scene, &unit_pulse(), &RunOptions::default());
+    assert_eq!(run.expect("run").summary.model, "rocking");
+    bracket_contains_housner_and_is_honest(&scene);
+}
+
+fn bracket_contains_housner_and_is_honest(scene: &ashlar::scene::Scene) {
     let pulse = unit_pulse();
     let criteria = vec![Criterion::parse("toppled:column").expect("criterion")];
     let req = PgaRequest {
@@ -40,7 +62,7 @@ fn rocking_column_bracket_contains_housner_and_is_honest() {
         tolerance: 0.01,
         scan_points: 8,
     };
-    let r = search(&scene, &pulse, &req, &RunOptions::default()).expect("search");
+    let r = search(scene, &pulse, &req, &RunOptions::default()).expect("search");
     let (safe, fail) = (r.safe_pga.expect("safe"), r.failing_pga.expect("failing"));
     eprintln!(
         "bracket [{safe:.4}, {fail:.4}] m/s² after {} runs, monotonic {}",
@@ -53,8 +75,8 @@ fn rocking_column_bracket_contains_housner_and_is_honest() {
         safe <= housner * 1.02 && fail >= housner * 0.98,
         "bracket [{safe}, {fail}] vs {housner}"
     );
-    assert!(!evaluate(&scene, &pulse, &criteria, safe, None).expect("run"));
-    assert!(evaluate(&scene, &pulse, &criteria, fail, None).expect("run"));
+    assert!(!evaluate(scene, &pulse, &criteria, safe, None).expect("run"));
+    assert!(evaluate(scene, &pulse, &criteria, fail, None).expect("run"));
 }
 
 #[test]

@@ -55,16 +55,32 @@ fn auto_runs_the_rocking_model_on_a_column_and_says_why() {
     assert!((e - (1.0 - 1.5 * alpha.sin().powi(2))).abs() < 1e-12);
 }
 
+/// `auto` is the default (chosen from docs/accuracy-vs-speed.md); `"dda"` forces the engine.
 #[test]
-fn dda_is_the_default_and_forced_by_dda() {
-    let s = run(
-        &parse(&column(json!({ "duration": 0.1 }))),
-        &pulse(5.0),
-        &RunOptions::default(),
-    )
-    .expect("run")
-    .summary;
-    assert_eq!(s.model, "dda");
+fn auto_is_the_default_and_dda_forces_the_engine() {
+    let summary = |control: Value| {
+        run(
+            &parse(&column(control)),
+            &pulse(5.0),
+            &RunOptions::default(),
+        )
+        .expect("run")
+        .summary
+    };
+    let default = summary(json!({ "duration": 0.1 }));
+    assert_eq!(default.model, "rocking", "{}", default.model_reason);
+    assert!(
+        default.model_reason.contains("auto"),
+        "{}",
+        default.model_reason
+    );
+    let forced = summary(json!({ "duration": 0.1, "model": "dda" }));
+    assert_eq!(forced.model, "dda");
+    assert!(
+        forced.model_reason.contains("\"dda\""),
+        "{}",
+        forced.model_reason
+    );
 }
 
 #[test]
@@ -75,12 +91,18 @@ fn auto_falls_back_to_dda_on_a_wall_naming_why() {
         ..Default::default()
     });
     let mut v = serde_json::to_value(&spec).expect("json");
-    v["control"] = json!({ "duration": 0.05, "model": "auto" });
-    let s = run(&parse(&v), &pulse(1.0), &RunOptions::default())
-        .expect("run")
-        .summary;
-    assert_eq!(s.model, "dda");
-    assert!(s.model_reason.contains("free blocks"), "{}", s.model_reason);
+    // Explicit "auto" and the default (which is "auto") alike.
+    for control in [
+        json!({ "duration": 0.05, "model": "auto" }),
+        json!({ "duration": 0.05 }),
+    ] {
+        v["control"] = control;
+        let s = run(&parse(&v), &pulse(1.0), &RunOptions::default())
+            .expect("run")
+            .summary;
+        assert_eq!(s.model, "dda");
+        assert!(s.model_reason.contains("free blocks"), "{}", s.model_reason);
+    }
 }
 
 #[test]
@@ -270,4 +292,34 @@ fn first_motion_matches_yeungs_chart() {
         seen.insert(expected as u8);
     }
     assert_eq!(seen.len(), 4, "every mode of the chart is exercised");
+}
+
+/// `ashlar run --model` overrides the scene's `control.model`; a bad name is refused naming
+/// the flag and the accepted values.
+#[test]
+fn cli_model_flag_overrides_the_default() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = std::env::temp_dir().join(format!("ashlar-model-flag-{}", std::process::id()));
+    let run = |extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_ashlar"))
+            .arg("run")
+            .arg(root.join("examples/column.json"))
+            .args(["--no-trajectory", "--out"])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .expect("run ashlar")
+    };
+    let model_of = |o: std::process::Output| {
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: Value = serde_json::from_slice(&o.stdout).expect("summary json");
+        v["model"].as_str().unwrap_or_default().to_string()
+    };
+    assert_eq!(model_of(run(&[])), "rocking");
+    assert_eq!(model_of(run(&["--model", "dda"])), "dda");
+    let bad = run(&["--model", "fem"]);
+    assert!(!bad.status.success());
+    let msg = String::from_utf8_lossy(&bad.stderr);
+    assert!(msg.contains("--model") && msg.contains("dda"), "{msg}");
+    std::fs::remove_dir_all(&out).ok();
 }

@@ -34,6 +34,10 @@ pub struct RunArgs {
     /// Seconds between recorded frames (overrides the scene's control.output_interval).
     #[arg(long)]
     pub output_interval: Option<f64>,
+    /// Override the scene's control.model: `auto` (default), `dda` (force the full engine),
+    /// `rocking` or `sliding`.
+    #[arg(long)]
+    pub model: Option<String>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -71,6 +75,10 @@ pub struct PgaArgs {
     /// Output directory for result.json (and fragility.json, fragility.svg over several records).
     #[arg(long, default_value = "ashlar-out")]
     pub out: PathBuf,
+    /// Override the scene's control.model: `auto` (default), `dda` (force the full engine),
+    /// `rocking` or `sliding`.
+    #[arg(long)]
+    pub model: Option<String>,
 }
 
 /// Record file extensions picked from a directory.
@@ -158,6 +166,15 @@ pub fn parse_acceleration(text: &str) -> Result<f64, String> {
         })
 }
 
+/// `--model NAME` as the scene's `control.model`.
+fn apply_model(scene: &mut Scene, model: Option<&str>) -> Result<(), String> {
+    if let Some(m) = model {
+        scene.control.model = serde_json::from_value(serde_json::Value::from(m))
+            .map_err(|_| format!("--model {m:?}: expected one of auto, dda, rocking, sliding"))?;
+    }
+    Ok(())
+}
+
 fn load_scene(path: &Path) -> Result<Scene, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     parse_scene(&text).map_err(|e| format!("{}: {e}", path.display()))
@@ -185,6 +202,7 @@ fn load_motion(args: &RunArgs) -> Result<GroundMotion, String> {
 
 pub fn run(args: &RunArgs) -> Result<(), String> {
     let mut scene = load_scene(&args.scene)?;
+    apply_model(&mut scene, args.model.as_deref())?;
     if let Some(i) = args.output_interval {
         if !(i.is_finite() && i > 0.0) {
             return Err(format!(
@@ -223,7 +241,8 @@ pub fn pga(args: &PgaArgs) -> Result<(), String> {
         scan_points: args.scan_points,
     };
     let method = Method::parse(&args.fit).map_err(|e| format!("--fit: {e}"))?;
-    let scene = load_scene(&args.scene)?;
+    let mut scene = load_scene(&args.scene)?;
+    apply_model(&mut scene, args.model.as_deref())?;
     let (paths, several) = record_paths(&args.motion)?;
     let mut records = Vec::new();
     for p in &paths {
