@@ -686,6 +686,174 @@ mod tests {
         assert_eq!(Combine::Any.label(&c[..1]), "toppled:a");
     }
 
+    fn request(min: f64, max: f64, tolerance: f64, scan_points: usize) -> PgaRequest {
+        PgaRequest {
+            criteria: vec![Criterion::parse("toppled:a").expect("c")],
+            combine: Combine::All,
+            min,
+            max,
+            tolerance,
+            scan_points,
+        }
+    }
+
+    /// Drive the planner to the end with a scripted evaluator, recording every batch.
+    fn drive(
+        req: &PgaRequest,
+        width: usize,
+        fails: impl Fn(f64) -> bool,
+    ) -> (PgaResult, Vec<Vec<f64>>) {
+        let mut known = std::collections::HashMap::new();
+        let mut batches = Vec::new();
+        loop {
+            match plan(req, width, &|p| known.get(&p.to_bits()).copied()) {
+                Step::Done(r) => return (r, batches),
+                Step::Pending { batch, done } => {
+                    assert_eq!(done, known.len(), "every known run is replayed");
+                    let pts: Vec<f64> = batch.iter().map(|&(i, p)| {
+                        assert_eq!(i, 0);
+                        p
+                    }).collect();
+                    for &p in &pts {
+                        known.insert(p.to_bits(), fails(p));
+                    }
+                    batches.push(pts);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn planner_scans_then_k_sections_the_lowest_bracket() {
+        // Threshold 2.37 m/s² on [0, 4], 5 scan points, width 2: the scan is 0,1,2,3,4; each
+        // round splits the bracket in three, so the bracket shrinks 3-fold per round.
+        let req = request(0.0, 4.0, 0.05, 5);
+        let (r, batches) = drive(&req, 2, |p| p >= 2.37);
+        assert_eq!(batches[0], vec![0.0, 1.0, 2.0, 3.0, 4.0]);
+        // Round 1 inside (2, 3): 2 + 1/3, 2 + 2/3 (computed as the planner does).
+        assert_eq!(batches[1], vec![2.0 + 1.0 / 3.0, 2.0 + 2.0 / 3.0]);
+        let mut lo = 2.0;
+        let mut hi = 3.0;
+        for b in &batches[1..] {
+            assert_eq!(b.len(), 2, "width points per round");
+            assert!(b.iter().all(|&p| p > lo && p < hi), "{b:?} inside ({lo}, {hi})");
+            // The independent bracket update: last safe point, first failing point.
+            for &p in b {
+                if p >= 2.37 {
+                    hi = hi.min(p);
+                } else {
+                    lo = lo.max(p);
+                }
+            }
+        }
+        assert_eq!((r.safe_pga, r.failing_pga), (Some(lo), Some(hi)));
+        assert!(hi - lo <= 0.05 && lo < 2.37 && 2.37 <= hi);
+        // (1/3)^k ≤ 0.05 needs k = 3 rounds: 5 + 3·2 runs.
+        assert_eq!(batches.len(), 4);
+        assert_eq!(r.runs.len(), 11);
+        assert!(r.monotonic);
+        assert!(r.runs.windows(2).all(|w| w[0].pga <= w[1].pga), "sorted");
+        assert!((expected_runs(&req, 2) - 11.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn replay_after_partial_results_asks_for_the_rest_of_the_same_batch() {
+        let req = request(0.0, 4.0, 0.05, 5);
+        let fails = |p: f64| p >= 2.37;
+        let (_, batches) = drive(&req, 3, fails);
+        // Any subset of the outcomes known: the planner asks for exactly the missing part of
+        // the first incomplete batch, and reports how many it found.
+        let all: Vec<f64> = batches.iter().flatten().copied().collect();
+        for cut in 0..all.len() {
+            for skip in 0..=cut {
+                // Known: the first `cut` runs except the `skip`-th (when skip < cut).
+                let known: std::collections::HashMap<u64, bool> = all[..cut]
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != skip)
+                    .map(|(_, &p)| (p.to_bits(), fails(p)))
+                    .collect();
+                let step = plan(&req, 3, &|p| known.get(&p.to_bits()).copied());
+                // The batch holding the first missing run.
+                let first_missing = if skip < cut { skip } else { cut };
+                let (mut start, mut b) = (0, 0);
+                while start + batches[b].len() <= first_missing {
+                    start += batches[b].len();
+                    b += 1;
+                }
+                let want: Vec<(usize, f64)> = batches[b]
+                    .iter()
+                    .filter(|p| !known.contains_key(&p.to_bits()))
+                    .map(|&p| (0, p))
+                    .collect();
+                match step {
+                    Step::Pending { batch, done } => {
+                        assert_eq!(batch, want, "cut {cut} skip {skip}");
+                        assert_eq!(done, start + batches[b].len() - want.len());
+                    }
+                    Step::Done(_) => panic!("cut {cut} skip {skip}: done too early"),
+                }
+            }
+        }
+        // Outcomes of amplitudes the search never asks for change nothing.
+        let mut known: std::collections::HashMap<u64, bool> =
+            all.iter().map(|&p| (p.to_bits(), fails(p))).collect();
+        let Step::Done(a) = plan(&req, 3, &|p| known.get(&p.to_bits()).copied()) else {
+            panic!("all known")
+        };
+        known.insert(0.123f64.to_bits(), true);
+        let Step::Done(b) = plan(&req, 3, &|p| known.get(&p.to_bits()).copied()) else {
+            panic!("all known")
+        };
+        assert_eq!(a, b);
+    }
+
+    #[test]
+    fn planner_reports_non_monotonic_outcomes_and_unbounded_sides() {
+        // Fails in [1, 1.6) and above 3: the lowest bracket is (0.5, 1], the later safe scan
+        // points above it make the result non-monotonic.
+        let req = request(0.0, 4.0, 0.1, 9);
+        let (r, _) = drive(&req, 2, |p| (1.0..1.6).contains(&p) || p >= 3.0);
+        assert!(!r.monotonic);
+        assert!(r.safe_pga.is_some_and(|s| s >= 0.9 && s < 1.0), "{r:?}");
+        assert_eq!(r.failing_pga, Some(1.0));
+        // Never failing: safe at the top, no bracket, only the scan.
+        let (r, b) = drive(&req, 2, |_| false);
+        assert_eq!((r.safe_pga, r.failing_pga, b.len()), (Some(4.0), None, 1));
+        // Failing at the bottom already.
+        let (r, _) = drive(&req, 2, |_| true);
+        assert_eq!((r.safe_pga, r.failing_pga), (None, Some(0.0)));
+    }
+
+    #[test]
+    fn records_are_planned_side_by_side() {
+        let req = request(0.0, 4.0, 0.05, 5);
+        let thresholds = [2.37, 0.61];
+        let mut known = std::collections::HashMap::new();
+        let mut rounds = 0;
+        let results = loop {
+            match plan_records(2, &req, 2, &|i, p| known.get(&(i, p.to_bits())).copied()) {
+                Step::Done(r) => break r,
+                Step::Pending { batch, .. } => {
+                    rounds += 1;
+                    if rounds == 1 {
+                        // Both records' scans at once.
+                        assert_eq!(batch.len(), 10);
+                        assert_eq!(batch.iter().filter(|(i, _)| *i == 1).count(), 5);
+                    }
+                    for (i, p) in batch {
+                        known.insert((i, p.to_bits()), p >= thresholds[i]);
+                    }
+                }
+            }
+        };
+        assert_eq!(rounds, 4, "the records' rounds overlap: 1 scan + 3 rounds");
+        for (i, r) in results.iter().enumerate() {
+            let (single, _) = drive(&req, 2, |p| p >= thresholds[i]);
+            assert_eq!(r, &single, "record {i} as searched alone");
+        }
+    }
+
     #[test]
     fn capacity_bounds_come_from_the_bracket() {
         let r = |s: Option<f64>, f: Option<f64>| PgaResult {
