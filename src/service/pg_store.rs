@@ -417,7 +417,8 @@ impl JobStore for PgStore {
             let mut tx = c.transaction()?;
             let sql = format!(
                 "UPDATE jobs j SET status = 'running', attempts = j.attempts + 1, started_ms = $1,
-                        progress = 0, lease_token = $2, worker = $3,
+                        progress = CASE WHEN j.kind = 'pga_search' THEN j.progress ELSE 0 END,
+                        lease_token = $2, worker = $3,
                         lease_until = now() + make_interval(secs => $4)
                  FROM (SELECT seq FROM jobs WHERE status = 'queued' ORDER BY seq
                        LIMIT 1 FOR UPDATE SKIP LOCKED) next
@@ -676,7 +677,7 @@ impl JobStore for PgStore {
         let ok = self.with(|c| {
             let mut tx = c.transaction()?;
             let n = tx.execute(
-                "UPDATE jobs SET status = 'waiting', attempts = GREATEST(attempts - 1, 0), progress = $3,
+                "UPDATE jobs SET status = 'waiting', attempts = GREATEST(attempts - 1, 0), progress = GREATEST(progress, $3),
                         lease_token = NULL, lease_until = NULL, worker = NULL
                  WHERE id = $1 AND status = 'running' AND lease_token = $2",
                 &[&id, &token, &progress.clamp(0.0, 1.0)],

@@ -415,7 +415,8 @@ impl JobStore for SqliteStore {
         self.write(|c| {
             // One statement: atomic even with other processes writing the same file.
             let sql = format!(
-                "UPDATE jobs SET status = 'running', attempts = attempts + 1, started_ms = ?1, progress = 0
+                "UPDATE jobs SET status = 'running', attempts = attempts + 1, started_ms = ?1,
+                        progress = CASE WHEN kind = 'pga_search' THEN progress ELSE 0 END
                  WHERE seq = (SELECT seq FROM jobs WHERE status = 'queued' ORDER BY seq LIMIT 1)
                  RETURNING {COLUMNS}"
             );
@@ -561,7 +562,7 @@ impl JobStore for SqliteStore {
         self.write(|c| {
             let tx = c.transaction()?;
             let n = tx.execute(
-                "UPDATE jobs SET status = 'waiting', attempts = MAX(attempts - 1, 0), progress = ?2
+                "UPDATE jobs SET status = 'waiting', attempts = MAX(attempts - 1, 0), progress = MAX(progress, ?2)
                  WHERE id = ?1 AND status = 'running'",
                 params![id.to_string(), progress.clamp(0.0, 1.0)],
             )?;

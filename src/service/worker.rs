@@ -408,11 +408,12 @@ fn run_job(core: &Core, job: JobRecord) {
     if cancel_pending {
         ctl.throw(STOP_USER);
     }
+    // A fanned-out search claimed again keeps the progress its children brought it.
     core.hub.publish(
         id,
         JobEvent {
             status: JobStatus::Running,
-            progress: 0.0,
+            progress: job.progress,
         },
     );
     let dir = core.job_dir(id);
