@@ -937,7 +937,7 @@ fn pga_searches_fan_out_over_three_workers_one_killed() {
         .collect();
     let single = json!({
         "scene": rigid_column(20.0),
-        "motion": half_sine(1.0, "T = 1 s"),
+        "motion": {"horizontal": half_sine(1.0, "")["horizontal"]},
         "criterion": "toppled:column",
         "range": {"min": 2.0, "max": 10.0, "units": "m/s2"},
         "tolerance": 0.02,
@@ -1030,7 +1030,8 @@ fn pga_searches_fan_out_over_three_workers_one_killed() {
     let list = get_json(&api.addr, "/v1/jobs?limit=100");
     let listed = list["jobs"].as_array().map(Vec::len).unwrap_or(usize::MAX);
     assert_eq!(listed, 2, "{list}");
-    // The multi-record search's plot was published by whichever worker finished it.
+    // The multi-record search's plot was published by whichever worker finished it (when a
+    // curve could be fitted: as in-process, a fit that fails is reported, not plotted).
     let (status, svg) = http(
         &api.addr,
         "GET",
@@ -1038,7 +1039,8 @@ fn pga_searches_fan_out_over_three_workers_one_killed() {
         None,
     )
     .expect("GET");
-    assert_eq!(status, 200, "{svg:.300}");
+    let fitted = !serde_json::from_str::<Value>(&reference[1]).expect("JSON")["fragility"].is_null();
+    assert_eq!(status, if fitted { 200 } else { 409 }, "{svg:.300}");
     for w in workers.drain(1..) {
         assert!(w.terminate().success(), "SIGTERM stops a worker cleanly");
     }
@@ -1061,7 +1063,7 @@ fn embedded_store_fans_out_with_one_worker_thread() {
     let core = svc.state().core.clone();
     let single = json!({
         "scene": rigid_column(3.0),
-        "motion": half_sine(1.0, "T = 1 s"),
+        "motion": {"horizontal": half_sine(1.0, "")["horizontal"]},
         "criterion": "toppled:column",
         "range": {"min": 2.0, "max": 10.0, "units": "m/s2"},
         "tolerance": 0.05,

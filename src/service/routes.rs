@@ -656,6 +656,8 @@ async fn get_fragility_svg(
             j.status.as_str()
         )));
     }
+    // Written by whichever worker finished the search: fetched from shared storage if need be.
+    super::artifacts::ensure_local(&s.core, id, "fragility.svg").await;
     let path = s.core.job_dir(id).join("fragility.svg");
     match tokio::fs::read(&path).await {
         Ok(bytes) => Ok((
