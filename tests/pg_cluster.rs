@@ -752,20 +752,31 @@ fn fan_out_contract(s: &dyn JobStore, expire: &dyn Fn()) {
     let p = new_search();
     s.insert(&p).expect("insert");
     let claimed = s.claim().expect("claim").expect("the search");
-    assert_eq!((claimed.id, claimed.attempts, claimed.parent), (p.id, 1, None));
+    assert_eq!(
+        (claimed.id, claimed.attempts, claimed.parent),
+        (p.id, 1, None)
+    );
     let (c1, c2) = (child(p.id, 1.0, 0.25), child(p.id, 2.0, 0.25));
-    assert!(s.fan_out(p.id, &[c1.clone(), c2.clone()], 0.2).expect("fan out"));
+    assert!(s
+        .fan_out(p.id, &[c1.clone(), c2.clone()], 0.2)
+        .expect("fan out"));
     let w = s.get(p.id).expect("get").expect("job");
     // Waiting gives the claim back: waiting is not a crash, max_attempts must not count it.
-    assert_eq!((w.status, w.attempts, w.progress), (JobStatus::Waiting, 0, 0.2));
+    assert_eq!(
+        (w.status, w.attempts, w.progress),
+        (JobStatus::Waiting, 0, 0.2)
+    );
     assert_eq!(s.counts().expect("counts").waiting, 1);
     assert!(
-        !s.fan_out(p.id, &[child(p.id, 3.0, 0.1)], 0.3).expect("fan out"),
+        !s.fan_out(p.id, &[child(p.id, 3.0, 0.1)], 0.3)
+            .expect("fan out"),
         "a waiting search cannot fan out again"
     );
     let kids = s.children(p.id).expect("children");
     assert_eq!(
-        kids.iter().map(|k| (k.id, k.kind, k.parent, k.status)).collect::<Vec<_>>(),
+        kids.iter()
+            .map(|k| (k.id, k.kind, k.parent, k.status))
+            .collect::<Vec<_>>(),
         vec![
             (c1.id, JobKind::PgaRun, Some(p.id), JobStatus::Queued),
             (c2.id, JobKind::PgaRun, Some(p.id), JobStatus::Queued)
@@ -773,24 +784,47 @@ fn fan_out_contract(s: &dyn JobStore, expire: &dyn Fn()) {
     );
     assert_eq!(kids[0].request["pga_bits"], json!(1.0f64.to_bits()));
     // Children never show in the job list.
-    let listed: Vec<Uuid> = s.list_recent(10, None).expect("list").iter().map(|j| j.id).collect();
+    let listed: Vec<Uuid> = s
+        .list_recent(10, None)
+        .expect("list")
+        .iter()
+        .map(|j| j.id)
+        .collect();
     assert_eq!(listed, vec![p.id]);
-    assert!(s.list_recent(10, Some(JobKind::PgaRun)).expect("list").is_empty());
+    assert!(s
+        .list_recent(10, Some(JobKind::PgaRun))
+        .expect("list")
+        .is_empty());
 
     // The waiting search is not claimable; its children are, in order.
     assert_eq!(s.claim().expect("claim").expect("c1").id, c1.id);
-    s.finish(c1.id, &Finish::Succeeded(json!({"pga": 1.0, "failed": false}))).expect("finish");
+    s.finish(
+        c1.id,
+        &Finish::Succeeded(json!({"pga": 1.0, "failed": false})),
+    )
+    .expect("finish");
     let w = s.get(p.id).expect("get").expect("job");
     assert_eq!(w.status, JobStatus::Waiting, "one child still runs");
-    assert!((w.progress - 0.45).abs() < 1e-12, "progress + the child's share: {}", w.progress);
+    assert!(
+        (w.progress - 0.45).abs() < 1e-12,
+        "progress + the child's share: {}",
+        w.progress
+    );
     assert_eq!(s.claim().expect("claim").expect("c2").id, c2.id);
-    s.finish(c2.id, &Finish::Succeeded(json!({"pga": 2.0, "failed": true}))).expect("finish");
+    s.finish(
+        c2.id,
+        &Finish::Succeeded(json!({"pga": 2.0, "failed": true})),
+    )
+    .expect("finish");
     // The last child queued the search again, and it is claimable at once.
     assert_eq!(status_of(s, p.id), JobStatus::Queued);
     let again = s.claim().expect("claim").expect("the search again");
     assert_eq!((again.id, again.attempts), (p.id, 1));
     let kids = s.children(p.id).expect("children");
-    assert_eq!(kids[1].result.as_deref(), Some(r#"{"failed":true,"pga":2.0}"#));
+    assert_eq!(
+        kids[1].result.as_deref(),
+        Some(r#"{"failed":true,"pga":2.0}"#)
+    );
     // Fanning out nothing new while every child has ended queues the search straight away.
     assert!(s.fan_out(p.id, &[], 0.5).expect("fan out"));
     assert_eq!(status_of(s, p.id), JobStatus::Queued);
@@ -798,9 +832,12 @@ fn fan_out_contract(s: &dyn JobStore, expire: &dyn Fn()) {
 
     // A failed child fails its search with the child's error and cancels its siblings.
     let (c3, c4) = (child(p.id, 1.5, 0.1), child(p.id, 1.75, 0.1));
-    assert!(s.fan_out(p.id, &[c3.clone(), c4.clone()], 0.6).expect("fan out"));
+    assert!(s
+        .fan_out(p.id, &[c3.clone(), c4.clone()], 0.6)
+        .expect("fan out"));
     assert_eq!(s.claim().expect("claim").expect("c3").id, c3.id);
-    s.finish(c3.id, &Finish::Failed("simulation diverged at 1.5".into())).expect("finish");
+    s.finish(c3.id, &Finish::Failed("simulation diverged at 1.5".into()))
+        .expect("finish");
     let f = s.get(p.id).expect("get").expect("job");
     assert_eq!(f.status, JobStatus::Failed);
     assert_eq!(f.error.as_deref(), Some("simulation diverged at 1.5"));
@@ -814,9 +851,14 @@ fn fan_out_contract(s: &dyn JobStore, expire: &dyn Fn()) {
     s.insert(&q).expect("insert");
     s.claim().expect("claim").expect("q");
     let (d1, d2) = (child(q.id, 1.0, 0.5), child(q.id, 2.0, 0.5));
-    assert!(s.fan_out(q.id, &[d1.clone(), d2.clone()], 0.0).expect("fan out"));
+    assert!(s
+        .fan_out(q.id, &[d1.clone(), d2.clone()], 0.0)
+        .expect("fan out"));
     assert_eq!(s.claim().expect("claim").expect("d1").id, d1.id);
-    assert_eq!(s.request_cancel(q.id).expect("cancel"), CancelOutcome::CancelledQueued);
+    assert_eq!(
+        s.request_cancel(q.id).expect("cancel"),
+        CancelOutcome::CancelledQueued
+    );
     assert_eq!(status_of(s, q.id), JobStatus::Cancelled);
     assert_eq!(status_of(s, d2.id), JobStatus::Cancelled);
     let r1 = s.get(d1.id).expect("get").expect("d1");
@@ -833,21 +875,25 @@ fn fan_out_contract(s: &dyn JobStore, expire: &dyn Fn()) {
     s.insert(&r).expect("insert");
     s.claim().expect("claim").expect("r");
     let e1 = child(r.id, 1.0, 0.5);
-    assert!(s.fan_out(r.id, std::slice::from_ref(&e1), 0.0).expect("fan out"));
+    assert!(s
+        .fan_out(r.id, std::slice::from_ref(&e1), 0.0)
+        .expect("fan out"));
     assert_eq!(s.claim().expect("claim").expect("e1").id, e1.id);
     expire();
     assert_eq!(s.recover(1).expect("recover"), (0, 1));
     let rr = s.get(r.id).expect("get").expect("r");
     assert_eq!(rr.status, JobStatus::Failed);
-    assert!(rr.error.unwrap_or_default().contains("1 times"), "the child's error");
+    assert!(
+        rr.error.unwrap_or_default().contains("1 times"),
+        "the child's error"
+    );
     assert_eq!(s.counts().expect("counts").waiting, 0);
 }
 
 #[test]
 fn fan_out_contract_sqlite_and_postgres() {
     let dir = temp_dir("fanout-contract");
-    let sqlite =
-        ashlar::service::SqliteStore::open(&dir.join("jobs.sqlite")).expect("open sqlite");
+    let sqlite = ashlar::service::SqliteStore::open(&dir.join("jobs.sqlite")).expect("open sqlite");
     fan_out_contract(&sqlite, &|| {});
     std::fs::remove_dir_all(dir).ok();
     let Some(base) = base_url("fan_out_contract_sqlite_and_postgres (PostgreSQL part)") else {
@@ -887,8 +933,8 @@ fn half_sine(period: f64, name: &str) -> Value {
 /// The same search in this process (the embedded in-process path), as result JSON text.
 fn in_process(body: &Value) -> String {
     use ashlar::service::request::JobInput;
-    let parsed =
-        ashlar::service::request::parse_pga(body, &ashlar::service::Limits::default()).expect("valid");
+    let parsed = ashlar::service::request::parse_pga(body, &ashlar::service::Limits::default())
+        .expect("valid");
     let JobInput::PgaSearch {
         scene,
         motion,
@@ -921,7 +967,16 @@ fn pga_searches_fan_out_over_three_workers_one_killed() {
     let shared = format!("file://{}", root.join("shared").display());
     let api = Server::start(
         &root.join("api"),
-        &["--database", &url, "--workers", "0", "--lease", "2", "--artifacts", &shared],
+        &[
+            "--database",
+            &url,
+            "--workers",
+            "0",
+            "--lease",
+            "2",
+            "--artifacts",
+            &shared,
+        ],
     );
     // The width of this process's rayon pool: the workers' k-section then plans exactly the
     // amplitudes the in-process search of this process plans.
@@ -931,7 +986,16 @@ fn pga_searches_fan_out_over_three_workers_one_killed() {
             Worker::start(
                 &url,
                 &root.join(format!("worker{k}")),
-                &["--workers", "1", "--lease", "2", "--artifacts", &shared, "--fanout-width", &width],
+                &[
+                    "--workers",
+                    "1",
+                    "--lease",
+                    "2",
+                    "--artifacts",
+                    &shared,
+                    "--fanout-width",
+                    &width,
+                ],
             )
         })
         .collect();
@@ -1007,12 +1071,20 @@ fn pga_searches_fan_out_over_three_workers_one_killed() {
         assert!(n >= 2, "search {id}: children ran on {n} worker(s)");
         // One child per run of the result, each succeeded once.
         let runs = if want.get("records").is_some() {
-            want["records"].as_array().expect("records").iter().map(|r| r["runs"].as_array().expect("runs").len()).sum::<usize>()
+            want["records"]
+                .as_array()
+                .expect("records")
+                .iter()
+                .map(|r| r["runs"].as_array().expect("runs").len())
+                .sum::<usize>()
         } else {
             want["runs"].as_array().expect("runs").len()
         };
         let kids: i64 = db
-            .query_one("SELECT count(*) FROM jobs WHERE parent = $1 AND status = 'succeeded'", &[id])
+            .query_one(
+                "SELECT count(*) FROM jobs WHERE parent = $1 AND status = 'succeeded'",
+                &[id],
+            )
             .expect("query")
             .get(0);
         assert_eq!(kids as usize, runs, "search {id}");
@@ -1039,7 +1111,8 @@ fn pga_searches_fan_out_over_three_workers_one_killed() {
         None,
     )
     .expect("GET");
-    let fitted = !serde_json::from_str::<Value>(&reference[1]).expect("JSON")["fragility"].is_null();
+    let fitted =
+        !serde_json::from_str::<Value>(&reference[1]).expect("JSON")["fragility"].is_null();
     assert_eq!(status, if fitted { 200 } else { 409 }, "{svg:.300}");
     for w in workers.drain(1..) {
         assert!(w.terminate().success(), "SIGTERM stops a worker cleanly");

@@ -710,10 +710,13 @@ mod tests {
                 Step::Done(r) => return (r, batches),
                 Step::Pending { batch, done } => {
                     assert_eq!(done, known.len(), "every known run is replayed");
-                    let pts: Vec<f64> = batch.iter().map(|&(i, p)| {
-                        assert_eq!(i, 0);
-                        p
-                    }).collect();
+                    let pts: Vec<f64> = batch
+                        .iter()
+                        .map(|&(i, p)| {
+                            assert_eq!(i, 0);
+                            p
+                        })
+                        .collect();
                     for &p in &pts {
                         known.insert(p.to_bits(), fails(p));
                     }
@@ -736,7 +739,10 @@ mod tests {
         let mut hi = 3.0;
         for b in &batches[1..] {
             assert_eq!(b.len(), 2, "width points per round");
-            assert!(b.iter().all(|&p| p > lo && p < hi), "{b:?} inside ({lo}, {hi})");
+            assert!(
+                b.iter().all(|&p| p > lo && p < hi),
+                "{b:?} inside ({lo}, {hi})"
+            );
             // The independent bracket update: last safe point, first failing point.
             for &p in b {
                 if p >= 2.37 {

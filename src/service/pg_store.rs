@@ -755,7 +755,10 @@ fn settle(tx: &mut postgres::Transaction<'_>, parent: Uuid) -> Result<(), StoreE
             "UPDATE jobs SET status = 'failed', error = $2, finished_ms = $3 WHERE id = $1",
             &[&parent, &super::store::child_error(&st, err), &now_ms()],
         )?;
-        tx.execute("SELECT pg_notify($1, $2)", &[&CHANNEL_DONE, &parent.to_string()])?;
+        tx.execute(
+            "SELECT pg_notify($1, $2)",
+            &[&CHANNEL_DONE, &parent.to_string()],
+        )?;
         return cancel_children(tx, parent);
     }
     let unfinished: i64 = tx
@@ -787,7 +790,10 @@ fn cancel_children(tx: &mut postgres::Transaction<'_>, parent: Uuid) -> Result<(
     )?;
     for r in running {
         let id: Uuid = r.try_get(0)?;
-        tx.execute("SELECT pg_notify($1, $2)", &[&CHANNEL_CANCEL, &id.to_string()])?;
+        tx.execute(
+            "SELECT pg_notify($1, $2)",
+            &[&CHANNEL_CANCEL, &id.to_string()],
+        )?;
     }
     Ok(())
 }

@@ -288,7 +288,8 @@ CREATE INDEX IF NOT EXISTS jobs_status_seq ON jobs(status, seq);
 const SCHEMA_PARENT: &str = "
 ALTER TABLE jobs ADD COLUMN parent TEXT;
 ";
-const INDEX_PARENT: &str = "CREATE INDEX IF NOT EXISTS jobs_parent ON jobs(parent) WHERE parent IS NOT NULL;";
+const INDEX_PARENT: &str =
+    "CREATE INDEX IF NOT EXISTS jobs_parent ON jobs(parent) WHERE parent IS NOT NULL;";
 
 const COLUMNS: &str =
     "id, kind, status, request, motion, progress, result, error, cancel_requested, attempts, created_ms, started_ms, finished_ms, parent";
@@ -420,7 +421,9 @@ impl JobStore for SqliteStore {
                  WHERE seq = (SELECT seq FROM jobs WHERE status = 'queued' ORDER BY seq LIMIT 1)
                  RETURNING {COLUMNS}"
             );
-            c.query_row(&sql, params![now_ms()], row_to_record).optional()?.transpose()
+            c.query_row(&sql, params![now_ms()], row_to_record)
+                .optional()?
+                .transpose()
         })
     }
 
@@ -583,7 +586,9 @@ impl JobStore for SqliteStore {
 
     fn children(&self, id: Uuid) -> Result<Vec<JobRecord>, StoreError> {
         self.read(|c| {
-            let mut st = c.prepare(&format!("SELECT {COLUMNS} FROM jobs WHERE parent = ?1 ORDER BY seq"))?;
+            let mut st = c.prepare(&format!(
+                "SELECT {COLUMNS} FROM jobs WHERE parent = ?1 ORDER BY seq"
+            ))?;
             let rows = st.query_map(params![id.to_string()], row_to_record)?;
             let mut out = Vec::new();
             for r in rows {
@@ -618,13 +623,18 @@ impl JobStore for SqliteStore {
 /// progress and settle the search.
 fn child_ended(tx: &rusqlite::Transaction<'_>, id: Uuid, status: &str) -> Result<(), StoreError> {
     let parent: Option<String> = tx
-        .query_row("SELECT parent FROM jobs WHERE id = ?1", params![id.to_string()], |r| r.get(0))
+        .query_row(
+            "SELECT parent FROM jobs WHERE id = ?1",
+            params![id.to_string()],
+            |r| r.get(0),
+        )
         .optional()?
         .flatten();
     let Some(parent) = parent else {
         return Ok(());
     };
-    let parent = Uuid::parse_str(&parent).map_err(|e| StoreError(format!("corrupt parent {parent:?}: {e}")))?;
+    let parent = Uuid::parse_str(&parent)
+        .map_err(|e| StoreError(format!("corrupt parent {parent:?}: {e}")))?;
     if status == "succeeded" {
         tx.execute(
             "UPDATE jobs SET progress = MIN(0.99, progress + COALESCE(
@@ -642,7 +652,9 @@ fn child_ended(tx: &rusqlite::Transaction<'_>, id: Uuid, status: &str) -> Result
 fn settle(tx: &rusqlite::Transaction<'_>, parent: Uuid) -> Result<(), StoreError> {
     let p = parent.to_string();
     let status: Option<String> = tx
-        .query_row("SELECT status FROM jobs WHERE id = ?1", params![p], |r| r.get(0))
+        .query_row("SELECT status FROM jobs WHERE id = ?1", params![p], |r| {
+            r.get(0)
+        })
         .optional()?;
     if status.as_deref() != Some("waiting") {
         return Ok(());

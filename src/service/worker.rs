@@ -461,7 +461,8 @@ fn run_job(core: &Core, job: JobRecord) {
     };
     let outcome = match (outcome, &core.artifacts) {
         (Ok(o), Some(a))
-            if ctl.reason.load(Ordering::SeqCst) != STOP_SHUTDOWN && job.kind != JobKind::PgaRun =>
+            if ctl.reason.load(Ordering::SeqCst) != STOP_SHUTDOWN
+                && job.kind != JobKind::PgaRun =>
         {
             a.publish_dir(id, &dir).map(|()| o)
         }
@@ -705,7 +706,11 @@ fn fan_out_search(
                 })
                 .collect();
             let progress = (done as f64 / expected).min(0.99);
-            if !core.store.fan_out(job.id, &children, progress).map_err(store_msg)? {
+            if !core
+                .store
+                .fan_out(job.id, &children, progress)
+                .map_err(store_msg)?
+            {
                 tracing::warn!(id = %job.id, "the search was no longer ours to fan out (lease lost)");
             }
             for _ in 0..children.len().min(core.params.workers) {
@@ -783,11 +788,18 @@ fn run_child(core: &Core, job: &JobRecord, cancel: &AtomicBool) -> Result<Runner
             .ok_or_else(|| format!("the search has no record {}", spec.record))?;
         (Some(n), g)
     };
-    let failed = pga::evaluate_combined(scene, gm, &request.criteria, request.combine, pga, Some(cancel))
-        .map_err(|e| match name {
-            Some(n) => pga::record_error(n, e).to_string(),
-            None => e.to_string(),
-        })?;
+    let failed = pga::evaluate_combined(
+        scene,
+        gm,
+        &request.criteria,
+        request.combine,
+        pga,
+        Some(cancel),
+    )
+    .map_err(|e| match name {
+        Some(n) => pga::record_error(n, e).to_string(),
+        None => e.to_string(),
+    })?;
     let value = serde_json::to_value(ChildResult { pga, failed }).map_err(|e| e.to_string())?;
     Ok(RunnerOutcome::Completed(value))
 }
