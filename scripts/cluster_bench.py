@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Throughput of the cluster mode (not a test): jobs/s with 1 and 2 `ashlar worker` processes
 on one PostgreSQL, against the embedded store with 1 and 2 worker threads; and one PGA search
-on the embedded store and on PostgreSQL. Run through scripts/cluster_bench.sh, which starts the
-database. Usage: cluster_bench.py ASHLAR_BINARY DATABASE_URL [JOBS]"""
+on the embedded store and on PostgreSQL; and a 2-record fragility search in process vs fanned
+out as child jobs over 1 and 2 worker processes (BENCH=fanout: only that). Run through
+scripts/cluster_bench.sh, which starts the database. Usage: cluster_bench.py ASHLAR_BINARY DATABASE_URL [JOBS]"""
 import json, os, shutil, subprocess, sys, tempfile, time, urllib.request, uuid
 
 BIN, BASE_URL = sys.argv[1], sys.argv[2]

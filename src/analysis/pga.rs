@@ -821,7 +821,7 @@ mod tests {
         let req = request(0.0, 4.0, 0.1, 9);
         let (r, _) = drive(&req, 2, |p| (1.0..1.6).contains(&p) || p >= 3.0);
         assert!(!r.monotonic);
-        assert!(r.safe_pga.is_some_and(|s| s >= 0.9 && s < 1.0), "{r:?}");
+        assert!(r.safe_pga.is_some_and(|s| (0.9..1.0).contains(&s)), "{r:?}");
         assert_eq!(r.failing_pga, Some(1.0));
         // Never failing: safe at the top, no bracket, only the scan.
         let (r, b) = drive(&req, 2, |_| false);
