@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Throughput of the cluster mode (not a test): jobs/s with 1 and 2 `ashlar worker` processes
 on one PostgreSQL, against the embedded store with 1 and 2 worker threads; and one PGA search
-on the embedded store and on PostgreSQL. Run through scripts/cluster_bench.sh, which starts the
-database. Usage: cluster_bench.py ASHLAR_BINARY DATABASE_URL [JOBS]"""
+on the embedded store and on PostgreSQL; and a 2-record fragility search in process vs fanned
+out as child jobs over 1 and 2 worker processes (BENCH=fanout: only that). Run through
+scripts/cluster_bench.sh, which starts the database. Usage: cluster_bench.py ASHLAR_BINARY DATABASE_URL [JOBS]"""
 import json, os, shutil, subprocess, sys, tempfile, time, urllib.request, uuid
 
 BIN, BASE_URL = sys.argv[1], sys.argv[2]
@@ -90,7 +91,53 @@ def search(addr):
     return dt, req(addr, "GET", f"/v1/pga-searches/{i}")
 
 
+def fanout_search(addr, body):
+    t0 = time.perf_counter()
+    i = req(addr, "POST", "/v1/pga-searches", body)["id"]
+    drain(addr, "/v1/pga-searches", [i])
+    return time.perf_counter() - t0, req(addr, "GET", f"/v1/pga-searches/{i}")["result"]
+
+
+def half_sine(period, name):
+    return {"name": name, "horizontal": {"pulse": {"amplitude": 1.0, "period": period, "cycles": 0.5, "units": "m/s2"}}}
+
+
+# A search heavy enough for the fan-out to matter: the full DDA engine (no reduced model), two
+# records (a fragility study), 30 s simulated per run.
+SEARCH = {"scene": dict(column(30.0), control={"duration": 30.0, "model": "dda"}),
+          "motions": [half_sine(0.8, "T = 0.8 s"), half_sine(1.25, "T = 1.25 s")],
+          "criterion": "toppled:column", "range": {"min": 1.0, "max": 12.0, "units": "m/s2"},
+          "tolerance": 0.05, "scan_points": 6}
+
+
+def fanout_rows():
+    """Wall time of SEARCH: embedded (in-process on the rayon pool), PostgreSQL with the
+    search on one worker (--fanout-width 0), and fanned out over 1 and 2 worker processes."""
+    rows = []
+    s, addr = serve(f"{root}/emb-fan", "--workers", "1")
+    rows.append(("embedded (SQLite), in-process search, 1 worker thread", *fanout_search(addr, SEARCH)))
+    stop(s)
+    configs = [("PostgreSQL, 1 worker process, in-process search (--fanout-width 0)", 1, ["--fanout-width", "0"]),
+               ("PostgreSQL, 1 worker process x 1 thread, fanned out", 1, []),
+               ("PostgreSQL, 2 worker processes x 1 thread, fanned out", 2, [])]
+    for k, (name, n, extra) in enumerate(configs):
+        url = fresh_db(f"fan{k}")
+        s, addr = serve(f"{root}/api-fan{k}", "--database", url, "--workers", "0")
+        ws = [worker(url, f"{root}/wf{k}_{j}", "--workers", "1", *extra) for j in range(n)]
+        rows.append((name, *fanout_search(addr, SEARCH)))
+        stop(s, *ws)
+    ref = rows[0][2]
+    runs = sum(len(r["runs"]) for r in ref["records"])
+    print(f"\nFragility search (2 records, full DDA column 30 s, toppled:column, 1-12 m/s2, tol 0.05), {runs} runs:")
+    for name, t, r in rows:
+        print(f"  {name:70s} {t:7.2f} s   same result as embedded: {r == ref}")
+
+
 root = tempfile.mkdtemp(prefix="ashlar-bench-")
+if os.environ.get("BENCH") == "fanout":
+    fanout_rows()
+    shutil.rmtree(root, ignore_errors=True)
+    sys.exit(0)
 rows = []
 for n in (1, 2):
     s, addr = serve(f"{root}/emb{n}", "--workers", str(n))
@@ -118,4 +165,5 @@ same = r_emb["result"]["safe_pga"] == r_pg["result"]["safe_pga"] and r_emb["resu
 print(f"\nPGA search (column 4 s, toppled:column, 1-12 m/s2, tolerance 0.05), {len(r_emb['result']['runs'])} runs:")
 print(f"  embedded store          {t_emb:6.2f} s")
 print(f"  PostgreSQL + 1 worker   {t_pg:6.2f} s   (same bracket: {same})")
+fanout_rows()
 shutil.rmtree(root, ignore_errors=True)

@@ -2,6 +2,7 @@
 # Cluster throughput benchmark (not a test): starts a throwaway PostgreSQL (fsync on, like the
 # embedded store's synchronous=FULL), builds ashlar, runs scripts/cluster_bench.py.
 #   bash scripts/cluster_bench.sh [JOBS]          # PROFILE=release for release numbers
+#   BENCH=fanout bash scripts/cluster_bench.sh    # only the fanned-out PGA search rows
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PROFILE="${PROFILE:-dev}"

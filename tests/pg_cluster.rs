@@ -716,3 +716,485 @@ fn bad_database_urls_are_named() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("connecting to PostgreSQL"), "{err}");
 }
+
+// ---------------------------------------------------------------------------------------------
+// Fanned-out PGA searches (issue 10): a search's runs are child jobs that every worker shares.
+
+fn child(parent: Uuid, pga: f64, step: f64) -> NewJob {
+    NewJob {
+        id: Uuid::new_v4(),
+        kind: JobKind::PgaRun,
+        request: json!({"parent": parent, "record": 0, "pga": pga, "pga_bits": pga.to_bits(),
+                        "width": 2, "progress_step": step}),
+        motion: json!({"pga": pga}),
+    }
+}
+
+fn new_search() -> NewJob {
+    NewJob {
+        id: Uuid::new_v4(),
+        kind: JobKind::PgaSearch,
+        request: json!({"a": 1}),
+        motion: json!({"pga": 1.0}),
+    }
+}
+
+fn status_of(s: &dyn JobStore, id: Uuid) -> JobStatus {
+    s.get(id).expect("get").expect("job").status
+}
+
+/// The fan-out contract every [`JobStore`] keeps: waiting, children, requeue of the search by
+/// its last child (same transaction), a failed child failing the search, cancel cascading to
+/// children, and recovery of children that keep dying. `expire` makes the running jobs'
+/// claims look dead to `recover` (a restart for SQLite, an expired lease for PostgreSQL).
+fn fan_out_contract(s: &dyn JobStore, expire: &dyn Fn()) {
+    use ashlar::service::store::CancelOutcome;
+    let p = new_search();
+    s.insert(&p).expect("insert");
+    let claimed = s.claim().expect("claim").expect("the search");
+    assert_eq!(
+        (claimed.id, claimed.attempts, claimed.parent),
+        (p.id, 1, None)
+    );
+    let (c1, c2) = (child(p.id, 1.0, 0.25), child(p.id, 2.0, 0.25));
+    assert!(s
+        .fan_out(p.id, &[c1.clone(), c2.clone()], 0.2)
+        .expect("fan out"));
+    let w = s.get(p.id).expect("get").expect("job");
+    // Waiting gives the claim back: waiting is not a crash, max_attempts must not count it.
+    assert_eq!(
+        (w.status, w.attempts, w.progress),
+        (JobStatus::Waiting, 0, 0.2)
+    );
+    assert_eq!(s.counts().expect("counts").waiting, 1);
+    assert!(
+        !s.fan_out(p.id, &[child(p.id, 3.0, 0.1)], 0.3)
+            .expect("fan out"),
+        "a waiting search cannot fan out again"
+    );
+    let kids = s.children(p.id).expect("children");
+    assert_eq!(
+        kids.iter()
+            .map(|k| (k.id, k.kind, k.parent, k.status))
+            .collect::<Vec<_>>(),
+        vec![
+            (c1.id, JobKind::PgaRun, Some(p.id), JobStatus::Queued),
+            (c2.id, JobKind::PgaRun, Some(p.id), JobStatus::Queued)
+        ]
+    );
+    assert_eq!(kids[0].request["pga_bits"], json!(1.0f64.to_bits()));
+    // Children never show in the job list.
+    let listed: Vec<Uuid> = s
+        .list_recent(10, None)
+        .expect("list")
+        .iter()
+        .map(|j| j.id)
+        .collect();
+    assert_eq!(listed, vec![p.id]);
+    assert!(s
+        .list_recent(10, Some(JobKind::PgaRun))
+        .expect("list")
+        .is_empty());
+
+    // The waiting search is not claimable; its children are, in order.
+    assert_eq!(s.claim().expect("claim").expect("c1").id, c1.id);
+    s.finish(
+        c1.id,
+        &Finish::Succeeded(json!({"pga": 1.0, "failed": false})),
+    )
+    .expect("finish");
+    let w = s.get(p.id).expect("get").expect("job");
+    assert_eq!(w.status, JobStatus::Waiting, "one child still runs");
+    assert!(
+        (w.progress - 0.45).abs() < 1e-12,
+        "progress + the child's share: {}",
+        w.progress
+    );
+    assert_eq!(s.claim().expect("claim").expect("c2").id, c2.id);
+    s.finish(
+        c2.id,
+        &Finish::Succeeded(json!({"pga": 2.0, "failed": true})),
+    )
+    .expect("finish");
+    // The last child queued the search again, and it is claimable at once.
+    assert_eq!(status_of(s, p.id), JobStatus::Queued);
+    let again = s.claim().expect("claim").expect("the search again");
+    assert_eq!((again.id, again.attempts), (p.id, 1));
+    let kids = s.children(p.id).expect("children");
+    assert_eq!(
+        kids[1].result.as_deref(),
+        Some(r#"{"failed":true,"pga":2.0}"#)
+    );
+    // Fanning out nothing new while every child has ended queues the search straight away.
+    assert!(s.fan_out(p.id, &[], 0.5).expect("fan out"));
+    assert_eq!(status_of(s, p.id), JobStatus::Queued);
+    assert_eq!(s.claim().expect("claim").expect("search").id, p.id);
+
+    // A failed child fails its search with the child's error and cancels its siblings.
+    let (c3, c4) = (child(p.id, 1.5, 0.1), child(p.id, 1.75, 0.1));
+    assert!(s
+        .fan_out(p.id, &[c3.clone(), c4.clone()], 0.6)
+        .expect("fan out"));
+    assert_eq!(s.claim().expect("claim").expect("c3").id, c3.id);
+    s.finish(c3.id, &Finish::Failed("simulation diverged at 1.5".into()))
+        .expect("finish");
+    let f = s.get(p.id).expect("get").expect("job");
+    assert_eq!(f.status, JobStatus::Failed);
+    assert_eq!(f.error.as_deref(), Some("simulation diverged at 1.5"));
+    assert!(f.finished_ms.is_some());
+    assert_eq!(status_of(s, c4.id), JobStatus::Cancelled);
+    assert!(s.claim().expect("claim").is_none());
+
+    // Cancelling a waiting search ends it at once and cancels its children: queued ones at
+    // once, running ones by request (their end then changes nothing).
+    let q = new_search();
+    s.insert(&q).expect("insert");
+    s.claim().expect("claim").expect("q");
+    let (d1, d2) = (child(q.id, 1.0, 0.5), child(q.id, 2.0, 0.5));
+    assert!(s
+        .fan_out(q.id, &[d1.clone(), d2.clone()], 0.0)
+        .expect("fan out"));
+    assert_eq!(s.claim().expect("claim").expect("d1").id, d1.id);
+    assert_eq!(
+        s.request_cancel(q.id).expect("cancel"),
+        CancelOutcome::CancelledQueued
+    );
+    assert_eq!(status_of(s, q.id), JobStatus::Cancelled);
+    assert_eq!(status_of(s, d2.id), JobStatus::Cancelled);
+    let r1 = s.get(d1.id).expect("get").expect("d1");
+    assert_eq!((r1.status, r1.cancel_requested), (JobStatus::Running, true));
+    s.finish(d1.id, &Finish::Cancelled(None)).expect("finish");
+    assert_eq!(status_of(s, q.id), JobStatus::Cancelled);
+    assert_eq!(
+        s.request_cancel(q.id).expect("cancel"),
+        CancelOutcome::AlreadyFinished(JobStatus::Cancelled)
+    );
+
+    // A child whose worker keeps dying fails after max_attempts, and fails its search.
+    let r = new_search();
+    s.insert(&r).expect("insert");
+    s.claim().expect("claim").expect("r");
+    let e1 = child(r.id, 1.0, 0.5);
+    assert!(s
+        .fan_out(r.id, std::slice::from_ref(&e1), 0.0)
+        .expect("fan out"));
+    assert_eq!(s.claim().expect("claim").expect("e1").id, e1.id);
+    expire();
+    assert_eq!(s.recover(1).expect("recover"), (0, 1));
+    let rr = s.get(r.id).expect("get").expect("r");
+    assert_eq!(rr.status, JobStatus::Failed);
+    assert!(
+        rr.error.unwrap_or_default().contains("1 times"),
+        "the child's error"
+    );
+    assert_eq!(s.counts().expect("counts").waiting, 0);
+}
+
+#[test]
+fn fan_out_contract_sqlite_and_postgres() {
+    let dir = temp_dir("fanout-contract");
+    let sqlite = ashlar::service::SqliteStore::open(&dir.join("jobs.sqlite")).expect("open sqlite");
+    fan_out_contract(&sqlite, &|| {});
+    std::fs::remove_dir_all(dir).ok();
+    let Some(base) = base_url("fan_out_contract_sqlite_and_postgres (PostgreSQL part)") else {
+        return;
+    };
+    let url = fresh_db(&base, "fanout");
+    let lease = LeaseParams::with_lease(Duration::from_millis(1000));
+    let pg = PgStore::open(&url, lease).expect("open");
+    fan_out_contract(&pg, &|| std::thread::sleep(Duration::from_millis(1300)));
+    // Every claim is logged; a search parked for its children ends its attempt `waiting`.
+    let outcomes: Vec<Option<String>> = pg
+        .attempts_of(pg.list_recent(10, Some(JobKind::PgaSearch)).expect("list")[2].id)
+        .expect("attempts")
+        .into_iter()
+        .map(|(_, o)| o)
+        .collect();
+    assert_eq!(
+        outcomes,
+        vec![
+            Some("waiting".into()),
+            Some("waiting".into()),
+            Some("waiting".into())
+        ]
+    );
+}
+
+fn rigid_column(duration: f64) -> Value {
+    let mut s = column_scene(duration);
+    s["control"]["block_model"] = json!("rigid");
+    s
+}
+
+fn half_sine(period: f64, name: &str) -> Value {
+    json!({"name": name, "horizontal": {"pulse": {"amplitude": 1.0, "period": period, "cycles": 0.5, "units": "m/s2"}}})
+}
+
+/// The same search in this process (the embedded in-process path), as result JSON text.
+fn in_process(body: &Value) -> String {
+    use ashlar::service::request::JobInput;
+    let parsed = ashlar::service::request::parse_pga(body, &ashlar::service::Limits::default())
+        .expect("valid");
+    let JobInput::PgaSearch {
+        scene,
+        motion,
+        request,
+        records,
+        fit,
+        ..
+    } = parsed.input
+    else {
+        panic!("a search")
+    };
+    let opts = ashlar::analysis::run::RunOptions::default();
+    if records.is_empty() {
+        let r = ashlar::analysis::pga::search(&scene, &motion, &request, &opts).expect("search");
+        serde_json::to_string(&r).expect("json")
+    } else {
+        let r = ashlar::analysis::pga::search_records(&scene, &records, &request, fit, &opts)
+            .expect("search");
+        serde_json::to_string(&r).expect("json")
+    }
+}
+
+#[test]
+fn pga_searches_fan_out_over_three_workers_one_killed() {
+    let Some(base) = base_url("pga_searches_fan_out_over_three_workers_one_killed") else {
+        return;
+    };
+    let url = fresh_db(&base, "fanout_http");
+    let root = temp_dir("pg-fanout");
+    let shared = format!("file://{}", root.join("shared").display());
+    let api = Server::start(
+        &root.join("api"),
+        &[
+            "--database",
+            &url,
+            "--workers",
+            "0",
+            "--lease",
+            "2",
+            "--artifacts",
+            &shared,
+        ],
+    );
+    // The width of this process's rayon pool: the workers' k-section then plans exactly the
+    // amplitudes the in-process search of this process plans.
+    let width = rayon::current_num_threads().to_string();
+    let mut workers: Vec<Worker> = (0..3)
+        .map(|k| {
+            Worker::start(
+                &url,
+                &root.join(format!("worker{k}")),
+                &[
+                    "--workers",
+                    "1",
+                    "--lease",
+                    "2",
+                    "--artifacts",
+                    &shared,
+                    "--fanout-width",
+                    &width,
+                ],
+            )
+        })
+        .collect();
+    let single = json!({
+        "scene": rigid_column(20.0),
+        "motion": {"horizontal": half_sine(1.0, "")["horizontal"]},
+        "criterion": "toppled:column",
+        "range": {"min": 2.0, "max": 10.0, "units": "m/s2"},
+        "tolerance": 0.02,
+        "scan_points": 6
+    });
+    let multi = json!({
+        "scene": rigid_column(20.0),
+        "motions": [half_sine(0.8, "T = 0.8 s"), half_sine(1.25, "T = 1.25 s")],
+        "criterion": ["toppled:column", "rotation:column:20"],
+        "combine": "any",
+        "range": {"min": 2.0, "max": 10.0, "units": "m/s2"},
+        "tolerance": 0.02,
+        "scan_points": 6
+    });
+    let post = |b: &Value| {
+        let (status, text) =
+            http(&api.addr, "POST", "/v1/pga-searches", Some(&b.to_string())).expect("POST");
+        assert_eq!(status, 202, "{text}");
+        let v: Value = serde_json::from_str(&text).expect("JSON");
+        Uuid::parse_str(v["id"].as_str().expect("id")).expect("uuid")
+    };
+    let ids = [post(&single), post(&multi)];
+
+    // SIGKILL worker 0 while it runs a child run (its claim is open in job_attempts).
+    let victim = format!(":{}", workers[0].pid());
+    let mut db = sql(&url);
+    wait_until("worker 0 runs a child", Duration::from_secs(120), || {
+        let n: i64 = db
+            .query_one(
+                "SELECT count(*) FROM job_attempts a JOIN jobs j ON j.id = a.job_id
+                 WHERE a.worker LIKE '%' || $1 AND a.outcome IS NULL AND j.parent IS NOT NULL",
+                &[&victim],
+            )
+            .expect("query")
+            .get(0);
+        n > 0
+    });
+    workers[0].kill();
+
+    let mut seen_waiting = false;
+    wait_until("both searches end", Duration::from_secs(900), || {
+        ids.iter().all(|id| {
+            let j = get_json(&api.addr, &format!("/v1/pga-searches/{id}"));
+            seen_waiting |= j["status"] == "waiting";
+            is_terminal(&j)
+        })
+    });
+    assert!(seen_waiting, "the API shows a search waiting for its runs");
+    let reference = [in_process(&single), in_process(&multi)];
+    for (id, want) in ids.iter().zip(&reference) {
+        let j = get_json(&api.addr, &format!("/v1/pga-searches/{id}"));
+        assert_eq!(j["status"], "succeeded", "{j}");
+        assert_eq!(j["progress"], json!(1.0));
+        // Exactly the in-process result: same amplitudes (planned from the same bits), same
+        // verdicts, same bracket, same fragility fit.
+        let want: Value = serde_json::from_str(want).expect("JSON");
+        assert_eq!(j["result"], want, "search {id}: cluster vs in-process");
+        // The runs were shared: children executed by at least two distinct workers.
+        let n: i64 = db
+            .query_one(
+                "SELECT count(DISTINCT a.worker) FROM job_attempts a JOIN jobs j ON j.id = a.job_id
+                 WHERE j.parent = $1 AND a.outcome = 'succeeded'",
+                &[id],
+            )
+            .expect("query")
+            .get(0);
+        assert!(n >= 2, "search {id}: children ran on {n} worker(s)");
+        // One child per run of the result, each succeeded once.
+        let runs = if want.get("records").is_some() {
+            want["records"]
+                .as_array()
+                .expect("records")
+                .iter()
+                .map(|r| r["runs"].as_array().expect("runs").len())
+                .sum::<usize>()
+        } else {
+            want["runs"].as_array().expect("runs").len()
+        };
+        let kids: i64 = db
+            .query_one(
+                "SELECT count(*) FROM jobs WHERE parent = $1 AND status = 'succeeded'",
+                &[id],
+            )
+            .expect("query")
+            .get(0);
+        assert_eq!(kids as usize, runs, "search {id}");
+    }
+    // The killed worker's child was reaped once and rerun.
+    let victim_expired: i64 = db
+        .query_one(
+            "SELECT count(*) FROM job_attempts WHERE worker LIKE '%' || $1 AND outcome = 'expired'",
+            &[&victim],
+        )
+        .expect("query")
+        .get(0);
+    assert_eq!(victim_expired, 1);
+    // Children stay out of the job list.
+    let list = get_json(&api.addr, "/v1/jobs?limit=100");
+    let listed = list["jobs"].as_array().map(Vec::len).unwrap_or(usize::MAX);
+    assert_eq!(listed, 2, "{list}");
+    // The multi-record search's plot was published by whichever worker finished it (when a
+    // curve could be fitted: as in-process, a fit that fails is reported, not plotted).
+    let (status, svg) = http(
+        &api.addr,
+        "GET",
+        &format!("/v1/pga-searches/{}/fragility.svg", ids[1]),
+        None,
+    )
+    .expect("GET");
+    let fitted =
+        !serde_json::from_str::<Value>(&reference[1]).expect("JSON")["fragility"].is_null();
+    assert_eq!(status, if fitted { 200 } else { 409 }, "{svg:.300}");
+    for w in workers.drain(1..) {
+        assert!(w.terminate().success(), "SIGTERM stops a worker cleanly");
+    }
+    drop(api);
+    std::fs::remove_dir_all(root).ok();
+}
+
+/// The embedded (SQLite) store fans out too when asked (`--fanout-width`): with ONE worker
+/// thread, a search parks itself, the thread runs its children, the last child requeues it,
+/// and so on to the end (no thread ever waits on children, so one thread cannot deadlock).
+/// The results are exactly the in-process search's. Needs no PostgreSQL.
+#[test]
+fn embedded_store_fans_out_with_one_worker_thread() {
+    let dir = temp_dir("fanout-embedded");
+    let mut cfg = ServiceConfig::new(&dir);
+    cfg.workers.workers = 1;
+    cfg.workers.idle_poll = Duration::from_millis(50);
+    cfg.workers.fanout_width = Some(rayon::current_num_threads());
+    let svc = Service::start(cfg, ashlar::service::analysis_runner()).expect("embedded service");
+    let core = svc.state().core.clone();
+    let single = json!({
+        "scene": rigid_column(3.0),
+        "motion": {"horizontal": half_sine(1.0, "")["horizontal"]},
+        "criterion": "toppled:column",
+        "range": {"min": 2.0, "max": 10.0, "units": "m/s2"},
+        "tolerance": 0.05,
+        "scan_points": 5
+    });
+    let multi = json!({
+        "scene": rigid_column(3.0),
+        "motions": [half_sine(0.8, "T = 0.8 s"), half_sine(1.25, "T = 1.25 s")],
+        "criterion": ["toppled:column", "rotation:column:20"],
+        "combine": "any",
+        "range": {"min": 2.0, "max": 10.0, "units": "m/s2"},
+        "tolerance": 0.05,
+        "scan_points": 5
+    });
+    let limits = ashlar::service::Limits::default();
+    let ids: Vec<Uuid> = [&single, &multi]
+        .iter()
+        .map(|b| {
+            let parsed = ashlar::service::request::parse_pga(b, &limits).expect("valid");
+            let id = Uuid::new_v4();
+            core.store
+                .insert(&NewJob {
+                    id,
+                    kind: JobKind::PgaSearch,
+                    request: (*b).clone(),
+                    motion: parsed.motion_summary,
+                })
+                .expect("insert");
+            core.notify_work();
+            id
+        })
+        .collect();
+    let mut progress = [0.0f64; 2];
+    wait_until("both searches end", Duration::from_secs(600), || {
+        ids.iter().enumerate().all(|(k, &id)| {
+            let j = core.store.get(id).expect("get").expect("job");
+            assert!(
+                j.progress >= progress[k],
+                "progress went back: {} after {}",
+                j.progress,
+                progress[k]
+            );
+            progress[k] = j.progress;
+            j.status.is_terminal()
+        })
+    });
+    for (id, body) in ids.iter().zip([&single, &multi]) {
+        let j = core.store.get(*id).expect("get").expect("job");
+        assert_eq!(j.status, JobStatus::Succeeded, "{:?}", j.error);
+        let got: Value = serde_json::from_str(j.result.as_deref().expect("result")).expect("JSON");
+        let want: Value = serde_json::from_str(&in_process(body)).expect("JSON");
+        assert_eq!(got, want, "fanned out vs in-process");
+        let kids = core.store.children(*id).expect("children");
+        assert!(kids.len() > 5, "{} children", kids.len());
+        assert!(kids.iter().all(|k| k.status == JobStatus::Succeeded));
+    }
+    // The multi-record search wrote its plot like the in-process runner does.
+    assert!(core.job_dir(ids[1]).join("fragility.svg").exists());
+    svc.shutdown(Duration::from_secs(5));
+    std::fs::remove_dir_all(dir).ok();
+}

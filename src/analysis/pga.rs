@@ -287,42 +287,78 @@ pub fn evaluate_combined(
     Ok(combine.verdict(criteria.iter().map(|c| c.met(&tr))))
 }
 
-/// Search for the threshold amplitude.
-pub fn search(
-    scene: &Scene,
-    motion: &GroundMotion,
+/// One step of a search replayed from the outcomes known so far (see [`plan`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Step<T> {
+    /// These (record, amplitude m/s²) pairs must be evaluated before the search can go on;
+    /// `done` runs were found known on the way.
+    Pending {
+        batch: Vec<(usize, f64)>,
+        done: usize,
+    },
+    /// The search is over.
+    Done(T),
+}
+
+/// Runs a search is expected to need: the scan, then one round of `width` runs per
+/// (width + 1)-fold narrowing of a scan interval to the tolerance. For progress only.
+pub fn expected_runs(req: &PgaRequest, width: usize) -> f64 {
+    let width = width.max(1);
+    let n = req.scan_points;
+    let rounds = ((req.max - req.min) / (n - 1) as f64 / req.tolerance)
+        .max(1.0)
+        .log((width + 1) as f64)
+        .ceil();
+    n as f64 + rounds * width as f64
+}
+
+/// The search as a pure, deterministic planner: replays the scan and the k-section rounds
+/// (`width` interior points per round) from the outcomes `known` returns (`None`: not
+/// evaluated yet) and stops at the first batch with unknown amplitudes. Replaying with more
+/// outcomes known gives the same batches again, so the outcomes may come from anywhere (this
+/// process's threads, or child jobs on other machines) in any order. `req` must be valid.
+pub fn plan(
     req: &PgaRequest,
-    opts: &RunOptions,
-) -> Result<PgaResult, RunError> {
-    validate(scene, motion, req)?;
-    let cancel = opts.cancel;
-    let eval_many = |pgas: &[f64]| -> Result<Vec<PgaRun>, RunError> {
-        pgas.par_iter()
-            .map(|&pga| {
-                evaluate_combined(scene, motion, &req.criteria, req.combine, pga, cancel)
-                    .map(|failed| PgaRun { pga, failed })
-            })
-            .collect()
+    width: usize,
+    known: &dyn Fn(f64) -> Option<bool>,
+) -> Step<PgaResult> {
+    let width = width.max(1);
+    let mut done = 0;
+    // A batch's runs, or the amplitudes of it still unknown.
+    let mut batch = |pgas: &[f64]| -> Result<Vec<PgaRun>, Vec<(usize, f64)>> {
+        let got: Vec<Option<bool>> = pgas.iter().map(|&p| known(p)).collect();
+        done += got.iter().filter(|g| g.is_some()).count();
+        if got.iter().all(Option::is_some) {
+            Ok(pgas
+                .iter()
+                .zip(got)
+                .map(|(&pga, g)| PgaRun {
+                    pga,
+                    failed: g == Some(true),
+                })
+                .collect())
+        } else {
+            Err(pgas
+                .iter()
+                .zip(got)
+                .filter(|(_, g)| g.is_none())
+                .map(|(&p, _)| (0, p))
+                .collect())
+        }
     };
     let n = req.scan_points;
     let grid: Vec<f64> = (0..n)
         .map(|k| req.min + (req.max - req.min) * k as f64 / (n - 1) as f64)
         .collect();
-    let mut runs = eval_many(&grid)?;
-    let workers = rayon::current_num_threads().max(1);
-    // Progress: runs done over the runs the search is expected to need (the scan, then one round
-    // of `workers` runs per (workers + 1)-fold narrowing of a scan interval to the tolerance).
-    let rounds = ((req.max - req.min) / (n - 1) as f64 / req.tolerance)
-        .max(1.0)
-        .log((workers + 1) as f64)
-        .ceil();
-    let expected = n as f64 + rounds * workers as f64;
-    let report = |done: usize| {
-        if let Some(p) = opts.progress {
-            p((done as f64 / expected).min(0.99));
+    let mut runs = match batch(&grid) {
+        Ok(r) => r,
+        Err(pending) => {
+            return Step::Pending {
+                batch: pending,
+                done,
+            }
         }
     };
-    report(runs.len());
     let first_fail = runs.iter().position(|r| r.failed);
     let monotonic_scan = match first_fail {
         Some(k) => runs[k..].iter().all(|r| r.failed),
@@ -337,14 +373,19 @@ pub fn search(
         if f - s <= req.tolerance {
             break;
         }
-        if cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
-            return Err(RunError::Invalid("cancelled".into()));
-        }
-        // Split the bracket into workers + 1 parts and evaluate the interior points together.
-        let pts: Vec<f64> = (1..=workers)
-            .map(|k| s + (f - s) * k as f64 / (workers + 1) as f64)
+        // Split the bracket into width + 1 parts and evaluate the interior points together.
+        let pts: Vec<f64> = (1..=width)
+            .map(|k| s + (f - s) * k as f64 / (width + 1) as f64)
             .collect();
-        let round = eval_many(&pts)?;
+        let round = match batch(&pts) {
+            Ok(r) => r,
+            Err(pending) => {
+                return Step::Pending {
+                    batch: pending,
+                    done,
+                }
+            }
+        };
         match round.iter().position(|r| r.failed) {
             Some(0) => fail = Some(round[0].pga),
             Some(k) => {
@@ -354,7 +395,13 @@ pub fn search(
             None => safe = Some(round[round.len() - 1].pga),
         }
         runs.extend(round);
-        report(runs.len());
+        // A bracket too narrow for floating point to split (a tolerance below one ULP of the
+        // amplitudes) would otherwise be split forever.
+        if let (Some(s2), Some(f2)) = (safe, fail) {
+            if f2 - s2 >= f - s {
+                break;
+            }
+        }
     }
     let monotonic = monotonic_scan && {
         let lowest_fail = runs
@@ -365,7 +412,7 @@ pub fn search(
         runs.iter().all(|r| r.failed || r.pga < lowest_fail)
     };
     runs.sort_by(|a, b| a.pga.total_cmp(&b.pga));
-    Ok(PgaResult {
+    Step::Done(PgaResult {
         criterion: req.combine.label(&req.criteria),
         safe_pga: safe,
         failing_pga: fail,
@@ -373,6 +420,81 @@ pub fn search(
         monotonic,
         runs,
     })
+}
+
+/// [`plan`] for several records searched together: one planner per record, replayed side by
+/// side; the pending batches of every record come out at once. `known(record, pga)`.
+pub fn plan_records(
+    records: usize,
+    req: &PgaRequest,
+    width: usize,
+    known: &dyn Fn(usize, f64) -> Option<bool>,
+) -> Step<Vec<PgaResult>> {
+    let mut results = Vec::with_capacity(records);
+    let mut pending = Vec::new();
+    let mut done = 0;
+    for i in 0..records {
+        match plan(req, width, &|p| known(i, p)) {
+            Step::Done(r) => {
+                done += r.runs.len();
+                results.push(r);
+            }
+            Step::Pending { batch, done: d } => {
+                done += d;
+                pending.extend(batch.into_iter().map(|(_, p)| (i, p)));
+            }
+        }
+    }
+    if pending.is_empty() {
+        Step::Done(results)
+    } else {
+        Step::Pending {
+            batch: pending,
+            done,
+        }
+    }
+}
+
+/// Search for the threshold amplitude: [`plan`] driven in this process, each batch evaluated
+/// on the rayon pool (one interior point per thread and round).
+pub fn search(
+    scene: &Scene,
+    motion: &GroundMotion,
+    req: &PgaRequest,
+    opts: &RunOptions,
+) -> Result<PgaResult, RunError> {
+    validate(scene, motion, req)?;
+    let cancel = opts.cancel;
+    let workers = rayon::current_num_threads().max(1);
+    let expected = expected_runs(req, workers);
+    let report = |done: usize| {
+        if let Some(p) = opts.progress {
+            p((done as f64 / expected).min(0.99));
+        }
+    };
+    let mut known: std::collections::HashMap<u64, bool> = std::collections::HashMap::new();
+    let mut done = 0;
+    loop {
+        let step = plan(req, workers, &|p| known.get(&p.to_bits()).copied());
+        let batch = match step {
+            Step::Done(r) => return Ok(r),
+            Step::Pending { batch, .. } => batch,
+        };
+        if done > 0 && cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
+            return Err(RunError::Invalid("cancelled".into()));
+        }
+        let outcomes: Vec<bool> = batch
+            .par_iter()
+            .map(|&(_, pga)| {
+                evaluate_combined(scene, motion, &req.criteria, req.combine, pga, cancel)
+            })
+            .collect::<Result<_, _>>()?;
+        for (&(_, pga), failed) in batch.iter().zip(outcomes) {
+            known.insert(pga.to_bits(), failed);
+        }
+        done += batch.len();
+        report(done);
+    }
 }
 
 /// One record's search in a multi-record study: the single-record result plus the record's name.
@@ -414,14 +536,7 @@ pub fn search_records(
     method: Method,
     opts: &RunOptions,
 ) -> Result<MultiResult, RunError> {
-    if records.is_empty() {
-        return Err(RunError::Invalid(
-            "motions: give at least one record".into(),
-        ));
-    }
-    for (name, gm) in records {
-        validate(scene, gm, req).map_err(|e| RunError::Invalid(format!("record {name:?}: {e}")))?;
-    }
+    validate_records(scene, records, req)?;
     let parts = std::sync::Mutex::new(vec![0.0f64; records.len()]);
     let results: Vec<RecordResult> = records
         .par_iter()
@@ -443,16 +558,24 @@ pub fn search_records(
                     motion: name.clone(),
                     result,
                 })
-                .map_err(|e| match e {
-                    RunError::Invalid(m) if m == "cancelled" => RunError::Invalid(m),
-                    RunError::Invalid(m) => RunError::Invalid(format!("record {name:?}: {m}")),
-                    RunError::Simulation(m) => {
-                        RunError::Simulation(format!("record {name:?}: {m}"))
-                    }
-                    RunError::Io(m) => RunError::Io(m),
-                })
+                .map_err(|e| record_error(name, e))
         })
         .collect::<Result<_, _>>()?;
+    Ok(multi_result(results, req, method))
+}
+
+/// A record's error in a multi-record search names the record (a cancel stays a cancel).
+pub fn record_error(name: &str, e: RunError) -> RunError {
+    match e {
+        RunError::Invalid(m) if m == "cancelled" => RunError::Invalid(m),
+        RunError::Invalid(m) => RunError::Invalid(format!("record {name:?}: {m}")),
+        RunError::Simulation(m) => RunError::Simulation(format!("record {name:?}: {m}")),
+        RunError::Io(m) => RunError::Io(m),
+    }
+}
+
+/// The multi-record result from the records' searches: the fragility curve fitted by `method`.
+pub fn multi_result(results: Vec<RecordResult>, req: &PgaRequest, method: Method) -> MultiResult {
     let points: Vec<Point> = results
         .iter()
         .flat_map(|r| r.result.runs.iter())
@@ -474,13 +597,39 @@ pub fn search_records(
         Ok(f) => (Some(f), None),
         Err(e) => (None, Some(e.to_string())),
     };
-    Ok(MultiResult {
+    MultiResult {
         criterion: req.combine.label(&req.criteria),
         units: "m/s2".into(),
         records: results,
         fragility,
         fragility_error,
-    })
+    }
+}
+
+/// Check a multi-record search's request against every record (the errors name the record).
+pub fn validate_records(
+    scene: &Scene,
+    records: &[(String, GroundMotion)],
+    req: &PgaRequest,
+) -> Result<(), RunError> {
+    if records.is_empty() {
+        return Err(RunError::Invalid(
+            "motions: give at least one record".into(),
+        ));
+    }
+    for (name, gm) in records {
+        validate(scene, gm, req).map_err(|e| RunError::Invalid(format!("record {name:?}: {e}")))?;
+    }
+    Ok(())
+}
+
+/// Check a single-record search's request.
+pub fn validate_search(
+    scene: &Scene,
+    motion: &GroundMotion,
+    req: &PgaRequest,
+) -> Result<(), RunError> {
+    validate(scene, motion, req)
 }
 
 /// The fragility plot of a multi-record result (`None` when no curve was fitted).
@@ -535,6 +684,180 @@ mod tests {
         assert_eq!(Combine::All.label(&c), "toppled:a,not:rotation:b:5");
         assert_eq!(Combine::Any.label(&c), "any(toppled:a,not:rotation:b:5)");
         assert_eq!(Combine::Any.label(&c[..1]), "toppled:a");
+    }
+
+    fn request(min: f64, max: f64, tolerance: f64, scan_points: usize) -> PgaRequest {
+        PgaRequest {
+            criteria: vec![Criterion::parse("toppled:a").expect("c")],
+            combine: Combine::All,
+            min,
+            max,
+            tolerance,
+            scan_points,
+        }
+    }
+
+    /// Drive the planner to the end with a scripted evaluator, recording every batch.
+    fn drive(
+        req: &PgaRequest,
+        width: usize,
+        fails: impl Fn(f64) -> bool,
+    ) -> (PgaResult, Vec<Vec<f64>>) {
+        let mut known = std::collections::HashMap::new();
+        let mut batches = Vec::new();
+        loop {
+            match plan(req, width, &|p| known.get(&p.to_bits()).copied()) {
+                Step::Done(r) => return (r, batches),
+                Step::Pending { batch, done } => {
+                    assert_eq!(done, known.len(), "every known run is replayed");
+                    let pts: Vec<f64> = batch
+                        .iter()
+                        .map(|&(i, p)| {
+                            assert_eq!(i, 0);
+                            p
+                        })
+                        .collect();
+                    for &p in &pts {
+                        known.insert(p.to_bits(), fails(p));
+                    }
+                    batches.push(pts);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn planner_scans_then_k_sections_the_lowest_bracket() {
+        // Threshold 2.37 m/s² on [0, 4], 5 scan points, width 2: the scan is 0,1,2,3,4; each
+        // round splits the bracket in three, so the bracket shrinks 3-fold per round.
+        let req = request(0.0, 4.0, 0.05, 5);
+        let (r, batches) = drive(&req, 2, |p| p >= 2.37);
+        assert_eq!(batches[0], vec![0.0, 1.0, 2.0, 3.0, 4.0]);
+        // Round 1 inside (2, 3): 2 + 1/3, 2 + 2/3 (computed as the planner does).
+        assert_eq!(batches[1], vec![2.0 + 1.0 / 3.0, 2.0 + 2.0 / 3.0]);
+        let mut lo = 2.0;
+        let mut hi = 3.0;
+        for b in &batches[1..] {
+            assert_eq!(b.len(), 2, "width points per round");
+            assert!(
+                b.iter().all(|&p| p > lo && p < hi),
+                "{b:?} inside ({lo}, {hi})"
+            );
+            // The independent bracket update: last safe point, first failing point.
+            for &p in b {
+                if p >= 2.37 {
+                    hi = hi.min(p);
+                } else {
+                    lo = lo.max(p);
+                }
+            }
+        }
+        assert_eq!((r.safe_pga, r.failing_pga), (Some(lo), Some(hi)));
+        assert!(hi - lo <= 0.05 && lo < 2.37 && 2.37 <= hi);
+        // (1/3)^k ≤ 0.05 needs k = 3 rounds: 5 + 3·2 runs.
+        assert_eq!(batches.len(), 4);
+        assert_eq!(r.runs.len(), 11);
+        assert!(r.monotonic);
+        assert!(r.runs.windows(2).all(|w| w[0].pga <= w[1].pga), "sorted");
+        assert!((expected_runs(&req, 2) - 11.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn replay_after_partial_results_asks_for_the_rest_of_the_same_batch() {
+        let req = request(0.0, 4.0, 0.05, 5);
+        let fails = |p: f64| p >= 2.37;
+        let (_, batches) = drive(&req, 3, fails);
+        // Any subset of the outcomes known: the planner asks for exactly the missing part of
+        // the first incomplete batch, and reports how many it found.
+        let all: Vec<f64> = batches.iter().flatten().copied().collect();
+        for cut in 0..all.len() {
+            for skip in 0..=cut {
+                // Known: the first `cut` runs except the `skip`-th (when skip < cut).
+                let known: std::collections::HashMap<u64, bool> = all[..cut]
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != skip)
+                    .map(|(_, &p)| (p.to_bits(), fails(p)))
+                    .collect();
+                let step = plan(&req, 3, &|p| known.get(&p.to_bits()).copied());
+                // The batch holding the first missing run.
+                let first_missing = if skip < cut { skip } else { cut };
+                let (mut start, mut b) = (0, 0);
+                while start + batches[b].len() <= first_missing {
+                    start += batches[b].len();
+                    b += 1;
+                }
+                let want: Vec<(usize, f64)> = batches[b]
+                    .iter()
+                    .filter(|p| !known.contains_key(&p.to_bits()))
+                    .map(|&p| (0, p))
+                    .collect();
+                match step {
+                    Step::Pending { batch, done } => {
+                        assert_eq!(batch, want, "cut {cut} skip {skip}");
+                        assert_eq!(done, start + batches[b].len() - want.len());
+                    }
+                    Step::Done(_) => panic!("cut {cut} skip {skip}: done too early"),
+                }
+            }
+        }
+        // Outcomes of amplitudes the search never asks for change nothing.
+        let mut known: std::collections::HashMap<u64, bool> =
+            all.iter().map(|&p| (p.to_bits(), fails(p))).collect();
+        let Step::Done(a) = plan(&req, 3, &|p| known.get(&p.to_bits()).copied()) else {
+            panic!("all known")
+        };
+        known.insert(0.123f64.to_bits(), true);
+        let Step::Done(b) = plan(&req, 3, &|p| known.get(&p.to_bits()).copied()) else {
+            panic!("all known")
+        };
+        assert_eq!(a, b);
+    }
+
+    #[test]
+    fn planner_reports_non_monotonic_outcomes_and_unbounded_sides() {
+        // Fails in [1, 1.6) and above 3: the lowest bracket is (0.5, 1], the later safe scan
+        // points above it make the result non-monotonic.
+        let req = request(0.0, 4.0, 0.1, 9);
+        let (r, _) = drive(&req, 2, |p| (1.0..1.6).contains(&p) || p >= 3.0);
+        assert!(!r.monotonic);
+        assert!(r.safe_pga.is_some_and(|s| (0.9..1.0).contains(&s)), "{r:?}");
+        assert_eq!(r.failing_pga, Some(1.0));
+        // Never failing: safe at the top, no bracket, only the scan.
+        let (r, b) = drive(&req, 2, |_| false);
+        assert_eq!((r.safe_pga, r.failing_pga, b.len()), (Some(4.0), None, 1));
+        // Failing at the bottom already.
+        let (r, _) = drive(&req, 2, |_| true);
+        assert_eq!((r.safe_pga, r.failing_pga), (None, Some(0.0)));
+    }
+
+    #[test]
+    fn records_are_planned_side_by_side() {
+        let req = request(0.0, 4.0, 0.05, 5);
+        let thresholds = [2.37, 0.61];
+        let mut known = std::collections::HashMap::new();
+        let mut rounds = 0;
+        let results = loop {
+            match plan_records(2, &req, 2, &|i, p| known.get(&(i, p.to_bits())).copied()) {
+                Step::Done(r) => break r,
+                Step::Pending { batch, .. } => {
+                    rounds += 1;
+                    if rounds == 1 {
+                        // Both records' scans at once.
+                        assert_eq!(batch.len(), 10);
+                        assert_eq!(batch.iter().filter(|(i, _)| *i == 1).count(), 5);
+                    }
+                    for (i, p) in batch {
+                        known.insert((i, p.to_bits()), p >= thresholds[i]);
+                    }
+                }
+            }
+        };
+        assert_eq!(rounds, 4, "the records' rounds overlap: 1 scan + 3 rounds");
+        for (i, r) in results.iter().enumerate() {
+            let (single, _) = drive(&req, 2, |p| p >= thresholds[i]);
+            assert_eq!(r, &single, "record {i} as searched alone");
+        }
     }
 
     #[test]

@@ -42,6 +42,10 @@ pub struct WorkerArgs {
     /// Testing aid: the service's deterministic fake runner, N ms per simulated second.
     #[arg(long, hide = true)]
     pub fake_runner_ms: Option<u64>,
+    /// PGA searches fan out their runs as child jobs with N interior amplitudes per k-section
+    /// round (default: the number of cores; 0: a search runs on the worker that claims it).
+    #[arg(long)]
+    pub fanout_width: Option<usize>,
 }
 
 pub fn run(args: &WorkerArgs) -> Result<(), String> {
@@ -89,6 +93,9 @@ pub fn run(args: &WorkerArgs) -> Result<(), String> {
             "--shutdown-grace must be a number of seconds ≥ 0, got {}",
             args.shutdown_grace
         ));
+    }
+    if args.fake_runner_ms.is_none() {
+        config.workers.fanout_width = service::fanout_width(args.fanout_width, true);
     }
     let runner = match args.fake_runner_ms {
         Some(ms) => service::fake::fake_runner(Duration::from_millis(ms)),

@@ -19,6 +19,7 @@ pub const ARTIFACT_NAMES: &[&str] = &[
     "result.json",
     "histories.csv",
     "trajectory.mcap",
+    "fragility.svg",
 ];
 
 /// An object store plus the prefix jobs live under (`<prefix>/jobs/<uuid>/<file>`).

@@ -70,6 +70,23 @@ pub struct ServeArgs {
     /// Testing aid: run jobs with the service's deterministic fake runner instead of the engine.
     #[arg(long, hide = true)]
     pub fake_runner: bool,
+    /// PGA searches fan out their runs as child jobs shared by every worker process, with N
+    /// interior amplitudes per k-section round (default with a PostgreSQL --database: the
+    /// number of cores; 0: each search runs on the cores of the worker that claims it, the
+    /// embedded store's default).
+    #[arg(long)]
+    pub fanout_width: Option<usize>,
+}
+
+/// The fan-out width a process uses: `--fanout-width` if given (0: none), else fan out on a
+/// shared (PostgreSQL) store with one interior point per core, like the in-process search.
+pub fn fanout_width(flag: Option<usize>, postgres: bool) -> Option<usize> {
+    match flag {
+        Some(0) => None,
+        Some(n) => Some(n),
+        None if postgres => Some(rayon::current_num_threads().max(1)),
+        None => None,
+    }
 }
 
 /// How to start the service (the library form of `ServeArgs`).
@@ -253,6 +270,9 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
             "--shutdown-grace must be a number of seconds ≥ 0, got {}",
             args.shutdown_grace
         ));
+    }
+    if !args.fake_runner {
+        config.workers.fanout_width = fanout_width(args.fanout_width, config.postgres.is_some());
     }
     let runner = if args.fake_runner {
         fake::fake_runner(Duration::from_millis(200))

@@ -112,7 +112,7 @@ impl From<postgres::Error> for StoreError {
     }
 }
 
-const COLUMNS: &str = "id, kind, status, request, motion, progress, result, error, cancel_requested, attempts, created_ms, started_ms, finished_ms";
+const COLUMNS: &str = "id, kind, status, request, motion, progress, result, error, cancel_requested, attempts, created_ms, started_ms, finished_ms, parent";
 
 fn row_to_record(row: &Row) -> Result<JobRecord, StoreError> {
     let json = |k: usize, what: &str| -> Result<serde_json::Value, StoreError> {
@@ -136,6 +136,7 @@ fn row_to_record(row: &Row) -> Result<JobRecord, StoreError> {
         created_ms: row.try_get(10)?,
         started_ms: row.try_get(11)?,
         finished_ms: row.try_get(12)?,
+        parent: row.try_get(13)?,
     })
 }
 
@@ -143,6 +144,7 @@ fn parse_kind(s: &str) -> Result<JobKind, StoreError> {
     match s {
         "run" => Ok(JobKind::Run),
         "pga_search" => Ok(JobKind::PgaSearch),
+        "pga_run" => Ok(JobKind::PgaRun),
         other => Err(StoreError(format!(
             "unknown job kind {other:?} in the store"
         ))),
@@ -156,6 +158,7 @@ fn parse_status(s: &str) -> Result<JobStatus, StoreError> {
         "succeeded" => JobStatus::Succeeded,
         "failed" => JobStatus::Failed,
         "cancelled" => JobStatus::Cancelled,
+        "waiting" => JobStatus::Waiting,
         other => {
             return Err(StoreError(format!(
                 "unknown job status {other:?} in the store"
@@ -398,7 +401,7 @@ impl JobStore for PgStore {
         let kind = kind.map(JobKind::as_str);
         self.with(|c| {
             let sql = format!(
-                "SELECT {cols} FROM jobs WHERE $1::TEXT IS NULL OR kind = $1 ORDER BY seq DESC LIMIT $2"
+                "SELECT {cols} FROM jobs WHERE parent IS NULL AND ($1::TEXT IS NULL OR kind = $1) ORDER BY seq DESC LIMIT $2"
             );
             c.query(&sql, &[&kind, &limit])?
                 .iter()
@@ -414,7 +417,8 @@ impl JobStore for PgStore {
             let mut tx = c.transaction()?;
             let sql = format!(
                 "UPDATE jobs j SET status = 'running', attempts = j.attempts + 1, started_ms = $1,
-                        progress = 0, lease_token = $2, worker = $3,
+                        progress = CASE WHEN j.kind = 'pga_search' THEN j.progress ELSE 0 END,
+                        lease_token = $2, worker = $3,
                         lease_until = now() + make_interval(secs => $4)
                  FROM (SELECT seq FROM jobs WHERE status = 'queued' ORDER BY seq
                        LIMIT 1 FOR UPDATE SKIP LOCKED) next
@@ -471,12 +475,33 @@ impl JobStore for PgStore {
         };
         let n = self.with(|c| {
             let mut tx = c.transaction()?;
+            // A child run locks its search's row first: every transaction touching both
+            // (cancel, fan-out, this) takes the parent before the child, so none deadlock.
+            let parent: Option<Uuid> = tx
+                .query_opt("SELECT parent FROM jobs WHERE id = $1", &[&id])?
+                .map(|r| r.try_get(0))
+                .transpose()?
+                .flatten();
+            if let Some(p) = parent {
+                tx.execute("SELECT 1 FROM jobs WHERE id = $1 FOR UPDATE", &[&p])?;
+            }
             let n = tx.execute(
                 "UPDATE jobs SET status = $2, result = $3, error = $4, progress = COALESCE($5, progress),
                         finished_ms = $6, lease_token = NULL, lease_until = NULL
                  WHERE id = $1 AND status = 'running' AND lease_token = $7",
                 &[&id, &status, &result, &error, &progress, &now_ms(), &token],
             )?;
+            if let (1, Some(p)) = (n, parent) {
+                if status == "succeeded" {
+                    tx.execute(
+                        "UPDATE jobs SET progress = LEAST(0.99, progress + COALESCE(
+                             (SELECT (request::jsonb ->> 'progress_step')::float8 FROM jobs WHERE id = $2), 0))
+                         WHERE id = $1 AND status = 'waiting'",
+                        &[&p, &id],
+                    )?;
+                }
+                settle(&mut tx, p)?;
+            }
             if n == 1 {
                 tx.execute(
                     "UPDATE job_attempts SET outcome = $2, ended_at = now() WHERE token = $1",
@@ -538,6 +563,15 @@ impl JobStore for PgStore {
                     tx.execute("SELECT pg_notify($1, $2)", &[&CHANNEL_DONE, &id.to_string()])?;
                     CancelOutcome::CancelledQueued
                 }
+                JobStatus::Waiting => {
+                    // No worker holds a waiting search: it ends now, with its children.
+                    tx.execute(
+                        "UPDATE jobs SET status = 'cancelled', cancel_requested = TRUE, finished_ms = $2 WHERE id = $1",
+                        &[&id, &now_ms()],
+                    )?;
+                    tx.execute("SELECT pg_notify($1, $2)", &[&CHANNEL_DONE, &id.to_string()])?;
+                    CancelOutcome::CancelledQueued
+                }
                 JobStatus::Running => {
                     tx.execute(
                         "UPDATE jobs SET cancel_requested = TRUE WHERE id = $1",
@@ -549,6 +583,9 @@ impl JobStore for PgStore {
                 }
                 s => CancelOutcome::AlreadyFinished(s),
             };
+            if !matches!(out, CancelOutcome::AlreadyFinished(_)) {
+                cancel_children(&mut tx, id)?;
+            }
             tx.commit()?;
             Ok(out)
         })
@@ -611,7 +648,67 @@ impl JobStore for PgStore {
             if requeued + failed > 0 {
                 tracing::info!(requeued, failed, "reaped jobs whose worker's lease expired");
             }
+            // Searches whose children all ended (or one failed, e.g. reaped too often) are
+            // settled, each in its own transaction (parent row first, as everywhere).
+            let parents: Vec<Uuid> = c
+                .query(
+                    "SELECT p.id FROM jobs p WHERE p.status = 'waiting' AND (
+                         NOT EXISTS (SELECT 1 FROM jobs k WHERE k.parent = p.id AND k.status IN ('queued', 'running'))
+                         OR EXISTS (SELECT 1 FROM jobs k WHERE k.parent = p.id AND k.status IN ('failed', 'cancelled')))",
+                    &[],
+                )?
+                .iter()
+                .map(|r| r.try_get(0))
+                .collect::<Result<_, _>>()?;
+            for p in parents {
+                let mut tx = c.transaction()?;
+                tx.execute("SELECT 1 FROM jobs WHERE id = $1 FOR UPDATE", &[&p])?;
+                settle(&mut tx, p)?;
+                tx.commit()?;
+            }
             Ok((requeued, failed))
+        })
+    }
+
+    fn fan_out(&self, id: Uuid, children: &[NewJob], progress: f64) -> Result<bool, StoreError> {
+        let Some(token) = self.token(id) else {
+            return Ok(false);
+        };
+        let ok = self.with(|c| {
+            let mut tx = c.transaction()?;
+            let n = tx.execute(
+                "UPDATE jobs SET status = 'waiting', attempts = GREATEST(attempts - 1, 0), progress = GREATEST(progress, $3),
+                        lease_token = NULL, lease_until = NULL, worker = NULL
+                 WHERE id = $1 AND status = 'running' AND lease_token = $2",
+                &[&id, &token, &progress.clamp(0.0, 1.0)],
+            )?;
+            if n == 0 {
+                return Ok(false);
+            }
+            tx.execute(
+                "UPDATE job_attempts SET outcome = 'waiting', ended_at = now() WHERE token = $1",
+                &[&token],
+            )?;
+            let now = now_ms();
+            for ch in children {
+                tx.execute(
+                    "INSERT INTO jobs (id, kind, status, request, motion, created_ms, parent) VALUES ($1, $2, 'queued', $3, $4, $5, $6)",
+                    &[&ch.id, &ch.kind.as_str(), &ch.request.to_string(), &ch.motion.to_string(), &now, &id],
+                )?;
+            }
+            settle(&mut tx, id)?;
+            tx.execute("SELECT pg_notify($1, '')", &[&CHANNEL_WORK])?;
+            tx.commit()?;
+            Ok(true)
+        })?;
+        self.drop_token(id);
+        Ok(ok)
+    }
+
+    fn children(&self, id: Uuid) -> Result<Vec<JobRecord>, StoreError> {
+        self.with(|c| {
+            let sql = format!("SELECT {COLUMNS} FROM jobs WHERE parent = $1 ORDER BY seq");
+            c.query(&sql, &[&id])?.iter().map(row_to_record).collect()
         })
     }
 
@@ -628,11 +725,77 @@ impl JobStore for PgStore {
                     JobStatus::Succeeded => out.succeeded = n,
                     JobStatus::Failed => out.failed = n,
                     JobStatus::Cancelled => out.cancelled = n,
+                    JobStatus::Waiting => out.waiting = n,
                 }
             }
             Ok(out)
         })
     }
+}
+
+/// Settle a waiting search whose row the caller has locked: a failed (or cancelled) child
+/// fails it with the child's error and cancels the other children; when no child is left
+/// unfinished it goes back to the queue (and wakes a worker), which replays it.
+fn settle(tx: &mut postgres::Transaction<'_>, parent: Uuid) -> Result<(), StoreError> {
+    let status: Option<String> = tx
+        .query_opt("SELECT status FROM jobs WHERE id = $1", &[&parent])?
+        .map(|r| r.try_get(0))
+        .transpose()?;
+    if status.as_deref() != Some("waiting") {
+        return Ok(());
+    }
+    let bad = tx.query_opt(
+        "SELECT status, error FROM jobs WHERE parent = $1 AND status IN ('failed', 'cancelled') ORDER BY seq LIMIT 1",
+        &[&parent],
+    )?;
+    if let Some(r) = bad {
+        let st: String = r.try_get(0)?;
+        let err: Option<String> = r.try_get(1)?;
+        tx.execute(
+            "UPDATE jobs SET status = 'failed', error = $2, finished_ms = $3 WHERE id = $1",
+            &[&parent, &super::store::child_error(&st, err), &now_ms()],
+        )?;
+        tx.execute(
+            "SELECT pg_notify($1, $2)",
+            &[&CHANNEL_DONE, &parent.to_string()],
+        )?;
+        return cancel_children(tx, parent);
+    }
+    let unfinished: i64 = tx
+        .query_one(
+            "SELECT count(*) FROM jobs WHERE parent = $1 AND status IN ('queued', 'running')",
+            &[&parent],
+        )?
+        .try_get(0)?;
+    if unfinished == 0 {
+        tx.execute(
+            "UPDATE jobs SET status = 'queued', started_ms = NULL WHERE id = $1",
+            &[&parent],
+        )?;
+        tx.execute("SELECT pg_notify($1, '')", &[&CHANNEL_WORK])?;
+    }
+    Ok(())
+}
+
+/// Cancel the unfinished children of a job: queued ones at once, running ones by request
+/// (their processes hear it on the cancel channel).
+fn cancel_children(tx: &mut postgres::Transaction<'_>, parent: Uuid) -> Result<(), StoreError> {
+    tx.execute(
+        "UPDATE jobs SET status = 'cancelled', cancel_requested = TRUE, finished_ms = $2 WHERE parent = $1 AND status = 'queued'",
+        &[&parent, &now_ms()],
+    )?;
+    let running = tx.query(
+        "UPDATE jobs SET cancel_requested = TRUE WHERE parent = $1 AND status = 'running' RETURNING id",
+        &[&parent],
+    )?;
+    for r in running {
+        let id: Uuid = r.try_get(0)?;
+        tx.execute(
+            "SELECT pg_notify($1, $2)",
+            &[&CHANNEL_CANCEL, &id.to_string()],
+        )?;
+    }
+    Ok(())
 }
 
 /// The background threads of a process on the cluster store: the listener (wake-ups and

@@ -190,7 +190,8 @@ pub(super) fn check_json_content_type(headers: &HeaderMap) -> Result<(), ApiErro
 fn base(kind: JobKind) -> &'static str {
     match kind {
         JobKind::Run => "/v1/jobs",
-        JobKind::PgaSearch => "/v1/pga-searches",
+        // Child runs are not served over HTTP; they belong to their search.
+        JobKind::PgaSearch | JobKind::PgaRun => "/v1/pga-searches",
     }
 }
 
@@ -201,7 +202,7 @@ fn links(kind: JobKind, id: Uuid) -> Value {
             "self": b, "events": format!("{b}/events"), "cancel": format!("{b}/cancel"),
             "histories": format!("{b}/histories"), "trajectory": format!("{b}/trajectory.mcap"),
         }),
-        JobKind::PgaSearch => {
+        JobKind::PgaSearch | JobKind::PgaRun => {
             json!({"self": b, "events": format!("{b}/events"), "cancel": format!("{b}/cancel")})
         }
     }
@@ -234,7 +235,7 @@ async fn submit(
         let value = json_body(&bytes)?;
         let parsed = match kind {
             JobKind::Run => parse_run(&value, &limits)?,
-            JobKind::PgaSearch => parse_pga(&value, &limits)?,
+            JobKind::PgaSearch | JobKind::PgaRun => parse_pga(&value, &limits)?,
         };
         Ok::<_, ApiError>((value, parsed.motion_summary))
     })
@@ -655,6 +656,8 @@ async fn get_fragility_svg(
             j.status.as_str()
         )));
     }
+    // Written by whichever worker finished the search: fetched from shared storage if need be.
+    super::artifacts::ensure_local(&s.core, id, "fragility.svg").await;
     let path = s.core.job_dir(id).join("fragility.svg");
     match tokio::fs::read(&path).await {
         Ok(bytes) => Ok((

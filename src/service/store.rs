@@ -18,6 +18,9 @@ pub enum JobKind {
     Run,
     /// A PGA threshold search (`POST /v1/pga-searches`).
     PgaSearch,
+    /// One run of a fanned-out PGA search at one amplitude: a child job (`parent` = the
+    /// search), never submitted over HTTP nor listed by `GET /v1/jobs`.
+    PgaRun,
 }
 
 impl JobKind {
@@ -25,12 +28,14 @@ impl JobKind {
         match self {
             JobKind::Run => "run",
             JobKind::PgaSearch => "pga_search",
+            JobKind::PgaRun => "pga_run",
         }
     }
-    fn parse(s: &str) -> Result<Self, StoreError> {
+    pub(crate) fn parse(s: &str) -> Result<Self, StoreError> {
         match s {
             "run" => Ok(JobKind::Run),
             "pga_search" => Ok(JobKind::PgaSearch),
+            "pga_run" => Ok(JobKind::PgaRun),
             other => Err(StoreError(format!(
                 "unknown job kind {other:?} in the store"
             ))),
@@ -39,7 +44,9 @@ impl JobKind {
 }
 
 /// Life cycle: `queued → running → succeeded | failed | cancelled`; `running → queued` when a
-/// server stops (or dies) while the job runs.
+/// server stops (or dies) while the job runs; `running → waiting → queued` when a fanned-out
+/// search waits for its child runs (no worker holds it meanwhile; the end of its last child
+/// queues it again).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum JobStatus {
@@ -48,6 +55,8 @@ pub enum JobStatus {
     Succeeded,
     Failed,
     Cancelled,
+    /// A search parked until its child runs end (see [`JobStore::fan_out`]).
+    Waiting,
 }
 
 impl JobStatus {
@@ -58,15 +67,17 @@ impl JobStatus {
             JobStatus::Succeeded => "succeeded",
             JobStatus::Failed => "failed",
             JobStatus::Cancelled => "cancelled",
+            JobStatus::Waiting => "waiting",
         }
     }
-    fn parse(s: &str) -> Result<Self, StoreError> {
+    pub(crate) fn parse(s: &str) -> Result<Self, StoreError> {
         Ok(match s {
             "queued" => JobStatus::Queued,
             "running" => JobStatus::Running,
             "succeeded" => JobStatus::Succeeded,
             "failed" => JobStatus::Failed,
             "cancelled" => JobStatus::Cancelled,
+            "waiting" => JobStatus::Waiting,
             other => {
                 return Err(StoreError(format!(
                     "unknown job status {other:?} in the store"
@@ -108,6 +119,8 @@ pub struct JobRecord {
     pub created_ms: i64,
     pub started_ms: Option<i64>,
     pub finished_ms: Option<i64>,
+    /// The search a child run belongs to (`None` for jobs submitted over HTTP).
+    pub parent: Option<Uuid>,
 }
 
 /// A new job to enqueue.
@@ -148,6 +161,8 @@ pub struct Counts {
     pub succeeded: u64,
     pub failed: u64,
     pub cancelled: u64,
+    /// Searches waiting for their child runs.
+    pub waiting: u64,
 }
 
 /// A store failure (I/O, corruption). Logged in full; clients see a generic 500/503.
@@ -190,6 +205,22 @@ pub trait JobStore: Send + Sync {
     ) -> Result<Vec<JobRecord>, StoreError> {
         let _ = (limit, kind);
         Err(StoreError("this job store cannot list jobs".into()))
+    }
+    /// Fan a running job out, in one transaction: insert `children` (queued, `parent` = `id`)
+    /// and park the job in `waiting`, giving its claim back (attempts − 1: waiting is not a
+    /// crash) and setting its progress. When no child of the job is left unfinished (they all
+    /// ended before this call), the job goes straight back to the queue instead. The end of
+    /// the last child requeues a waiting job (in the child's `finish` transaction); a child
+    /// that fails fails it with the child's error; cancelling it cancels its children.
+    /// Returns false, changing nothing, when `id` is not running (under this process's claim).
+    fn fan_out(&self, id: Uuid, children: &[NewJob], progress: f64) -> Result<bool, StoreError> {
+        let _ = (id, children, progress);
+        Err(StoreError("this job store cannot fan jobs out".into()))
+    }
+    /// Every child job of `id`, oldest first, with requests and results.
+    fn children(&self, id: Uuid) -> Result<Vec<JobRecord>, StoreError> {
+        let _ = id;
+        Ok(Vec::new())
     }
 }
 
@@ -253,8 +284,15 @@ CREATE TABLE IF NOT EXISTS jobs (
 CREATE INDEX IF NOT EXISTS jobs_status_seq ON jobs(status, seq);
 ";
 
+/// Added for fanned-out searches; files created before it get the column on open.
+const SCHEMA_PARENT: &str = "
+ALTER TABLE jobs ADD COLUMN parent TEXT;
+";
+const INDEX_PARENT: &str =
+    "CREATE INDEX IF NOT EXISTS jobs_parent ON jobs(parent) WHERE parent IS NOT NULL;";
+
 const COLUMNS: &str =
-    "id, kind, status, request, motion, progress, result, error, cancel_requested, attempts, created_ms, started_ms, finished_ms";
+    "id, kind, status, request, motion, progress, result, error, cancel_requested, attempts, created_ms, started_ms, finished_ms, parent";
 
 impl SqliteStore {
     /// Open (or create) the store at `path`.
@@ -270,6 +308,13 @@ impl SqliteStore {
         };
         let writer = open()?;
         writer.execute_batch(SCHEMA)?;
+        let has_parent: bool = writer
+            .prepare("SELECT 1 FROM pragma_table_info('jobs') WHERE name = 'parent'")?
+            .exists([])?;
+        if !has_parent {
+            writer.execute_batch(SCHEMA_PARENT)?;
+        }
+        writer.execute_batch(INDEX_PARENT)?;
         let reader = open()?;
         Ok(Self {
             writer: Mutex::new(writer),
@@ -321,6 +366,7 @@ fn row_to_record(row: &rusqlite::Row<'_>) -> rusqlite::Result<Result<JobRecord, 
     let created_ms: i64 = row.get(10)?;
     let started_ms: Option<i64> = row.get(11)?;
     let finished_ms: Option<i64> = row.get(12)?;
+    let parent: Option<String> = row.get(13)?;
     Ok((|| {
         Ok(JobRecord {
             id: Uuid::parse_str(&id).map_err(|e| StoreError(format!("corrupt id {id:?}: {e}")))?,
@@ -336,6 +382,12 @@ fn row_to_record(row: &rusqlite::Row<'_>) -> rusqlite::Result<Result<JobRecord, 
             created_ms,
             started_ms,
             finished_ms,
+            parent: parent
+                .map(|p| {
+                    Uuid::parse_str(&p)
+                        .map_err(|e| StoreError(format!("corrupt parent {p:?}: {e}")))
+                })
+                .transpose()?,
         })
     })())
 }
@@ -364,11 +416,14 @@ impl JobStore for SqliteStore {
         self.write(|c| {
             // One statement: atomic even with other processes writing the same file.
             let sql = format!(
-                "UPDATE jobs SET status = 'running', attempts = attempts + 1, started_ms = ?1, progress = 0
+                "UPDATE jobs SET status = 'running', attempts = attempts + 1, started_ms = ?1,
+                        progress = CASE WHEN kind = 'pga_search' THEN progress ELSE 0 END
                  WHERE seq = (SELECT seq FROM jobs WHERE status = 'queued' ORDER BY seq LIMIT 1)
                  RETURNING {COLUMNS}"
             );
-            c.query_row(&sql, params![now_ms()], row_to_record).optional()?.transpose()
+            c.query_row(&sql, params![now_ms()], row_to_record)
+                .optional()?
+                .transpose()
         })
     }
 
@@ -389,11 +444,16 @@ impl JobStore for SqliteStore {
             Finish::Cancelled(v) => ("cancelled", v.as_ref().map(|v| v.to_string()), None, None),
         };
         self.write(|c| {
-            c.execute(
+            let tx = c.transaction()?;
+            let n = tx.execute(
                 "UPDATE jobs SET status = ?2, result = ?3, error = ?4, progress = COALESCE(?5, progress), finished_ms = ?6
                  WHERE id = ?1 AND status = 'running'",
                 params![id.to_string(), status, result, error, progress, now_ms()],
             )?;
+            if n == 1 {
+                child_ended(&tx, id, status)?;
+            }
+            tx.commit()?;
             Ok(())
         })
     }
@@ -426,12 +486,23 @@ impl JobStore for SqliteStore {
                     )?;
                     CancelOutcome::CancelledQueued
                 }
+                JobStatus::Waiting => {
+                    // No worker holds a waiting search: it ends now, with its children.
+                    tx.execute(
+                        "UPDATE jobs SET status = 'cancelled', cancel_requested = 1, finished_ms = ?2 WHERE id = ?1",
+                        params![id.to_string(), now_ms()],
+                    )?;
+                    CancelOutcome::CancelledQueued
+                }
                 JobStatus::Running => {
                     tx.execute("UPDATE jobs SET cancel_requested = 1 WHERE id = ?1", params![id.to_string()])?;
                     CancelOutcome::Requested
                 }
                 s => CancelOutcome::AlreadyFinished(s),
             };
+            if !matches!(out, CancelOutcome::AlreadyFinished(_)) {
+                cancel_children(&tx, id)?;
+            }
             tx.commit()?;
             Ok(out)
         })
@@ -453,6 +524,16 @@ impl JobStore for SqliteStore {
             )?;
             let requeued =
                 tx.execute("UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL WHERE status = 'running'", [])?;
+            // Children failed or cancelled above end their searches; and a search whose
+            // children all ended is never left waiting.
+            let parents: Vec<String> = tx
+                .prepare("SELECT id FROM jobs WHERE status = 'waiting'")?
+                .query_map([], |r| r.get(0))?
+                .collect::<Result<_, _>>()?;
+            for p in parents {
+                let p = Uuid::parse_str(&p).map_err(|e| StoreError(format!("corrupt id {p:?}: {e}")))?;
+                settle(&tx, p)?;
+            }
             tx.commit()?;
             Ok((requeued, failed))
         })
@@ -473,7 +554,45 @@ impl JobStore for SqliteStore {
                     JobStatus::Succeeded => out.succeeded = n,
                     JobStatus::Failed => out.failed = n,
                     JobStatus::Cancelled => out.cancelled = n,
+                    JobStatus::Waiting => out.waiting = n,
                 }
+            }
+            Ok(out)
+        })
+    }
+
+    fn fan_out(&self, id: Uuid, children: &[NewJob], progress: f64) -> Result<bool, StoreError> {
+        self.write(|c| {
+            let tx = c.transaction()?;
+            let n = tx.execute(
+                "UPDATE jobs SET status = 'waiting', attempts = MAX(attempts - 1, 0), progress = MAX(progress, ?2)
+                 WHERE id = ?1 AND status = 'running'",
+                params![id.to_string(), progress.clamp(0.0, 1.0)],
+            )?;
+            if n == 0 {
+                return Ok(false);
+            }
+            for ch in children {
+                tx.execute(
+                    "INSERT INTO jobs (id, kind, status, request, motion, created_ms, parent) VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6)",
+                    params![ch.id.to_string(), ch.kind.as_str(), ch.request.to_string(), ch.motion.to_string(), now_ms(), id.to_string()],
+                )?;
+            }
+            settle(&tx, id)?;
+            tx.commit()?;
+            Ok(true)
+        })
+    }
+
+    fn children(&self, id: Uuid) -> Result<Vec<JobRecord>, StoreError> {
+        self.read(|c| {
+            let mut st = c.prepare(&format!(
+                "SELECT {COLUMNS} FROM jobs WHERE parent = ?1 ORDER BY seq"
+            ))?;
+            let rows = st.query_map(params![id.to_string()], row_to_record)?;
+            let mut out = Vec::new();
+            for r in rows {
+                out.push(r??);
             }
             Ok(out)
         })
@@ -488,7 +607,7 @@ impl JobStore for SqliteStore {
         let limit = i64::try_from(limit).unwrap_or(i64::MAX);
         self.read(|c| {
             let mut st = c.prepare(&format!(
-                "SELECT {cols} FROM jobs WHERE ?1 IS NULL OR kind = ?1 ORDER BY seq DESC LIMIT ?2"
+                "SELECT {cols} FROM jobs WHERE parent IS NULL AND (?1 IS NULL OR kind = ?1) ORDER BY seq DESC LIMIT ?2"
             ))?;
             let rows = st.query_map(params![kind.map(JobKind::as_str), limit], row_to_record)?;
             let mut out = Vec::new();
@@ -498,6 +617,98 @@ impl JobStore for SqliteStore {
             Ok(out)
         })
     }
+}
+
+/// A job ended with `status`: if it is a child run, add its share to its waiting search's
+/// progress and settle the search.
+fn child_ended(tx: &rusqlite::Transaction<'_>, id: Uuid, status: &str) -> Result<(), StoreError> {
+    let parent: Option<String> = tx
+        .query_row(
+            "SELECT parent FROM jobs WHERE id = ?1",
+            params![id.to_string()],
+            |r| r.get(0),
+        )
+        .optional()?
+        .flatten();
+    let Some(parent) = parent else {
+        return Ok(());
+    };
+    let parent = Uuid::parse_str(&parent)
+        .map_err(|e| StoreError(format!("corrupt parent {parent:?}: {e}")))?;
+    if status == "succeeded" {
+        tx.execute(
+            "UPDATE jobs SET progress = MIN(0.99, progress + COALESCE(
+                 (SELECT json_extract(request, '$.progress_step') FROM jobs WHERE id = ?2), 0))
+             WHERE id = ?1 AND status = 'waiting'",
+            params![parent.to_string(), id.to_string()],
+        )?;
+    }
+    settle(tx, parent)
+}
+
+/// Settle a waiting search: a failed (or cancelled) child fails it with the child's error and
+/// cancels the other children; when no child is left unfinished it goes back to the queue,
+/// where a worker replays it from its children's results.
+fn settle(tx: &rusqlite::Transaction<'_>, parent: Uuid) -> Result<(), StoreError> {
+    let p = parent.to_string();
+    let status: Option<String> = tx
+        .query_row("SELECT status FROM jobs WHERE id = ?1", params![p], |r| {
+            r.get(0)
+        })
+        .optional()?;
+    if status.as_deref() != Some("waiting") {
+        return Ok(());
+    }
+    let bad: Option<(String, Option<String>)> = tx
+        .query_row(
+            "SELECT status, error FROM jobs WHERE parent = ?1 AND status IN ('failed', 'cancelled') ORDER BY seq LIMIT 1",
+            params![p],
+            |r| Ok((r.get(0)?, r.get(1)?)),
+        )
+        .optional()?;
+    if let Some((st, err)) = bad {
+        tx.execute(
+            "UPDATE jobs SET status = 'failed', error = ?2, finished_ms = ?3 WHERE id = ?1",
+            params![p, child_error(&st, err), now_ms()],
+        )?;
+        cancel_children(tx, parent)?;
+        return Ok(());
+    }
+    let unfinished: i64 = tx.query_row(
+        "SELECT COUNT(*) FROM jobs WHERE parent = ?1 AND status IN ('queued', 'running')",
+        params![p],
+        |r| r.get(0),
+    )?;
+    if unfinished == 0 {
+        tx.execute(
+            "UPDATE jobs SET status = 'queued', started_ms = NULL WHERE id = ?1",
+            params![p],
+        )?;
+    }
+    Ok(())
+}
+
+/// The error a search fails with when one of its child runs ended `status` with `error`.
+pub(crate) fn child_error(status: &str, error: Option<String>) -> String {
+    match (status, error) {
+        (_, Some(e)) => e,
+        ("cancelled", None) => "a run of the search was cancelled".into(),
+        (_, None) => "a run of the search failed".into(),
+    }
+}
+
+/// Cancel the unfinished children of a job: queued ones at once, running ones by request.
+fn cancel_children(tx: &rusqlite::Transaction<'_>, parent: Uuid) -> Result<(), StoreError> {
+    let p = parent.to_string();
+    tx.execute(
+        "UPDATE jobs SET status = 'cancelled', cancel_requested = 1, finished_ms = ?2 WHERE parent = ?1 AND status = 'queued'",
+        params![p, now_ms()],
+    )?;
+    tx.execute(
+        "UPDATE jobs SET cancel_requested = 1 WHERE parent = ?1 AND status = 'running'",
+        params![p],
+    )?;
+    Ok(())
 }
 
 #[cfg(test)]

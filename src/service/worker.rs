@@ -3,7 +3,7 @@
 //! see ([`Core`]): store, limits, progress hub, the stop switches of running jobs.
 use super::events::{Hub, JobEvent};
 use super::request::{parse_pga, parse_run, JobInput, Limits};
-use super::store::{Finish, JobKind, JobRecord, JobStatus, JobStore};
+use super::store::{Finish, JobKind, JobRecord, JobStatus, JobStore, NewJob};
 use serde_json::Value;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -141,6 +141,12 @@ pub struct WorkerParams {
     /// A job found `running` at start-up this many times (the server died under it each time)
     /// is failed instead of retried.
     pub max_attempts: u32,
+    /// Fan PGA searches out as child jobs (`pga_run`, one per amplitude) that every worker of
+    /// every process sharing the store runs, with this many interior points per k-section
+    /// round. None: a search runs on the rayon pool of the worker that claimed it (the
+    /// default of the embedded store; `ashlar serve|worker` with PostgreSQL fan out). A search
+    /// that already has children is always replayed from them, whatever this says.
+    pub fanout_width: Option<usize>,
 }
 
 impl Default for WorkerParams {
@@ -152,6 +158,7 @@ impl Default for WorkerParams {
             idle_poll: Duration::from_millis(500),
             progress_write_interval: Duration::from_millis(250),
             max_attempts: 3,
+            fanout_width: None,
         }
     }
 }
@@ -362,6 +369,9 @@ fn worker_loop(core: &Core) {
         match core.store.claim() {
             Ok(Some(job)) => {
                 core.store_healthy.store(true, Ordering::Relaxed);
+                // One wake-up may stand for many jobs (a fan-out queues dozens at once, and
+                // NOTIFYs of one transaction fold into one): pass it on to an idle thread.
+                core.notify_work();
                 run_job(core, job);
             }
             Ok(None) => core.wait_for_work(seen, core.params.idle_poll),
@@ -378,6 +388,7 @@ fn parse_stored(core: &Core, job: &JobRecord) -> Result<JobInput, String> {
     let parsed = match job.kind {
         JobKind::Run => parse_run(&job.request, &core.limits),
         JobKind::PgaSearch => parse_pga(&job.request, &core.limits),
+        JobKind::PgaRun => return Err("a child run has no request of its own".into()),
     };
     parsed
         .map(|p| p.input)
@@ -397,20 +408,62 @@ fn run_job(core: &Core, job: JobRecord) {
     if cancel_pending {
         ctl.throw(STOP_USER);
     }
+    // A fanned-out search claimed again keeps the progress its children brought it.
     core.hub.publish(
         id,
         JobEvent {
             status: JobStatus::Running,
-            progress: 0.0,
+            progress: job.progress,
         },
     );
     let dir = core.job_dir(id);
-    let outcome = prepare_dir(&dir).and_then(|()| {
-        let input = parse_stored(core, &job)?;
-        execute(core, id, &input, &dir, &ctl)
-    });
+    // A child run writes no artifacts (its outcome goes to the store): no directory.
+    let outcome = if job.kind == JobKind::PgaRun {
+        execute(core, id, &dir, &ctl, |_| run_child(core, &job, &ctl.stop)).map(Some)
+    } else {
+        prepare_dir(&dir).and_then(|()| {
+            let input = parse_stored(core, &job)?;
+            match &input {
+                JobInput::PgaSearch { .. } if fans_out(core, &job) => {
+                    execute(core, id, &dir, &ctl, |hooks| {
+                        fan_out_search(core, &job, &input, hooks)
+                    })
+                }
+                _ => {
+                    let runner = core.runner.clone();
+                    execute(core, id, &dir, &ctl, |hooks| runner(&input, hooks)).map(Some)
+                }
+            }
+        })
+    };
+    let outcome = match outcome {
+        Ok(Some(o)) => Ok(o),
+        Err(e) => Err(e),
+        Ok(None) => {
+            // Parked in `waiting` by the store; its last child queues it again.
+            core.unregister(id);
+            let progress = core
+                .store
+                .get(id)
+                .ok()
+                .flatten()
+                .map(|j| j.progress)
+                .unwrap_or(0.0);
+            core.hub.publish(
+                id,
+                JobEvent {
+                    status: JobStatus::Waiting,
+                    progress,
+                },
+            );
+            return;
+        }
+    };
     let outcome = match (outcome, &core.artifacts) {
-        (Ok(o), Some(a)) if ctl.reason.load(Ordering::SeqCst) != STOP_SHUTDOWN => {
+        (Ok(o), Some(a))
+            if ctl.reason.load(Ordering::SeqCst) != STOP_SHUTDOWN
+                && job.kind != JobKind::PgaRun =>
+        {
             a.publish_dir(id, &dir).map(|()| o)
         }
         (o, _) => o,
@@ -441,6 +494,11 @@ fn run_job(core: &Core, job: JobRecord) {
         Finish::Cancelled(_) => (JobStatus::Cancelled, job.progress),
     };
     core.store_result("recording a finished job", core.store.finish(id, &finish));
+    if job.kind == JobKind::PgaRun {
+        // The last child of a search queues the search again: a thread of this process may
+        // be idle (another process hears it through the store's notification).
+        core.notify_work();
+    }
     let progress = core
         .store
         .get(id)
@@ -465,13 +523,15 @@ fn prepare_dir(dir: &Path) -> Result<(), String> {
     })
 }
 
-fn execute(
+/// Run `work` with the job's hooks (progress to the hub and the store, the stop switch),
+/// turning a panic into an error for the user.
+fn execute<T>(
     core: &Core,
     id: Uuid,
-    input: &JobInput,
     dir: &Path,
     ctl: &RunControl,
-) -> Result<RunnerOutcome, String> {
+    work: impl FnOnce(&RunHooks<'_>) -> Result<T, String>,
+) -> Result<T, String> {
     let last_write = Mutex::new(Instant::now());
     let progress = |p: f64| {
         let p = if p.is_finite() {
@@ -502,8 +562,7 @@ fn execute(
         cancel: &ctl.stop,
         progress: &progress,
     };
-    let runner = core.runner.clone();
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| runner(input, &hooks))) {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(&hooks))) {
         Ok(r) => r,
         Err(panic) => {
             let msg = panic
@@ -518,4 +577,229 @@ fn execute(
             )
         }
     }
+}
+
+/// What a child run (`pga_run`) is asked: one amplitude of one record of its search. The
+/// amplitude travels as its bits so that the replaying search finds exactly the value it
+/// planned (a decimal round trip through JSON could move it by one ULP).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ChildRequest {
+    pub parent: Uuid,
+    /// Index of the record in the search's `motions` (0 for a single-record search).
+    pub record: usize,
+    /// m/s², for people reading the store; `pga_bits` is what counts.
+    pub pga: f64,
+    pub pga_bits: u64,
+    /// Interior points per k-section round, fixed by the search's first fan-out so that every
+    /// replay plans the same batches.
+    pub width: usize,
+    /// This run's share of the search's progress (1 / expected runs).
+    pub progress_step: f64,
+}
+
+/// A child's `result`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ChildResult {
+    pub pga: f64,
+    pub failed: bool,
+}
+
+/// Does this search fan out: configured to, or fanned out already (then it must replay).
+fn fans_out(core: &Core, job: &JobRecord) -> bool {
+    core.params.fanout_width.is_some_and(|w| w > 0)
+        || core
+            .store
+            .children(job.id)
+            .map(|c| !c.is_empty())
+            .unwrap_or(false)
+}
+
+fn store_msg(e: super::store::StoreError) -> String {
+    tracing::error!(error = %e, "job store");
+    "the job store failed while running the search; see the server log".into()
+}
+
+/// One step of a fanned-out search: replay its planner from its children's outcomes; finish
+/// (`Some`) or enqueue the next batch as child jobs and park the search (`None`).
+fn fan_out_search(
+    core: &Core,
+    job: &JobRecord,
+    input: &JobInput,
+    hooks: &RunHooks<'_>,
+) -> Result<Option<RunnerOutcome>, String> {
+    use crate::analysis::pga;
+    use std::collections::{HashMap, HashSet};
+    let JobInput::PgaSearch {
+        scene,
+        motion,
+        request,
+        records,
+        fit,
+        ..
+    } = input
+    else {
+        return Err("not a PGA search".into());
+    };
+    if records.is_empty() {
+        pga::validate_search(scene, motion, request)
+    } else {
+        pga::validate_records(scene, records, request)
+    }
+    .map_err(|e| e.to_string())?;
+    let mut width = None;
+    let mut known: HashMap<(usize, u64), bool> = HashMap::new();
+    let mut unfinished: HashSet<(usize, u64)> = HashSet::new();
+    for ch in core.store.children(job.id).map_err(store_msg)? {
+        let spec: ChildRequest = serde_json::from_value(ch.request.clone())
+            .map_err(|e| format!("a child run of this search is corrupt in the store: {e}"))?;
+        width.get_or_insert(spec.width);
+        let key = (spec.record, spec.pga_bits);
+        match ch.status {
+            JobStatus::Succeeded => {
+                let r: ChildResult = serde_json::from_str(ch.result.as_deref().unwrap_or(""))
+                    .map_err(|e| format!("a child run's result is corrupt in the store: {e}"))?;
+                known.insert(key, r.failed);
+            }
+            JobStatus::Failed | JobStatus::Cancelled => {
+                return Err(super::store::child_error(ch.status.as_str(), ch.error))
+            }
+            _ => {
+                unfinished.insert(key);
+            }
+        }
+    }
+    if hooks.cancel.load(Ordering::SeqCst) {
+        return Ok(Some(RunnerOutcome::Cancelled(None)));
+    }
+    let width = width
+        .or(core.params.fanout_width)
+        .filter(|w| *w > 0)
+        .unwrap_or_else(|| rayon::current_num_threads().max(1));
+    let look = |i: usize, p: f64| known.get(&(i, p.to_bits())).copied();
+    let step = if records.is_empty() {
+        match pga::plan(request, width, &|p| look(0, p)) {
+            pga::Step::Done(r) => pga::Step::Done(vec![r]),
+            pga::Step::Pending { batch, done } => pga::Step::Pending { batch, done },
+        }
+    } else {
+        pga::plan_records(records.len(), request, width, &look)
+    };
+    match step {
+        pga::Step::Done(results) => finish_search(results, records, request, *fit, hooks).map(Some),
+        pga::Step::Pending { batch, done } => {
+            let expected = pga::expected_runs(request, width) * records.len().max(1) as f64;
+            let children: Vec<NewJob> = batch
+                .iter()
+                .filter(|(i, p)| !unfinished.contains(&(*i, p.to_bits())))
+                .map(|&(record, pga)| NewJob {
+                    id: Uuid::new_v4(),
+                    kind: JobKind::PgaRun,
+                    request: serde_json::json!(ChildRequest {
+                        parent: job.id,
+                        record,
+                        pga,
+                        pga_bits: pga.to_bits(),
+                        width,
+                        progress_step: 1.0 / expected,
+                    }),
+                    motion: serde_json::json!({ "pga": pga }),
+                })
+                .collect();
+            let progress = (done as f64 / expected).min(0.99);
+            if !core
+                .store
+                .fan_out(job.id, &children, progress)
+                .map_err(store_msg)?
+            {
+                tracing::warn!(id = %job.id, "the search was no longer ours to fan out (lease lost)");
+            }
+            for _ in 0..children.len().min(core.params.workers) {
+                core.notify_work();
+            }
+            Ok(None)
+        }
+    }
+}
+
+/// The finished search's result (and its files), as the in-process runner writes them.
+fn finish_search(
+    mut results: Vec<crate::analysis::pga::PgaResult>,
+    records: &[(String, crate::motion::GroundMotion)],
+    request: &crate::analysis::pga::PgaRequest,
+    fit: crate::analysis::fragility::Method,
+    hooks: &RunHooks<'_>,
+) -> Result<RunnerOutcome, String> {
+    use crate::analysis::pga;
+    let value = if records.is_empty() {
+        let r = results.pop().ok_or("the search has no result")?;
+        serde_json::to_value(&r).map_err(|e| e.to_string())?
+    } else {
+        let recs = records
+            .iter()
+            .zip(results)
+            .map(|((name, _), result)| pga::RecordResult {
+                motion: name.clone(),
+                result,
+            })
+            .collect();
+        let res = pga::multi_result(recs, request, fit);
+        if let Some(svg) = pga::fragility_svg(&res) {
+            std::fs::write(hooks.out_dir.join("fragility.svg"), svg)
+                .map_err(|e| format!("writing fragility.svg: {e}"))?;
+        }
+        serde_json::to_value(&res).map_err(|e| e.to_string())?
+    };
+    let text = serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?;
+    std::fs::write(hooks.out_dir.join("result.json"), text)
+        .map_err(|e| format!("writing result.json: {e}"))?;
+    Ok(RunnerOutcome::Completed(value))
+}
+
+/// A child run: one amplitude of one record of its search, whose request (scene, records,
+/// criteria) is read from the search's row.
+fn run_child(core: &Core, job: &JobRecord, cancel: &AtomicBool) -> Result<RunnerOutcome, String> {
+    use crate::analysis::pga;
+    let spec: ChildRequest = serde_json::from_value(job.request.clone())
+        .map_err(|e| format!("the stored child run is corrupt: {e}"))?;
+    let parent = core
+        .store
+        .get(spec.parent)
+        .map_err(store_msg)?
+        .ok_or("the search of this run no longer exists")?;
+    let input = parse_pga(&parent.request, &core.limits)
+        .map_err(|e| format!("the stored request is no longer accepted: {}", e.detail))?
+        .input;
+    let JobInput::PgaSearch {
+        scene,
+        motion,
+        request,
+        records,
+        ..
+    } = &input
+    else {
+        return Err("the parent of a child run is not a PGA search".into());
+    };
+    let pga = f64::from_bits(spec.pga_bits);
+    let (name, gm) = if records.is_empty() {
+        (None, motion)
+    } else {
+        let (n, g) = records
+            .get(spec.record)
+            .ok_or_else(|| format!("the search has no record {}", spec.record))?;
+        (Some(n), g)
+    };
+    let failed = pga::evaluate_combined(
+        scene,
+        gm,
+        &request.criteria,
+        request.combine,
+        pga,
+        Some(cancel),
+    )
+    .map_err(|e| match name {
+        Some(n) => pga::record_error(n, e).to_string(),
+        None => e.to_string(),
+    })?;
+    let value = serde_json::to_value(ChildResult { pga, failed }).map_err(|e| e.to_string())?;
+    Ok(RunnerOutcome::Completed(value))
 }
