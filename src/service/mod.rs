@@ -8,6 +8,7 @@ pub mod events;
 pub mod fake;
 pub mod histories;
 pub mod pg_store;
+pub mod pg_tls;
 pub mod problem;
 pub mod request;
 pub mod routes;
