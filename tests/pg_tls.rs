@@ -10,7 +10,9 @@
 //! - `require` and the default (`prefer`) connect encrypted without a CA; `verify-ca` accepts
 //!   the certificate at 127.0.0.1 (issued for `localhost`), `verify-full` refuses it there;
 //! - a wrong CA is refused with the host and the reason, also by `ashlar worker` at start-up;
-//! - `sslmode=disable` is refused by the server (hostssl only), with a hint.
+//! - `sslmode=disable` is refused by the server (hostssl only), with a hint;
+//! - a database whose pg_hba line says `cert` admits a client presenting `sslcert`/`sslkey`
+//!   (signed by the CA) and refuses one without.
 mod service_support;
 
 use ashlar::service::pg_tls;
@@ -220,6 +222,7 @@ fn modes_behave_as_in_libpq() {
         ),
         "verify-full must refuse a certificate issued for another name",
     );
+    eprintln!("verify-full at 127.0.0.1: {e}");
     assert!(
         e.contains("127.0.0.1") && e.contains("verify-full") && e.contains("not valid for name"),
         "{e}"
@@ -239,6 +242,7 @@ fn wrong_ca_is_refused_naming_host_and_reason() {
             &format!("sslmode={mode}&sslrootcert={wrong}"),
         );
         let e = refused(&url, "a wrong CA must be refused");
+        eprintln!("{mode}, wrong CA: {e}");
         assert!(
             e.contains(&format!("localhost:{}", env.port))
                 && e.contains("failed verification")
@@ -260,6 +264,7 @@ fn wrong_ca_is_refused_naming_host_and_reason() {
         .output()
         .expect("run ashlar worker");
     let stderr = String::from_utf8_lossy(&out.stderr);
+    eprintln!("ashlar worker, wrong CA: {}", stderr.trim());
     assert!(!out.status.success(), "worker started with a wrong CA");
     assert!(
         stderr.contains("localhost") && stderr.contains("UnknownIssuer"),
@@ -277,8 +282,53 @@ fn plain_text_is_refused_by_a_hostssl_server() {
         &env.url("127.0.0.1", "postgres", "sslmode=disable"),
         "hostssl only: a plain-text client must be refused",
     );
+    eprintln!("sslmode=disable: {e}");
     assert!(
         e.contains("127.0.0.1") && e.contains("no encryption") && e.contains("drop sslmode=disable"),
         "{e}"
     );
+}
+
+#[test]
+fn client_certificate_authentication() {
+    let Some(env) = env("client_certificate_authentication") else {
+        return;
+    };
+    let ca = env.ca("ca.pem");
+    let mut admin = connect(&env.url(
+        "localhost",
+        "postgres",
+        &format!("sslmode=verify-full&sslrootcert={ca}"),
+    ))
+    .expect("admin connection");
+    // Several test runs may share a server: create once.
+    let exists = admin
+        .query_opt("SELECT 1 FROM pg_database WHERE datname = 'certdb'", &[])
+        .expect("pg_database")
+        .is_some();
+    if !exists {
+        admin
+            .batch_execute("CREATE DATABASE certdb")
+            .expect("create certdb");
+    }
+    let base = format!("sslmode=verify-full&sslrootcert={ca}");
+    let e = refused(
+        &env.url("localhost", "certdb", &base),
+        "certdb demands a client certificate",
+    );
+    eprintln!("certdb without a client certificate: {e}");
+    assert!(e.contains("certificate"), "{e}");
+    let with_cert = format!(
+        "{base}&sslcert={}&sslkey={}",
+        env.ca("client.crt"),
+        env.ca("client.key")
+    );
+    let mut c = connect(&env.url("localhost", "certdb", &with_cert))
+        .expect("a client certificate signed by the CA is accepted");
+    assert!(encrypted(&mut c));
+    let who: String = c
+        .query_one("SELECT current_user::text", &[])
+        .expect("current_user")
+        .get(0);
+    assert_eq!(who, "ashlar");
 }

@@ -27,22 +27,31 @@ mkdir -p "$CERTS"
     printf 'subjectAltName=DNS:localhost\nbasicConstraints=CA:FALSE\nkeyUsage=digitalSignature,keyEncipherment\nextendedKeyUsage=serverAuth\n' > server.ext
     openssl x509 -req -in server.csr -CA ca.pem -CAkey ca.key -CAcreateserial -days 2 \
         -extfile server.ext -out server.crt 2>/dev/null
+    # A client certificate for user `ashlar` (database `certdb` demands one: `cert` below).
+    openssl req -newkey rsa:2048 -nodes -subj "/CN=ashlar" \
+        -keyout client.key -out client.csr 2>/dev/null
+    printf 'basicConstraints=CA:FALSE\nkeyUsage=digitalSignature,keyEncipherment\nextendedKeyUsage=clientAuth\n' > client.ext
+    openssl x509 -req -in client.csr -CA ca.pem -CAkey ca.key -CAcreateserial -days 2 \
+        -extfile client.ext -out client.crt 2>/dev/null
 )
 DATA="$TMP/data"
-cp "$CERTS/server.crt" "$CERTS/server.key" "$DATA/"
+cp "$CERTS/server.crt" "$CERTS/server.key" "$CERTS/ca.pem" "$DATA/"
 chmod 600 "$DATA/server.key"
-if [ "${#RUN[@]}" -gt 0 ]; then chown ashlarpg "$DATA/server.crt" "$DATA/server.key"; fi
+if [ "${#RUN[@]}" -gt 0 ]; then chown ashlarpg "$DATA/server.crt" "$DATA/server.key" "$DATA/ca.pem"; fi
 chmod -R a+rX "$CERTS"
 cat >> "$DATA/postgresql.conf" <<EOF
 ssl = on
 ssl_cert_file = 'server.crt'
 ssl_key_file = 'server.key'
+ssl_ca_file = 'ca.pem'
 EOF
 # TCP only over TLS; the Unix socket stays open for the test harness's own set-up.
 cat > "$DATA/pg_hba.conf" <<EOF
-local   all all                trust
-hostssl all all 127.0.0.1/32   trust
-hostssl all all ::1/128        trust
+local   all    all                trust
+hostssl certdb all 127.0.0.1/32   cert
+hostssl certdb all ::1/128        cert
+hostssl all    all 127.0.0.1/32   trust
+hostssl all    all ::1/128        trust
 EOF
 "${RUN[@]}" "$BIN/pg_ctl" -D "$DATA" -w -t 60 restart -l "$TMP/server.log" \
     -o "-p $PORT -k $TMP -c listen_addresses=127.0.0.1 -c fsync=off -c max_connections=300" >/dev/null \
