@@ -257,6 +257,7 @@ fn bad_s3_settings_stop_start_up() {
         s3.endpoint
     ))
     .expect_err("a missing bucket is refused at start-up");
+    eprintln!("missing bucket: {e}");
     assert!(
         e.contains("no-such-bucket") && e.contains("not reachable"),
         "{e}"
@@ -266,6 +267,7 @@ fn bad_s3_settings_stop_start_up() {
         s3.bucket, s3.endpoint
     ))
     .expect_err("a misspelt option is refused");
+    eprintln!("misspelt option: {e}");
     assert!(e.contains("\"endpont\""), "{e}");
     // The secret in a URL option never shows in messages.
     let e = ArtifactStore::open(&format!(
