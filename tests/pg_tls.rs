@@ -49,10 +49,7 @@ fn env(test: &str) -> Option<Env> {
 
 impl Env {
     fn url(&self, host: &str, db: &str, params: &str) -> String {
-        format!(
-            "postgresql://ashlar@{host}:{}/{db}?{params}",
-            self.port
-        )
+        format!("postgresql://ashlar@{host}:{}/{db}?{params}", self.port)
     }
 
     fn ca(&self, name: &str) -> String {
@@ -135,7 +132,10 @@ fn verify_full_runs_a_job_end_to_end_encrypted() {
     };
     let ca = format!("sslmode=verify-full&sslrootcert={}", env.ca("ca.pem"));
     let mut admin = connect(&env.url("localhost", "postgres", &ca)).expect("verify-full connects");
-    assert!(encrypted(&mut admin), "verify-full session is not encrypted");
+    assert!(
+        encrypted(&mut admin),
+        "verify-full session is not encrypted"
+    );
     let db = format!("ashlar_tls_{}", &Uuid::new_v4().simple().to_string()[..8]);
     admin
         .batch_execute(&format!("CREATE DATABASE {db}"))
@@ -158,11 +158,15 @@ fn verify_full_runs_a_job_end_to_end_encrypted() {
         .expect("id")
         .to_string();
     let mut last = Value::Null;
-    wait_until("the worker finishes the job", Duration::from_secs(120), || {
-        let (_, t) = http(&api.addr, "GET", &format!("/v1/jobs/{id}"), None).expect("GET");
-        last = serde_json::from_str(&t).unwrap_or(Value::Null);
-        is_terminal(&last)
-    });
+    wait_until(
+        "the worker finishes the job",
+        Duration::from_secs(120),
+        || {
+            let (_, t) = http(&api.addr, "GET", &format!("/v1/jobs/{id}"), None).expect("GET");
+            last = serde_json::from_str(&t).unwrap_or(Value::Null);
+            is_terminal(&last)
+        },
+    );
     assert_eq!(last["status"], "succeeded", "{last}");
     assert!(last["summary"].is_object(), "no summary: {last}");
     // The API ran nothing (0 worker threads): it serves what the worker recorded.
@@ -184,7 +188,11 @@ fn verify_full_runs_a_job_end_to_end_encrypted() {
             &[&db],
         )
         .expect("sessions");
-    assert!(rows.len() >= 2, "expected the API's and the worker's sessions, found {}", rows.len());
+    assert!(
+        rows.len() >= 2,
+        "expected the API's and the worker's sessions, found {}",
+        rows.len()
+    );
     assert!(
         rows.iter().all(|r| r.get::<_, bool>(0)),
         "a session on {db} is not encrypted"
@@ -284,7 +292,9 @@ fn plain_text_is_refused_by_a_hostssl_server() {
     );
     eprintln!("sslmode=disable: {e}");
     assert!(
-        e.contains("127.0.0.1") && e.contains("no encryption") && e.contains("drop sslmode=disable"),
+        e.contains("127.0.0.1")
+            && e.contains("no encryption")
+            && e.contains("drop sslmode=disable"),
         "{e}"
     );
 }

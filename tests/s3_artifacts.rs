@@ -107,7 +107,12 @@ fn serve(data: &Path, args: &[&str], envs: &[(&str, &str)]) -> (Child, String) {
         }
         panic!("ashlar serve did not start: {line:?}\n{err}");
     }
-    let addr = line.trim().rsplit("http://").next().unwrap_or("").to_string();
+    let addr = line
+        .trim()
+        .rsplit("http://")
+        .next()
+        .unwrap_or("")
+        .to_string();
     (child, addr)
 }
 
@@ -176,10 +181,13 @@ fn artifacts_round_trip_through_s3() {
     );
 
     // Process A runs the job and publishes its artifacts to the bucket.
-    let (a, a_addr) = serve(&root.join("a"), &["--workers", "1", "--artifacts", &url], &[]);
+    let (a, a_addr) = serve(
+        &root.join("a"),
+        &["--workers", "1", "--artifacts", &url],
+        &[],
+    );
     let body = json!({"scene": column_scene(2.0), "motion": pulse(3.0)});
-    let (status, text) =
-        http(&a_addr, "POST", "/v1/jobs", Some(&body.to_string())).expect("POST");
+    let (status, text) = http(&a_addr, "POST", "/v1/jobs", Some(&body.to_string())).expect("POST");
     assert_eq!(status, 202, "{text}");
     let id = serde_json::from_str::<Value>(&text).expect("JSON")["id"]
         .as_str()
@@ -224,7 +232,11 @@ fn artifacts_round_trip_through_s3() {
         &[("AWS_ENDPOINT", &s3.endpoint), ("AWS_ALLOW_HTTP", "true")],
     );
     assert!(
-        !root.join("b/jobs").join(&id).join("trajectory.mcap").exists(),
+        !root
+            .join("b/jobs")
+            .join(&id)
+            .join("trajectory.mcap")
+            .exists(),
         "B must start without the job's files"
     );
     let (st, b_mcap) = get_bytes(&b_addr, &format!("/v1/jobs/{id}/trajectory.mcap"));
@@ -237,7 +249,10 @@ fn artifacts_round_trip_through_s3() {
         sha256(&a_mcap),
         "trajectory served from S3 differs from the local one"
     );
-    assert_eq!(b_csv, a_csv, "histories served from S3 differ from the local ones");
+    assert_eq!(
+        b_csv, a_csv,
+        "histories served from S3 differ from the local ones"
+    );
     assert!(
         b_csv.starts_with(b"time,column.x"),
         "{}",
@@ -262,11 +277,8 @@ fn bad_s3_settings_stop_start_up() {
         e.contains("no-such-bucket") && e.contains("not reachable"),
         "{e}"
     );
-    let e = ArtifactStore::open(&format!(
-        "s3://{}/p?endpont={}",
-        s3.bucket, s3.endpoint
-    ))
-    .expect_err("a misspelt option is refused");
+    let e = ArtifactStore::open(&format!("s3://{}/p?endpont={}", s3.bucket, s3.endpoint))
+        .expect_err("a misspelt option is refused");
     eprintln!("misspelt option: {e}");
     assert!(e.contains("\"endpont\""), "{e}");
     // The secret in a URL option never shows in messages.

@@ -79,7 +79,9 @@ impl ArtifactStore {
         let shown = parsed.to_string();
         if parsed.scheme() == "file" {
             if !options.is_empty() {
-                return Err(format!("--artifacts {shown}: a file:// URL takes no options"));
+                return Err(format!(
+                    "--artifacts {shown}: a file:// URL takes no options"
+                ));
             }
             // The local store does not create its root; workers must agree on it existing.
             std::fs::create_dir_all(parsed.path())
@@ -118,7 +120,12 @@ impl ArtifactStore {
         })
         .join()
         .map_err(|_| "the artifact probe panicked".to_string())?;
-        res.map_err(|e| format!("--artifacts {}: the storage is not reachable: {e}", self.url))
+        res.map_err(|e| {
+            format!(
+                "--artifacts {}: the storage is not reachable: {e}",
+                self.url
+            )
+        })
     }
 
     fn location(&self, id: Uuid, name: &str) -> StorePath {
@@ -176,10 +183,7 @@ impl ArtifactStore {
 
 /// S3 options: `AWS_*` environment variables, then the URL's query (validated: an unknown
 /// option is named, not ignored).
-fn s3_options(
-    shown: &str,
-    query: Vec<(String, String)>,
-) -> Result<Vec<(String, String)>, String> {
+fn s3_options(shown: &str, query: Vec<(String, String)>) -> Result<Vec<(String, String)>, String> {
     let mut opts: Vec<(String, String)> = std::env::vars()
         .filter(|(k, _)| k.starts_with("AWS_"))
         .map(|(k, v)| (k.to_ascii_lowercase(), v))
@@ -187,10 +191,7 @@ fn s3_options(
     for (k, v) in query {
         let key = k.to_ascii_lowercase();
         #[cfg(feature = "s3")]
-        if key
-            .parse::<object_store::aws::AmazonS3ConfigKey>()
-            .is_err()
-        {
+        if key.parse::<object_store::aws::AmazonS3ConfigKey>().is_err() {
             return Err(format!(
                 "--artifacts {shown}: unknown S3 option {k:?} in the URL (expected object_store's names: endpoint, region, allow_http, virtual_hosted_style_request, skip_signature, …)"
             ));

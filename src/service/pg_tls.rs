@@ -25,7 +25,9 @@ use rustls::client::WebPkiServerVerifier;
 use rustls::crypto::CryptoProvider;
 use rustls::pki_types::pem::PemObject;
 use rustls::pki_types::{CertificateDer, PrivateKeyDer, ServerName, UnixTime};
-use rustls::{CertificateError, ClientConfig, DigitallySignedStruct, RootCertStore, SignatureScheme};
+use rustls::{
+    CertificateError, ClientConfig, DigitallySignedStruct, RootCertStore, SignatureScheme,
+};
 use std::path::PathBuf;
 use std::sync::Arc;
 use tokio_postgres_rustls::MakeRustlsConnect;
@@ -343,8 +345,9 @@ fn client_config(
         None => builder.with_no_client_auth(),
         Some((cert, key)) => {
             let certs = load_certs(cert, "sslcert")?;
-            let key = PrivateKeyDer::from_pem_file(key)
-                .map_err(|e| format!("--database: sslkey={key}: cannot read a PEM private key: {e}"))?;
+            let key = PrivateKeyDer::from_pem_file(key).map_err(|e| {
+                format!("--database: sslkey={key}: cannot read a PEM private key: {e}")
+            })?;
             builder
                 .with_client_auth_cert(certs, key)
                 .map_err(|e| format!("--database: sslcert/sslkey: {e}"))?
@@ -395,7 +398,12 @@ pub fn parse(url: &str) -> Result<PgTarget, String> {
     let client_cert = match (&p.sslcert, &p.sslkey) {
         (Some(c), Some(k)) => Some((c.as_str(), k.as_str())),
         (None, None) => None,
-        _ => return Err("--database: sslcert and sslkey go together (a client certificate and its key)".into()),
+        _ => {
+            return Err(
+                "--database: sslcert and sslkey go together (a client certificate and its key)"
+                    .into(),
+            )
+        }
     };
     let hosts = config
         .get_hosts()
@@ -480,7 +488,8 @@ impl PgTarget {
                     self.roots_label()
                 ),
                 rustls::Error::InvalidCertificate(
-                    CertificateError::NotValidForName | CertificateError::NotValidForNameContext { .. },
+                    CertificateError::NotValidForName
+                    | CertificateError::NotValidForNameContext { .. },
                 ) => "it was not issued for the host name in the URL (sslmode=verify-ca checks \
                       the CA only)"
                     .to_string(),
@@ -490,9 +499,7 @@ impl PgTarget {
                 rustls::Error::InvalidCertificate(_) => "it was rejected".to_string(),
                 _ => "the TLS handshake failed".to_string(),
             };
-            return format!(
-                "{head}: the server's certificate failed verification: {tls}; {why}"
-            );
+            return format!("{head}: the server's certificate failed verification: {tls}; {why}");
         }
         let detail = match e.as_db_error() {
             Some(db) => format!("the server refused: {}", db.message()),
@@ -543,9 +550,10 @@ mod tests {
         assert_eq!(t.mode, SslMode::Prefer);
         assert_eq!(t.config.get_application_name(), Some("x"));
         assert_eq!(t.hosts(), "db.example:6543");
-        let (rest, p) =
-            split_tls_params("postgres://h/d?sslmode=require&connect_timeout=3&sslrootcert=%2Ftmp%2Fca.pem")
-                .expect("split");
+        let (rest, p) = split_tls_params(
+            "postgres://h/d?sslmode=require&connect_timeout=3&sslrootcert=%2Ftmp%2Fca.pem",
+        )
+        .expect("split");
         assert_eq!(rest, "postgres://h/d?connect_timeout=3");
         assert_eq!(p.sslmode.as_deref(), Some("require"));
         assert_eq!(p.sslrootcert.as_deref(), Some("/tmp/ca.pem"));
@@ -558,7 +566,10 @@ mod tests {
     #[test]
     fn unknown_or_unsupported_sslmode_is_named() {
         let e = err("postgres://h/d?sslmode=verify_full");
-        assert!(e.contains("sslmode=\"verify_full\"") && e.contains("verify-full"), "{e}");
+        assert!(
+            e.contains("sslmode=\"verify_full\"") && e.contains("verify-full"),
+            "{e}"
+        );
         let e = err("postgres://h/d?sslmode=allow");
         assert!(e.contains("sslmode=allow"), "{e}");
     }
