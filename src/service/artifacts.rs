@@ -54,37 +54,78 @@ fn runtime() -> Result<&'static tokio::runtime::Runtime, String> {
 }
 
 impl ArtifactStore {
-    /// Open `file:///ABSOLUTE/DIR` or `s3://BUCKET/PREFIX` (credentials from the usual
-    /// `AWS_*` environment variables). A plain absolute path is taken as a directory.
+    /// Open `file:///ABSOLUTE/DIR` or `s3://BUCKET/PREFIX` (with the `s3` feature). A plain
+    /// absolute path is taken as a directory.
+    ///
+    /// S3 settings come from the usual `AWS_*` environment variables (`AWS_ACCESS_KEY_ID`,
+    /// `AWS_SECRET_ACCESS_KEY`, `AWS_REGION`, `AWS_ENDPOINT`, `AWS_ALLOW_HTTP`, …), then from
+    /// the URL's query, which wins:
+    /// `s3://bucket/prefix?endpoint=http://127.0.0.1:9000&allow_http=true` (any name
+    /// `object_store`'s `AmazonS3ConfigKey` accepts; keep secrets in the environment). The bucket is probed once here, so a wrong endpoint, bucket or
+    /// credential stops the process at start-up instead of failing every job.
     pub fn open(url: &str) -> Result<Self, String> {
         let full = if url.starts_with('/') {
             format!("file://{url}")
         } else {
             url.to_string()
         };
-        let parsed = url::Url::parse(&full).map_err(|e| {
+        let mut parsed = url::Url::parse(&full).map_err(|e| {
             format!(
                 "--artifacts {url:?}: not a URL ({e}); expected file:///DIR or s3://BUCKET/PREFIX"
             )
         })?;
+        let options: Vec<(String, String)> = parsed.query_pairs().into_owned().collect();
+        parsed.set_query(None);
+        // Shown in logs and errors: without the query, which may carry credentials.
+        let shown = parsed.to_string();
         if parsed.scheme() == "file" {
+            if !options.is_empty() {
+                return Err(format!(
+                    "--artifacts {shown}: a file:// URL takes no options"
+                ));
+            }
             // The local store does not create its root; workers must agree on it existing.
             std::fs::create_dir_all(parsed.path())
-                .map_err(|e| format!("--artifacts {url}: {e}"))?;
+                .map_err(|e| format!("--artifacts {shown}: {e}"))?;
         }
         let (store, prefix) = if parsed.scheme() == "s3" {
-            object_store::parse_url_opts(&parsed, std::env::vars().filter(|(k, _)| k.starts_with("AWS_")).map(|(k, v)| (k.to_ascii_lowercase(), v)))
+            object_store::parse_url_opts(&parsed, s3_options(&shown, options)?)
         } else {
             object_store::parse_url(&parsed)
         }
         .map_err(|e| match parsed.scheme() {
-            "s3" if !cfg!(feature = "s3") => format!("--artifacts {url}: this ashlar was built without S3 support (cargo build --features s3)"),
-            _ => format!("--artifacts {url}: {e}"),
+            "s3" if !cfg!(feature = "s3") => format!("--artifacts {shown}: this ashlar was built without S3 support (cargo build --features s3)"),
+            _ => format!("--artifacts {shown}: {e}"),
         })?;
-        Ok(Self {
+        let out = Self {
             store: Arc::from(store),
             prefix,
-            url: url.to_string(),
+            url: shown,
+        };
+        if parsed.scheme() != "file" {
+            out.probe()?;
+        }
+        Ok(out)
+    }
+
+    /// One listing of the prefix (empty on a fresh bucket, an error when the bucket, endpoint
+    /// or credentials are wrong). On its own thread: the caller may be inside a runtime.
+    fn probe(&self) -> Result<(), String> {
+        let store = self.store.clone();
+        let prefix = self.prefix.clone();
+        let res = std::thread::spawn(move || -> Result<(), String> {
+            runtime()?
+                .block_on(store.list_with_delimiter(Some(&prefix)))
+                .map(|_| ())
+                .map_err(|e| e.to_string())
+        })
+        .join()
+        .map_err(|_| "the artifact probe panicked".to_string())?;
+        res.map_err(|e| {
+            format!(
+                "--artifacts {}: the storage is not reachable: {e}",
+                self.url
+            )
         })
     }
 
@@ -139,6 +180,28 @@ impl ArtifactStore {
             .map_err(|e| format!("artifact fetch task: {e}"))?
             .map_err(|e| format!("{}: {e}", self.url))
     }
+}
+
+/// S3 options: `AWS_*` environment variables, then the URL's query (validated: an unknown
+/// option is named, not ignored).
+fn s3_options(shown: &str, query: Vec<(String, String)>) -> Result<Vec<(String, String)>, String> {
+    let mut opts: Vec<(String, String)> = std::env::vars()
+        .filter(|(k, _)| k.starts_with("AWS_"))
+        .map(|(k, v)| (k.to_ascii_lowercase(), v))
+        .collect();
+    for (k, v) in query {
+        let key = k.to_ascii_lowercase();
+        #[cfg(feature = "s3")]
+        if key.parse::<object_store::aws::AmazonS3ConfigKey>().is_err() {
+            return Err(format!(
+                "--artifacts {shown}: unknown S3 option {k:?} in the URL (expected object_store's names: endpoint, region, allow_http, virtual_hosted_style_request, skip_signature, …)"
+            ));
+        }
+        #[cfg(not(feature = "s3"))]
+        let _ = shown;
+        opts.push((key, v));
+    }
+    Ok(opts)
 }
 
 /// Make sure `<data>/jobs/<id>/<name>` exists locally, downloading it from the shared artifact

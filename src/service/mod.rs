@@ -8,6 +8,7 @@ pub mod events;
 pub mod fake;
 pub mod histories;
 pub mod pg_store;
+pub mod pg_tls;
 pub mod problem;
 pub mod request;
 pub mod routes;
@@ -35,7 +36,8 @@ pub struct ServeArgs {
     #[arg(long, default_value = "./ashlar-data")]
     pub data: PathBuf,
     /// Job store URL instead of the embedded default: `sqlite:PATH` (artifacts go to --data),
-    /// or `postgres://USER@HOST:PORT/DBNAME` to share one queue with `ashlar worker` processes.
+    /// or `postgres://USER@HOST:PORT/DBNAME` to share one queue with `ashlar worker` processes
+    /// (TLS: libpq's `?sslmode=verify-full&sslrootcert=CA.pem`, see docs/cluster.md).
     #[arg(long)]
     pub database: Option<String>,
     /// Shared artifact storage (`file:///DIR`, or `s3://BUCKET/PREFIX` with the `s3` feature):

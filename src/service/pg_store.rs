@@ -24,7 +24,7 @@ use super::store::{
 };
 use super::worker::Core;
 use postgres::fallible_iterator::FallibleIterator;
-use postgres::{Client, NoTls, Row};
+use postgres::{Client, Row};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -93,7 +93,8 @@ pub struct Heartbeat {
 
 /// PostgreSQL job store. Connections are pooled (one per concurrently calling thread).
 pub struct PgStore {
-    config: postgres::Config,
+    /// Client configuration and TLS (`sslmode`, `sslrootcert`…), see `pg_tls`.
+    target: super::pg_tls::PgTarget,
     pool: Mutex<Vec<Client>>,
     /// `host:pid`, recorded with each claim.
     worker_name: String,
@@ -167,19 +168,19 @@ fn parse_status(s: &str) -> Result<JobStatus, StoreError> {
     })
 }
 
-/// Check a `--database` URL names PostgreSQL and parse it (credentials are never echoed).
-pub fn parse_url(url: &str) -> Result<postgres::Config, String> {
+/// Check a `--database` URL names PostgreSQL and parse it, TLS parameters included
+/// (credentials are never echoed).
+pub fn parse_url(url: &str) -> Result<super::pg_tls::PgTarget, String> {
     if !(url.starts_with("postgres://") || url.starts_with("postgresql://")) {
         return Err("--database: expected postgres://USER@HOST:PORT/DBNAME".into());
     }
-    url.parse::<postgres::Config>()
-        .map_err(|e| format!("--database: not a valid PostgreSQL URL: {e}"))
+    super::pg_tls::parse(url)
 }
 
 impl PgStore {
     /// Connect, create or upgrade the schema, and return the store.
     pub fn open(url: &str, params: LeaseParams) -> Result<Self, StoreError> {
-        let config = parse_url(url).map_err(StoreError)?;
+        let target = parse_url(url).map_err(StoreError)?;
         let host = std::env::var("HOSTNAME")
             .ok()
             .or_else(|| {
@@ -190,7 +191,7 @@ impl PgStore {
             .filter(|s| !s.is_empty())
             .unwrap_or_else(|| "localhost".into());
         let store = Self {
-            config,
+            target,
             pool: Mutex::new(Vec::new()),
             worker_name: format!("{host}:{}", std::process::id()),
             params,
@@ -211,9 +212,7 @@ impl PgStore {
 
     /// A new connection (also used for `LISTEN`).
     pub fn connect(&self) -> Result<Client, StoreError> {
-        self.config
-            .connect(NoTls)
-            .map_err(|e| StoreError(format!("connecting to PostgreSQL: {e}")))
+        self.target.connect().map_err(StoreError)
     }
 
     /// Run `f` on a pooled connection; a connection that broke is dropped, not returned.

@@ -1,0 +1,615 @@
+//! TLS for the PostgreSQL job store: reads libpq's connection parameters `sslmode`,
+//! `sslrootcert`, `sslcert` and `sslkey` from a `--database postgres://…` URL and makes
+//! connections through rustls (pure Rust, `ring` provider). Beside `pg_store`, which opens
+//! every connection (pool and `LISTEN`) through [`PgTarget::connect`].
+//!
+//! The modes follow libpq (<https://www.postgresql.org/docs/current/libpq-ssl.html>):
+//!
+//! | `sslmode` | encrypted | server certificate checked |
+//! |---|---|---|
+//! | `disable` | never | – |
+//! | `prefer` (default) | when the server offers TLS | only if a root certificate is given |
+//! | `require` | always | only if a root certificate is given (then as `verify-ca`) |
+//! | `verify-ca` | always | signed by a trusted CA |
+//! | `verify-full` | always | signed by a trusted CA **and** issued for the host name |
+//!
+//! The root certificates are `sslrootcert=PATH` (PEM), `sslrootcert=system` (the operating
+//! system's trusted CAs; as in libpq 16 it implies, and insists on, `verify-full`), or else
+//! `~/.postgresql/root.crt` when that file exists. `sslcert=PATH&sslkey=PATH` present a client
+//! certificate (for `hostssl … cert` in `pg_hba.conf`). Over a Unix socket `sslmode` is
+//! ignored, as in libpq.
+use postgres::config::{Host, SslMode as PgSslMode};
+use postgres::{Client, NoTls};
+use rustls::client::danger::{HandshakeSignatureValid, ServerCertVerified, ServerCertVerifier};
+use rustls::client::WebPkiServerVerifier;
+use rustls::crypto::CryptoProvider;
+use rustls::pki_types::pem::PemObject;
+use rustls::pki_types::{CertificateDer, PrivateKeyDer, ServerName, UnixTime};
+use rustls::{
+    CertificateError, ClientConfig, DigitallySignedStruct, RootCertStore, SignatureScheme,
+};
+use std::path::PathBuf;
+use std::sync::Arc;
+use tokio_postgres_rustls::MakeRustlsConnect;
+
+/// libpq's `sslmode` values (`allow` is not offered: the client library cannot fall back from
+/// plain text to TLS).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SslMode {
+    Disable,
+    Prefer,
+    Require,
+    VerifyCa,
+    VerifyFull,
+}
+
+impl SslMode {
+    pub const NAMES: &'static str = "disable, prefer, require, verify-ca, verify-full";
+
+    pub fn parse(s: &str) -> Result<Self, String> {
+        Ok(match s {
+            "disable" => Self::Disable,
+            "prefer" => Self::Prefer,
+            "require" => Self::Require,
+            "verify-ca" => Self::VerifyCa,
+            "verify-full" => Self::VerifyFull,
+            "allow" => {
+                return Err(
+                    "--database: sslmode=allow is not supported (it would try plain text \
+                     first); use sslmode=prefer or sslmode=disable"
+                        .into(),
+                )
+            }
+            other => {
+                return Err(format!(
+                    "--database: sslmode={other:?} is not a known sslmode (expected one of {})",
+                    Self::NAMES
+                ))
+            }
+        })
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Disable => "disable",
+            Self::Prefer => "prefer",
+            Self::Require => "require",
+            Self::VerifyCa => "verify-ca",
+            Self::VerifyFull => "verify-full",
+        }
+    }
+
+    fn verifies(self) -> bool {
+        matches!(self, Self::VerifyCa | Self::VerifyFull)
+    }
+}
+
+/// Where trusted root certificates come from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RootCerts {
+    /// None given and no `~/.postgresql/root.crt`: certificates are not checked.
+    None,
+    /// A PEM file (`sslrootcert=PATH`, or libpq's default `~/.postgresql/root.crt`).
+    File(PathBuf),
+    /// `sslrootcert=system`: the operating system's trust store.
+    System,
+}
+
+/// A parsed `--database` URL: the client configuration and how to secure its connections.
+pub struct PgTarget {
+    pub config: postgres::Config,
+    pub mode: SslMode,
+    pub roots: RootCerts,
+    /// Built once; `None` for `sslmode=disable` or when every host is a Unix socket.
+    tls: Option<MakeRustlsConnect>,
+    /// `host:port, …`, for messages (never the password).
+    hosts: String,
+}
+
+impl std::fmt::Debug for PgTarget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PgTarget")
+            .field("hosts", &self.hosts)
+            .field("mode", &self.mode)
+            .field("roots", &self.roots)
+            .finish()
+    }
+}
+
+/// The parameters this module takes out of the URL before the client library parses it.
+#[derive(Debug, Default)]
+struct TlsParams {
+    sslmode: Option<String>,
+    sslrootcert: Option<String>,
+    sslcert: Option<String>,
+    sslkey: Option<String>,
+}
+
+/// Split libpq's TLS parameters off a URL's query; the rest of the URL is kept verbatim.
+fn split_tls_params(url: &str) -> Result<(String, TlsParams), String> {
+    let Some((base, query)) = url.split_once('?') else {
+        return Ok((url.to_string(), TlsParams::default()));
+    };
+    let mut kept = Vec::new();
+    let mut p = TlsParams::default();
+    for pair in query.split('&').filter(|s| !s.is_empty()) {
+        let (k, v) = pair.split_once('=').unwrap_or((pair, ""));
+        let decode = |s: &str, what: &str| {
+            percent_encoding::percent_decode_str(s)
+                .decode_utf8()
+                .map(|c| c.into_owned())
+                .map_err(|_| format!("--database: {what} is not valid UTF-8 once decoded"))
+        };
+        let slot = match decode(k, "a parameter name")?.as_str() {
+            "sslmode" => &mut p.sslmode,
+            "sslrootcert" => &mut p.sslrootcert,
+            "sslcert" => &mut p.sslcert,
+            "sslkey" => &mut p.sslkey,
+            _ => {
+                kept.push(pair);
+                continue;
+            }
+        };
+        *slot = Some(decode(v, k)?);
+    }
+    let rest = if kept.is_empty() {
+        base.to_string()
+    } else {
+        format!("{base}?{}", kept.join("&"))
+    };
+    Ok((rest, p))
+}
+
+/// libpq's default root certificate file, when it exists.
+fn default_root_file() -> Option<PathBuf> {
+    let home = std::env::var_os("HOME")?;
+    let p = PathBuf::from(home).join(".postgresql/root.crt");
+    p.is_file().then_some(p)
+}
+
+fn provider() -> Arc<CryptoProvider> {
+    Arc::new(rustls::crypto::ring::default_provider())
+}
+
+fn load_certs(path: &str, what: &str) -> Result<Vec<CertificateDer<'static>>, String> {
+    let certs = CertificateDer::pem_file_iter(path)
+        .and_then(|it| it.collect::<Result<Vec<_>, _>>())
+        .map_err(|e| format!("--database: {what}={path}: cannot read PEM certificates: {e}"))?;
+    if certs.is_empty() {
+        return Err(format!(
+            "--database: {what}={path}: no PEM certificate (-----BEGIN CERTIFICATE-----) in it"
+        ));
+    }
+    Ok(certs)
+}
+
+fn root_store(roots: &RootCerts) -> Result<RootCertStore, String> {
+    let mut store = RootCertStore::empty();
+    match roots {
+        RootCerts::None => {}
+        RootCerts::File(p) => {
+            let path = p.display().to_string();
+            for c in load_certs(&path, "sslrootcert")? {
+                store.add(c).map_err(|e| {
+                    format!("--database: sslrootcert={path}: not a usable CA certificate: {e}")
+                })?;
+            }
+        }
+        RootCerts::System => {
+            let found = rustls_native_certs::load_native_certs();
+            let (added, _) = store.add_parsable_certificates(found.certs);
+            if added == 0 {
+                return Err(format!(
+                    "--database: sslrootcert=system: no trusted CA certificate found in the \
+                     operating system's store{}",
+                    found
+                        .errors
+                        .first()
+                        .map(|e| format!(" ({e})"))
+                        .unwrap_or_default()
+                ));
+            }
+        }
+    }
+    Ok(store)
+}
+
+/// Accepts any certificate (`prefer`/`require` without a root certificate, as libpq does) but
+/// still checks the handshake signatures, so the session is encrypted to whoever holds the key
+/// of the certificate presented.
+#[derive(Debug)]
+struct EncryptOnly(Arc<CryptoProvider>);
+
+impl ServerCertVerifier for EncryptOnly {
+    fn verify_server_cert(
+        &self,
+        _end_entity: &CertificateDer<'_>,
+        _intermediates: &[CertificateDer<'_>],
+        _server_name: &ServerName<'_>,
+        _ocsp: &[u8],
+        _now: UnixTime,
+    ) -> Result<ServerCertVerified, rustls::Error> {
+        Ok(ServerCertVerified::assertion())
+    }
+
+    fn verify_tls12_signature(
+        &self,
+        message: &[u8],
+        cert: &CertificateDer<'_>,
+        dss: &DigitallySignedStruct,
+    ) -> Result<HandshakeSignatureValid, rustls::Error> {
+        rustls::crypto::verify_tls12_signature(
+            message,
+            cert,
+            dss,
+            &self.0.signature_verification_algorithms,
+        )
+    }
+
+    fn verify_tls13_signature(
+        &self,
+        message: &[u8],
+        cert: &CertificateDer<'_>,
+        dss: &DigitallySignedStruct,
+    ) -> Result<HandshakeSignatureValid, rustls::Error> {
+        rustls::crypto::verify_tls13_signature(
+            message,
+            cert,
+            dss,
+            &self.0.signature_verification_algorithms,
+        )
+    }
+
+    fn supported_verify_schemes(&self) -> Vec<SignatureScheme> {
+        self.0.signature_verification_algorithms.supported_schemes()
+    }
+}
+
+/// `verify-ca`: the chain must lead to a trusted root, the host name is not compared. WebPKI
+/// checks the chain before the name, so a name mismatch means the chain was good.
+#[derive(Debug)]
+struct ChainOnly(Arc<WebPkiServerVerifier>);
+
+impl ServerCertVerifier for ChainOnly {
+    fn verify_server_cert(
+        &self,
+        end_entity: &CertificateDer<'_>,
+        intermediates: &[CertificateDer<'_>],
+        server_name: &ServerName<'_>,
+        ocsp: &[u8],
+        now: UnixTime,
+    ) -> Result<ServerCertVerified, rustls::Error> {
+        match self
+            .0
+            .verify_server_cert(end_entity, intermediates, server_name, ocsp, now)
+        {
+            Err(rustls::Error::InvalidCertificate(
+                CertificateError::NotValidForName | CertificateError::NotValidForNameContext { .. },
+            )) => Ok(ServerCertVerified::assertion()),
+            other => other,
+        }
+    }
+
+    fn verify_tls12_signature(
+        &self,
+        message: &[u8],
+        cert: &CertificateDer<'_>,
+        dss: &DigitallySignedStruct,
+    ) -> Result<HandshakeSignatureValid, rustls::Error> {
+        self.0.verify_tls12_signature(message, cert, dss)
+    }
+
+    fn verify_tls13_signature(
+        &self,
+        message: &[u8],
+        cert: &CertificateDer<'_>,
+        dss: &DigitallySignedStruct,
+    ) -> Result<HandshakeSignatureValid, rustls::Error> {
+        self.0.verify_tls13_signature(message, cert, dss)
+    }
+
+    fn supported_verify_schemes(&self) -> Vec<SignatureScheme> {
+        self.0.supported_verify_schemes()
+    }
+}
+
+fn client_config(
+    mode: SslMode,
+    roots: &RootCerts,
+    client_cert: Option<(&str, &str)>,
+) -> Result<ClientConfig, String> {
+    let provider = provider();
+    let builder = ClientConfig::builder_with_provider(provider.clone())
+        .with_safe_default_protocol_versions()
+        .map_err(|e| format!("--database: TLS set-up: {e}"))?;
+    let verifier: Arc<dyn ServerCertVerifier> = if *roots == RootCerts::None {
+        Arc::new(EncryptOnly(provider.clone()))
+    } else {
+        let webpki = WebPkiServerVerifier::builder_with_provider(
+            Arc::new(root_store(roots)?),
+            provider.clone(),
+        )
+        .build()
+        .map_err(|e| format!("--database: sslrootcert: {e}"))?;
+        if mode == SslMode::VerifyFull {
+            webpki
+        } else {
+            // libpq: with a root certificate, `prefer`/`require` check the chain like verify-ca.
+            Arc::new(ChainOnly(webpki))
+        }
+    };
+    let builder = builder
+        .dangerous()
+        .with_custom_certificate_verifier(verifier);
+    let mut config = match client_cert {
+        None => builder.with_no_client_auth(),
+        Some((cert, key)) => {
+            let certs = load_certs(cert, "sslcert")?;
+            let key = PrivateKeyDer::from_pem_file(key).map_err(|e| {
+                format!("--database: sslkey={key}: cannot read a PEM private key: {e}")
+            })?;
+            builder
+                .with_client_auth_cert(certs, key)
+                .map_err(|e| format!("--database: sslcert/sslkey: {e}"))?
+        }
+    };
+    // PostgreSQL 17's direct TLS negotiation (`sslnegotiation=direct`) requires this ALPN.
+    config.alpn_protocols = vec![b"postgresql".to_vec()];
+    Ok(config)
+}
+
+/// Parse a `--database` URL (already known to start with `postgres://` or `postgresql://`),
+/// including its TLS parameters, and load the certificates it names.
+pub fn parse(url: &str) -> Result<PgTarget, String> {
+    parse_with_default_root(url, default_root_file())
+}
+
+/// [`parse`] with libpq's default root certificate file given (tests pass `None`).
+fn parse_with_default_root(url: &str, default_root: Option<PathBuf>) -> Result<PgTarget, String> {
+    let (rest, p) = split_tls_params(url)?;
+    let mut config = rest
+        .parse::<postgres::Config>()
+        .map_err(|e| format!("--database: not a valid PostgreSQL URL: {e}"))?;
+    let system = p.sslrootcert.as_deref() == Some("system");
+    let mode = match p.sslmode.as_deref() {
+        Some(m) => SslMode::parse(m)?,
+        // libpq 16: sslrootcert=system defaults to the only mode that makes it meaningful.
+        None if system => SslMode::VerifyFull,
+        None => SslMode::Prefer,
+    };
+    if system && mode != SslMode::VerifyFull {
+        return Err(format!(
+            "--database: sslrootcert=system needs sslmode=verify-full (got sslmode={}): a \
+             public CA signs certificates for anyone, so only the host name check makes it safe",
+            mode.name()
+        ));
+    }
+    let roots = match p.sslrootcert {
+        Some(_) if system => RootCerts::System,
+        Some(path) if path.is_empty() => {
+            return Err("--database: sslrootcert is empty (expected a PEM file path)".into())
+        }
+        Some(path) => RootCerts::File(PathBuf::from(path)),
+        None => default_root.map_or(RootCerts::None, RootCerts::File),
+    };
+    if mode.verifies() && roots == RootCerts::None {
+        return Err(format!(
+            "--database: sslmode={} needs the certificate of the CA that signed the server's \
+             certificate: add sslrootcert=PATH (PEM), or sslrootcert=system for the operating \
+             system's trusted CAs (or install it as ~/.postgresql/root.crt)",
+            mode.name()
+        ));
+    }
+    let client_cert = match (&p.sslcert, &p.sslkey) {
+        (Some(c), Some(k)) => Some((c.as_str(), k.as_str())),
+        (None, None) => None,
+        _ => {
+            return Err(
+                "--database: sslcert and sslkey go together (a client certificate and its key)"
+                    .into(),
+            )
+        }
+    };
+    let hosts = config
+        .get_hosts()
+        .iter()
+        .enumerate()
+        .map(|(i, h)| {
+            let port = config
+                .get_ports()
+                .get(i)
+                .or(config.get_ports().first())
+                .copied()
+                .unwrap_or(5432);
+            match h {
+                Host::Tcp(name) => format!("{name}:{port}"),
+                Host::Unix(dir) => format!("{}/.s.PGSQL.{port}", dir.display()),
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    let all_unix = !config.get_hosts().is_empty()
+        && config
+            .get_hosts()
+            .iter()
+            .all(|h| matches!(h, Host::Unix(_)));
+    let effective = if all_unix { SslMode::Disable } else { mode };
+    config.ssl_mode(match effective {
+        SslMode::Disable => PgSslMode::Disable,
+        SslMode::Prefer => PgSslMode::Prefer,
+        _ => PgSslMode::Require,
+    });
+    let tls = if effective == SslMode::Disable {
+        None
+    } else {
+        Some(MakeRustlsConnect::new(client_config(
+            mode,
+            &roots,
+            client_cert,
+        )?))
+    };
+    Ok(PgTarget {
+        config,
+        mode,
+        roots,
+        tls,
+        hosts,
+    })
+}
+
+impl PgTarget {
+    /// `host:port` of every host in the URL.
+    pub fn hosts(&self) -> &str {
+        &self.hosts
+    }
+
+    /// A new connection, with an error that says which server, which mode and why.
+    pub fn connect(&self) -> Result<Client, String> {
+        let res = match &self.tls {
+            Some(tls) => self.config.connect(tls.clone()),
+            None => self.config.connect(NoTls),
+        };
+        res.map_err(|e| self.explain(&e))
+    }
+
+    fn roots_label(&self) -> String {
+        match &self.roots {
+            RootCerts::None => "none".into(),
+            RootCerts::File(p) => p.display().to_string(),
+            RootCerts::System => "system".into(),
+        }
+    }
+
+    fn explain(&self, e: &postgres::Error) -> String {
+        let head = format!(
+            "connecting to PostgreSQL at {} (sslmode={})",
+            self.hosts,
+            self.mode.name()
+        );
+        if let Some(tls) = rustls_error(e) {
+            let why = match &tls {
+                rustls::Error::InvalidCertificate(CertificateError::UnknownIssuer) => format!(
+                    "it is not signed by a CA trusted here (sslrootcert={})",
+                    self.roots_label()
+                ),
+                rustls::Error::InvalidCertificate(
+                    CertificateError::NotValidForName
+                    | CertificateError::NotValidForNameContext { .. },
+                ) => "it was not issued for the host name in the URL (sslmode=verify-ca checks \
+                      the CA only)"
+                    .to_string(),
+                rustls::Error::InvalidCertificate(
+                    CertificateError::Expired | CertificateError::ExpiredContext { .. },
+                ) => "it has expired".to_string(),
+                rustls::Error::InvalidCertificate(_) => "it was rejected".to_string(),
+                _ => "the TLS handshake failed".to_string(),
+            };
+            return format!("{head}: the server's certificate failed verification: {tls}; {why}");
+        }
+        let detail = match e.as_db_error() {
+            Some(db) => format!("the server refused: {}", db.message()),
+            None => e.to_string(),
+        };
+        let hint = if detail.contains("server does not support TLS") {
+            " (its postgresql.conf has ssl = off: turn it on, or use sslmode=prefer/disable)"
+        } else if detail.contains("no encryption") && self.mode == SslMode::Disable {
+            " (the server's pg_hba.conf only accepts TLS here: drop sslmode=disable)"
+        } else {
+            ""
+        };
+        format!("{head}: {detail}{hint}")
+    }
+}
+
+/// The rustls error behind a connection error, if the TLS handshake is what failed.
+fn rustls_error(e: &postgres::Error) -> Option<rustls::Error> {
+    let mut cur: Option<&(dyn std::error::Error + 'static)> = std::error::Error::source(e);
+    while let Some(err) = cur {
+        if let Some(r) = err.downcast_ref::<rustls::Error>() {
+            return Some(r.clone());
+        }
+        // `io::Error::source` skips the wrapped error itself; look inside.
+        if let Some(inner) = err
+            .downcast_ref::<std::io::Error>()
+            .and_then(|io| io.get_ref())
+            .and_then(|i| i.downcast_ref::<rustls::Error>())
+        {
+            return Some(inner.clone());
+        }
+        cur = err.source();
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// As if `~/.postgresql/root.crt` did not exist, whatever this machine has.
+    fn err(url: &str) -> String {
+        parse_with_default_root(url, None)
+            .map(|_| ())
+            .expect_err(url)
+    }
+
+    #[test]
+    fn default_is_prefer_and_tls_params_are_stripped() {
+        let t = parse("postgres://u@db.example:6543/ashlar?application_name=x").expect("parse");
+        assert_eq!(t.mode, SslMode::Prefer);
+        assert_eq!(t.config.get_application_name(), Some("x"));
+        assert_eq!(t.hosts(), "db.example:6543");
+        let (rest, p) = split_tls_params(
+            "postgres://h/d?sslmode=require&connect_timeout=3&sslrootcert=%2Ftmp%2Fca.pem",
+        )
+        .expect("split");
+        assert_eq!(rest, "postgres://h/d?connect_timeout=3");
+        assert_eq!(p.sslmode.as_deref(), Some("require"));
+        assert_eq!(p.sslrootcert.as_deref(), Some("/tmp/ca.pem"));
+        assert!(matches!(
+            parse("postgres://h/d?sslmode=disable").expect("parse").mode,
+            SslMode::Disable
+        ));
+    }
+
+    #[test]
+    fn unknown_or_unsupported_sslmode_is_named() {
+        let e = err("postgres://h/d?sslmode=verify_full");
+        assert!(
+            e.contains("sslmode=\"verify_full\"") && e.contains("verify-full"),
+            "{e}"
+        );
+        let e = err("postgres://h/d?sslmode=allow");
+        assert!(e.contains("sslmode=allow"), "{e}");
+    }
+
+    #[test]
+    fn verification_needs_a_root_certificate() {
+        let e = err("postgres://h/d?sslmode=verify-full");
+        assert!(e.contains("sslrootcert"), "{e}");
+        let e = err("postgres://h/d?sslmode=verify-ca&sslrootcert=/nonexistent/ca.pem");
+        assert!(e.contains("sslrootcert=/nonexistent/ca.pem"), "{e}");
+        let e = err("postgres://h/d?sslmode=require&sslrootcert=system");
+        assert!(e.contains("verify-full"), "{e}");
+        let e = err("postgres://h/d?sslcert=/x.pem");
+        assert!(e.contains("sslkey"), "{e}");
+    }
+
+    #[test]
+    fn a_file_without_certificates_is_refused() {
+        let p = std::env::temp_dir().join(format!("ashlar-notacert-{}.pem", std::process::id()));
+        std::fs::write(&p, "hello\n").expect("write");
+        let e = err(&format!(
+            "postgres://h/d?sslmode=verify-full&sslrootcert={}",
+            p.display()
+        ));
+        assert!(e.contains("no PEM certificate"), "{e}");
+        std::fs::remove_file(p).ok();
+    }
+
+    #[test]
+    fn unix_sockets_ignore_sslmode() {
+        let t = parse("postgres://u@%2Fvar%2Frun%2Fpostgresql/d?sslmode=require").expect("parse");
+        assert!(t.tls.is_none());
+        assert_eq!(t.config.get_ssl_mode(), PgSslMode::Disable);
+    }
+}

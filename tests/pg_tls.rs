@@ -1,0 +1,344 @@
+//! TLS to PostgreSQL (issue 10). Needs the server `tests/pg/tls.sh` starts: `ssl = on` with a
+//! certificate for DNS name `localhost` signed by a CA the script made, and a pg_hba.conf that
+//! accepts TCP clients over TLS only (`hostssl`). The script sets `ASHLAR_TEST_TLS_PORT` and
+//! `ASHLAR_TEST_TLS_CERTS` (holding `ca.pem` and an unrelated `wrong-ca.pem`). Without them
+//! every test prints a loud SKIPPED line and passes (a plain `cargo test`); `tests/pg/tls.sh`,
+//! run by `.ci/run`, fails if they skip.
+//!
+//! - `verify-full` with the right CA: an API process and a worker process run a job end to end,
+//!   and every connection they hold is encrypted (`pg_stat_ssl`);
+//! - `require` and the default (`prefer`) connect encrypted without a CA; `verify-ca` accepts
+//!   the certificate at 127.0.0.1 (issued for `localhost`), `verify-full` refuses it there;
+//! - a wrong CA is refused with the host and the reason, also by `ashlar worker` at start-up;
+//! - `sslmode=disable` is refused by the server (hostssl only), with a hint;
+//! - a database whose pg_hba line says `cert` admits a client presenting `sslcert`/`sslkey`
+//!   (signed by the CA) and refuses one without.
+mod service_support;
+
+use ashlar::service::pg_tls;
+use serde_json::{json, Value};
+use service_support::*;
+use std::io::BufRead;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+use uuid::Uuid;
+
+struct Env {
+    port: String,
+    certs: PathBuf,
+}
+
+fn env(test: &str) -> Option<Env> {
+    match (
+        std::env::var("ASHLAR_TEST_TLS_PORT"),
+        std::env::var("ASHLAR_TEST_TLS_CERTS"),
+    ) {
+        (Ok(port), Ok(certs)) if !port.is_empty() && !certs.is_empty() => Some(Env {
+            port,
+            certs: PathBuf::from(certs),
+        }),
+        _ => {
+            eprintln!(
+                "SKIPPED {test}: ASHLAR_TEST_TLS_PORT/ASHLAR_TEST_TLS_CERTS are not set (run tests/pg/tls.sh)"
+            );
+            None
+        }
+    }
+}
+
+impl Env {
+    fn url(&self, host: &str, db: &str, params: &str) -> String {
+        format!("postgresql://ashlar@{host}:{}/{db}?{params}", self.port)
+    }
+
+    fn ca(&self, name: &str) -> String {
+        self.certs.join(name).display().to_string()
+    }
+}
+
+fn connect(url: &str) -> Result<postgres::Client, String> {
+    pg_tls::parse(url)?.connect()
+}
+
+/// The error of a connection that must fail.
+fn refused(url: &str, why: &str) -> String {
+    match connect(url) {
+        Ok(_) => panic!("{why}: {url} connected"),
+        Err(e) => e,
+    }
+}
+
+/// Whether this session is encrypted, as the server sees it.
+fn encrypted(c: &mut postgres::Client) -> bool {
+    c.query_one(
+        "SELECT ssl FROM pg_stat_ssl WHERE pid = pg_backend_pid()",
+        &[],
+    )
+    .expect("pg_stat_ssl")
+    .get(0)
+}
+
+fn wait_until(what: &str, timeout: Duration, mut done: impl FnMut() -> bool) {
+    let start = Instant::now();
+    while !done() {
+        assert!(
+            start.elapsed() < timeout,
+            "timed out after {timeout:?}: {what}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// An `ashlar worker` process; its log goes to `<data>/worker.log`.
+struct Worker(Child);
+
+impl Worker {
+    fn start(url: &str, data: &Path, artifacts: &str) -> Self {
+        std::fs::create_dir_all(data).expect("data dir");
+        let log = std::fs::File::create(data.join("worker.log")).expect("log file");
+        let mut child = Command::new(env!("CARGO_BIN_EXE_ashlar"))
+            .args(["worker", "--database", url, "--workers", "1"])
+            .args(["--artifacts", artifacts, "--data"])
+            .arg(data)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::from(log))
+            .spawn()
+            .expect("spawn ashlar worker");
+        let mut line = String::new();
+        std::io::BufReader::new(child.stdout.take().expect("stdout"))
+            .read_line(&mut line)
+            .expect("read the ready line");
+        assert!(
+            line.starts_with("ashlar worker: running"),
+            "worker did not start: {line:?} (log: {})",
+            std::fs::read_to_string(data.join("worker.log")).unwrap_or_default()
+        );
+        Self(child)
+    }
+}
+
+impl Drop for Worker {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+#[test]
+fn verify_full_runs_a_job_end_to_end_encrypted() {
+    let Some(env) = env("verify_full_runs_a_job_end_to_end_encrypted") else {
+        return;
+    };
+    let ca = format!("sslmode=verify-full&sslrootcert={}", env.ca("ca.pem"));
+    let mut admin = connect(&env.url("localhost", "postgres", &ca)).expect("verify-full connects");
+    assert!(
+        encrypted(&mut admin),
+        "verify-full session is not encrypted"
+    );
+    let db = format!("ashlar_tls_{}", &Uuid::new_v4().simple().to_string()[..8]);
+    admin
+        .batch_execute(&format!("CREATE DATABASE {db}"))
+        .expect("create database");
+    let url = env.url("localhost", &db, &ca);
+
+    let root = temp_dir("pg-tls");
+    let shared = format!("file://{}", root.join("shared").display());
+    let api = Server::start(
+        &root.join("api"),
+        &["--database", &url, "--workers", "0", "--artifacts", &shared],
+    );
+    let _worker = Worker::start(&url, &root.join("worker"), &shared);
+    let body = json!({"scene": column_scene(2.0), "motion": pulse(3.0)});
+    let (status, text) =
+        http(&api.addr, "POST", "/v1/jobs", Some(&body.to_string())).expect("POST");
+    assert_eq!(status, 202, "{text}");
+    let id = serde_json::from_str::<Value>(&text).expect("JSON")["id"]
+        .as_str()
+        .expect("id")
+        .to_string();
+    let mut last = Value::Null;
+    wait_until(
+        "the worker finishes the job",
+        Duration::from_secs(120),
+        || {
+            let (_, t) = http(&api.addr, "GET", &format!("/v1/jobs/{id}"), None).expect("GET");
+            last = serde_json::from_str(&t).unwrap_or(Value::Null);
+            is_terminal(&last)
+        },
+    );
+    assert_eq!(last["status"], "succeeded", "{last}");
+    assert!(last["summary"].is_object(), "no summary: {last}");
+    // The API ran nothing (0 worker threads): it serves what the worker recorded.
+    let (status, csv) = http(
+        &api.addr,
+        "GET",
+        &format!("/v1/jobs/{id}/histories?format=csv"),
+        None,
+    )
+    .expect("GET histories");
+    assert_eq!(status, 200, "{csv:.300}");
+    assert!(csv.starts_with("time,column.x"), "{csv:.200}");
+
+    // Every session the two processes hold on this database is encrypted, and there are some
+    // (pool + LISTEN connections of both processes).
+    let rows = admin
+        .query(
+            "SELECT s.ssl FROM pg_stat_ssl s JOIN pg_stat_activity a USING (pid) WHERE a.datname = $1",
+            &[&db],
+        )
+        .expect("sessions");
+    assert!(
+        rows.len() >= 2,
+        "expected the API's and the worker's sessions, found {}",
+        rows.len()
+    );
+    assert!(
+        rows.iter().all(|r| r.get::<_, bool>(0)),
+        "a session on {db} is not encrypted"
+    );
+    drop(api);
+    std::fs::remove_dir_all(root).ok();
+}
+
+#[test]
+fn modes_behave_as_in_libpq() {
+    let Some(env) = env("modes_behave_as_in_libpq") else {
+        return;
+    };
+    let ca = env.ca("ca.pem");
+    // require, prefer (the default): encrypted, certificate not checked.
+    for params in ["sslmode=require", "", "sslmode=prefer"] {
+        let mut c = connect(&env.url("127.0.0.1", "postgres", params))
+            .unwrap_or_else(|e| panic!("{params:?}: {e}"));
+        assert!(encrypted(&mut c), "{params:?} is not encrypted");
+    }
+    // verify-ca: the chain is checked, not the name (the certificate is for `localhost`).
+    let mut c = connect(&env.url(
+        "127.0.0.1",
+        "postgres",
+        &format!("sslmode=verify-ca&sslrootcert={ca}"),
+    ))
+    .expect("verify-ca at 127.0.0.1");
+    assert!(encrypted(&mut c));
+    // verify-full checks the name too.
+    let e = refused(
+        &env.url(
+            "127.0.0.1",
+            "postgres",
+            &format!("sslmode=verify-full&sslrootcert={ca}"),
+        ),
+        "verify-full must refuse a certificate issued for another name",
+    );
+    eprintln!("verify-full at 127.0.0.1: {e}");
+    assert!(
+        e.contains("127.0.0.1") && e.contains("verify-full") && e.contains("not valid for name"),
+        "{e}"
+    );
+}
+
+#[test]
+fn wrong_ca_is_refused_naming_host_and_reason() {
+    let Some(env) = env("wrong_ca_is_refused_naming_host_and_reason") else {
+        return;
+    };
+    let wrong = env.ca("wrong-ca.pem");
+    for mode in ["verify-full", "verify-ca", "require"] {
+        let url = env.url(
+            "localhost",
+            "postgres",
+            &format!("sslmode={mode}&sslrootcert={wrong}"),
+        );
+        let e = refused(&url, "a wrong CA must be refused");
+        eprintln!("{mode}, wrong CA: {e}");
+        assert!(
+            e.contains(&format!("localhost:{}", env.port))
+                && e.contains("failed verification")
+                && e.contains("UnknownIssuer")
+                && e.contains(&wrong),
+            "{mode}: {e}"
+        );
+    }
+    // The same from the command line: the worker refuses to start and says why.
+    let data = temp_dir("pg-tls-wrong");
+    let url = env.url(
+        "localhost",
+        "postgres",
+        &format!("sslmode=verify-full&sslrootcert={wrong}"),
+    );
+    let out = Command::new(env!("CARGO_BIN_EXE_ashlar"))
+        .args(["worker", "--database", &url, "--data"])
+        .arg(&data)
+        .output()
+        .expect("run ashlar worker");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    eprintln!("ashlar worker, wrong CA: {}", stderr.trim());
+    assert!(!out.status.success(), "worker started with a wrong CA");
+    assert!(
+        stderr.contains("localhost") && stderr.contains("UnknownIssuer"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(data).ok();
+}
+
+#[test]
+fn plain_text_is_refused_by_a_hostssl_server() {
+    let Some(env) = env("plain_text_is_refused_by_a_hostssl_server") else {
+        return;
+    };
+    let e = refused(
+        &env.url("127.0.0.1", "postgres", "sslmode=disable"),
+        "hostssl only: a plain-text client must be refused",
+    );
+    eprintln!("sslmode=disable: {e}");
+    assert!(
+        e.contains("127.0.0.1")
+            && e.contains("no encryption")
+            && e.contains("drop sslmode=disable"),
+        "{e}"
+    );
+}
+
+#[test]
+fn client_certificate_authentication() {
+    let Some(env) = env("client_certificate_authentication") else {
+        return;
+    };
+    let ca = env.ca("ca.pem");
+    let mut admin = connect(&env.url(
+        "localhost",
+        "postgres",
+        &format!("sslmode=verify-full&sslrootcert={ca}"),
+    ))
+    .expect("admin connection");
+    // Several test runs may share a server: create once.
+    let exists = admin
+        .query_opt("SELECT 1 FROM pg_database WHERE datname = 'certdb'", &[])
+        .expect("pg_database")
+        .is_some();
+    if !exists {
+        admin
+            .batch_execute("CREATE DATABASE certdb")
+            .expect("create certdb");
+    }
+    let base = format!("sslmode=verify-full&sslrootcert={ca}");
+    let e = refused(
+        &env.url("localhost", "certdb", &base),
+        "certdb demands a client certificate",
+    );
+    eprintln!("certdb without a client certificate: {e}");
+    assert!(e.contains("certificate"), "{e}");
+    let with_cert = format!(
+        "{base}&sslcert={}&sslkey={}",
+        env.ca("client.crt"),
+        env.ca("client.key")
+    );
+    let mut c = connect(&env.url("localhost", "certdb", &with_cert))
+        .expect("a client certificate signed by the CA is accepted");
+    assert!(encrypted(&mut c));
+    let who: String = c
+        .query_one("SELECT current_user::text", &[])
+        .expect("current_user")
+        .get(0);
+    assert_eq!(who, "ashlar");
+}
