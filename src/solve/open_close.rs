@@ -111,11 +111,34 @@ pub fn iterate(
         add_contacts(sys, dofs, contacts, laws, springs, prescribed);
         solver.solve(sys, dofs, x)?;
         let mut changed = 0;
+        let dbg = std::env::var("OC_DEBUG").is_ok();
+        let mut cats = [0usize; 8];
         for (k, (c, law)) in contacts.iter_mut().zip(laws).enumerate() {
+            let old = c.state;
+            let (ofn, orf) = (c.friction_normal, c.release_factor);
             if update_state(c, law, springs, x, dofs, prescribed, params, it) {
                 changed += 1;
                 last_changed = Some(k);
+                if dbg {
+                    let endpoint = c.xi < 1e-6 || c.xi > 1.0 - 1e-6;
+                    let cat = match (old.is_closed(), c.state.is_closed()) {
+                        (true, false) => 0,
+                        (false, true) => 1,
+                        _ if std::mem::discriminant(&old) != std::mem::discriminant(&c.state) => 4,
+                        _ if (orf - c.release_factor).abs() > 0.0 => 2,
+                        _ if (ofn - c.friction_normal).abs() > 0.0 => 3,
+                        _ => 4,
+                    };
+                    cats[cat + if endpoint && cat < 2 { 5 } else { 0 } * 0] += 1;
+                    if endpoint && cat < 2 { cats[5 + cat] += 1; }
+                    if it >= 15 && k % 1 == 0 && cat < 2 {
+                        eprintln!("   it {it} k {k} vb {} v {} eb {} e {} xi {:.3e} g0 {:.3e} g {:.3e} {:?}->{:?} flips {}", c.vertex_block, c.vertex, c.edge_block, c.edge, c.xi, c.g0, c.gap, old, c.state, c.flips);
+                    }
+                }
             }
+        }
+        if dbg {
+            eprintln!("oc it {it}: changed {changed} close→open {} open→close {} release {} friction {} other {} (endpoint c→o {} o→c {})", cats[0], cats[1], cats[2], cats[3], cats[4], cats[5], cats[6]);
         }
         if changed == 0 {
             return Ok(OpenClose::Converged { iterations: it });
@@ -166,7 +189,13 @@ fn update_state(
         match old {
             ContactState::Open => {
                 c.shear_force = 0.0;
-                ContactState::Locked
+                if frictionless(c, law) {
+                    ContactState::Sliding {
+                        dir: if s != 0.0 { s.signum() } else { 1.0 },
+                    }
+                } else {
+                    ContactState::Locked
+                }
             }
             ContactState::Locked => {
                 let f = -springs.shear * s;
@@ -211,7 +240,10 @@ fn update_state(
     let mut friction_moved = false;
     if let ContactState::Sliding { .. } = new {
         let n = c.normal_force.max(0.0);
-        friction_moved = matches!(old, ContactState::Sliding { .. })
+        // Without a friction coefficient the friction force does not depend on the normal
+        // force (it is zero, or the bond's cohesion): nothing to iterate.
+        friction_moved = law.tan_phi != 0.0
+            && matches!(old, ContactState::Sliding { .. })
             && (n - c.friction_normal).abs()
                 > friction_tol
                     * (n.max(c.friction_normal) + springs.normal * springs.gap_tolerance);
@@ -226,6 +258,13 @@ fn update_state(
             };
     }
     changed || friction_moved || release_moved
+}
+
+/// A joint that can carry no shear force at any normal force (no friction, no intact
+/// cohesion): it closes straight into sliding, since a locked state would only add a shear
+/// spring for one iteration, perturbing every other contact, before slipping anyway.
+fn frictionless(c: &Contact, law: &JointLaw) -> bool {
+    law.tan_phi == 0.0 && !(c.bonded && law.cohesion > 0.0)
 }
 
 /// The kept fraction λ = |g₀|/(|g₀| + g₁) of a contact compressed at the step start that is

@@ -16,6 +16,8 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Par, Side};
 
+pub static DBG_T: [std::sync::atomic::AtomicU64; 4] = [const { std::sync::atomic::AtomicU64::new(0) }; 4];
+
 #[derive(Default)]
 pub struct SparseCholesky {
     pattern: Vec<(usize, usize)>,
@@ -29,6 +31,11 @@ pub struct SparseCholesky {
     l_values: Vec<f64>,
     /// `l_values` holds a factor of a matrix with the current pattern (usable as preconditioner).
     factored: bool,
+    /// The matrix values `l_values` factors (to count how much the matrix changed since).
+    factored_values: Vec<f64>,
+    /// Scratch of [`SparseCholesky::changed_blocks`]: per off-diagonal slot and per block.
+    changed_off: Vec<bool>,
+    changed_diag: Vec<bool>,
     mem: Option<MemBuffer>,
     /// Conjugate-gradient scratch: right-hand side, residual, preconditioned residual,
     /// search direction and its image.
@@ -175,10 +182,22 @@ impl SparseCholesky {
             self.rebuild_pattern(sys, dofs, params.supernodal)?;
         }
         self.fill_values(sys, dofs);
-        if self.factored && params.max_reuse_iterations > 0 && self.reuse_solve(x, params) {
+        let t0 = std::time::Instant::now();
+        if self.factored
+            && params.max_reuse_iterations > 0
+            && self.changed_blocks(sys, dofs) < params.max_reuse_iterations
+            && self.reuse_solve(x, params)
+        {
+            DBG_T[0].fetch_add(t0.elapsed().as_micros() as u64, std::sync::atomic::Ordering::Relaxed);
             return Ok(());
         }
+        DBG_T[1].fetch_add(t0.elapsed().as_micros() as u64, std::sync::atomic::Ordering::Relaxed);
+        let t0 = std::time::Instant::now();
         self.factorize(sys, dofs)?;
+        DBG_T[2].fetch_add(t0.elapsed().as_micros() as u64, std::sync::atomic::Ordering::Relaxed);
+        if DBG_T[3].load(std::sync::atomic::Ordering::Relaxed) == 0 {
+            DBG_T[3].store(self.l_values.len() as u64, std::sync::atomic::Ordering::Relaxed);
+        }
         let (Some(symbolic), Some(mem)) = (self.symbolic.as_ref(), self.mem.as_mut()) else {
             return Err(SolveError::Backend("symbolic factorization missing".into()));
         };
@@ -186,6 +205,45 @@ impl SparseCholesky {
         let rhs = faer::MatMut::from_column_major_slice_mut(x, self.n, 1);
         llt.solve_in_place_with_conj(faer::Conj::No, rhs, Par::Seq, MemStack::new(mem));
         Ok(())
+    }
+
+    /// A lower bound on the rank of the change of the matrix since its last factorization,
+    /// which is about the number of conjugate-gradient iterations the reused factor needs:
+    /// each changed off-diagonal block is at least one changed spring, and so is each changed
+    /// diagonal block of a block without one (a spring to a fixed block). When it reaches
+    /// [`SparseParams::max_reuse_iterations`] the iteration cannot converge in time, and
+    /// trying costs more than a factorization (the pile of examples/pile.rs spent 57 % of its
+    /// solve time in such failed attempts: docs/pile.md).
+    fn changed_blocks(&mut self, sys: &BlockSystem, dofs: &Dofs) -> usize {
+        let nf = dofs.ndof.len();
+        self.changed_off.clear();
+        self.changed_off.resize(sys.pairs.len(), false);
+        self.changed_diag.clear();
+        self.changed_diag.resize(nf, false);
+        let mut at = 0;
+        for b in 0..nf {
+            for c in 0..dofs.ndof[b] {
+                for &(a, slot) in &self.col_blocks[b] {
+                    let rows = if slot.is_none() { c + 1 } else { dofs.ndof[a] };
+                    if self.values[at..at + rows] != self.factored_values[at..at + rows] {
+                        match slot {
+                            None => self.changed_diag[b] = true,
+                            Some(k) => self.changed_off[k] = true,
+                        }
+                    }
+                    at += rows;
+                }
+            }
+        }
+        let mut count = 0;
+        for (k, &(a, b)) in sys.pairs.iter().enumerate() {
+            if self.changed_off[k] {
+                count += 1;
+                self.changed_diag[a] = false;
+                self.changed_diag[b] = false;
+            }
+        }
+        count + self.changed_diag.iter().filter(|&&d| d).count()
     }
 
     /// Numeric factorization of the current values into `l_values`.
@@ -213,6 +271,7 @@ impl SparseCholesky {
                 dof: first_bad_pivot(sys, dofs),
             })?;
         self.factored = true;
+        self.factored_values.clone_from(&self.values);
         self.numeric_count += 1;
         Ok(())
     }
