@@ -156,7 +156,5 @@ fn main() {
             sim.stats.dual_switches,
         );
         println!("         profile: {:?}", sim.profile);
-        let t: Vec<u64> = ashlar::solve::DBG_T.iter().map(|a| a.load(std::sync::atomic::Ordering::Relaxed)).collect();
-        println!("DBG reuse ok {} ms, reuse failed {} ms, factorize {} ms, nnz(L) {}", t[0]/1000, t[1]/1000, t[2]/1000, t[3]);
     }
 }

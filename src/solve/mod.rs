@@ -7,7 +7,7 @@ pub mod dual;
 pub mod open_close;
 mod sparse_cholesky;
 
-pub use sparse_cholesky::{SparseParams, DBG_T};
+pub use sparse_cholesky::SparseParams;
 
 use crate::assembly::{BlockSystem, Dofs};
 

@@ -97,8 +97,13 @@ pub fn iterate(
     params: &OpenCloseParams,
 ) -> Result<OpenClose, SolveError> {
     let mut last_changed = None;
-    for c in contacts.iter_mut() {
+    for (c, law) in contacts.iter_mut().zip(laws) {
         c.flips = 0;
+        // A frictionless contact carried in locked (found touching, or locked by a slip below
+        // the length tolerance) holds a shear spring it cannot have: start it sliding.
+        if c.state == ContactState::Locked && frictionless(c, law) {
+            c.state = ContactState::Sliding { dir: 1.0 };
+        }
         c.start_normal_force = if c.state.is_closed() {
             c.normal_force.max(0.0)
         } else {
@@ -111,34 +116,11 @@ pub fn iterate(
         add_contacts(sys, dofs, contacts, laws, springs, prescribed);
         solver.solve(sys, dofs, x)?;
         let mut changed = 0;
-        let dbg = std::env::var("OC_DEBUG").is_ok();
-        let mut cats = [0usize; 8];
         for (k, (c, law)) in contacts.iter_mut().zip(laws).enumerate() {
-            let old = c.state;
-            let (ofn, orf) = (c.friction_normal, c.release_factor);
             if update_state(c, law, springs, x, dofs, prescribed, params, it) {
                 changed += 1;
                 last_changed = Some(k);
-                if dbg {
-                    let endpoint = c.xi < 1e-6 || c.xi > 1.0 - 1e-6;
-                    let cat = match (old.is_closed(), c.state.is_closed()) {
-                        (true, false) => 0,
-                        (false, true) => 1,
-                        _ if std::mem::discriminant(&old) != std::mem::discriminant(&c.state) => 4,
-                        _ if (orf - c.release_factor).abs() > 0.0 => 2,
-                        _ if (ofn - c.friction_normal).abs() > 0.0 => 3,
-                        _ => 4,
-                    };
-                    cats[cat + if endpoint && cat < 2 { 5 } else { 0 } * 0] += 1;
-                    if endpoint && cat < 2 { cats[5 + cat] += 1; }
-                    if it >= 15 && k % 1 == 0 && cat < 2 {
-                        eprintln!("   it {it} k {k} vb {} v {} eb {} e {} xi {:.3e} g0 {:.3e} g {:.3e} {:?}->{:?} flips {}", c.vertex_block, c.vertex, c.edge_block, c.edge, c.xi, c.g0, c.gap, old, c.state, c.flips);
-                    }
-                }
             }
-        }
-        if dbg {
-            eprintln!("oc it {it}: changed {changed} close→open {} open→close {} release {} friction {} other {} (endpoint c→o {} o→c {})", cats[0], cats[1], cats[2], cats[3], cats[4], cats[5], cats[6]);
         }
         if changed == 0 {
             return Ok(OpenClose::Converged { iterations: it });

@@ -16,8 +16,6 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Par, Side};
 
-pub static DBG_T: [std::sync::atomic::AtomicU64; 4] = [const { std::sync::atomic::AtomicU64::new(0) }; 4];
-
 #[derive(Default)]
 pub struct SparseCholesky {
     pattern: Vec<(usize, usize)>,
@@ -182,22 +180,14 @@ impl SparseCholesky {
             self.rebuild_pattern(sys, dofs, params.supernodal)?;
         }
         self.fill_values(sys, dofs);
-        let t0 = std::time::Instant::now();
         if self.factored
             && params.max_reuse_iterations > 0
             && self.changed_blocks(sys, dofs) < params.max_reuse_iterations
             && self.reuse_solve(x, params)
         {
-            DBG_T[0].fetch_add(t0.elapsed().as_micros() as u64, std::sync::atomic::Ordering::Relaxed);
             return Ok(());
         }
-        DBG_T[1].fetch_add(t0.elapsed().as_micros() as u64, std::sync::atomic::Ordering::Relaxed);
-        let t0 = std::time::Instant::now();
         self.factorize(sys, dofs)?;
-        DBG_T[2].fetch_add(t0.elapsed().as_micros() as u64, std::sync::atomic::Ordering::Relaxed);
-        if DBG_T[3].load(std::sync::atomic::Ordering::Relaxed) == 0 {
-            DBG_T[3].store(self.l_values.len() as u64, std::sync::atomic::Ordering::Relaxed);
-        }
         let (Some(symbolic), Some(mem)) = (self.symbolic.as_ref(), self.mem.as_mut()) else {
             return Err(SolveError::Backend("symbolic factorization missing".into()));
         };
