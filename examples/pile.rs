@@ -98,7 +98,12 @@ fn time_run(solver: &str, steps: usize, trace: bool) -> (f64, Simulation) {
         };
         if trace {
             let c = sim.solver_counts();
-            let closed = sim.contacts.contacts.iter().filter(|c| c.state.is_closed()).count();
+            let closed = sim
+                .contacts
+                .contacts
+                .iter()
+                .filter(|c| c.state.is_closed())
+                .count();
             println!(
                 "{k:4}  {dt:.3e}  {:4}  {:2}  {:7}  {:8}  {:2}  {:6}  {:8}  {:6}  {:.0}",
                 sim.stats.time_step_cuts - stats.time_step_cuts,
