@@ -11,7 +11,7 @@
 //! Δt ≤ 1 ms with the seed's displacement ratio 0.003.
 //!
 //! Run: `cargo run --release --example pile` (add `-- --write pile.json` to save the scene,
-//! `-- --steps N` to change the step count, `-- --only dual|penalty` to time one solver).
+//! `-- --steps N` to change the step count, `-- --only dual|penalty` to time one solver, `-- --trace` to print per-step work counts).
 use ashlar::motion::GroundMotion;
 use ashlar::scene::{parse_scene, Scene};
 use ashlar::simulation::{SimParams, Simulation};
@@ -79,14 +79,43 @@ fn scene(solver: &str) -> Scene {
     }
 }
 
-/// Run `steps` steps; returns (seconds, simulation).
-fn time_run(solver: &str, steps: usize) -> (f64, Simulation) {
+/// Run `steps` steps; returns (seconds, simulation). With `trace`, print one line per step:
+/// Δt, cuts, open–close iterations, numeric and symbolic factorizations, preconditioned CG
+/// iterations, contact detections, contacts, closed contacts.
+fn time_run(solver: &str, steps: usize, trace: bool) -> (f64, Simulation) {
     let scene = scene(solver);
     let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
     let t = Instant::now();
+    if trace {
+        println!("step  dt(s)      cuts  oc  numeric  symbolic  cg  detect  contacts  closed  ms");
+    }
     for k in 0..steps {
-        if let Err(e) = sim.step(1.0) {
-            panic!("{solver}: step {k} failed: {e}");
+        let (stats, counts, detections) = (sim.stats, sim.solver_counts(), sim.contacts.detections);
+        let ts = Instant::now();
+        let dt = match sim.step(1.0) {
+            Ok(dt) => dt,
+            Err(e) => panic!("{solver}: step {k} failed: {e}"),
+        };
+        if trace {
+            let c = sim.solver_counts();
+            let closed = sim
+                .contacts
+                .contacts
+                .iter()
+                .filter(|c| c.state.is_closed())
+                .count();
+            println!(
+                "{k:4}  {dt:.3e}  {:4}  {:2}  {:7}  {:8}  {:2}  {:6}  {:8}  {:6}  {:.0}",
+                sim.stats.time_step_cuts - stats.time_step_cuts,
+                sim.stats.open_close_iterations - stats.open_close_iterations,
+                c.numeric - counts.numeric,
+                c.symbolic - counts.symbolic,
+                c.reuse_iterations - counts.reuse_iterations,
+                sim.contacts.detections - detections,
+                sim.contacts.contacts.len(),
+                closed,
+                ts.elapsed().as_secs_f64() * 1e3,
+            );
         }
     }
     (t.elapsed().as_secs_f64(), sim)
@@ -107,6 +136,7 @@ fn main() {
     }
     let steps: usize = arg("--steps").and_then(|s| s.parse().ok()).unwrap_or(280);
     let only = arg("--only");
+    let trace = args.iter().any(|a| a == "--trace");
     let blocks = scene("dual").blocks.len();
     println!(
         "pile: {blocks} blocks, {steps} steps, {} rayon threads",
@@ -116,7 +146,7 @@ fn main() {
         if only.as_deref().is_some_and(|o| o != solver) {
             continue;
         }
-        let (secs, sim) = time_run(solver, steps);
+        let (secs, sim) = time_run(solver, steps, trace);
         let tip = sim.geoms[blocks - 1].bounds().0.y;
         println!(
             "{solver:>7}: {secs:.2} s for {steps} steps (simulated {:.4} s), {} contacts at the end, \

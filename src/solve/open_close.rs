@@ -97,8 +97,13 @@ pub fn iterate(
     params: &OpenCloseParams,
 ) -> Result<OpenClose, SolveError> {
     let mut last_changed = None;
-    for c in contacts.iter_mut() {
+    for (c, law) in contacts.iter_mut().zip(laws) {
         c.flips = 0;
+        // A frictionless contact carried in locked (found touching, or locked by a slip below
+        // the length tolerance) holds a shear spring it cannot have: start it sliding.
+        if c.state == ContactState::Locked && frictionless(c, law) {
+            c.state = ContactState::Sliding { dir: 1.0 };
+        }
         c.start_normal_force = if c.state.is_closed() {
             c.normal_force.max(0.0)
         } else {
@@ -166,7 +171,13 @@ fn update_state(
         match old {
             ContactState::Open => {
                 c.shear_force = 0.0;
-                ContactState::Locked
+                if frictionless(c, law) {
+                    ContactState::Sliding {
+                        dir: if s != 0.0 { s.signum() } else { 1.0 },
+                    }
+                } else {
+                    ContactState::Locked
+                }
             }
             ContactState::Locked => {
                 let f = -springs.shear * s;
@@ -211,7 +222,10 @@ fn update_state(
     let mut friction_moved = false;
     if let ContactState::Sliding { .. } = new {
         let n = c.normal_force.max(0.0);
-        friction_moved = matches!(old, ContactState::Sliding { .. })
+        // Without a friction coefficient the friction force does not depend on the normal
+        // force (it is zero, or the bond's cohesion): nothing to iterate.
+        friction_moved = law.tan_phi != 0.0
+            && matches!(old, ContactState::Sliding { .. })
             && (n - c.friction_normal).abs()
                 > friction_tol
                     * (n.max(c.friction_normal) + springs.normal * springs.gap_tolerance);
@@ -226,6 +240,13 @@ fn update_state(
             };
     }
     changed || friction_moved || release_moved
+}
+
+/// A joint that can carry no shear force at any normal force (no friction, no intact
+/// cohesion): it closes straight into sliding, since a locked state would only add a shear
+/// spring for one iteration, perturbing every other contact, before slipping anyway.
+fn frictionless(c: &Contact, law: &JointLaw) -> bool {
+    law.tan_phi == 0.0 && !(c.bonded && law.cohesion > 0.0)
 }
 
 /// The kept fraction λ = |g₀|/(|g₀| + g₁) of a contact compressed at the step start that is

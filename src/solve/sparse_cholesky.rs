@@ -16,6 +16,13 @@ use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Par, Side};
 
+/// Relative change of an off-diagonal block that counts as a changed spring in
+/// [`SparseCholesky::major_changes`]: a spring opening or closing changes its coupling block by
+/// 1/m of its size when m springs join the two blocks (m ≤ 4 between two polygons' sides);
+/// geometry drift changes it by the blocks' relative motion within one step, usually far less
+/// (a misjudged count only costs time: the iteration still checks its own convergence).
+const MAJOR_CHANGE: f64 = 0.2;
+
 #[derive(Default)]
 pub struct SparseCholesky {
     pattern: Vec<(usize, usize)>,
@@ -29,6 +36,11 @@ pub struct SparseCholesky {
     l_values: Vec<f64>,
     /// `l_values` holds a factor of a matrix with the current pattern (usable as preconditioner).
     factored: bool,
+    /// The matrix values `l_values` factors (to count how much the matrix changed since).
+    factored_values: Vec<f64>,
+    /// Scratch of [`SparseCholesky::major_changes`]: per off-diagonal slot, the largest
+    /// change of an entry and the largest entry.
+    change: Vec<[f64; 2]>,
     mem: Option<MemBuffer>,
     /// Conjugate-gradient scratch: right-hand side, residual, preconditioned residual,
     /// search direction and its image.
@@ -53,7 +65,8 @@ pub struct SparseParams {
     /// Conjugate-gradient iterations preconditioned by the previous factor before refactoring;
     /// 0 always refactors. A step that changes no contact state converges in 1–2, one that
     /// opens or closes k springs in about k + 1; 8 covers the common case and caps the cost of
-    /// a failed attempt below one factorization.
+    /// a failed attempt below one factorization. A change of the matrix whose rank is
+    /// already this large (estimated by `major_changes`) refactors without trying.
     pub max_reuse_iterations: usize,
     /// Convergence: the preconditioned residual (≈ the remaining error of the solution, since
     /// the preconditioner is nearly the matrix) below this fraction of the largest unknown.
@@ -175,7 +188,11 @@ impl SparseCholesky {
             self.rebuild_pattern(sys, dofs, params.supernodal)?;
         }
         self.fill_values(sys, dofs);
-        if self.factored && params.max_reuse_iterations > 0 && self.reuse_solve(x, params) {
+        if self.factored
+            && params.max_reuse_iterations > 0
+            && self.major_changes(sys, dofs) < params.max_reuse_iterations
+            && self.reuse_solve(x, params)
+        {
             return Ok(());
         }
         self.factorize(sys, dofs)?;
@@ -186,6 +203,43 @@ impl SparseCholesky {
         let rhs = faer::MatMut::from_column_major_slice_mut(x, self.n, 1);
         llt.solve_in_place_with_conj(faer::Conj::No, rhs, Par::Seq, MemStack::new(mem));
         Ok(())
+    }
+
+    /// About the rank of the change of the matrix since its last factorization, which is
+    /// about the number of conjugate-gradient iterations the reused factor needs: the number
+    /// of off-diagonal blocks that changed by more than [`MAJOR_CHANGE`] of their size (each is
+    /// at least one spring opened, closed or switched between stick and slip). Small changes
+    /// of every block (the geometry and Δt drifting from step to step) are not counted: they
+    /// keep the factor a good preconditioner. When the count reaches
+    /// [`SparseParams::max_reuse_iterations`] the iteration cannot converge in time, and
+    /// trying costs more than a factorization (the pile of examples/pile.rs spent 55 % of its
+    /// solve time in such failed attempts: docs/pile.md).
+    fn major_changes(&mut self, sys: &BlockSystem, dofs: &Dofs) -> usize {
+        self.change.clear();
+        self.change.resize(sys.pairs.len(), [0.0; 2]);
+        let mut at = 0;
+        for b in 0..dofs.ndof.len() {
+            for c in 0..dofs.ndof[b] {
+                for &(a, slot) in &self.col_blocks[b] {
+                    let rows = if slot.is_none() { c + 1 } else { dofs.ndof[a] };
+                    if let Some(k) = slot {
+                        let [delta, size] = &mut self.change[k];
+                        for (new, old) in self.values[at..at + rows]
+                            .iter()
+                            .zip(&self.factored_values[at..at + rows])
+                        {
+                            *delta = delta.max((new - old).abs());
+                            *size = size.max(new.abs()).max(old.abs());
+                        }
+                    }
+                    at += rows;
+                }
+            }
+        }
+        self.change
+            .iter()
+            .filter(|[delta, size]| *delta > MAJOR_CHANGE * size)
+            .count()
     }
 
     /// Numeric factorization of the current values into `l_values`.
@@ -213,6 +267,7 @@ impl SparseCholesky {
                 dof: first_bad_pivot(sys, dofs),
             })?;
         self.factored = true;
+        self.factored_values.clone_from(&self.values);
         self.numeric_count += 1;
         Ok(())
     }
