@@ -619,7 +619,12 @@ fn aspect_ratio_sweep() {
                 height: 5.0,
                 ..k()
             },
-            Diagnostic,
+            // Completes since the narrow phase stopped taking phantom penetrations of
+            // vertices outside the edge block (contact/vertex_edge.rs): before, a vertex was
+            // "found" 1.1 cm deep and the run stopped with `PenaltyTooSoft` after the energy
+            // had grown by 2.8 × the scale. Energy and penetration are checked as for every
+            // completed case.
+            Complete,
         ),
     ]);
 }

@@ -83,7 +83,34 @@ pub fn candidate(
             best = Some(c);
         }
     }
+    // A vertex outside the edge block penetrates nothing. A deep negative gap can still come
+    // from an edge whose line the vertex is beyond while it sits outside by another edge (that
+    // edge rejected by the entrance criterion at a small relative rotation, e.g. a vertex at
+    // the end of a slightly tilted face-to-face contact): such a phantom penetration pushed
+    // the vertex 8 cm "out" of a block it was not in (tests: `phantom_penetration_…`). Gaps
+    // within the entrance criterion's round-off scale (angle tolerance × edge length) are kept,
+    // so touching corners are not affected by which side round-off puts them.
+    if let Some(bc) = best {
+        let (a, b) = (gj.vertices[bc.edge], gj.vertices[(bc.edge + 1) % ne]);
+        let floor = sin_tol * (b - a).norm();
+        if bc.gap < -floor && !inside(&gj.vertices, p) {
+            return None;
+        }
+    }
     best
+}
+
+/// Whether `p` lies inside the polygon (crossing number; any simple polygon).
+fn inside(poly: &[nalgebra::Vector2<f64>], p: nalgebra::Vector2<f64>) -> bool {
+    let n = poly.len();
+    let mut odd = false;
+    for k in 0..n {
+        let (a, b) = (poly[k], poly[(k + 1) % n]);
+        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
+            odd = !odd;
+        }
+    }
+    odd
 }
 
 /// Candidates of every vertex of block `i` against the edges of block `j`.
@@ -135,6 +162,71 @@ pub fn drop_mirrored_vertex_pairs(
             cands.remove(k);
         } else {
             k += 1;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector2;
+
+    fn v(x: f64, y: f64) -> Vector2<f64> {
+        Vector2::new(x, y)
+    }
+
+    /// Regression (the 1700-block pile, step 187, examples/pile.rs): two neighbouring blocks of
+    /// the top row, face to face with a relative rotation of 2.7e-3 rad (above the 1e-3 rad
+    /// angle tolerance), the right one 12 cm lower. Its top-left vertex is 0.08 mm outside the
+    /// left block's right face; the entrance criterion rejects that face (the vertex's lower
+    /// edge turns 2.7e-3 rad into it), and the left block's bottom edge was then taken with a
+    /// gap of −7.8 cm: a phantom penetration that stopped the run with `PenaltyTooSoft`.
+    /// Now no candidate: the face contact is carried by the other block's corner.
+    #[test]
+    fn phantom_penetration_of_an_outside_vertex_is_not_a_contact() {
+        let left = BlockGeometry::new(vec![
+            v(8.000053556221753, 8.203145931882563),
+            v(8.40004252152172, 8.20388651421613),
+            v(8.399674955454675, 8.403885594805596),
+            v(7.999685990154714, 8.403145012472004),
+        ]);
+        let right = BlockGeometry::new(vec![
+            v(8.400142628141174, 8.081631594985907),
+            v(8.800113730516161, 8.081974148666433),
+            v(8.799948423706624, 8.281977137748559),
+            v(8.39997732133163, 8.281634584068032),
+        ]);
+        let geoms = [right, left];
+        let sin_tol = ContactParams::default().angle_tolerance.sin();
+        // Search distance of the pile (2.5 × 0.003 × its half size ≈ 0.083 m): the bottom edge's
+        // −7.8 cm is within it.
+        let search = 0.083;
+        assert!(!inside(&geoms[1].vertices, geoms[0].vertices[3]));
+        assert!(candidate(&geoms, 0, 3, 1, search, sin_tol).is_none());
+        // The real contact of the two faces: the left block's bottom-right corner on the right
+        // block's left face, a tiny penetration (≈ 0.2 mm), still found.
+        let c = candidate(&geoms, 1, 1, 0, search, sin_tol).expect("corner on the face");
+        assert_eq!(c.edge, 3);
+        assert!(c.gap.abs() < 1e-3, "{c:?}");
+    }
+
+    /// A vertex genuinely inside keeps its (shallowest) penetration; a vertex touching a face
+    /// (gap at round-off) keeps its contact whichever side round-off puts it.
+    #[test]
+    fn real_and_touching_contacts_are_kept() {
+        let base = BlockGeometry::new(vec![v(0.0, 0.0), v(2.0, 0.0), v(2.0, 1.0), v(0.0, 1.0)]);
+        let sin_tol = ContactParams::default().angle_tolerance.sin();
+        for dy in [-0.01, 1e-17, -1e-17] {
+            let top = BlockGeometry::new(vec![
+                v(0.5, 1.0 + dy),
+                v(1.5, 1.0 + dy),
+                v(1.5, 2.0 + dy),
+                v(0.5, 2.0 + dy),
+            ]);
+            let geoms = [top, base.clone()];
+            let c = candidate(&geoms, 0, 0, 1, 0.05, sin_tol).expect("contact kept");
+            assert_eq!(c.edge, 2, "top edge of the base");
+            assert!((c.gap - dy).abs() < 1e-12);
         }
     }
 }
