@@ -2,6 +2,7 @@
 //! criterion; vertex–vertex situations are resolved to the edge the vertex can enter.
 use super::ContactParams;
 use crate::geometry::BlockGeometry;
+use crate::scene::inside_depth;
 
 /// A vertex of `vertex_block` near edge `edge` of `edge_block`.
 #[derive(Debug, Clone, Copy)]
@@ -93,24 +94,11 @@ pub fn candidate(
     if let Some(bc) = best {
         let (a, b) = (gj.vertices[bc.edge], gj.vertices[(bc.edge + 1) % ne]);
         let floor = sin_tol * (b - a).norm();
-        if bc.gap < -floor && !inside(&gj.vertices, p) {
+        if bc.gap < -floor && inside_depth(p, &gj.vertices) <= 0.0 {
             return None;
         }
     }
     best
-}
-
-/// Whether `p` lies inside the polygon (crossing number; any simple polygon).
-fn inside(poly: &[nalgebra::Vector2<f64>], p: nalgebra::Vector2<f64>) -> bool {
-    let n = poly.len();
-    let mut odd = false;
-    for k in 0..n {
-        let (a, b) = (poly[k], poly[(k + 1) % n]);
-        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
-            odd = !odd;
-        }
-    }
-    odd
 }
 
 /// Candidates of every vertex of block `i` against the edges of block `j`.
@@ -201,7 +189,7 @@ mod tests {
         // Search distance of the pile (2.5 × 0.003 × its half size ≈ 0.083 m): the bottom edge's
         // −7.8 cm is within it.
         let search = 0.083;
-        assert!(!inside(&geoms[1].vertices, geoms[0].vertices[3]));
+        assert!(inside_depth(geoms[0].vertices[3], &geoms[1].vertices) < 0.0);
         assert!(candidate(&geoms, 0, 3, 1, search, sin_tol).is_none());
         // The real contact of the two faces: the left block's bottom-right corner on the right
         // block's left face, a tiny penetration (≈ 0.2 mm), still found.

@@ -8,7 +8,7 @@ mod plane;
 pub mod spec;
 mod validate;
 
-pub use plane::{polygon_signed_area, segments_cross};
+pub use plane::{inside_depth, polygon_signed_area, segments_cross};
 pub use spec::*;
 pub use validate::validate;
 
