@@ -19,9 +19,7 @@ use ashlar::service::{Service, ServiceConfig};
 use postgres::NoTls;
 use serde_json::{json, Value};
 use service_support::*;
-use std::io::BufRead;
-use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 use std::time::{Duration, Instant};
 use uuid::Uuid;
 
@@ -52,59 +50,6 @@ fn fresh_db(base: &str, tag: &str) -> String {
 
 fn sql(url: &str) -> postgres::Client {
     postgres::Client::connect(url, NoTls).expect("connect")
-}
-
-/// An `ashlar worker` process; its log goes to `<data>/worker.log`.
-struct Worker {
-    child: Child,
-}
-
-impl Worker {
-    fn start(url: &str, data: &Path, extra: &[&str]) -> Self {
-        std::fs::create_dir_all(data).expect("data dir");
-        let log = std::fs::File::create(data.join("worker.log")).expect("log file");
-        let mut child = Command::new(env!("CARGO_BIN_EXE_ashlar"))
-            .args(["worker", "--database", url, "--data"])
-            .arg(data)
-            .args(extra)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::from(log))
-            .spawn()
-            .expect("spawn ashlar worker");
-        let mut line = String::new();
-        std::io::BufReader::new(child.stdout.take().expect("stdout"))
-            .read_line(&mut line)
-            .expect("read the ready line");
-        assert!(
-            line.starts_with("ashlar worker: running"),
-            "worker did not start: {line:?} (log: {})",
-            std::fs::read_to_string(data.join("worker.log")).unwrap_or_default()
-        );
-        Self { child }
-    }
-
-    fn pid(&self) -> u32 {
-        self.child.id()
-    }
-
-    fn kill(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-
-    fn terminate(mut self) -> std::process::ExitStatus {
-        Command::new("kill")
-            .args(["-TERM", &self.child.id().to_string()])
-            .status()
-            .expect("kill -TERM");
-        self.child.wait().expect("wait")
-    }
-}
-
-impl Drop for Worker {
-    fn drop(&mut self) {
-        self.kill();
-    }
 }
 
 fn get_json(addr: &str, path: &str) -> Value {
@@ -154,17 +99,6 @@ fn close_json(a: &Value, b: &Value, rel: f64) -> bool {
                     .all(|(k, v)| y.get(k).is_some_and(|w| close_json(v, w, rel)))
         }
         _ => a == b,
-    }
-}
-
-fn wait_until(what: &str, timeout: Duration, mut done: impl FnMut() -> bool) {
-    let start = Instant::now();
-    while !done() {
-        assert!(
-            start.elapsed() < timeout,
-            "timed out after {timeout:?}: {what}"
-        );
-        std::thread::sleep(Duration::from_millis(50));
     }
 }
 

@@ -18,10 +18,9 @@ mod service_support;
 use ashlar::service::pg_tls;
 use serde_json::{json, Value};
 use service_support::*;
-use std::io::BufRead;
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::path::PathBuf;
+use std::process::Command;
+use std::time::Duration;
 use uuid::Uuid;
 
 struct Env {
@@ -79,52 +78,6 @@ fn encrypted(c: &mut postgres::Client) -> bool {
     .get(0)
 }
 
-fn wait_until(what: &str, timeout: Duration, mut done: impl FnMut() -> bool) {
-    let start = Instant::now();
-    while !done() {
-        assert!(
-            start.elapsed() < timeout,
-            "timed out after {timeout:?}: {what}"
-        );
-        std::thread::sleep(Duration::from_millis(100));
-    }
-}
-
-/// An `ashlar worker` process; its log goes to `<data>/worker.log`.
-struct Worker(Child);
-
-impl Worker {
-    fn start(url: &str, data: &Path, artifacts: &str) -> Self {
-        std::fs::create_dir_all(data).expect("data dir");
-        let log = std::fs::File::create(data.join("worker.log")).expect("log file");
-        let mut child = Command::new(env!("CARGO_BIN_EXE_ashlar"))
-            .args(["worker", "--database", url, "--workers", "1"])
-            .args(["--artifacts", artifacts, "--data"])
-            .arg(data)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::from(log))
-            .spawn()
-            .expect("spawn ashlar worker");
-        let mut line = String::new();
-        std::io::BufReader::new(child.stdout.take().expect("stdout"))
-            .read_line(&mut line)
-            .expect("read the ready line");
-        assert!(
-            line.starts_with("ashlar worker: running"),
-            "worker did not start: {line:?} (log: {})",
-            std::fs::read_to_string(data.join("worker.log")).unwrap_or_default()
-        );
-        Self(child)
-    }
-}
-
-impl Drop for Worker {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
 #[test]
 fn verify_full_runs_a_job_end_to_end_encrypted() {
     let Some(env) = env("verify_full_runs_a_job_end_to_end_encrypted") else {
@@ -148,7 +101,11 @@ fn verify_full_runs_a_job_end_to_end_encrypted() {
         &root.join("api"),
         &["--database", &url, "--workers", "0", "--artifacts", &shared],
     );
-    let _worker = Worker::start(&url, &root.join("worker"), &shared);
+    let _worker = Worker::start(
+        &url,
+        &root.join("worker"),
+        &["--workers", "1", "--artifacts", &shared],
+    );
     let body = json!({"scene": column_scene(2.0), "motion": pulse(3.0)});
     let (status, text) =
         http(&api.addr, "POST", "/v1/jobs", Some(&body.to_string())).expect("POST");

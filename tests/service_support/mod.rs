@@ -251,3 +251,73 @@ impl Drop for Server {
         let _ = self.child.wait();
     }
 }
+
+/// Poll `done` until it holds, failing after `timeout` with `what` (for the tests that drive
+/// separate processes, where no event can be awaited).
+pub fn wait_until(what: &str, timeout: Duration, mut done: impl FnMut() -> bool) {
+    let start = Instant::now();
+    while !done() {
+        assert!(
+            start.elapsed() < timeout,
+            "timed out after {timeout:?}: {what}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// An `ashlar worker` process on `--database url`; its log goes to `<data>/worker.log`.
+pub struct Worker {
+    child: std::process::Child,
+}
+
+impl Worker {
+    /// Start it and wait for its ready line; `extra` are further arguments.
+    pub fn start(url: &str, data: &std::path::Path, extra: &[&str]) -> Self {
+        use std::io::BufRead;
+        std::fs::create_dir_all(data).expect("data dir");
+        let log = std::fs::File::create(data.join("worker.log")).expect("log file");
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ashlar"))
+            .args(["worker", "--database", url, "--data"])
+            .arg(data)
+            .args(extra)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::from(log))
+            .spawn()
+            .expect("spawn ashlar worker");
+        let mut line = String::new();
+        std::io::BufReader::new(child.stdout.take().expect("stdout"))
+            .read_line(&mut line)
+            .expect("read the ready line");
+        assert!(
+            line.starts_with("ashlar worker: running"),
+            "worker did not start: {line:?} (log: {})",
+            std::fs::read_to_string(data.join("worker.log")).unwrap_or_default()
+        );
+        Self { child }
+    }
+
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// SIGKILL: no chance to clean up.
+    pub fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+
+    /// SIGTERM and wait for a clean exit.
+    pub fn terminate(mut self) -> std::process::ExitStatus {
+        std::process::Command::new("kill")
+            .args(["-TERM", &self.child.id().to_string()])
+            .status()
+            .expect("kill -TERM");
+        self.child.wait().expect("wait")
+    }
+}
+
+impl Drop for Worker {
+    fn drop(&mut self) {
+        self.kill();
+    }
+}
