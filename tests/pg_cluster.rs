@@ -19,6 +19,7 @@ use ashlar::service::{Service, ServiceConfig};
 use postgres::NoTls;
 use serde_json::{json, Value};
 use service_support::*;
+use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 use uuid::Uuid;
@@ -50,6 +51,32 @@ fn fresh_db(base: &str, tag: &str) -> String {
 
 fn sql(url: &str) -> postgres::Client {
     postgres::Client::connect(url, NoTls).expect("connect")
+}
+
+/// One API process (`--workers 0`) and `n` single-thread worker processes (2 s leases, `extra`
+/// further worker arguments) on `url`. Every process has its own --data under `root` (as on
+/// separate machines); artifacts meet in `root/shared` through the object store.
+fn cluster(url: &str, root: &Path, n: usize, extra: &[&str]) -> (Server, Vec<Worker>) {
+    let shared = format!("file://{}", root.join("shared").display());
+    let api = Server::start(
+        &root.join("api"),
+        &[
+            "--database",
+            url,
+            "--workers",
+            "0",
+            "--lease",
+            "2",
+            "--artifacts",
+            &shared,
+        ],
+    );
+    let mut args = vec!["--workers", "1", "--lease", "2", "--artifacts", &shared];
+    args.extend_from_slice(extra);
+    let workers = (0..n)
+        .map(|k| Worker::start(url, &root.join(format!("worker{k}")), &args))
+        .collect();
+    (api, workers)
 }
 
 fn get_json(addr: &str, path: &str) -> Value {
@@ -156,31 +183,7 @@ fn hundred_jobs_three_workers_one_killed() {
     };
     let url = fresh_db(&base, "hundred");
     let root = temp_dir("pg-hundred");
-    // Every process has its own --data (as on separate machines); artifacts meet in a shared
-    // directory through the object store.
-    let shared = format!("file://{}", root.join("shared").display());
-    let api = Server::start(
-        &root.join("api"),
-        &[
-            "--database",
-            &url,
-            "--workers",
-            "0",
-            "--lease",
-            "2",
-            "--artifacts",
-            &shared,
-        ],
-    );
-    let mut workers: Vec<Worker> = (0..3)
-        .map(|k| {
-            Worker::start(
-                &url,
-                &root.join(format!("worker{k}")),
-                &["--workers", "1", "--lease", "2", "--artifacts", &shared],
-            )
-        })
-        .collect();
+    let (api, mut workers) = cluster(&url, &root, 3, &[]);
     // 30 s simulated: a column that rocks then rests, a fraction of a second of CPU per job.
     let bodies: Vec<Value> = (0..100).map(|k| job_body(k, 30.0)).collect();
     let ids: Vec<String> = bodies.iter().map(|b| submit(&api.addr, b)).collect();
@@ -898,41 +901,10 @@ fn pga_searches_fan_out_over_three_workers_one_killed() {
     };
     let url = fresh_db(&base, "fanout_http");
     let root = temp_dir("pg-fanout");
-    let shared = format!("file://{}", root.join("shared").display());
-    let api = Server::start(
-        &root.join("api"),
-        &[
-            "--database",
-            &url,
-            "--workers",
-            "0",
-            "--lease",
-            "2",
-            "--artifacts",
-            &shared,
-        ],
-    );
     // The width of this process's rayon pool: the workers' k-section then plans exactly the
     // amplitudes the in-process search of this process plans.
     let width = rayon::current_num_threads().to_string();
-    let mut workers: Vec<Worker> = (0..3)
-        .map(|k| {
-            Worker::start(
-                &url,
-                &root.join(format!("worker{k}")),
-                &[
-                    "--workers",
-                    "1",
-                    "--lease",
-                    "2",
-                    "--artifacts",
-                    &shared,
-                    "--fanout-width",
-                    &width,
-                ],
-            )
-        })
-        .collect();
+    let (api, mut workers) = cluster(&url, &root, 3, &["--fanout-width", &width]);
     let single = json!({
         "scene": rigid_column(20.0),
         "motion": {"horizontal": half_sine(1.0, "")["horizontal"]},
