@@ -1379,7 +1379,6 @@ pub fn report(result: &StudyResult, svg_dir: &str, command: &str) -> String {
             }
         }
         s += "\n\n";
-        let ok = |p: &&Point| p.error.is_some_and(|e| e <= 0.01);
         if let Some(d) = pts.iter().find(|p| p.sweep == "defaults") {
             s += &format!(
                 "Defaults: error {}, {:.3} s, {} steps (model {}).",
@@ -1391,12 +1390,7 @@ pub fn report(result: &StudyResult, svg_dir: &str, command: &str) -> String {
                 d.model_ran
             );
         }
-        if let Some(best) = pts
-            .iter()
-            .filter(|p| ok(p))
-            .filter(|p| p.model_ran == "dda")
-            .min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s))
-        {
+        if let Some(best) = cheapest_within_1pct(pts.iter().copied(), |p| p.model_ran == "dda") {
             s += &format!(
                 " Cheapest full-DDA point within 1 %: `{}` ({:.3} %, {:.3} s).",
                 best.label,
@@ -1404,12 +1398,7 @@ pub fn report(result: &StudyResult, svg_dir: &str, command: &str) -> String {
                 best.wall_time_s
             );
         }
-        if let Some(best) = pts
-            .iter()
-            .filter(|p| ok(p))
-            .filter(|p| p.sweep == "reduced")
-            .min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s))
-        {
+        if let Some(best) = cheapest_within_1pct(pts.iter().copied(), |p| p.sweep == "reduced") {
             s += &format!(
                 " Cheapest reduced point within 1 %: `{}` ({:.2e}, {:.4} s).",
                 best.label,
@@ -1437,6 +1426,15 @@ pub fn report(result: &StudyResult, svg_dir: &str, command: &str) -> String {
         s += "\n";
     }
     s
+}
+
+/// The point of least wall time among those `pred` accepts whose error is within 1 %.
+fn cheapest_within_1pct<'a>(
+    pts: impl Iterator<Item = &'a Point>,
+    pred: impl Fn(&Point) -> bool,
+) -> Option<&'a Point> {
+    pts.filter(|p| pred(p) && p.error.is_some_and(|e| e <= 0.01))
+        .min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s))
 }
 
 /// The full engine at the default settings (`"model": "dda"` given, nothing else).
@@ -1599,13 +1597,9 @@ fn summary_tables(result: &StudyResult) -> String {
     for sc in &result.scenes {
         let d = find(&sc.name, &|p| p.sweep == "defaults");
         let full = engine_baseline(result, &sc.name);
-        let best = result
-            .points
-            .iter()
-            .filter(|p| {
-                p.scene == sc.name && p.model_ran == "dda" && p.error.is_some_and(|e| e <= 0.01)
-            })
-            .min_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s));
+        let best = cheapest_within_1pct(result.points.iter(), |p| {
+            p.scene == sc.name && p.model_ran == "dda"
+        });
         s += &format!(
             "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
             sc.name,
