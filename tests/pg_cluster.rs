@@ -867,6 +867,29 @@ fn half_sine(period: f64, name: &str) -> Value {
     json!({"name": name, "horizontal": {"pulse": {"amplitude": 1.0, "period": period, "cycles": 0.5, "units": "m/s2"}}})
 }
 
+/// The two searches the fan-out tests submit: one record, and two records with two criteria
+/// combined by `any` (a fragility study), over `duration` s of a rigid column.
+fn search_bodies(duration: f64, tolerance: f64, scan_points: u32) -> (Value, Value) {
+    let single = json!({
+        "scene": rigid_column(duration),
+        "motion": {"horizontal": half_sine(1.0, "")["horizontal"]},
+        "criterion": "toppled:column",
+        "range": {"min": 2.0, "max": 10.0, "units": "m/s2"},
+        "tolerance": tolerance,
+        "scan_points": scan_points
+    });
+    let multi = json!({
+        "scene": rigid_column(duration),
+        "motions": [half_sine(0.8, "T = 0.8 s"), half_sine(1.25, "T = 1.25 s")],
+        "criterion": ["toppled:column", "rotation:column:20"],
+        "combine": "any",
+        "range": {"min": 2.0, "max": 10.0, "units": "m/s2"},
+        "tolerance": tolerance,
+        "scan_points": scan_points
+    });
+    (single, multi)
+}
+
 /// The same search in this process (the embedded in-process path), as result JSON text.
 fn in_process(body: &Value) -> String {
     use ashlar::service::request::JobInput;
@@ -905,23 +928,7 @@ fn pga_searches_fan_out_over_three_workers_one_killed() {
     // amplitudes the in-process search of this process plans.
     let width = rayon::current_num_threads().to_string();
     let (api, mut workers) = cluster(&url, &root, 3, &["--fanout-width", &width]);
-    let single = json!({
-        "scene": rigid_column(20.0),
-        "motion": {"horizontal": half_sine(1.0, "")["horizontal"]},
-        "criterion": "toppled:column",
-        "range": {"min": 2.0, "max": 10.0, "units": "m/s2"},
-        "tolerance": 0.02,
-        "scan_points": 6
-    });
-    let multi = json!({
-        "scene": rigid_column(20.0),
-        "motions": [half_sine(0.8, "T = 0.8 s"), half_sine(1.25, "T = 1.25 s")],
-        "criterion": ["toppled:column", "rotation:column:20"],
-        "combine": "any",
-        "range": {"min": 2.0, "max": 10.0, "units": "m/s2"},
-        "tolerance": 0.02,
-        "scan_points": 6
-    });
+    let (single, multi) = search_bodies(20.0, 0.02, 6);
     let post = |b: &Value| {
         let (status, text) =
             http(&api.addr, "POST", "/v1/pga-searches", Some(&b.to_string())).expect("POST");
@@ -1040,23 +1047,7 @@ fn embedded_store_fans_out_with_one_worker_thread() {
     cfg.workers.fanout_width = Some(rayon::current_num_threads());
     let svc = Service::start(cfg, ashlar::service::analysis_runner()).expect("embedded service");
     let core = svc.state().core.clone();
-    let single = json!({
-        "scene": rigid_column(3.0),
-        "motion": {"horizontal": half_sine(1.0, "")["horizontal"]},
-        "criterion": "toppled:column",
-        "range": {"min": 2.0, "max": 10.0, "units": "m/s2"},
-        "tolerance": 0.05,
-        "scan_points": 5
-    });
-    let multi = json!({
-        "scene": rigid_column(3.0),
-        "motions": [half_sine(0.8, "T = 0.8 s"), half_sine(1.25, "T = 1.25 s")],
-        "criterion": ["toppled:column", "rotation:column:20"],
-        "combine": "any",
-        "range": {"min": 2.0, "max": 10.0, "units": "m/s2"},
-        "tolerance": 0.05,
-        "scan_points": 5
-    });
+    let (single, multi) = search_bodies(3.0, 0.05, 5);
     let limits = ashlar::service::Limits::default();
     let ids: Vec<Uuid> = [&single, &multi]
         .iter()
