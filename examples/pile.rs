@@ -11,7 +11,9 @@
 //! Δt ≤ 1 ms with the seed's displacement ratio 0.003.
 //!
 //! Run: `cargo run --release --example pile` (add `-- --write pile.json` to save the scene,
-//! `-- --steps N` to change the step count, `-- --only dual|penalty` to time one solver, `-- --trace` to print per-step work counts).
+//! `-- --steps N` to change the step count, `-- --only dual|penalty` to time one solver, `-- --trace` to print per-step work counts, `-- --cg-budget N` to
+//! give the dual solver's MPRGP minimisation N products with W, 0 for the projection–contraction
+//! iteration alone).
 use ashlar::motion::GroundMotion;
 use ashlar::scene::{parse_scene, Scene};
 use ashlar::simulation::{SimParams, Simulation};
@@ -82,12 +84,21 @@ fn scene(solver: &str) -> Scene {
 /// Run `steps` steps; returns (seconds, simulation). With `trace`, print one line per step:
 /// Δt, cuts, open–close iterations, numeric and symbolic factorizations, preconditioned CG
 /// iterations, contact detections, contacts, closed contacts.
-fn time_run(solver: &str, steps: usize, trace: bool) -> (f64, Simulation) {
+fn time_run(
+    solver: &str,
+    steps: usize,
+    trace: bool,
+    cg_budget: Option<usize>,
+) -> (f64, Simulation) {
     let scene = scene(solver);
-    let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
+    let mut params = SimParams::default();
+    if let Some(n) = cg_budget {
+        params.dual.max_cg_iterations = n;
+    }
+    let mut sim = Simulation::new(&scene, &GroundMotion::none(), params);
     let t = Instant::now();
     if trace {
-        println!("step  dt(s)      cuts  oc  numeric  symbolic  cg  detect  contacts  closed  ms");
+        println!("step  dt(s)      cuts  oc  numeric  symbolic  cg  mprgp  pc  detect  contacts  closed  ms");
     }
     for k in 0..steps {
         let (stats, counts, detections) = (sim.stats, sim.solver_counts(), sim.contacts.detections);
@@ -105,12 +116,14 @@ fn time_run(solver: &str, steps: usize, trace: bool) -> (f64, Simulation) {
                 .filter(|c| c.state.is_closed())
                 .count();
             println!(
-                "{k:4}  {dt:.3e}  {:4}  {:2}  {:7}  {:8}  {:2}  {:6}  {:8}  {:6}  {:.0}",
+                "{k:4}  {dt:.3e}  {:4}  {:2}  {:7}  {:8}  {:2}  {:6}  {:5}  {:6}  {:8}  {:6}  {:.0}",
                 sim.stats.time_step_cuts - stats.time_step_cuts,
                 sim.stats.open_close_iterations - stats.open_close_iterations,
                 c.numeric - counts.numeric,
                 c.symbolic - counts.symbolic,
                 c.reuse_iterations - counts.reuse_iterations,
+                sim.stats.dual_cg_products - stats.dual_cg_products,
+                sim.stats.dual_iterations - stats.dual_iterations,
                 sim.contacts.detections - detections,
                 sim.contacts.contacts.len(),
                 closed,
@@ -137,6 +150,7 @@ fn main() {
     let steps: usize = arg("--steps").and_then(|s| s.parse().ok()).unwrap_or(280);
     let only = arg("--only");
     let trace = args.iter().any(|a| a == "--trace");
+    let cg_budget = arg("--cg-budget").and_then(|s| s.parse().ok());
     let blocks = scene("dual").blocks.len();
     println!(
         "pile: {blocks} blocks, {steps} steps, {} rayon threads",
@@ -146,17 +160,18 @@ fn main() {
         if only.as_deref().is_some_and(|o| o != solver) {
             continue;
         }
-        let (secs, sim) = time_run(solver, steps, trace);
+        let (secs, sim) = time_run(solver, steps, trace, cg_budget);
         let tip = sim.geoms[blocks - 1].bounds().0.y;
         println!(
             "{solver:>7}: {secs:.2} s for {steps} steps (simulated {:.4} s), {} contacts at the end, \
              projectile tip at y = {tip:.3} m, max penetration {:.2e} m, cuts {}, \
-             open–close iterations {}, compatibility iterations {}, switches {}",
+             open–close iterations {}, MPRGP products with W {}, projection–contraction iterations {}, switches {}",
             sim.time,
             sim.contacts.contacts.len(),
             sim.stats.max_penetration,
             sim.stats.time_step_cuts,
             sim.stats.open_close_iterations,
+            sim.stats.dual_cg_products,
             sim.stats.dual_iterations,
             sim.stats.dual_switches,
         );

@@ -106,8 +106,10 @@ pub struct Stats {
     pub steps: u64,
     pub time_step_cuts: u64,
     pub open_close_iterations: u64,
-    /// Compatibility iterations of the dual solver (all steps).
+    /// Projection–contraction iterations of the dual solver (all steps).
     pub dual_iterations: u64,
+    /// Products with W of the dual solver's MPRGP minimisation (all steps).
+    pub dual_cg_products: u64,
     /// Vertex–vertex contact pairs switched by the dual solver.
     pub dual_switches: u64,
     /// Deepest penetration after a converged step, m.
@@ -460,6 +462,7 @@ impl Simulation {
         match r {
             Ok(o) => {
                 self.stats.dual_iterations += o.iterations as u64;
+                self.stats.dual_cg_products += o.cg_products as u64;
                 self.stats.dual_switches += o.switches as u64;
                 self.last_dual = Some(o);
                 Ok(o)

@@ -116,9 +116,30 @@ impl GapFunction {
 
     /// Block increments `d_f = f_f + Σ K⁻¹ w p` for contact forces `p`.
     pub fn displacements(&self, flex: &[BlockFlex], p: &[Pair], d: &mut Vec<Vec6>) {
+        self.gather(flex, p, true, d);
+    }
+
+    /// `G(p)`: gap and slide of every contact for the block increments `d`
+    /// (from [`GapFunction::displacements`]).
+    pub fn eval(&self, d: &[Vec6], out: &mut Vec<Pair>) {
+        self.scatter(d, true, out);
+    }
+
+    /// `W v` (m): the change of the gap function for a change `v` of the contact forces, with
+    /// `d` as scratch (the block increments of `v` alone).
+    pub fn apply_w(&self, flex: &[BlockFlex], v: &[Pair], d: &mut Vec<Vec6>, out: &mut Vec<Pair>) {
+        self.gather(flex, v, false, d);
+        self.scatter(d, false, out);
+    }
+
+    fn gather(&self, flex: &[BlockFlex], p: &[Pair], with_free: bool, d: &mut Vec<Vec6>) {
         d.resize(flex.len(), Vec6::zeros());
         let one = |(f, out): (usize, &mut Vec6)| {
-            let mut v = flex[f].free;
+            let mut v = if with_free {
+                flex[f].free
+            } else {
+                Vec6::zeros()
+            };
             for &(k, vertex_side) in &self.incidence[self.start[f]..self.start[f + 1]] {
                 let t = &self.terms[k as usize];
                 let [pn, pt] = p[k as usize];
@@ -137,13 +158,10 @@ impl GapFunction {
         }
     }
 
-    /// `G(p)`: gap and slide of every contact for the block increments `d`
-    /// (from [`GapFunction::displacements`]).
-    pub fn eval(&self, d: &[Vec6], out: &mut Vec<Pair>) {
+    fn scatter(&self, d: &[Vec6], with_constant: bool, out: &mut Vec<Pair>) {
         out.resize(self.terms.len(), [0.0; 2]);
         let one = |(t, g): (&PairTerms, &mut Pair)| {
-            let mut gn = t.constant[0];
-            let mut gt = t.constant[1];
+            let [mut gn, mut gt] = if with_constant { t.constant } else { [0.0; 2] };
             if let Some(f) = t.fi {
                 gn += t.wn_i.dot(&d[f]);
                 gt += t.wt_i.dot(&d[f]);

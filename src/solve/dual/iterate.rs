@@ -69,7 +69,7 @@ pub fn compatibility(
         worst: None,
     };
     for it in 0..=params.max_iterations {
-        let (res, worst) = natural_residual(gf, p, &s.g, &w);
+        let (res, worst) = natural_residual(gf, p, &s.g);
         report.residual = res;
         report.worst = worst;
         report.iterations = it;
@@ -161,17 +161,20 @@ pub fn compatibility(
     report
 }
 
-/// Largest `|D·(p − Π(p − D⁻¹G; p))|` over all components (m), and where it occurs.
-fn natural_residual(gf: &GapFunction, p: &[Pair], g: &[Pair], w: &[Pair]) -> (f64, Option<usize>) {
+/// Largest `|D·(p − Π(p − D⁻¹G; p))|` over all components (m), and where it occurs
+/// (D = diag W, from the terms).
+pub(super) fn natural_residual(gf: &GapFunction, p: &[Pair], g: &[Pair]) -> (f64, Option<usize>) {
     let mut worst = (0.0, None);
     for (k, t) in gf.terms.iter().enumerate() {
-        if w[k][0] <= 0.0 {
+        let w = t.diag;
+        if w[0] <= 0.0 {
             continue;
         }
-        let q = [p[k][0] - g[k][0] / w[k][0], p[k][1] - g[k][1] / w[k][1]];
+        let inv_t = if w[1] > 0.0 { 1.0 / w[1] } else { 0.0 };
+        let q = [p[k][0] - g[k][0] / w[0], p[k][1] - g[k][1] * inv_t];
         let proj = project(t, q, p[k][0]);
         for c in 0..2 {
-            let r = (w[k][c] * (p[k][c] - proj[c])).abs();
+            let r = (w[c] * (p[k][c] - proj[c])).abs();
             if r > worst.0 || r.is_nan() {
                 worst = (r, Some(k));
             }

@@ -5,9 +5,10 @@
 //! and load) and before `integrate` (which consumes the increments written to `x`).
 //!
 //! Per step: (1) invert each block's matrix ([`flexibility`]); (2) per-contact gap and slide
-//! terms ([`gap`]); (3) solve the quasi-variational inequality for the contact forces by the
-//! projection–contraction "compatibility iteration" ([`iterate`], projections in
-//! [`projection`]); (4) re-choose the pair of each compressed vertex–vertex contact (the
+//! terms ([`gap`]); (3) solve the quasi-variational inequality for the contact forces: first
+//! as a bound-constrained minimisation by conjugate gradients ([`mprgp`]), and where that has
+//! not converged within its budget by the seed's projection–contraction "compatibility
+//! iteration" ([`iterate`], projections in [`projection`]), both to the same stopping test; (4) re-choose the pair of each compressed vertex–vertex contact (the
 //! separating line with the largest step-end gap) and re-solve ([`switch`]); (5) block
 //! increments `d_i = f_i + K_i⁻¹ C_i p_i` into `x`.
 //! The non-penetration condition holds to the stated tolerance (a length), with no stiffness
@@ -18,6 +19,7 @@
 mod flexibility;
 mod gap;
 mod iterate;
+mod mprgp;
 mod projection;
 mod switch;
 
@@ -59,6 +61,23 @@ pub struct DualParams {
     pub beta_grow_below: f64,
     /// Relaxation γ ∈ (0, 2) of the contraction step: 1.8 converges fastest in He's tests.
     pub gamma: f64,
+    /// Products with W allowed to the MPRGP minimisation ([`mprgp`]) before the
+    /// projection–contraction iteration takes over from its forces (0: the
+    /// projection–contraction iteration alone, as in the seed). 20 000, the
+    /// projection–contraction budget: one of its iterations costs two products or more, so a
+    /// hopeless solve costs at most that much again before the fallback.
+    pub max_cg_iterations: usize,
+    /// Power iterations estimating the largest eigenvalue of D⁻¹W (the expansion step): 12
+    /// reach it within a factor 2 from a smooth start, which is all the step bound needs.
+    pub power_iterations: usize,
+    /// MPRGP's proportioning constant Γ: a conjugate-gradient step is taken while the
+    /// gradient of the bound forces is at most Γ times that of the free ones. 1 is Dostál's
+    /// recommended value (his convergence bound is best near it).
+    pub proportioning: f64,
+    /// Conjugate-gradient steps after which the gradient is recomputed from the forces (the
+    /// recurrence drifts by round-off): 50 costs 2 % more products and keeps the drift far
+    /// below the tolerance.
+    pub gradient_refresh: usize,
     /// Rounds of vertex–vertex switching per step (each re-solves warm-started): 4 allows a
     /// vertex to settle at a corner without letting it flip back and forth.
     pub max_switch_rounds: usize,
@@ -78,6 +97,10 @@ impl Default for DualParams {
             beta_grow: 1.5,
             beta_grow_below: 0.4,
             gamma: 1.8,
+            max_cg_iterations: 20_000,
+            power_iterations: 12,
+            proportioning: 1.0,
+            gradient_refresh: 50,
             max_switch_rounds: 4,
             parallel_from: 2000,
         }
@@ -88,8 +111,10 @@ impl Default for DualParams {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DualOutcome {
     pub converged: bool,
-    /// Compatibility iterations over all switching rounds.
+    /// Projection–contraction iterations over all switching rounds.
     pub iterations: usize,
+    /// Products with W of the MPRGP minimisation over all switching rounds.
+    pub cg_products: usize,
     /// Largest remaining contact-condition violation, m.
     pub residual: f64,
     /// Contact with the largest residual.
@@ -131,6 +156,7 @@ pub struct DualSolver {
     gap: GapFunction,
     p: Vec<Pair>,
     scratch: iterate::Scratch,
+    cg: mprgp::CgScratch,
     /// Per contact: made inert by vertex–vertex switching for this step.
     inert: Vec<bool>,
     warm: HashMap<Key, Pair>,
@@ -160,6 +186,7 @@ impl DualSolver {
         let mut outcome = DualOutcome {
             converged: false,
             iterations: 0,
+            cg_products: 0,
             residual: f64::INFINITY,
             worst: None,
             switches: 0,
@@ -183,15 +210,35 @@ impl DualSolver {
                     .iter()
                     .map(|c| self.warm.get(&key(c)).copied().unwrap_or([0.0; 2])),
             );
-            let r = iterate::compatibility(
-                &self.gap,
-                &self.flex,
-                &mut self.p,
-                &prm,
-                tol,
-                &mut self.scratch,
-            );
-            outcome.iterations += r.iterations;
+            let mut r = iterate::IterReport {
+                iterations: 0,
+                converged: false,
+                residual: f64::INFINITY,
+                worst: None,
+            };
+            if prm.max_cg_iterations > 0 {
+                r = mprgp::minimise(
+                    &self.gap,
+                    &self.flex,
+                    &mut self.p,
+                    &prm,
+                    tol,
+                    &mut self.scratch,
+                    &mut self.cg,
+                );
+                outcome.cg_products += r.iterations;
+            }
+            if !r.converged {
+                r = iterate::compatibility(
+                    &self.gap,
+                    &self.flex,
+                    &mut self.p,
+                    &prm,
+                    tol,
+                    &mut self.scratch,
+                );
+                outcome.iterations += r.iterations;
+            }
             outcome.converged = r.converged;
             outcome.residual = r.residual;
             outcome.worst = r.worst;
