@@ -63,9 +63,10 @@ pub struct DualParams {
     pub gamma: f64,
     /// Products with W allowed to the MPRGP minimisation ([`mprgp`]) before the
     /// projection–contraction iteration takes over from its forces (0: the
-    /// projection–contraction iteration alone, as in the seed). 20 000, the
-    /// projection–contraction budget: one of its iterations costs two products or more, so a
-    /// hopeless solve costs at most that much again before the fallback.
+    /// projection–contraction iteration alone, as in the seed). 5000: the warm-started solves
+    /// that converge take hundreds (small stacks and walls, `tests/dual_mprgp.rs`) to ~8000
+    /// (the 1700-block pile); on the pile a budget of 20 000 ran its first 5 steps slower
+    /// than 5000 (more time spent on solves that end in a time-step cut anyway).
     pub max_cg_iterations: usize,
     /// Power iterations estimating the largest eigenvalue of D⁻¹W (the expansion step): 12
     /// reach it within a factor 2 from a smooth start, which is all the step bound needs.
@@ -97,7 +98,7 @@ impl Default for DualParams {
             beta_grow: 1.5,
             beta_grow_below: 0.4,
             gamma: 1.8,
-            max_cg_iterations: 20_000,
+            max_cg_iterations: 5_000,
             power_iterations: 12,
             proportioning: 1.0,
             gradient_refresh: 50,
