@@ -13,7 +13,8 @@
 //! Run: `cargo run --release --example pile` (add `-- --write pile.json` to save the scene,
 //! `-- --steps N` to change the step count, `-- --only dual|penalty` to time one solver, `-- --trace` to print per-step work counts, `-- --cg-budget N` to
 //! give the dual solver's MPRGP minimisation N products with W, 0 for the projection–contraction
-//! iteration alone).
+//! iteration alone), `-- --dual-tolerance X` to stop its iterations at X × the smallest
+//! block's half size instead of the default 1e-9).
 use ashlar::motion::GroundMotion;
 use ashlar::scene::{parse_scene, Scene};
 use ashlar::simulation::{SimParams, Simulation};
@@ -81,19 +82,24 @@ fn scene(solver: &str) -> Scene {
     }
 }
 
+/// Overrides of the dual solver's parameters from the command line.
+#[derive(Clone, Copy)]
+struct DualArgs {
+    cg_budget: Option<usize>,
+    tolerance: Option<f64>,
+}
+
 /// Run `steps` steps; returns (seconds, simulation). With `trace`, print one line per step:
 /// Δt, cuts, open–close iterations, numeric and symbolic factorizations, preconditioned CG
 /// iterations, contact detections, contacts, closed contacts.
-fn time_run(
-    solver: &str,
-    steps: usize,
-    trace: bool,
-    cg_budget: Option<usize>,
-) -> (f64, Simulation) {
+fn time_run(solver: &str, steps: usize, trace: bool, dual: DualArgs) -> (f64, Simulation) {
     let scene = scene(solver);
     let mut params = SimParams::default();
-    if let Some(n) = cg_budget {
+    if let Some(n) = dual.cg_budget {
         params.dual.max_cg_iterations = n;
+    }
+    if let Some(t) = dual.tolerance {
+        params.dual.tolerance = t;
     }
     let mut sim = Simulation::new(&scene, &GroundMotion::none(), params);
     let t = Instant::now();
@@ -150,7 +156,10 @@ fn main() {
     let steps: usize = arg("--steps").and_then(|s| s.parse().ok()).unwrap_or(280);
     let only = arg("--only");
     let trace = args.iter().any(|a| a == "--trace");
-    let cg_budget = arg("--cg-budget").and_then(|s| s.parse().ok());
+    let dual = DualArgs {
+        cg_budget: arg("--cg-budget").and_then(|s| s.parse().ok()),
+        tolerance: arg("--dual-tolerance").and_then(|s| s.parse().ok()),
+    };
     let blocks = scene("dual").blocks.len();
     println!(
         "pile: {blocks} blocks, {steps} steps, {} rayon threads",
@@ -160,7 +169,7 @@ fn main() {
         if only.as_deref().is_some_and(|o| o != solver) {
             continue;
         }
-        let (secs, sim) = time_run(solver, steps, trace, cg_budget);
+        let (secs, sim) = time_run(solver, steps, trace, dual);
         let tip = sim.geoms[blocks - 1].bounds().0.y;
         println!(
             "{solver:>7}: {secs:.2} s for {steps} steps (simulated {:.4} s), {} contacts at the end, \
