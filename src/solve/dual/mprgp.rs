@@ -78,6 +78,7 @@ pub fn minimise(
         &mut c.dir,
         &mut c.w_dir,
         &mut c.grad,
+        &mut c.tmp,
     ] {
         v.clear();
         v.resize(n, [0.0; 2]);
@@ -220,7 +221,6 @@ fn bounded_cg(
             }
         }
     };
-    c.tmp.resize(n, [0.0; 2]);
     precond_free(p, c, false);
     let mut since_exact = 0;
     loop {
