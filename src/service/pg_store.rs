@@ -554,16 +554,8 @@ impl JobStore for PgStore {
             };
             let status: String = row.try_get(0)?;
             let out = match parse_status(&status)? {
-                JobStatus::Queued => {
-                    tx.execute(
-                        "UPDATE jobs SET status = 'cancelled', cancel_requested = TRUE, finished_ms = $2 WHERE id = $1",
-                        &[&id, &now_ms()],
-                    )?;
-                    tx.execute("SELECT pg_notify($1, $2)", &[&CHANNEL_DONE, &id.to_string()])?;
-                    CancelOutcome::CancelledQueued
-                }
-                JobStatus::Waiting => {
-                    // No worker holds a waiting search: it ends now, with its children.
+                // No worker holds a queued job, nor a waiting search: it ends now, with its children.
+                JobStatus::Queued | JobStatus::Waiting => {
                     tx.execute(
                         "UPDATE jobs SET status = 'cancelled', cancel_requested = TRUE, finished_ms = $2 WHERE id = $1",
                         &[&id, &now_ms()],

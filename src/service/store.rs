@@ -479,15 +479,8 @@ impl JobStore for SqliteStore {
                 return Ok(CancelOutcome::NotFound);
             };
             let out = match JobStatus::parse(&status)? {
-                JobStatus::Queued => {
-                    tx.execute(
-                        "UPDATE jobs SET status = 'cancelled', cancel_requested = 1, finished_ms = ?2 WHERE id = ?1",
-                        params![id.to_string(), now_ms()],
-                    )?;
-                    CancelOutcome::CancelledQueued
-                }
-                JobStatus::Waiting => {
-                    // No worker holds a waiting search: it ends now, with its children.
+                // No worker holds a queued job, nor a waiting search: it ends now, with its children.
+                JobStatus::Queued | JobStatus::Waiting => {
                     tx.execute(
                         "UPDATE jobs SET status = 'cancelled', cancel_requested = 1, finished_ms = ?2 WHERE id = ?1",
                         params![id.to_string(), now_ms()],
