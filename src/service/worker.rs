@@ -189,6 +189,16 @@ pub struct Core {
 }
 
 impl Core {
+    /// The job's progress as the store has it (which may be ahead of this process's, for a
+    /// search whose children ran elsewhere), or `otherwise` when it cannot be read.
+    fn stored_progress(&self, id: Uuid, otherwise: f64) -> f64 {
+        self.store
+            .get(id)
+            .ok()
+            .flatten()
+            .map_or(otherwise, |j| j.progress)
+    }
+
     pub fn new(
         store: Arc<dyn JobStore>,
         data_dir: PathBuf,
@@ -442,13 +452,7 @@ fn run_job(core: &Core, job: JobRecord) {
         Ok(None) => {
             // Parked in `waiting` by the store; its last child queues it again.
             core.unregister(id);
-            let progress = core
-                .store
-                .get(id)
-                .ok()
-                .flatten()
-                .map(|j| j.progress)
-                .unwrap_or(0.0);
+            let progress = core.stored_progress(id, 0.0);
             core.hub.publish(
                 id,
                 JobEvent {
@@ -499,13 +503,7 @@ fn run_job(core: &Core, job: JobRecord) {
         // be idle (another process hears it through the store's notification).
         core.notify_work();
     }
-    let progress = core
-        .store
-        .get(id)
-        .ok()
-        .flatten()
-        .map(|j| j.progress)
-        .unwrap_or(progress);
+    let progress = core.stored_progress(id, progress);
     core.hub.publish(id, JobEvent { status, progress });
 }
 
