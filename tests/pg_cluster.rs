@@ -79,6 +79,49 @@ fn cluster(url: &str, root: &Path, n: usize, extra: &[&str]) -> (Server, Vec<Wor
     (api, workers)
 }
 
+/// SIGKILL `worker` once it holds an open claim in `job_attempts` (on a child run of a search
+/// when `child`). Returns the worker's tag as matched in `job_attempts.worker`.
+fn kill_while_claiming(db: &mut postgres::Client, worker: &mut Worker, child: bool) -> String {
+    let victim = format!(":{}", worker.pid());
+    let query = if child {
+        "SELECT count(*) FROM job_attempts a JOIN jobs j ON j.id = a.job_id
+         WHERE a.worker LIKE '%' || $1 AND a.outcome IS NULL AND j.parent IS NOT NULL"
+    } else {
+        "SELECT count(*) FROM job_attempts WHERE worker LIKE '%' || $1 AND outcome IS NULL"
+    };
+    let what = if child { "a child" } else { "a job" };
+    wait_until(
+        &format!("the worker runs {what}"),
+        Duration::from_secs(120),
+        || {
+            let n: i64 = db.query_one(query, &[&victim]).expect("query").get(0);
+            n > 0
+        },
+    );
+    worker.kill();
+    victim
+}
+
+/// Attempts of the worker tagged `victim` that the reaper expired.
+fn expired_attempts(db: &mut postgres::Client, victim: &str) -> i64 {
+    db.query_one(
+        "SELECT count(*) FROM job_attempts WHERE worker LIKE '%' || $1 AND outcome = 'expired'",
+        &[&victim],
+    )
+    .expect("query")
+    .get(0)
+}
+
+/// Stop the surviving workers (index 1 on; 0 was killed) with SIGTERM, checking each exits
+/// cleanly, then the API process; remove the cluster's directory.
+fn shut_down(api: Server, mut workers: Vec<Worker>, root: &Path) {
+    for w in workers.drain(1..) {
+        assert!(w.terminate().success(), "SIGTERM stops a worker cleanly");
+    }
+    drop(api);
+    std::fs::remove_dir_all(root).ok();
+}
+
 fn get_json(addr: &str, path: &str) -> Value {
     let (status, body) = http(addr, "GET", path, None).expect("GET");
     assert_eq!(status, 200, "GET {path}: {body}");
@@ -189,19 +232,8 @@ fn hundred_jobs_three_workers_one_killed() {
     let ids: Vec<String> = bodies.iter().map(|b| submit(&api.addr, b)).collect();
 
     // SIGKILL worker 0 while it runs a job (its claim is open in job_attempts).
-    let victim = format!(":{}", workers[0].pid());
     let mut db = sql(&url);
-    wait_until("worker 0 runs a job", Duration::from_secs(120), || {
-        let n: i64 = db
-            .query_one(
-                "SELECT count(*) FROM job_attempts WHERE worker LIKE '%' || $1 AND outcome IS NULL",
-                &[&victim],
-            )
-            .expect("query")
-            .get(0);
-        n > 0
-    });
-    workers[0].kill();
+    let victim = kill_while_claiming(&mut db, &mut workers[0], false);
 
     wait_until("all 100 jobs succeed", Duration::from_secs(600), || {
         let c: i64 = db
@@ -239,13 +271,7 @@ fn hundred_jobs_three_workers_one_killed() {
         );
         expired_total += expired;
     }
-    let victim_expired: i64 = db
-        .query_one(
-            "SELECT count(*) FROM job_attempts WHERE worker LIKE '%' || $1 AND outcome = 'expired'",
-            &[&victim],
-        )
-        .expect("query")
-        .get(0);
+    let victim_expired = expired_attempts(&mut db, &victim);
     assert_eq!(victim_expired, 1, "the killed worker's job was reaped once");
     assert_eq!(expired_total, 1);
 
@@ -279,11 +305,7 @@ fn hundred_jobs_three_workers_one_killed() {
             "{csv:.200}"
         );
     }
-    for w in workers.drain(1..) {
-        assert!(w.terminate().success(), "SIGTERM stops a worker cleanly");
-    }
-    drop(api);
-    std::fs::remove_dir_all(root).ok();
+    shut_down(api, workers, &root);
 }
 
 #[test]
@@ -939,20 +961,8 @@ fn pga_searches_fan_out_over_three_workers_one_killed() {
     let ids = [post(&single), post(&multi)];
 
     // SIGKILL worker 0 while it runs a child run (its claim is open in job_attempts).
-    let victim = format!(":{}", workers[0].pid());
     let mut db = sql(&url);
-    wait_until("worker 0 runs a child", Duration::from_secs(120), || {
-        let n: i64 = db
-            .query_one(
-                "SELECT count(*) FROM job_attempts a JOIN jobs j ON j.id = a.job_id
-                 WHERE a.worker LIKE '%' || $1 AND a.outcome IS NULL AND j.parent IS NOT NULL",
-                &[&victim],
-            )
-            .expect("query")
-            .get(0);
-        n > 0
-    });
-    workers[0].kill();
+    let victim = kill_while_claiming(&mut db, &mut workers[0], true);
 
     let mut seen_waiting = false;
     wait_until("both searches end", Duration::from_secs(900), || {
@@ -1003,13 +1013,7 @@ fn pga_searches_fan_out_over_three_workers_one_killed() {
         assert_eq!(kids as usize, runs, "search {id}");
     }
     // The killed worker's child was reaped once and rerun.
-    let victim_expired: i64 = db
-        .query_one(
-            "SELECT count(*) FROM job_attempts WHERE worker LIKE '%' || $1 AND outcome = 'expired'",
-            &[&victim],
-        )
-        .expect("query")
-        .get(0);
+    let victim_expired = expired_attempts(&mut db, &victim);
     assert_eq!(victim_expired, 1);
     // Children stay out of the job list.
     let list = get_json(&api.addr, "/v1/jobs?limit=100");
@@ -1027,11 +1031,7 @@ fn pga_searches_fan_out_over_three_workers_one_killed() {
     let fitted =
         !serde_json::from_str::<Value>(&reference[1]).expect("JSON")["fragility"].is_null();
     assert_eq!(status, if fitted { 200 } else { 409 }, "{svg:.300}");
-    for w in workers.drain(1..) {
-        assert!(w.terminate().success(), "SIGTERM stops a worker cleanly");
-    }
-    drop(api);
-    std::fs::remove_dir_all(root).ok();
+    shut_down(api, workers, &root);
 }
 
 /// The embedded (SQLite) store fans out too when asked (`--fanout-width`): with ONE worker
