@@ -21,8 +21,9 @@ const state = {
   order: [], // ids, newest first
   streams: new Map(), // id -> EventSource
   watched: null, // id of the job shown in the result panel
-  autoShow: new Set(), // ids submitted here: shown when they finish
+  autoShow: null, // id of the latest job submitted here: shown when it finishes
   inspectSeq: 0,
+  showSeq: 0, // bumped by every show(): an older show() still waiting on the server gives up
   view: null, // the run being animated
 };
 
@@ -410,7 +411,9 @@ async function onSubmit(ev) {
   try {
     const acc = await api("POST", url, body);
     $("submit-status").textContent = `Queued ${acc.kind === "run" ? "run" : "PGA search"} ${acc.id.slice(0, 8)}.`;
-    state.autoShow.add(acc.id);
+    // Only the latest submission takes the result panel when it finishes: an earlier job
+    // that ends later (a cancelled run writing its outputs) must not replace it.
+    state.autoShow = acc.id;
     const job = await api("GET", acc.links.self);
     upsertJob(job);
     renderJobs();
@@ -475,8 +478,8 @@ function follow(job) {
       const fresh = await api("GET", job.links.self);
       upsertJob(fresh);
       renderJobRow(fresh.id);
-      if (state.autoShow.has(fresh.id) || state.watched === fresh.id) {
-        state.autoShow.delete(fresh.id);
+      if (state.autoShow === fresh.id || state.watched === fresh.id) {
+        if (state.autoShow === fresh.id) state.autoShow = null;
         show(fresh.id);
       }
     } catch (e) { console.warn(e); }
@@ -563,10 +566,13 @@ async function cancel(id) {
 // ---------- results ----------
 
 async function show(id) {
+  const seq = ++state.showSeq;
+  const current = () => seq === state.showSeq;
   state.watched = id;
   renderJobs();
   stopPlaying();
   const j = await api("GET", state.jobs.get(id).links.self);
+  if (!current()) return;
   upsertJob(j);
   $("result").hidden = false;
   $("run-view").hidden = true;
@@ -579,9 +585,10 @@ async function show(id) {
     return;
   }
   try {
-    if (j.kind === "run") await showRun(j);
+    if (j.kind === "run") await showRun(j, current);
     else showPga(j);
   } catch (e) {
+    if (!current()) return;
     // E.g. a run cancelled before it started has no histories.
     $("run-view").hidden = true;
     head.textContent += ` · ${e.message}`;
@@ -589,12 +596,13 @@ async function show(id) {
   $("result").scrollIntoView({ behavior: "smooth", block: "start" });
 }
 
-async function showRun(j) {
+async function showRun(j, current) {
   const [geo, hist, ground] = await Promise.all([
     api("GET", `/v1/jobs/${j.id}/scene`),
     api("GET", j.links.histories),
     api("GET", `/v1/jobs/${j.id}/ground`),
   ]);
+  if (!current()) return;
   $("run-view").hidden = false;
   state.view = buildView(j, geo, hist, ground);
   const slider = $("time-slider");
