@@ -1,54 +1,21 @@
 //! Block on a shaking foundation (seed 000 §3.4, §4.5.3, Eqs. 11–13, 16–17) as a 2D model with
 //! `driven_block`: the foundation (16 m long, so the block never reaches its ends) follows d1(t) = A(1 − cos 2πft) exactly; a flat block
 //! (2 m × 0.1 m) on top responds through friction μ. Reference: the semi-analytic rules of
-//! Eq. 17 integrated here with Δt = 1e-5 s. Tolerance: the 3 %, measured as the largest
+//! Eq. 17 integrated with Δt = 1e-5 s (`ashlar::analysis::reference`). Tolerance: the 3 %, measured as the largest
 //! |d2_DDA − d2_ref| over the run relative to the largest |d2_ref| (a pointwise relative error is
 //! undefined where the displacement crosses zero).
 mod common;
+use ashlar::analysis::reference::foundation_eq17;
 use ashlar::motion::{GroundMotion, Signal};
 use common::*;
 use serde_json::json;
 use std::f64::consts::PI;
 
-/// Semi-analytic response of block 2 (Eq. 17), sampled every `every` seconds.
+/// Semi-analytic response of block 2 (Eq. 17, `ashlar::analysis::reference`, Δt = 1e-5 s),
+/// sampled every `every` seconds.
 fn reference(a: f64, f: f64, mu: f64, t_end: f64, every: f64) -> Vec<(f64, f64)> {
-    let w = 2.0 * PI * f;
     let dt = 1e-5;
-    let (mut x2, mut v2, mut t) = (0.0f64, 0.0f64, 0.0f64);
-    let mut out = vec![(0.0, 0.0)];
-    let mut next = every;
-    let limit = mu * G;
-    while t < t_end - 1e-12 {
-        let v1 = a * w * (w * t).sin();
-        let a1 = a * w * w * (w * t).cos();
-        let rel = v1 - v2;
-        let acc = if rel.abs() < 1e-12 {
-            if a1.abs() <= limit {
-                a1
-            } else {
-                limit * a1.signum()
-            }
-        } else {
-            limit * rel.signum()
-        };
-        let mut nv = v2 + acc * dt;
-        let nv1 = a * w * (w * (t + dt)).sin();
-        // Sticking: the relative velocity changes sign within the step, or the blocks move
-        // together and the foundation's acceleration is within the friction limit.
-        let reverses = rel.abs() >= 1e-12 && (nv1 - nv) * rel < 0.0;
-        let stays_stuck = rel.abs() < 1e-12 && a1.abs() <= limit;
-        if reverses || stays_stuck {
-            nv = nv1;
-        }
-        x2 += 0.5 * (v2 + nv) * dt;
-        v2 = nv;
-        t += dt;
-        if t >= next - 1e-9 {
-            out.push((t, x2));
-            next += every;
-        }
-    }
-    out
+    foundation_eq17(a, f, mu, G, t_end, dt, (every / dt).round() as usize)
 }
 
 fn dda(a: f64, f: f64, mu: f64, t_end: f64, every: f64) -> Vec<(f64, f64)> {

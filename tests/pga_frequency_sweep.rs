@@ -3,8 +3,9 @@
 //! base (half-width × half-height 0.2 × 0.6 m and the more slender 0.1 × 0.8 m).
 //!
 //! Reference: Housner's equation of rocking, θ̈ = −p²[sin(α sgnθ − θ) − (ü_g/g) cos(α sgnθ − θ)]
-//! with p² = 3g/(4R), integrated here by RK4 (Δt = 1e-4 s) with Housner's restitution
-//! r = 1 − 1.5 sin²α applied to the angular velocity at each impact (as in tests/rocking.rs).
+//! with p² = 3g/(4R), integrated by RK4 (Δt = 1e-4 s) with Housner's restitution
+//! r = 1 − 1.5 sin²α applied to the angular velocity at each impact (`ashlar::analysis::reference`,
+//! as in tests/rocking.rs).
 //! The reference threshold is the lowest overturning amplitude found by a fine scan (3000 points
 //! from g tan α to 16 g tan α) and bisection to 1e-4 relative. "Overturned" means what the
 //! engine's `toppled` criterion means: |θ| ≥ 60° at any time, or |θ| > 30° at the end of the
@@ -19,6 +20,7 @@
 //! scan points, to 0.4 %) within 3 % of Housner's (the bound).
 mod common;
 use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};
+use ashlar::analysis::reference::{housner_rocking, HousnerColumn};
 use ashlar::analysis::run::RunOptions;
 use ashlar::motion::{GroundMotion, Signal};
 use common::*;
@@ -36,12 +38,9 @@ struct Column {
     h: f64,
 }
 
-/// Housner with the engine's `toppled` verdict. Returns (overturned, impacts before the verdict).
+/// Housner (`ashlar::analysis::reference`, RK4 at 1e-4 s) with the engine's `toppled`
+/// verdict. Returns (overturned, impacts before the verdict).
 fn housner(c: Column, a: f64, f: f64) -> (bool, usize) {
-    let r = c.b.hypot(c.h);
-    let alpha = (c.b / c.h).atan();
-    let p2 = 3.0 * G / (4.0 * r);
-    let e = 1.0 - 1.5 * alpha.sin().powi(2);
     let t_pulse = 1.0 / f;
     let ground = |t: f64| {
         if t <= t_pulse {
@@ -50,48 +49,17 @@ fn housner(c: Column, a: f64, f: f64) -> (bool, usize) {
             0.0
         }
     };
-    let dt = 1e-4;
-    let (mut t, mut th, mut w, mut sgn) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
-    let mut impacts = 0;
-    let t_end = t_pulse + AFTER;
-    while t < t_end - 1e-12 {
-        if sgn == 0.0 {
-            let ug = ground(t);
-            if ug.abs() > G * alpha.tan() {
-                // Ground to +x tips the column towards −x: counter-clockwise, θ > 0 (as in
-                // tests/rocking.rs); only the magnitude matters here.
-                sgn = ug.signum();
-            } else {
-                t += dt;
-                continue;
-            }
-        }
-        let acc = |t: f64, th: f64| {
-            p2 * (-(alpha * sgn - th).sin() + ground(t) / G * (alpha * sgn - th).cos())
-        };
-        let (k1t, k1w) = (w, acc(t, th));
-        let (k2t, k2w) = (w + 0.5 * dt * k1w, acc(t + 0.5 * dt, th + 0.5 * dt * k1t));
-        let (k3t, k3w) = (w + 0.5 * dt * k2w, acc(t + 0.5 * dt, th + 0.5 * dt * k2t));
-        let (k4t, k4w) = (w + dt * k3w, acc(t + dt, th + dt * k3t));
-        let nth = th + dt / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t);
-        let nw = w + dt / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
-        t += dt;
-        if nth * sgn < 0.0 {
-            impacts += 1;
-            th = 0.0;
-            w = nw * e;
-            sgn = w.signum();
-            if w.abs() < 1e-6 {
-                (sgn, w) = (0.0, 0.0);
-            }
-        } else {
-            (th, w) = (nth, nw);
-        }
-        if th.abs() >= std::f64::consts::FRAC_PI_3 {
-            return (true, impacts);
-        }
-    }
-    (th.abs() > std::f64::consts::FRAC_PI_6, impacts)
+    let col = HousnerColumn {
+        b: c.b,
+        h: c.h,
+        g: G,
+        dt: 1e-4,
+    };
+    let end = housner_rocking(&col, ground, t_pulse + AFTER, |s| {
+        s.theta.abs() >= std::f64::consts::FRAC_PI_3
+    });
+    // Stopped at 60°, or past 30° at the end of the window.
+    (end.theta.abs() > std::f64::consts::FRAC_PI_6, end.impacts)
 }
 
 /// Lowest overturning amplitude of the reference, and its mode (impacts before overturning).

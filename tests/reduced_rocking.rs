@@ -1,16 +1,17 @@
 //! The reduced rocking model (`"model": "rocking"`, `analysis::reduced`) against two
 //! independent methods on the rocking column of seed 000 §3.3 (b = 0.2 m, h = 0.6 m, half-sine
 //! pulse a(t) = A sin 2πt for 0 ≤ t ≤ 0.5 s):
-//! 1. Housner's equation integrated here by fixed-step RK4 (Δt = 1e-5 s) with Housner's
-//!    restitution e = 1 − 1.5 sin²α, written independently of the model (fixed step, no event
-//!    location). Tolerances: rotation history over 2 s (through the impacts) within 0.5 % of
-//!    the peak rotation — the reference locates impacts only to its 1e-5 s step, which shifts
+//! 1. Housner's equation integrated by fixed-step RK4 (Δt = 1e-5 s) with Housner's
+//!    restitution e = 1 − 1.5 sin²α (`ashlar::analysis::reference`, written independently of
+//!    the model: fixed step, no event location). Tolerances: rotation history over 2 s
+//!    (through the impacts) within 0.5 % of the peak rotation — the reference locates impacts only to its 1e-5 s step, which shifts
 //!    θ by ~ω·1e-5 ≈ 1e-5 rad a bounce, 0.005 % of the peak, so 0.5 % leaves a wide margin
 //!    while still failing for a wrong restitution (a 1 % change of e moves the second peak by
 //!    2 %); overturning amplitude within 0.2 % of the reference (both bisected to 1e-3 m/s²).
 //! 2. The full DDA engine on the same scene: rotation until the first impact within 2 % of the
 //!    peak (the tolerance of tests/rocking.rs, which holds DDA to the same reference).
 mod common;
+use ashlar::analysis::reference::{half_sine_pulse, housner_history, HousnerColumn};
 use ashlar::analysis::run::{run, RunOptions};
 use ashlar::motion::{GroundMotion, Signal};
 use common::*;
@@ -29,63 +30,18 @@ fn pulse(a: f64) -> GroundMotion {
     })
 }
 
-fn ground(a: f64, t: f64) -> f64 {
-    if (0.0..=0.5).contains(&t) {
-        a * (2.0 * std::f64::consts::PI * t).sin()
-    } else {
-        0.0
-    }
-}
-
-/// Housner by RK4: θ samples every 0.01 s, first impact time, overturned.
+/// Housner by RK4 (`ashlar::analysis::reference`): θ samples every 0.01 s, first impact
+/// time, overturned.
 fn housner(a: f64, t_end: f64) -> (Vec<f64>, Option<f64>, bool) {
-    let r = (B * B + H * H).sqrt();
-    let alpha = (B / H).atan();
-    let k = 3.0 / (4.0 * r);
-    let e = 1.0 - 1.5 * alpha.sin().powi(2);
-    let acc = |t: f64, th: f64, sgn: f64| {
-        k * (-G * (alpha * sgn - th).sin() + ground(a, t) * (alpha * sgn - th).cos())
+    let col = HousnerColumn {
+        b: B,
+        h: H,
+        g: G,
+        dt: 1e-5,
     };
-    let dt = 1e-5;
-    let (mut th, mut w, mut sgn) = (0.0, 0.0, 0.0f64);
-    let mut out = vec![0.0];
-    let mut impact = None;
-    let n = (t_end / dt).round() as usize;
-    for i in 0..n {
-        let t = i as f64 * dt;
-        if sgn == 0.0 && ground(a, t).abs() > G * alpha.tan() {
-            sgn = ground(a, t).signum();
-        }
-        if sgn != 0.0 {
-            let f = |t: f64, th: f64, w: f64| (w, acc(t, th, sgn));
-            let (k1t, k1w) = f(t, th, w);
-            let (k2t, k2w) = f(t + dt / 2.0, th + dt / 2.0 * k1t, w + dt / 2.0 * k1w);
-            let (k3t, k3w) = f(t + dt / 2.0, th + dt / 2.0 * k2t, w + dt / 2.0 * k2w);
-            let (k4t, k4w) = f(t + dt, th + dt * k3t, w + dt * k3w);
-            let nth = th + dt / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t);
-            let nw = w + dt / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
-            if nth * sgn < 0.0 {
-                impact.get_or_insert(t + dt);
-                th = 0.0;
-                w = nw * e;
-                sgn = w.signum();
-                if w.abs() < 1e-6 {
-                    sgn = 0.0;
-                    w = 0.0;
-                }
-            } else {
-                th = nth;
-                w = nw;
-            }
-        }
-        if (i + 1) % 1000 == 0 {
-            out.push(th);
-        }
-        if th.abs() > std::f64::consts::FRAC_PI_2 {
-            return (out, impact, true);
-        }
-    }
-    (out, impact, false)
+    let r = housner_history(&col, half_sine_pulse(a), t_end, 1000);
+    let theta = r.samples.iter().map(|s| s.1).collect();
+    (theta, r.first_impact, r.overturned)
 }
 
 fn column(model: &str, duration: f64) -> ashlar::scene::Scene {

@@ -4,7 +4,8 @@
 //!    within 1e-6 relative — the model integrates a constant acceleration, so only the ODE
 //!    tolerance (1e-10) and the onset location contribute.
 //! 2. Incline under a horizontal sine (seed 000 Eq. 10), against the fixed-step (1e-5 s)
-//!    semi-implicit rigid-plastic integration of tests/sliding_newmark.rs written again here:
+//!    semi-implicit rigid-plastic integration of `ashlar::analysis::reference` (as in
+//!    tests/sliding_newmark.rs):
 //!    within 0.1 % — that reference's own first-order stick/slip timing error (≤ 1e-5 s per
 //!    transition, a few transitions a cycle) is ~1e-4 of the displacement; the DDA
 //!    bound is 2 %.
@@ -14,6 +15,7 @@
 //!    deviated by 0.36 %, at 1e-6 s by 0.041 % (measured), so 1e-6 s is used.
 //! 4. The full DDA engine on the sine case: within 2 % (the bound for DDA).
 mod common;
+use ashlar::analysis::reference::{foundation_eq17, newmark_incline};
 use ashlar::analysis::run::{run, RunOptions, Summary};
 use ashlar::motion::{GroundMotion, Signal};
 use common::*;
@@ -21,31 +23,9 @@ use serde_json::json;
 use std::f64::consts::PI;
 use std::sync::Mutex;
 
+/// `ashlar::analysis::reference::newmark_incline` under A sin 2πft, fixed step 1e-5 s.
 fn newmark_reference(alpha: f64, phi: f64, a: f64, f: f64, t_end: f64) -> f64 {
-    let (sa, ca, mu) = (alpha.sin(), alpha.cos(), phi.tan());
-    let dt = 1e-5;
-    let (mut s, mut v) = (0.0f64, 0.0f64);
-    let n = (t_end / dt).round() as usize;
-    for i in 0..n {
-        let t = i as f64 * dt;
-        let ag = a * (2.0 * PI * f * t).sin();
-        let drive = G * sa - ag * ca;
-        let fric = mu * (G * ca + ag * sa).max(0.0);
-        let acc = if v > 0.0 {
-            drive - fric
-        } else if v < 0.0 {
-            drive + fric
-        } else if drive.abs() > fric {
-            drive - fric * drive.signum()
-        } else {
-            0.0
-        };
-        let nv = v + acc * dt;
-        let nv = if v != 0.0 && nv * v < 0.0 { 0.0 } else { nv };
-        s += 0.5 * (v + nv) * dt;
-        v = nv;
-    }
-    s
+    newmark_incline(alpha, phi, G, |t| a * (2.0 * PI * f * t).sin(), t_end, 1e-5)
 }
 
 fn incline_run(
@@ -123,40 +103,13 @@ fn incline_under_sine_matches_dda() {
     assert!(err < 0.02);
 }
 
+/// `ashlar::analysis::reference::foundation_eq17`, sampled every 0.01 s.
 fn foundation_reference(a: f64, f: f64, mu: f64, t_end: f64, dt: f64) -> Vec<f64> {
-    let w = 2.0 * PI * f;
-    let (mut x2, mut v2) = (0.0f64, 0.0f64);
-    let mut out = vec![0.0];
-    let limit = mu * G;
-    let n = (t_end / dt).round() as usize;
-    for i in 0..n {
-        let t = i as f64 * dt;
-        let v1 = a * w * (w * t).sin();
-        let a1 = a * w * w * (w * t).cos();
-        let rel = v1 - v2;
-        let acc = if rel.abs() < 1e-12 {
-            if a1.abs() <= limit {
-                a1
-            } else {
-                limit * a1.signum()
-            }
-        } else {
-            limit * rel.signum()
-        };
-        let mut nv = v2 + acc * dt;
-        let nv1 = a * w * (w * (t + dt)).sin();
-        let reverses = rel.abs() >= 1e-12 && (nv1 - nv) * rel < 0.0;
-        let stays_stuck = rel.abs() < 1e-12 && a1.abs() <= limit;
-        if reverses || stays_stuck {
-            nv = nv1;
-        }
-        x2 += 0.5 * (v2 + nv) * dt;
-        v2 = nv;
-        if (i + 1) % ((0.01 / dt).round() as usize) == 0 {
-            out.push(x2);
-        }
-    }
-    out
+    let every = (0.01 / dt).round() as usize;
+    foundation_eq17(a, f, mu, G, t_end, dt, every)
+        .into_iter()
+        .map(|(_, x)| x)
+        .collect()
 }
 
 #[test]

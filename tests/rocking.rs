@@ -1,10 +1,12 @@
 //! Rocking column (seed 000 §3.3): a rigid column of half-width b = 0.2 m and half-height
 //! h = 0.6 m on a fixed base, under a half-sine acceleration pulse a(t) = A sin(2πt) for
-//! 0 ≤ t ≤ 0.5 s. Reference: Housner's equation of rocking integrated here by RK4 (step 1e-5 s)
-//! with Housner's restitution at impacts. Tolerances: rotation up to the first impact within
-//! 2 % of the peak rotation; overturning amplitude within 2 % (both from the issue), within 1 %
-//! with the dual solver (`ASHLAR_CONTACT_SOLVER=dual`, no penalty stiffness to tune).
+//! 0 ≤ t ≤ 0.5 s. Reference: Housner's equation of rocking integrated by RK4 (step 1e-5 s) with
+//! Housner's restitution at impacts (`ashlar::analysis::reference`, which shares no code with
+//! the engine). Tolerances: rotation up to the first impact within 2 % of the peak rotation;
+//! overturning amplitude within 2 % (both from the issue), within 1 % with the dual solver
+//! (`ASHLAR_CONTACT_SOLVER=dual`, no penalty stiffness to tune).
 mod common;
+use ashlar::analysis::reference::{half_sine_pulse, housner_history, HousnerColumn};
 use ashlar::motion::{GroundMotion, Signal};
 use common::*;
 use serde_json::json;
@@ -21,69 +23,19 @@ fn pulse(a: f64) -> GroundMotion {
     })
 }
 
-fn ground(a: f64, t: f64) -> f64 {
-    if (0.0..=0.5).contains(&t) {
-        a * (2.0 * std::f64::consts::PI * t).sin()
-    } else {
-        0.0
-    }
-}
-
-/// Housner: θ̈ = (3/4R)[−g sin(α sgnθ − θ) + ü_g cos(α sgnθ − θ)], θ counter-clockwise (the
-/// ground accelerating to +x tips the column back towards −x, i.e. counter-clockwise).
-/// Returns samples (t, θ), the first impact time, and whether it overturned by `t_end`.
+/// Housner's equation (`ashlar::analysis::reference`, RK4 at 1e-5 s with Housner's
+/// restitution) under the same pulse: (t, θ) every step, the first impact time, and whether it
+/// overturned by `t_end`. θ counter-clockwise (the ground accelerating to +x tips the column back
+/// towards −x).
 fn housner(a: f64, t_end: f64) -> (Vec<(f64, f64)>, Option<f64>, bool) {
-    let r = (B * B + H * H).sqrt();
-    let alpha = (B / H).atan();
-    let k = 3.0 / (4.0 * r);
-    let e = 1.0 - 1.5 * alpha.sin().powi(2);
-    let acc = |t: f64, th: f64, sgn: f64| {
-        k * (-G * (alpha * sgn - th).sin() + ground(a, t) * (alpha * sgn - th).cos())
+    let col = HousnerColumn {
+        b: B,
+        h: H,
+        g: G,
+        dt: 1e-5,
     };
-    let (mut t, mut th, mut w) = (0.0, 0.0, 0.0);
-    let dt = 1e-5;
-    let mut out = vec![(0.0, 0.0)];
-    let mut first_impact = None;
-    let mut sgn = 0.0;
-    while t < t_end {
-        if sgn == 0.0 {
-            // At rest on the base until the ground acceleration exceeds g·tan α.
-            let ug = ground(a, t);
-            if ug.abs() > G * alpha.tan() {
-                sgn = ug.signum();
-            } else {
-                t += dt;
-                out.push((t, 0.0));
-                continue;
-            }
-        }
-        let f = |t: f64, th: f64, w: f64| (w, acc(t, th, sgn));
-        let (k1t, k1w) = f(t, th, w);
-        let (k2t, k2w) = f(t + dt / 2.0, th + dt / 2.0 * k1t, w + dt / 2.0 * k1w);
-        let (k3t, k3w) = f(t + dt / 2.0, th + dt / 2.0 * k2t, w + dt / 2.0 * k2w);
-        let (k4t, k4w) = f(t + dt, th + dt * k3t, w + dt * k3w);
-        let nth = th + dt / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t);
-        let nw = w + dt / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
-        t += dt;
-        if nth * sgn < 0.0 {
-            first_impact.get_or_insert(t);
-            th = 0.0;
-            w = nw * e;
-            sgn = w.signum();
-            if w.abs() < 1e-6 {
-                sgn = 0.0;
-                w = 0.0;
-            }
-        } else {
-            th = nth;
-            w = nw;
-        }
-        out.push((t, th));
-        if th.abs() > std::f64::consts::FRAC_PI_2 {
-            return (out, first_impact, true);
-        }
-    }
-    (out, first_impact, false)
+    let r = housner_history(&col, half_sine_pulse(a), t_end, 1);
+    (r.samples, r.first_impact, r.overturned)
 }
 
 fn column_scene(control: serde_json::Value) -> ashlar::scene::Scene {

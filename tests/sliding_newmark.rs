@@ -1,41 +1,18 @@
 //! Block on an incline under horizontal sinusoidal ground acceleration (seed 000 §3.1.2 Eq. 10,
-//! §4.1.3): Newmark-type sliding. Reference: an independent rigid-plastic integration written
-//! here (semi-implicit Euler, Δt = 1e-5 s, stick/slip switching with the exact friction law,
-//! both sliding directions). Tolerance: final displacement within 2 % (the bound).
+//! §4.1.3): Newmark-type sliding. Reference: an independent rigid-plastic integration
+//! (`ashlar::analysis::reference`: semi-implicit Euler, Δt = 1e-5 s, stick/slip switching with
+//! the exact friction law, both sliding directions). Tolerance: final displacement within 2 % (the bound).
 mod common;
+use ashlar::analysis::reference::newmark_incline;
 use common::*;
 use serde_json::json;
 
 /// Down-slope displacement of a rigid block on an incline α (down-slope towards +x) with
-/// friction φ under horizontal ground acceleration a_g(t) = A sin(2πft), relative to the ground.
+/// friction φ under horizontal ground acceleration a_g(t) = A sin(2πft), relative to the ground
+/// (`ashlar::analysis::reference::newmark_incline`, fixed step 1e-5 s).
 fn newmark_reference(alpha: f64, phi: f64, a: f64, f: f64, t_end: f64) -> f64 {
-    let (sa, ca, mu) = (alpha.sin(), alpha.cos(), phi.tan());
-    let dt = 1e-5;
-    let (mut s, mut v, mut t) = (0.0f64, 0.0f64, 0.0f64);
-    while t < t_end {
-        let ag = a * (2.0 * std::f64::consts::PI * f * t).sin();
-        // Per unit mass: driving force along the slope (down positive) from gravity and the
-        // inertial load −a_g (horizontal); normal pressure from both.
-        let drive = G * sa - ag * ca;
-        let normal = (G * ca + ag * sa).max(0.0);
-        let fric = mu * normal;
-        let acc = if v > 0.0 {
-            drive - fric
-        } else if v < 0.0 {
-            drive + fric
-        } else if drive.abs() > fric {
-            drive - fric * drive.signum()
-        } else {
-            0.0
-        };
-        let nv = v + acc * dt;
-        // Friction cannot reverse the motion within a step: stick when the velocity crosses zero.
-        let nv = if v != 0.0 && nv * v < 0.0 { 0.0 } else { nv };
-        s += 0.5 * (v + nv) * dt;
-        v = nv;
-        t += dt;
-    }
-    s
+    let sine = |t: f64| a * (2.0 * std::f64::consts::PI * f * t).sin();
+    newmark_incline(alpha, phi, G, sine, t_end, 1e-5)
 }
 
 fn dda(alpha_deg: f64, phi_deg: f64, a: f64, f: f64, t_end: f64) -> f64 {

@@ -3,5 +3,6 @@
 pub mod fragility;
 pub mod pga;
 pub mod reduced;
+pub mod reference;
 pub mod run;
 pub mod study;

@@ -10,6 +10,7 @@
 //! closed form, a DDA run at the finest setting of the sweep.
 use super::reduced::ode::Tolerance;
 use super::reduced::ReducedParams;
+use super::reference;
 use super::run::{run, RunOptions};
 use crate::motion::{self, GroundMotion, Signal};
 use crate::record::Frame;
@@ -315,135 +316,18 @@ fn incline_blocks(alpha_deg: f64) -> (Value, [f64; 2]) {
     (blocks, d)
 }
 
-/// Rigid-plastic block on an incline under a horizontal sine, fixed-step semi-implicit
-/// integration with exact stick/slip switching (as in tests/sliding_newmark.rs).
-fn newmark_incline(alpha: f64, phi: f64, a: f64, f: f64, t_end: f64) -> f64 {
-    let (sa, ca, mu) = (alpha.sin(), alpha.cos(), phi.tan());
-    let dt = 1e-5;
-    let (mut s, mut v, mut t) = (0.0f64, 0.0f64, 0.0f64);
-    while t < t_end - 1e-12 {
-        let ag = a * (2.0 * PI * f * t).sin();
-        let drive = G * sa - ag * ca;
-        let fric = mu * (G * ca + ag * sa).max(0.0);
-        let acc = if v > 0.0 {
-            drive - fric
-        } else if v < 0.0 {
-            drive + fric
-        } else if drive.abs() > fric {
-            drive - fric * drive.signum()
-        } else {
-            0.0
-        };
-        let nv = v + acc * dt;
-        let nv = if v != 0.0 && nv * v < 0.0 { 0.0 } else { nv };
-        s += 0.5 * (v + nv) * dt;
-        v = nv;
-        t += dt;
-    }
-    s
-}
-
-/// Seed 000 Eq. 17: block on a foundation moving as A(1 − cos ωt), sampled every `every` s.
-fn foundation_reference(a: f64, f: f64, mu: f64, t_end: f64, every: f64) -> Vec<(f64, f64)> {
-    let w = 2.0 * PI * f;
-    let dt = 1e-5;
-    let (mut x2, mut v2, mut t) = (0.0f64, 0.0f64, 0.0f64);
-    let mut out = vec![(0.0, 0.0)];
-    let mut next = every;
-    let limit = mu * G;
-    while t < t_end - 1e-12 {
-        let v1 = a * w * (w * t).sin();
-        let a1 = a * w * w * (w * t).cos();
-        let rel = v1 - v2;
-        let acc = if rel.abs() < 1e-12 {
-            if a1.abs() <= limit {
-                a1
-            } else {
-                limit * a1.signum()
-            }
-        } else {
-            limit * rel.signum()
-        };
-        let mut nv = v2 + acc * dt;
-        let nv1 = a * w * (w * (t + dt)).sin();
-        let reverses = rel.abs() >= 1e-12 && (nv1 - nv) * rel < 0.0;
-        let stays_stuck = rel.abs() < 1e-12 && a1.abs() <= limit;
-        if reverses || stays_stuck {
-            nv = nv1;
-        }
-        x2 += 0.5 * (v2 + nv) * dt;
-        v2 = nv;
-        t += dt;
-        if t >= next - 1e-9 {
-            out.push((t, x2));
-            next += every;
-        }
-    }
-    out
-}
-
-/// Housner's rocking of a b × h (half sizes) column under a half-sine pulse of amplitude `a`
-/// and period 1 s, RK4 at 1e-5 s with Housner's restitution: (t, θ) every `every` s, and
-/// whether it overturned by `t_end`.
+/// Housner's rocking of a b × h (half sizes) column under seed 000's half-sine pulse of
+/// amplitude `a` (RK4 at 1e-5 s): (t, θ) every `every` s, overturned by `t_end`, first impact.
 fn housner(b: f64, h: f64, a: f64, t_end: f64, every: f64) -> (Vec<(f64, f64)>, bool, Option<f64>) {
-    let r = (b * b + h * h).sqrt();
-    let alpha = (b / h).atan();
-    let k = 3.0 / (4.0 * r);
-    let e = 1.0 - 1.5 * alpha.sin().powi(2);
-    let ground = |t: f64| {
-        if (0.0..=0.5).contains(&t) {
-            a * (2.0 * PI * t).sin()
-        } else {
-            0.0
-        }
+    let col = reference::HousnerColumn {
+        b,
+        h,
+        g: G,
+        dt: 1e-5,
     };
-    let acc = |t: f64, th: f64, sgn: f64| {
-        k * (-G * (alpha * sgn - th).sin() + ground(t) * (alpha * sgn - th).cos())
-    };
-    let (mut t, mut th, mut w, mut sgn) = (0.0, 0.0, 0.0, 0.0f64);
-    let dt = 1e-5;
-    let mut out = vec![(0.0, 0.0)];
-    let mut next = every;
-    let mut first_impact = None;
-    while t < t_end - 1e-12 {
-        if sgn == 0.0 {
-            let ug = ground(t);
-            if ug.abs() > G * alpha.tan() {
-                sgn = ug.signum();
-            }
-        }
-        if sgn != 0.0 {
-            let f = |t: f64, th: f64, w: f64| (w, acc(t, th, sgn));
-            let (k1t, k1w) = f(t, th, w);
-            let (k2t, k2w) = f(t + dt / 2.0, th + dt / 2.0 * k1t, w + dt / 2.0 * k1w);
-            let (k3t, k3w) = f(t + dt / 2.0, th + dt / 2.0 * k2t, w + dt / 2.0 * k2w);
-            let (k4t, k4w) = f(t + dt, th + dt * k3t, w + dt * k3w);
-            let nth = th + dt / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t);
-            let nw = w + dt / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
-            if nth * sgn < 0.0 {
-                first_impact.get_or_insert(t + dt);
-                th = 0.0;
-                w = nw * e;
-                sgn = w.signum();
-                if w.abs() < 1e-6 {
-                    sgn = 0.0;
-                    w = 0.0;
-                }
-            } else {
-                th = nth;
-                w = nw;
-            }
-        }
-        t += dt;
-        if t >= next - 1e-9 {
-            out.push((t, th));
-            next += every;
-        }
-        if th.abs() > std::f64::consts::FRAC_PI_2 {
-            return (out, true, first_impact);
-        }
-    }
-    (out, false, first_impact)
+    let stride = (every / col.dt).round() as usize;
+    let r = reference::housner_history(&col, reference::half_sine_pulse(a), t_end, stride);
+    (r.samples, r.overturned, r.first_impact)
 }
 
 fn pulse(a: f64) -> GroundMotion {
@@ -470,7 +354,7 @@ fn column_scene() -> Value {
 
 /// The benchmark scenes.
 fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
-    let every = 0.01;
+    let every: f64 = 0.01;
     let mut out = Vec::new();
     // 1. Incline under gravity (seed 000 Eq. 14).
     let (alpha, phi, t_end) = (28.0f64, 20.0f64, 1.0);
@@ -494,7 +378,9 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
     // 2. Incline under a horizontal sine (seed 000 Eq. 10).
     let (alpha, phi, a, f, t_end) = (20.0f64, 30.0f64, 4.0, 1.0, 4.0);
     let (blocks, d) = incline_blocks(alpha);
-    let exact = newmark_incline(alpha.to_radians(), phi.to_radians(), a, f, t_end);
+    let sine = |t: f64| a * (2.0 * PI * f * t).sin();
+    let exact =
+        reference::newmark_incline(alpha.to_radians(), phi.to_radians(), G, sine, t_end, 1e-5);
     out.push(Bench {
         name: "incline-sine".into(),
         description: format!("the same block on a {alpha}° incline, φ = {phi}°, under a horizontal sine {a} m/s² at {f} Hz for {t_end} s"),
@@ -528,7 +414,9 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
             phase: std::f64::consts::FRAC_PI_2,
         }),
         duration: t_end,
-        metric: Metric::HistoryX { reference: foundation_reference(a, f, mu, t_end, every) },
+        metric: Metric::HistoryX {
+            reference: reference::foundation_eq17(a, f, mu, G, t_end, 1e-5, (every / 1e-5).round() as usize),
+        },
         reference_text: "seed 000 Eq. 17 integrated at a fixed step of 1e-5 s".into(),
         metric_text: "largest |x − x_ref| over the run relative to the largest |x_ref|".into(),
         reducible: true,

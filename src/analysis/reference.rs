@@ -1,0 +1,321 @@
+//! Independent semi-analytic references of seed 000 §3, integrated by fixed steps: Housner's
+//! rocking column, the rigid-plastic (Newmark) block on an incline, and the block on a shaking
+//! foundation (Eq. 17). Used by `ashlar study` and by the physics tests that hold the engine
+//! and the reduced models to them.
+//!
+//! Nothing here shares code with the engine or with `analysis::reduced` (which integrates the
+//! same equations adaptively, with event location): agreement is evidence, not tautology. Keep
+//! it that way: no imports from the rest of the crate.
+//!
+//! Units: m, s, rad. Ground acceleration is a function of time (m/s², along +x).
+
+/// A free-standing rigid rectangular column on a rigid base (Housner 1963), rocking about
+/// its base corners.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HousnerColumn {
+    /// Half-width b, m.
+    pub b: f64,
+    /// Half-height h, m.
+    pub h: f64,
+    /// Gravity, m/s².
+    pub g: f64,
+    /// Fixed RK4 step, s.
+    pub dt: f64,
+}
+
+/// The rocking reference after a step.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RockingState {
+    /// Steps taken.
+    pub step: usize,
+    /// Time, s (`step × dt`).
+    pub t: f64,
+    /// Rotation θ, rad, counter-clockwise positive: a ground accelerating to +x tips the
+    /// column back towards −x, θ > 0.
+    pub theta: f64,
+    /// θ̇, rad/s.
+    pub omega: f64,
+    /// Impacts (θ crossing zero) so far.
+    pub impacts: usize,
+    /// End time of the step with the first impact, s.
+    pub first_impact: Option<f64>,
+}
+
+/// Angular speed below which a column that has just impacted is at rest again, rad/s.
+const REST_SPEED: f64 = 1e-6;
+
+/// Housner's equation of rocking, θ̈ = (3/4R)[−g sin(α sgnθ − θ) + ü_g cos(α sgnθ − θ)]
+/// (R = √(b² + h²), α = atan(b/h)), under the ground acceleration `ground(t)`.
+///
+/// The column rests until |ü_g| > g tan α and then tips with the sign of ü_g; each step is
+/// one classical RK4 step of `dt`. When θ crosses zero the step ends at θ = 0 with θ̇ scaled
+/// by Housner's restitution e = 1 − 1.5 sin²α (impacts are located only to the step), and the
+/// column is at rest again if |θ̇| < 1e-6 rad/s.
+///
+/// `observe` sees the state after every step (resting ones too) and returns `true` to stop,
+/// e.g. once the column has overturned: the equation means nothing past |θ| = π/2. Runs
+/// `round(t_end / dt)` steps at most; returns the last state.
+pub fn housner_rocking(
+    col: &HousnerColumn,
+    ground: impl Fn(f64) -> f64,
+    t_end: f64,
+    mut observe: impl FnMut(&RockingState) -> bool,
+) -> RockingState {
+    let r = col.b.hypot(col.h);
+    let alpha = (col.b / col.h).atan();
+    let k = 3.0 / (4.0 * r);
+    let e = 1.0 - 1.5 * alpha.sin().powi(2);
+    let g = col.g;
+    let dt = col.dt;
+    let mut sgn = 0.0f64;
+    let acc = |t: f64, th: f64, sgn: f64| {
+        k * (-g * (alpha * sgn - th).sin() + ground(t) * (alpha * sgn - th).cos())
+    };
+    let mut s = RockingState::default();
+    let n = (t_end / dt).round() as usize;
+    for i in 0..n {
+        let t = i as f64 * dt;
+        if sgn == 0.0 {
+            let ug = ground(t);
+            if ug.abs() > g * alpha.tan() {
+                sgn = ug.signum();
+            }
+        }
+        if sgn != 0.0 {
+            let (th, w) = (s.theta, s.omega);
+            let f = |t: f64, th: f64, w: f64| (w, acc(t, th, sgn));
+            let (k1t, k1w) = f(t, th, w);
+            let (k2t, k2w) = f(t + dt / 2.0, th + dt / 2.0 * k1t, w + dt / 2.0 * k1w);
+            let (k3t, k3w) = f(t + dt / 2.0, th + dt / 2.0 * k2t, w + dt / 2.0 * k2w);
+            let (k4t, k4w) = f(t + dt, th + dt * k3t, w + dt * k3w);
+            let nth = th + dt / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t);
+            let nw = w + dt / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
+            if nth * sgn < 0.0 {
+                s.impacts += 1;
+                s.first_impact.get_or_insert(t + dt);
+                s.theta = 0.0;
+                s.omega = nw * e;
+                sgn = s.omega.signum();
+                if s.omega.abs() < REST_SPEED {
+                    sgn = 0.0;
+                    s.omega = 0.0;
+                }
+            } else {
+                s.theta = nth;
+                s.omega = nw;
+            }
+        }
+        s.step = i + 1;
+        s.t = (i + 1) as f64 * dt;
+        if observe(&s) {
+            break;
+        }
+    }
+    s
+}
+
+/// Seed 000 §3.3's ground motion: ü_g = A sin 2πt for 0 ≤ t ≤ 0.5 s (one half-sine of a 1 s
+/// period), then 0; A in m/s².
+pub fn half_sine_pulse(a: f64) -> impl Fn(f64) -> f64 {
+    move |t| {
+        if (0.0..=0.5).contains(&t) {
+            a * (2.0 * std::f64::consts::PI * t).sin()
+        } else {
+            0.0
+        }
+    }
+}
+
+/// A sampled rocking history.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RockingHistory {
+    /// (t, θ) at t = 0 and after every `stride` steps, s and rad.
+    pub samples: Vec<(f64, f64)>,
+    /// |θ| passed π/2 (the integration stops there).
+    pub overturned: bool,
+    /// End time of the step with the first impact, s.
+    pub first_impact: Option<f64>,
+}
+
+/// [`housner_rocking`] until `t_end` or until the column overturns (|θ| > π/2), sampled every
+/// `stride` steps.
+pub fn housner_history(
+    col: &HousnerColumn,
+    ground: impl Fn(f64) -> f64,
+    t_end: f64,
+    stride: usize,
+) -> RockingHistory {
+    let stride = stride.max(1);
+    let over = |s: &RockingState| s.theta.abs() > std::f64::consts::FRAC_PI_2;
+    let mut samples = vec![(0.0, 0.0)];
+    let end = housner_rocking(col, ground, t_end, |s| {
+        if s.step % stride == 0 {
+            samples.push((s.t, s.theta));
+        }
+        over(s)
+    });
+    RockingHistory {
+        samples,
+        overturned: over(&end),
+        first_impact: end.first_impact,
+    }
+}
+
+/// Down-slope displacement (m) relative to the ground of a rigid-plastic block on an incline
+/// at `alpha` (rad; down-slope towards +x) with friction angle `phi` (rad), under the
+/// horizontal ground acceleration `ground(t)` (seed 000 Eq. 10, Newmark's sliding block).
+///
+/// Per unit mass the drive along the slope is g sin α − ü_g cos α (the inertial load is
+/// −ü_g) and the normal pressure max(0, g cos α + ü_g sin α). Semi-implicit fixed steps of
+/// `dt` with the exact friction law in both sliding directions; friction never reverses the
+/// motion within a step (the block sticks when its velocity crosses zero). The stick/slip
+/// timing is first order in `dt`. Runs `round(t_end / dt)` steps.
+pub fn newmark_incline(
+    alpha: f64,
+    phi: f64,
+    g: f64,
+    ground: impl Fn(f64) -> f64,
+    t_end: f64,
+    dt: f64,
+) -> f64 {
+    let (sa, ca, mu) = (alpha.sin(), alpha.cos(), phi.tan());
+    let (mut s, mut v) = (0.0f64, 0.0f64);
+    let n = (t_end / dt).round() as usize;
+    for i in 0..n {
+        let ag = ground(i as f64 * dt);
+        let drive = g * sa - ag * ca;
+        let fric = mu * (g * ca + ag * sa).max(0.0);
+        let acc = if v > 0.0 {
+            drive - fric
+        } else if v < 0.0 {
+            drive + fric
+        } else if drive.abs() > fric {
+            drive - fric * drive.signum()
+        } else {
+            0.0
+        };
+        let nv = v + acc * dt;
+        let nv = if v != 0.0 && nv * v < 0.0 { 0.0 } else { nv };
+        s += 0.5 * (v + nv) * dt;
+        v = nv;
+    }
+    s
+}
+
+/// Relative speed below which the block and the foundation move together, m/s.
+const STUCK_SPEED: f64 = 1e-12;
+
+/// Seed 000 Eq. 17: displacement x₂ (m) of a block resting with friction coefficient `mu` on
+/// a foundation that moves as d₁ = A(1 − cos ωt), ω = 2πf, from rest.
+///
+/// Fixed steps of `dt`: while stuck the block follows the foundation as long as the
+/// foundation's acceleration is within μg; while slipping it accelerates at ±μg towards the
+/// foundation's velocity, and sticks when the relative velocity would change sign within the
+/// step. The stick/slip timing is first order in `dt` (a velocity error of up to dt·Aω² at
+/// each reversal). Returns (t, x₂) at t = 0 and every `every` steps, `round(t_end / dt)` steps.
+pub fn foundation_eq17(
+    a: f64,
+    f: f64,
+    mu: f64,
+    g: f64,
+    t_end: f64,
+    dt: f64,
+    every: usize,
+) -> Vec<(f64, f64)> {
+    let w = 2.0 * std::f64::consts::PI * f;
+    let limit = mu * g;
+    let (mut x2, mut v2) = (0.0f64, 0.0f64);
+    let mut out = vec![(0.0, 0.0)];
+    let n = (t_end / dt).round() as usize;
+    let every = every.max(1);
+    for i in 0..n {
+        let t = i as f64 * dt;
+        let v1 = a * w * (w * t).sin();
+        let a1 = a * w * w * (w * t).cos();
+        let rel = v1 - v2;
+        let stuck = rel.abs() < STUCK_SPEED;
+        let acc = if stuck {
+            a1.clamp(-limit, limit)
+        } else {
+            limit * rel.signum()
+        };
+        let mut nv = v2 + acc * dt;
+        let nv1 = a * w * (w * (t + dt)).sin();
+        let reverses = !stuck && (nv1 - nv) * rel < 0.0;
+        let stays_stuck = stuck && a1.abs() <= limit;
+        if reverses || stays_stuck {
+            nv = nv1;
+        }
+        x2 += 0.5 * (v2 + nv) * dt;
+        v2 = nv;
+        if (i + 1) % every == 0 {
+            out.push(((i + 1) as f64 * dt, x2));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const G: f64 = 9.81;
+
+    /// Under gravity alone the incline has the closed form d = ½g(sin α − cos α tan φ)t²
+    /// (seed 000 Eq. 14); the semi-implicit steps with the trapezoidal position update
+    /// integrate a constant acceleration exactly, so only round-off remains (1e-9 relative).
+    #[test]
+    fn incline_under_gravity_is_the_closed_form() {
+        let (alpha, phi) = (30f64.to_radians(), 20f64.to_radians());
+        let d = newmark_incline(alpha, phi, G, |_| 0.0, 1.0, 1e-4);
+        let exact = 0.5 * G * (alpha.sin() - alpha.cos() * phi.tan());
+        assert!(((d - exact) / exact).abs() < 1e-9, "{d} vs {exact}");
+        // Below the friction angle it does not move.
+        assert_eq!(newmark_incline(phi, alpha, G, |_| 0.0, 1.0, 1e-4), 0.0);
+    }
+
+    /// A column below g tan α never leaves its base; and the free rocking of a column
+    /// released from rest conserves energy between impacts (RK4 at 1e-5 s: 1e-9 relative).
+    #[test]
+    fn rocking_rests_below_the_threshold_and_conserves_energy_in_flight() {
+        let col = HousnerColumn {
+            b: 0.2,
+            h: 0.6,
+            g: G,
+            dt: 1e-5,
+        };
+        let low = 0.99 * G * col.b / col.h;
+        let end = housner_rocking(&col, |_| low, 1.0, |_| false);
+        assert_eq!((end.theta, end.omega, end.step), (0.0, 0.0, 100_000));
+        // A 0.05 s kick above the threshold, then free rocking: E = ½Iθ̇² + mgR cos(α − θ)
+        // per unit m with I = 4R²/3 (about the corner) is constant until the first impact.
+        let (r, alpha) = (col.b.hypot(col.h), (col.b / col.h).atan());
+        let energy = |s: &RockingState| {
+            0.5 * (4.0 * r * r / 3.0) * s.omega.powi(2) + G * r * (alpha - s.theta).cos()
+        };
+        let mut flight = Vec::new();
+        let kick = |t: f64| if t < 0.05 { 2.0 * G } else { 0.0 };
+        housner_rocking(&col, kick, 2.0, |s| {
+            if s.t > 0.05 + 2.0 * col.dt && s.impacts == 0 {
+                flight.push(energy(s));
+            }
+            s.impacts > 0 || s.theta.abs() > std::f64::consts::FRAC_PI_2
+        });
+        assert!(flight.len() > 100, "no free flight: {}", flight.len());
+        let (lo, hi) = flight
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+        assert!((hi - lo) / hi < 1e-9, "energy drifts {}", (hi - lo) / hi);
+    }
+
+    /// A foundation shaken well below μg carries the block with it: x₂ = d₁ = A(1 − cos ωt).
+    #[test]
+    fn foundation_below_the_friction_limit_carries_the_block() {
+        let (a, f, mu) = (0.001, 1.0, 0.6);
+        let w = 2.0 * std::f64::consts::PI * f;
+        for (t, x2) in foundation_eq17(a, f, mu, G, 2.0, 1e-5, 1000) {
+            let d1 = a * (1.0 - (w * t).cos());
+            assert!((x2 - d1).abs() < 1e-12, "t {t}: {x2} vs {d1}");
+        }
+    }
+}
