@@ -14,7 +14,8 @@
 //! `-- --steps N` to change the step count, `-- --only dual|penalty` to time one solver, `-- --trace` to print per-step work counts, `-- --cg-budget N` to
 //! give the dual solver's MPRGP minimisation N products with W, 0 for the projection–contraction
 //! iteration alone), `-- --dual-tolerance X` to stop its iterations at X × the smallest
-//! block's half size instead of the default 1e-9).
+//! block's half size instead of the default 1e-9, `-- --block-model rigid` for 3 unknowns a
+//! block instead of the seed's 6).
 use ashlar::motion::GroundMotion;
 use ashlar::scene::{parse_scene, Scene};
 use ashlar::simulation::{SimParams, Simulation};
@@ -32,8 +33,9 @@ fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Value {
     json!([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
 }
 
-/// The pile scene as JSON (`ashlar.scene/1`) for the given contact solver.
-pub fn pile_scene(solver: &str) -> Value {
+/// The pile scene as JSON (`ashlar.scene/1`) for the given contact solver and block model
+/// (`"deformable"`, 6 unknowns a block as in the seed's DDA, or `"rigid"`, 3).
+pub fn pile_scene(solver: &str, block_model: &str) -> Value {
     let width = COLUMNS as f64 * W;
     let height = ROWS as f64 * H;
     let mut blocks = vec![
@@ -71,12 +73,12 @@ pub fn pile_scene(solver: &str) -> Value {
         "blocks": blocks,
         "initial": [{ "block": "projectile", "velocity": [0.0, -SPEED] }],
         "control": { "time_step": 1.0e-3, "max_displacement_ratio": 0.003,
-                     "contact_solver": solver, "duration": 10.0 }
+                     "contact_solver": solver, "block_model": block_model, "duration": 10.0 }
     })
 }
 
-fn scene(solver: &str) -> Scene {
-    match parse_scene(&pile_scene(solver).to_string()) {
+fn scene(solver: &str, block_model: &str) -> Scene {
+    match parse_scene(&pile_scene(solver, block_model).to_string()) {
         Ok(s) => s,
         Err(e) => panic!("pile scene invalid: {e}"),
     }
@@ -89,11 +91,19 @@ struct DualArgs {
     tolerance: Option<f64>,
 }
 
+/// What the command line sets besides the dual solver's parameters.
+struct RunArgs<'a> {
+    steps: usize,
+    trace: bool,
+    block_model: &'a str,
+}
+
 /// Run `steps` steps; returns (seconds, simulation). With `trace`, print one line per step:
 /// Δt, cuts, open–close iterations, numeric and symbolic factorizations, preconditioned CG
 /// iterations, contact detections, contacts, closed contacts.
-fn time_run(solver: &str, steps: usize, trace: bool, dual: DualArgs) -> (f64, Simulation) {
-    let scene = scene(solver);
+fn time_run(solver: &str, run: &RunArgs<'_>, dual: DualArgs) -> (f64, Simulation) {
+    let (steps, trace) = (run.steps, run.trace);
+    let scene = scene(solver, run.block_model);
     let mut params = SimParams::default();
     if let Some(n) = dual.cg_budget {
         params.dual.max_cg_iterations = n;
@@ -149,7 +159,7 @@ fn main() {
             .cloned()
     };
     if let Some(path) = arg("--write") {
-        let text = serde_json::to_string_pretty(&pile_scene("dual")).expect("json");
+        let text = serde_json::to_string_pretty(&pile_scene("dual", "deformable")).expect("json");
         std::fs::write(&path, text).expect("write scene");
         eprintln!("wrote {path}");
     }
@@ -160,16 +170,22 @@ fn main() {
         cg_budget: arg("--cg-budget").and_then(|s| s.parse().ok()),
         tolerance: arg("--dual-tolerance").and_then(|s| s.parse().ok()),
     };
-    let blocks = scene("dual").blocks.len();
+    let block_model = arg("--block-model").unwrap_or_else(|| "deformable".into());
+    let run = RunArgs {
+        steps,
+        trace,
+        block_model: &block_model,
+    };
+    let blocks = scene("dual", &block_model).blocks.len();
     println!(
-        "pile: {blocks} blocks, {steps} steps, {} rayon threads",
+        "pile: {blocks} {block_model} blocks, {steps} steps, {} rayon threads",
         rayon::current_num_threads()
     );
     for solver in ["penalty", "dual"] {
         if only.as_deref().is_some_and(|o| o != solver) {
             continue;
         }
-        let (secs, sim) = time_run(solver, steps, trace, dual);
+        let (secs, sim) = time_run(solver, &run, dual);
         let tip = sim.geoms[blocks - 1].bounds().0.y;
         println!(
             "{solver:>7}: {secs:.2} s for {steps} steps (simulated {:.4} s), {} contacts at the end, \
