@@ -14,8 +14,9 @@
 //! `-- --steps N` to change the step count, `-- --only dual|penalty` to time one solver, `-- --trace` to print per-step work counts, `-- --cg-budget N` to
 //! give the dual solver's MPRGP minimisation N products with W, 0 for the projection–contraction
 //! iteration alone), `-- --dual-tolerance X` to stop its iterations at X × the smallest
-//! block's half size instead of the default 1e-9, `-- --block-model rigid` for 3 unknowns a
-//! block instead of the seed's 6).
+//! block's half size instead of the default 1e-9, `-- --proportioning G` for MPRGP's
+//! proportioning constant Γ instead of 1, `-- --block-model rigid` for 3 unknowns a block
+//! instead of the seed's 6).
 use ashlar::motion::GroundMotion;
 use ashlar::scene::{parse_scene, Scene};
 use ashlar::simulation::{SimParams, Simulation};
@@ -89,6 +90,7 @@ fn scene(solver: &str, block_model: &str) -> Scene {
 struct DualArgs {
     cg_budget: Option<usize>,
     tolerance: Option<f64>,
+    proportioning: Option<f64>,
 }
 
 /// What the command line sets besides the dual solver's parameters.
@@ -110,6 +112,9 @@ fn time_run(solver: &str, run: &RunArgs<'_>, dual: DualArgs) -> (f64, Simulation
     }
     if let Some(t) = dual.tolerance {
         params.dual.tolerance = t;
+    }
+    if let Some(g) = dual.proportioning {
+        params.dual.proportioning = g;
     }
     let mut sim = Simulation::new(&scene, &GroundMotion::none(), params);
     let t = Instant::now();
@@ -169,6 +174,7 @@ fn main() {
     let dual = DualArgs {
         cg_budget: arg("--cg-budget").and_then(|s| s.parse().ok()),
         tolerance: arg("--dual-tolerance").and_then(|s| s.parse().ok()),
+        proportioning: arg("--proportioning").and_then(|s| s.parse().ok()),
     };
     let block_model = arg("--block-model").unwrap_or_else(|| "deformable".into());
     let run = RunArgs {
