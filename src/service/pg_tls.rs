@@ -17,7 +17,8 @@
 //! system's trusted CAs; as in libpq 16 it implies, and insists on, `verify-full`), or else
 //! `~/.postgresql/root.crt` when that file exists. `sslcert=PATH&sslkey=PATH` present a client
 //! certificate (for `hostssl … cert` in `pg_hba.conf`). Over a Unix socket `sslmode` is
-//! ignored, as in libpq.
+//! ignored, as in libpq. A parameter the URL does not set is taken, as libpq does, from the
+//! environment: `PGSSLMODE`, `PGSSLROOTCERT`, `PGSSLCERT`, `PGSSLKEY` (empty means unset).
 use postgres::config::{Host, SslMode as PgSslMode};
 use postgres::{Client, NoTls};
 use rustls::client::danger::{HandshakeSignatureValid, ServerCertVerified, ServerCertVerifier};
@@ -359,14 +360,52 @@ fn client_config(
 }
 
 /// Parse a `--database` URL (already known to start with `postgres://` or `postgresql://`),
-/// including its TLS parameters, and load the certificates it names.
+/// including its TLS parameters (or libpq's environment variables for those it lacks), and
+/// load the certificates it names.
 pub fn parse(url: &str) -> Result<PgTarget, String> {
-    parse_with_default_root(url, default_root_file())
+    parse_with(url, default_root_file(), &|k| std::env::var(k).ok())
 }
 
-/// [`parse`] with libpq's default root certificate file given (tests pass `None`).
-fn parse_with_default_root(url: &str, default_root: Option<PathBuf>) -> Result<PgTarget, String> {
-    let (rest, p) = split_tls_params(url)?;
+/// libpq's environment variables for the TLS parameters.
+const TLS_ENV: [&str; 4] = ["PGSSLMODE", "PGSSLROOTCERT", "PGSSLCERT", "PGSSLKEY"];
+
+/// [`parse`] with libpq's default root certificate file and the environment given (tests
+/// pass `None` and an empty environment).
+fn parse_with(
+    url: &str,
+    default_root: Option<PathBuf>,
+    env: &dyn Fn(&str) -> Option<String>,
+) -> Result<PgTarget, String> {
+    let (rest, mut p) = split_tls_params(url)?;
+    let mut from_env = Vec::new();
+    let slots = [
+        &mut p.sslmode,
+        &mut p.sslrootcert,
+        &mut p.sslcert,
+        &mut p.sslkey,
+    ];
+    for (slot, name) in slots.into_iter().zip(TLS_ENV) {
+        if slot.is_none() {
+            if let Some(v) = env(name).filter(|v| !v.is_empty()) {
+                *slot = Some(v);
+                from_env.push(name);
+            }
+        }
+    }
+    parse_params(&rest, p, default_root).map_err(|e| {
+        if from_env.is_empty() {
+            e
+        } else {
+            format!("{e} (taken from the environment: {})", from_env.join(", "))
+        }
+    })
+}
+
+fn parse_params(
+    rest: &str,
+    p: TlsParams,
+    default_root: Option<PathBuf>,
+) -> Result<PgTarget, String> {
     let mut config = rest
         .parse::<postgres::Config>()
         .map_err(|e| format!("--database: not a valid PostgreSQL URL: {e}"))?;
@@ -545,16 +584,20 @@ fn rustls_error(e: &postgres::Error) -> Option<rustls::Error> {
 mod tests {
     use super::*;
 
+    /// [`parse`] with an empty environment, whatever this machine's `PGSSL*` are.
+    fn parse_no_env(url: &str) -> Result<PgTarget, String> {
+        parse_with(url, default_root_file(), &|_| None)
+    }
+
     /// As if `~/.postgresql/root.crt` did not exist, whatever this machine has.
     fn err(url: &str) -> String {
-        parse_with_default_root(url, None)
-            .map(|_| ())
-            .expect_err(url)
+        parse_with(url, None, &|_| None).map(|_| ()).expect_err(url)
     }
 
     #[test]
     fn default_is_prefer_and_tls_params_are_stripped() {
-        let t = parse("postgres://u@db.example:6543/ashlar?application_name=x").expect("parse");
+        let t =
+            parse_no_env("postgres://u@db.example:6543/ashlar?application_name=x").expect("parse");
         assert_eq!(t.mode, SslMode::Prefer);
         assert_eq!(t.config.get_application_name(), Some("x"));
         assert_eq!(t.hosts(), "db.example:6543");
@@ -566,7 +609,9 @@ mod tests {
         assert_eq!(p.sslmode.as_deref(), Some("require"));
         assert_eq!(p.sslrootcert.as_deref(), Some("/tmp/ca.pem"));
         assert!(matches!(
-            parse("postgres://h/d?sslmode=disable").expect("parse").mode,
+            parse_no_env("postgres://h/d?sslmode=disable")
+                .expect("parse")
+                .mode,
             SslMode::Disable
         ));
     }
@@ -608,8 +653,44 @@ mod tests {
 
     #[test]
     fn unix_sockets_ignore_sslmode() {
-        let t = parse("postgres://u@%2Fvar%2Frun%2Fpostgresql/d?sslmode=require").expect("parse");
+        let t = parse_no_env("postgres://u@%2Fvar%2Frun%2Fpostgresql/d?sslmode=require")
+            .expect("parse");
         assert!(t.tls.is_none());
         assert_eq!(t.config.get_ssl_mode(), PgSslMode::Disable);
+    }
+
+    #[test]
+    fn environment_fills_what_the_url_lacks_and_is_named_in_errors() {
+        let env = |k: &str| match k {
+            "PGSSLMODE" => Some("disable".to_string()),
+            "PGSSLCERT" => Some(String::new()),
+            _ => None,
+        };
+        let t = parse_with("postgres://h/d", None, &env).expect("parse");
+        assert_eq!(t.mode, SslMode::Disable);
+        // The URL wins over the environment.
+        let t = parse_with("postgres://h/d?sslmode=prefer", None, &env).expect("parse");
+        assert_eq!(t.mode, SslMode::Prefer);
+        // A bad value from the environment names the variable.
+        let bad = |k: &str| (k == "PGSSLMODE").then(|| "verify-everything".to_string());
+        let e = parse_with("postgres://h/d", None, &bad)
+            .map(|_| ())
+            .expect_err("bad PGSSLMODE");
+        assert!(
+            e.contains("verify-everything") && e.contains("PGSSLMODE"),
+            "{e}"
+        );
+        // A verifying mode from the environment with no root certificate anywhere.
+        let verify = |k: &str| (k == "PGSSLMODE").then(|| "verify-full".to_string());
+        let e = parse_with("postgres://h/d", None, &verify)
+            .map(|_| ())
+            .expect_err("verify-full without a CA");
+        assert!(e.contains("sslrootcert") && e.contains("PGSSLMODE"), "{e}");
+        // A client certificate needs its key, wherever each comes from.
+        let cert = |k: &str| (k == "PGSSLCERT").then(|| "/nonexistent/client.crt".to_string());
+        let e = parse_with("postgres://h/d?sslmode=disable", None, &cert)
+            .map(|_| ())
+            .expect_err("sslcert without sslkey");
+        assert!(e.contains("sslkey") && e.contains("PGSSLCERT"), "{e}");
     }
 }
