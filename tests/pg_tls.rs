@@ -10,6 +10,7 @@
 //! - `require` and the default (`prefer`) connect encrypted without a CA; `verify-ca` accepts
 //!   the certificate at 127.0.0.1 (issued for `localhost`), `verify-full` refuses it there;
 //! - a wrong CA is refused with the host and the reason, also by `ashlar worker` at start-up;
+//! - `PGSSLMODE`/`PGSSLROOTCERT` apply when the URL has no TLS parameters (libpq's variables);
 //! - `sslmode=disable` is refused by the server (hostssl only), with a hint;
 //! - a database whose pg_hba line says `cert` admits a client presenting `sslcert`/`sslkey`
 //!   (signed by the CA) and refuses one without.
@@ -235,6 +236,69 @@ fn wrong_ca_is_refused_naming_host_and_reason() {
         stderr.contains("localhost") && stderr.contains("UnknownIssuer"),
         "{stderr}"
     );
+    std::fs::remove_dir_all(data).ok();
+}
+
+/// libpq's environment variables: `ashlar worker` given a URL without TLS parameters takes
+/// them from `PGSSLMODE` and `PGSSLROOTCERT`. With the wrong CA there it refuses to start,
+/// naming the CA file (without the environment it would connect in `prefer` mode and run);
+/// with the right one it starts.
+#[test]
+fn tls_parameters_from_the_environment() {
+    use std::io::{BufRead, Read};
+    let Some(env) = env("tls_parameters_from_the_environment") else {
+        return;
+    };
+    let url = env.url("localhost", "postgres", "application_name=ashlar-env-test");
+    let data = temp_dir("pg-tls-env");
+    let worker = |ca: &str| {
+        Command::new(env!("CARGO_BIN_EXE_ashlar"))
+            .args(["worker", "--database", &url, "--data"])
+            .arg(&data)
+            .env("PGSSLMODE", "verify-full")
+            .env("PGSSLROOTCERT", ca)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("spawn ashlar worker")
+    };
+    let wrong = env.ca("wrong-ca.pem");
+    let mut child = worker(&wrong);
+    let mut status = None;
+    wait_until(
+        "the worker refuses the wrong CA from PGSSLROOTCERT",
+        Duration::from_secs(60),
+        || {
+            status = child.try_wait().expect("try_wait");
+            status.is_some()
+        },
+    );
+    let mut stderr = String::new();
+    child
+        .stderr
+        .take()
+        .expect("stderr")
+        .read_to_string(&mut stderr)
+        .expect("read stderr");
+    eprintln!(
+        "ashlar worker, wrong CA from the environment: {}",
+        stderr.trim()
+    );
+    assert!(status.is_some_and(|s| !s.success()), "{stderr}");
+    assert!(
+        stderr.contains("verify-full")
+            && stderr.contains("UnknownIssuer")
+            && stderr.contains(&wrong),
+        "{stderr}"
+    );
+    let mut child = worker(&env.ca("ca.pem"));
+    let mut line = String::new();
+    std::io::BufReader::new(child.stdout.take().expect("stdout"))
+        .read_line(&mut line)
+        .expect("read the ready line");
+    let _ = child.kill();
+    let _ = child.wait();
+    assert!(line.starts_with("ashlar worker: running"), "{line:?}");
     std::fs::remove_dir_all(data).ok();
 }
 
