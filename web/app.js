@@ -593,7 +593,7 @@ async function show(id) {
     $("run-view").hidden = true;
     head.textContent += ` · ${e.message}`;
   }
-  $("result").scrollIntoView({ behavior: "smooth", block: "start" });
+  if (current()) $("result").scrollIntoView({ behavior: "smooth", block: "start" });
 }
 
 async function showRun(j, current) {
