@@ -2,9 +2,9 @@
 //! angle 30°) under a steady horizontal sine of 1 Hz for 3 s; criterion
 //! `displacement:block:0.05` (residual centroid displacement ≥ 5 cm).
 //!
-//! Reference: an independent rigid-plastic Newmark integration written here (semi-implicit
-//! Euler, Δt = 1e-5 s, stick/slip with the exact Coulomb law, both directions; the same model
-//! as tests/sliding_newmark.rs, which checks the engine's displacement histories against it),
+//! Reference: an independent rigid-plastic Newmark integration (`ashlar::analysis::reference`:
+//! semi-implicit Euler, Δt = 1e-5 s, stick/slip with the exact Coulomb law, both directions;
+//! tests/sliding_newmark.rs checks the engine's displacement histories against it),
 //! and a direct bisection on its final displacement to 1e-5 relative.
 //!
 //! Tolerance: the engine's threshold (midpoint of a 0.01 m/s² bracket) within 2 % of the
@@ -12,6 +12,7 @@
 //! early stop) at `safe_pga` moves the block less than 5 cm, at `failing_pga` at least 5 cm.
 mod common;
 use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};
+use ashlar::analysis::reference::newmark_incline;
 use ashlar::analysis::run::{run as run_scene, RunOptions};
 use common::*;
 use serde_json::json;
@@ -25,33 +26,8 @@ const LIMIT: f64 = 0.05;
 /// Final down-slope displacement (m) of the rigid block relative to the ground under
 /// a_g(t) = A sin(2πFt).
 fn newmark(a: f64) -> f64 {
-    let (alpha, phi) = (ALPHA.to_radians(), PHI.to_radians());
-    let (sa, ca, mu) = (alpha.sin(), alpha.cos(), phi.tan());
-    let dt = 1e-5;
-    let (mut s, mut v, mut t) = (0.0f64, 0.0f64, 0.0f64);
-    while t < T_END - 1e-12 {
-        let ag = a * (2.0 * std::f64::consts::PI * F * t).sin();
-        // Per unit mass, down-slope positive: gravity and the inertial load −a_g (horizontal).
-        let drive = G * sa - ag * ca;
-        let fric = mu * (G * ca + ag * sa).max(0.0);
-        let acc = if v > 0.0 {
-            drive - fric
-        } else if v < 0.0 {
-            drive + fric
-        } else if drive.abs() > fric {
-            drive - fric * drive.signum()
-        } else {
-            0.0
-        };
-        let mut nv = v + acc * dt;
-        if v != 0.0 && nv * v < 0.0 {
-            nv = 0.0;
-        }
-        s += 0.5 * (v + nv) * dt;
-        v = nv;
-        t += dt;
-    }
-    s
+    let sine = |t: f64| a * (2.0 * std::f64::consts::PI * F * t).sin();
+    newmark_incline(ALPHA.to_radians(), PHI.to_radians(), G, sine, T_END, 1e-5)
 }
 
 #[test]

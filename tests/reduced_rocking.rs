@@ -18,8 +18,9 @@ use common::*;
 use serde_json::json;
 use std::sync::Mutex;
 
-const B: f64 = 0.2;
-const H: f64 = 0.6;
+/// The scene's column is the reference's.
+const B: f64 = HousnerColumn::SEED_000.b;
+const H: f64 = HousnerColumn::SEED_000.h;
 
 fn pulse(a: f64) -> GroundMotion {
     GroundMotion::horizontal(Signal::Pulse {
@@ -33,13 +34,7 @@ fn pulse(a: f64) -> GroundMotion {
 /// Housner by RK4 (`ashlar::analysis::reference`): θ samples every 0.01 s, first impact
 /// time, overturned.
 fn housner(a: f64, t_end: f64) -> (Vec<f64>, Option<f64>, bool) {
-    let col = HousnerColumn {
-        b: B,
-        h: H,
-        g: G,
-        dt: 1e-5,
-    };
-    let r = housner_history(&col, half_sine_pulse(a), t_end, 1000);
+    let r = housner_history(&HousnerColumn::SEED_000, half_sine_pulse(a), t_end, 1000);
     let theta = r.samples.iter().map(|s| s.1).collect();
     (theta, r.first_impact, r.overturned)
 }

@@ -11,8 +11,9 @@ use ashlar::motion::{GroundMotion, Signal};
 use common::*;
 use serde_json::json;
 
-const B: f64 = 0.2;
-const H: f64 = 0.6;
+/// The scene's column is the reference's.
+const B: f64 = HousnerColumn::SEED_000.b;
+const H: f64 = HousnerColumn::SEED_000.h;
 
 fn pulse(a: f64) -> GroundMotion {
     GroundMotion::horizontal(Signal::Pulse {
@@ -28,13 +29,7 @@ fn pulse(a: f64) -> GroundMotion {
 /// overturned by `t_end`. θ counter-clockwise (the ground accelerating to +x tips the column back
 /// towards −x).
 fn housner(a: f64, t_end: f64) -> (Vec<(f64, f64)>, Option<f64>, bool) {
-    let col = HousnerColumn {
-        b: B,
-        h: H,
-        g: G,
-        dt: 1e-5,
-    };
-    let r = housner_history(&col, half_sine_pulse(a), t_end, 1);
+    let r = housner_history(&HousnerColumn::SEED_000, half_sine_pulse(a), t_end, 1);
     (r.samples, r.first_impact, r.overturned)
 }
 

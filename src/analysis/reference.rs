@@ -23,6 +23,16 @@ pub struct HousnerColumn {
     pub dt: f64,
 }
 
+impl HousnerColumn {
+    /// Seed 000 §3.3's column (b = 0.2 m, h = 0.6 m, g = 9.81 m/s²) at an RK4 step of 1e-5 s.
+    pub const SEED_000: Self = Self {
+        b: 0.2,
+        h: 0.6,
+        g: 9.81,
+        dt: 1e-5,
+    };
+}
+
 /// The rocking reference after a step.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct RockingState {
