@@ -163,8 +163,9 @@ fn main() {
             .and_then(|i| args.get(i + 1))
             .cloned()
     };
+    let block_model = arg("--block-model").unwrap_or_else(|| "deformable".into());
     if let Some(path) = arg("--write") {
-        let text = serde_json::to_string_pretty(&pile_scene("dual", "deformable")).expect("json");
+        let text = serde_json::to_string_pretty(&pile_scene("dual", &block_model)).expect("json");
         std::fs::write(&path, text).expect("write scene");
         eprintln!("wrote {path}");
     }
@@ -176,7 +177,6 @@ fn main() {
         tolerance: arg("--dual-tolerance").and_then(|s| s.parse().ok()),
         proportioning: arg("--proportioning").and_then(|s| s.parse().ok()),
     };
-    let block_model = arg("--block-model").unwrap_or_else(|| "deformable".into());
     let run = RunArgs {
         steps,
         trace,
