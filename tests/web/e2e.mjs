@@ -206,7 +206,7 @@ try {
     await page.click("#submit-button");
     await page.waitForFunction(() => /Queued PGA search/.test(document.getElementById("submit-status").textContent), null, { timeout: 20000 });
     try {
-      await page.waitForFunction(() => /PGA search \w+: succeeded/.test(document.getElementById("result-head").textContent) && !document.getElementById("pga-view").hidden, null, { timeout: 30000 });
+      await page.waitForFunction(() => /PGA search \w+: succeeded/.test(document.getElementById("result-head").textContent) && !document.getElementById("pga-view").hidden, null, { timeout: 300000 });
     } catch (e) {
       const shown = await page.evaluate(() => ({ head: document.getElementById("result-head").textContent, pga: !document.getElementById("pga-view").hidden, rows: [...document.querySelectorAll("#jobs-body tr")].map((r) => `${r.id}:${r.dataset.status}`) }));
       throw new Error(`${e.message}\n    shown: ${JSON.stringify(shown)}`);
