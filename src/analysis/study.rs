@@ -23,6 +23,8 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 const G: f64 = 9.81;
+/// Fixed step of the sliding and foundation references, s (the texts of the report say 1e-5 s).
+const REF_DT: f64 = 1e-5;
 const PI: f64 = std::f64::consts::PI;
 
 /// What to run.
@@ -316,15 +318,10 @@ fn incline_blocks(alpha_deg: f64) -> (Value, [f64; 2]) {
     (blocks, d)
 }
 
-/// Housner's rocking of a b × h (half sizes) column under seed 000's half-sine pulse of
-/// amplitude `a` (RK4 at 1e-5 s): (t, θ) every `every` s, overturned by `t_end`, first impact.
-fn housner(b: f64, h: f64, a: f64, t_end: f64, every: f64) -> (Vec<(f64, f64)>, bool, Option<f64>) {
-    let col = reference::HousnerColumn {
-        b,
-        h,
-        g: G,
-        dt: 1e-5,
-    };
+/// Housner's rocking of seed 000's column under its half-sine pulse of amplitude `a` (RK4 at
+/// 1e-5 s): (t, θ) every `every` s, overturned by `t_end`, first impact.
+fn housner(a: f64, t_end: f64, every: f64) -> (Vec<(f64, f64)>, bool, Option<f64>) {
+    let col = reference::HousnerColumn::SEED_000;
     let stride = (every / col.dt).round() as usize;
     let r = reference::housner_history(&col, reference::half_sine_pulse(a), t_end, stride);
     (r.samples, r.overturned, r.first_impact)
@@ -339,8 +336,9 @@ fn pulse(a: f64) -> GroundMotion {
     })
 }
 
-const COL_B: f64 = 0.2;
-const COL_H: f64 = 0.6;
+/// The study's column is the reference's.
+const COL_B: f64 = reference::HousnerColumn::SEED_000.b;
+const COL_H: f64 = reference::HousnerColumn::SEED_000.h;
 
 fn column_scene() -> Value {
     material_scene(
@@ -380,7 +378,7 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
     let (blocks, d) = incline_blocks(alpha);
     let sine = |t: f64| a * (2.0 * PI * f * t).sin();
     let exact =
-        reference::newmark_incline(alpha.to_radians(), phi.to_radians(), G, sine, t_end, 1e-5);
+        reference::newmark_incline(alpha.to_radians(), phi.to_radians(), G, sine, t_end, REF_DT);
     out.push(Bench {
         name: "incline-sine".into(),
         description: format!("the same block on a {alpha}° incline, φ = {phi}°, under a horizontal sine {a} m/s² at {f} Hz for {t_end} s"),
@@ -415,14 +413,14 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
         }),
         duration: t_end,
         metric: Metric::HistoryX {
-            reference: reference::foundation_eq17(a, f, mu, G, t_end, 1e-5, (every / 1e-5).round() as usize),
+            reference: reference::foundation_eq17(a, f, mu, G, t_end, REF_DT, (every / REF_DT).round() as usize),
         },
         reference_text: "seed 000 Eq. 17 integrated at a fixed step of 1e-5 s".into(),
         metric_text: "largest |x − x_ref| over the run relative to the largest |x_ref|".into(),
         reducible: true,
     });
     // 4. Rocking column, history until the first impact (seed 000 §3.3).
-    let (reference, _, impact) = housner(COL_B, COL_H, 5.0, 2.0, every);
+    let (reference, _, impact) = housner(5.0, 2.0, every);
     let until = impact.unwrap_or(2.0) - 0.01;
     out.push(Bench {
         name: "rocking-history".into(),
@@ -436,7 +434,7 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
         reducible: true,
     });
     // 5. Rocking column, overturning amplitude.
-    let exact = overturning(|a| housner(COL_B, COL_H, a, 4.0, 0.1).1, 1e-3);
+    let exact = overturning(|a| housner(a, 4.0, 0.1).1, 1e-3);
     out.push(Bench {
         name: "rocking-overturning".into(),
         description: "the same column: smallest half-sine amplitude that overturns it".into(),
