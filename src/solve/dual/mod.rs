@@ -8,9 +8,10 @@
 //! terms ([`gap`]); (3) solve the quasi-variational inequality for the contact forces: first
 //! as a bound-constrained minimisation by conjugate gradients ([`mprgp`]), and where that has
 //! not converged within its budget by the seed's projection–contraction "compatibility
-//! iteration" ([`iterate`], projections in [`projection`]), both to the same stopping test; (4) re-choose the pair of each compressed vertex–vertex contact (the
-//! separating line with the largest step-end gap) and re-solve ([`switch`]); (5) block
-//! increments `d_i = f_i + K_i⁻¹ C_i p_i` into `x`.
+//! iteration" ([`iterate`], projections in [`projection`]), both to the same stopping test;
+//! (4) re-choose the pair of each compressed vertex–vertex contact (the separating line with
+//! the largest step-end gap) and re-solve ([`switch`]); (5) block increments
+//! `d_i = f_i + K_i⁻¹ C_i p_i` into `x`.
 //! The non-penetration condition holds to the stated tolerance (a length), with no stiffness
 //! parameter anywhere.
 //!
