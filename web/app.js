@@ -22,6 +22,7 @@ const state = {
   streams: new Map(), // id -> EventSource
   watched: null, // id of the job shown in the result panel
   autoShow: null, // id of the latest job submitted here: shown when it finishes
+  finished: new Set(), // ids whose end has been handled (see finished()), so it happens once
   inspectSeq: 0,
   showSeq: 0, // bumped by every show(): an older show() still waiting on the server gives up
   view: null, // the run being animated
@@ -417,7 +418,8 @@ async function onSubmit(ev) {
     const job = await api("GET", acc.links.self);
     upsertJob(job);
     renderJobs();
-    follow(job);
+    if (TERMINAL.has(job.status)) finished(job.id);
+    else follow(job);
   } catch (e) {
     $("submit-status").textContent = "";
     showProblem(e);
@@ -440,10 +442,12 @@ async function refreshJobs() {
   try {
     const r = await api("GET", "/v1/jobs?limit=30");
     const ids = [];
+    const ended = [];
     for (const j of r.jobs) {
       ids.push(j.id);
       const stream = state.streams.has(j.id);
       const known = state.jobs.get(j.id);
+      if (TERMINAL.has(j.status) && (state.autoShow === j.id || (known && !TERMINAL.has(known.status)))) ended.push(j.id);
       // A live stream is fresher than the listing for progress.
       if (stream && known) Object.assign(known, { ...j, progress: Math.max(known.progress, j.progress), status: TERMINAL.has(j.status) ? j.status : known.status });
       else state.jobs.set(j.id, Object.assign(known || {}, j));
@@ -451,6 +455,7 @@ async function refreshJobs() {
     const extra = state.order.filter((id) => !ids.includes(id));
     state.order = ids.concat(extra);
     renderJobs();
+    for (const id of ended) finished(id);
     for (const j of r.jobs) if (!TERMINAL.has(j.status)) follow(j);
   } catch (e) {
     console.warn("job list:", e);
@@ -478,16 +483,24 @@ function follow(job) {
       const fresh = await api("GET", job.links.self);
       upsertJob(fresh);
       renderJobRow(fresh.id);
-      if (state.autoShow === fresh.id || state.watched === fresh.id) {
-        if (state.autoShow === fresh.id) state.autoShow = null;
-        show(fresh.id);
-      }
     } catch (e) { console.warn(e); }
+    finished(job.id);
   });
   es.onerror = () => {
     // The server closed the stream (shutdown) or the network failed: fall back to polling.
     if (es.readyState === EventSource.CLOSED) state.streams.delete(job.id);
   };
+}
+
+// A job has been seen in a final state: by its stream's end event, by the periodic listing, or
+// by the read right after submitting (a short job can finish before the page follows it, and
+// then it never gets a stream). The latest submission, or the job on view, is shown, once.
+function finished(id) {
+  if (state.finished.has(id)) return;
+  state.finished.add(id);
+  if (state.autoShow !== id && state.watched !== id) return;
+  if (state.autoShow === id) state.autoShow = null;
+  show(id);
 }
 
 function renderJobs() {

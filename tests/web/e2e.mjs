@@ -66,6 +66,16 @@ page.on("pageerror", (e) => pageErrors.push(String(e)));
 // The browser logs every 4xx answer as a console error; the page handles those (field errors).
 page.on("console", (m) => { if (m.type() === "error" && !m.text().startsWith("Failed to load resource")) pageErrors.push(m.text()); });
 page.on("request", (r) => { const u = r.url(); if (!u.startsWith(base) && !u.startsWith("data:") && !u.startsWith("blob:")) foreign.push(u); });
+// What the page asked of the API and what it logged, printed when a check times out.
+const t00 = Date.now();
+const trail = [];
+const note = (what) => trail.push(`${((Date.now() - t00) / 1000).toFixed(2)} s ${what}`);
+// The periodic job listing is left out: it would crowd out the rest.
+const api = (r) => { const u = r.url().replace(base, ""); return u.startsWith("/v1/") && !u.startsWith("/v1/jobs?"); };
+page.on("request", (r) => { if (api(r)) note(`-> ${r.method()} ${r.url().replace(base, "")}`); });
+page.on("response", (r) => { if (api(r.request())) note(`<- ${r.status()} ${r.request().method()} ${r.url().replace(base, "")}`); });
+page.on("requestfailed", (r) => { if (api(r)) note(`xx ${r.method()} ${r.url().replace(base, "")}: ${r.failure() && r.failure().errorText}`); });
+page.on("console", (m) => { if (m.type() !== "log") note(`console.${m.type()}: ${m.text()}`); });
 
 try {
   await check("the page loads from the server alone", async () => {
@@ -203,14 +213,36 @@ try {
     await page.selectOption("#range-units", "g");
     await page.fill("#tolerance", "0.1");
     await page.fill("#scan-points", "4");
+    // The page's first read of the new search is held until the search has finished, as when
+    // a short job ends before the page follows it: CI once never showed such a search.
+    const firstRead = { held: false, status: "" };
+    await page.route("**/v1/pga-searches/*", async (route) => {
+      if (route.request().method() !== "GET" || firstRead.held) return route.continue();
+      firstRead.held = true;
+      for (;;) {
+        firstRead.status = (await (await fetch(route.request().url())).json()).status;
+        if (["succeeded", "failed", "cancelled"].includes(firstRead.status)) break;
+        await new Promise((r) => setTimeout(r, 200));
+      }
+      await route.continue();
+    });
     await page.click("#submit-button");
     await page.waitForFunction(() => /Queued PGA search/.test(document.getElementById("submit-status").textContent), null, { timeout: 20000 });
     try {
       await page.waitForFunction(() => /PGA search \w+: succeeded/.test(document.getElementById("result-head").textContent) && !document.getElementById("pga-view").hidden, null, { timeout: 300000 });
     } catch (e) {
-      const shown = await page.evaluate(() => ({ head: document.getElementById("result-head").textContent, pga: !document.getElementById("pga-view").hidden, rows: [...document.querySelectorAll("#jobs-body tr")].map((r) => `${r.id}:${r.dataset.status}`) }));
-      throw new Error(`${e.message}\n    shown: ${JSON.stringify(shown)}`);
+      const shown = await page.evaluate(() => ({
+        head: document.getElementById("result-head").textContent,
+        pga: !document.getElementById("pga-view").hidden,
+        rows: [...document.querySelectorAll("#jobs-body tr")].map((r) => `${r.id}:${r.dataset.status}`),
+        status: document.getElementById("submit-status").textContent,
+        autoShow: state.autoShow,
+        watched: state.watched,
+        streams: [...state.streams].map(([id, es]) => `${id}:${es.readyState}`),
+      }));
+      throw new Error(`${e.message}\n    shown: ${JSON.stringify(shown)}\n    trail:\n      ${trail.slice(-60).join("\n      ")}`);
     }
+    assert(firstRead.status === "succeeded", `the page's first read of the search was not held until it finished: ${JSON.stringify(firstRead)}`);
     const n = await colouredPixels(page, "plot-scan");
     assert(n > 50, `plot-scan: ${n} coloured pixels`);
     const text = await page.textContent("#pga-summary");
