@@ -49,10 +49,11 @@ pub fn compatibility(
     s: &mut Scratch,
 ) -> IterReport {
     let n = p.len();
-    let w: Vec<Pair> = gf.terms.iter().map(|t| t.diag).collect();
+    // Each contact's own flexibility, the iteration's metric (read in place, not copied).
+    let w = |k: usize| gf.terms[k].diag;
     // Contacts between blocks without unknowns carry no force.
     for k in 0..n {
-        if w[k][0] <= 0.0 {
+        if w(k)[0] <= 0.0 {
             p[k] = [0.0; 2];
         }
     }
@@ -86,10 +87,10 @@ pub fn compatibility(
             for k in 0..n {
                 let t = &gf.terms[k];
                 let q = [
-                    p[k][0] - beta * s.g[k][0] * inv(w[k][0]),
-                    p[k][1] - beta * s.g[k][1] * inv(w[k][1]),
+                    p[k][0] - beta * s.g[k][0] * inv(w(k)[0]),
+                    p[k][1] - beta * s.g[k][1] * inv(w(k)[1]),
                 ];
-                s.p_trial[k] = if w[k][0] > 0.0 {
+                s.p_trial[k] = if w(k)[0] > 0.0 {
                     project(t, q, p[k][0])
                 } else {
                     [0.0; 2]
@@ -102,8 +103,8 @@ pub fn compatibility(
                 for c in 0..2 {
                     let dp = p[k][c] - s.p_trial[k][c];
                     let dg = s.g[k][c] - s.g_trial[k][c];
-                    den += w[k][c] * dp * dp;
-                    num += beta * beta * dg * dg * inv(w[k][c]);
+                    den += w(k)[c] * dp * dp;
+                    num += beta * beta * dg * dg * inv(w(k)[c]);
                 }
             }
             if den == 0.0 {
@@ -125,10 +126,10 @@ pub fn compatibility(
         for k in 0..n {
             for c in 0..2 {
                 let dp = p[k][c] - s.p_trial[k][c];
-                let dd = dp - beta * (s.g[k][c] - s.g_trial[k][c]) * inv(w[k][c]);
+                let dd = dp - beta * (s.g[k][c] - s.g_trial[k][c]) * inv(w(k)[c]);
                 s.dir[k][c] = dd;
-                num += w[k][c] * dp * dd;
-                den += w[k][c] * dd * dd;
+                num += w(k)[c] * dp * dd;
+                den += w(k)[c] * dd * dd;
             }
         }
         let alpha = if den > 0.0 { num / den } else { 0.0 };
@@ -147,10 +148,10 @@ pub fn compatibility(
     for k in 0..n {
         let t = &gf.terms[k];
         let q = [
-            p[k][0] - s.g[k][0] * inv(w[k][0]),
-            p[k][1] - s.g[k][1] * inv(w[k][1]),
+            p[k][0] - s.g[k][0] * inv(w(k)[0]),
+            p[k][1] - s.g[k][1] * inv(w(k)[1]),
         ];
-        p[k] = if w[k][0] > 0.0 {
+        p[k] = if w(k)[0] > 0.0 {
             project(t, q, p[k][0])
         } else {
             [0.0; 2]
