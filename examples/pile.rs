@@ -16,7 +16,8 @@
 //! iteration alone), `-- --dual-tolerance X` to stop its iterations at X × the smallest
 //! block's half size instead of the default 1e-9, `-- --proportioning G` for MPRGP's
 //! proportioning constant Γ instead of 1, `-- --block-model rigid` for 3 unknowns a block
-//! instead of the seed's 6).
+//! instead of the seed's 6, `-- --stall-acceptance A` to accept a stalled dual solve whose
+//! violation is within A × its tolerance instead of cutting the step).
 use ashlar::motion::GroundMotion;
 use ashlar::scene::{parse_scene, Scene};
 use ashlar::simulation::{SimParams, Simulation};
@@ -91,6 +92,7 @@ struct DualArgs {
     cg_budget: Option<usize>,
     tolerance: Option<f64>,
     proportioning: Option<f64>,
+    stall_acceptance: Option<f64>,
 }
 
 /// What the command line sets besides the dual solver's parameters.
@@ -102,7 +104,8 @@ struct RunArgs<'a> {
 
 /// Run `steps` steps; returns (seconds, simulation). With `trace`, print one line per step:
 /// Δt, cuts, open–close iterations, numeric and symbolic factorizations, preconditioned CG
-/// iterations, contact detections, contacts, closed contacts.
+/// iterations, MPRGP products, projection–contraction iterations, loosely accepted dual solves,
+/// contact detections, contacts, closed contacts.
 fn time_run(solver: &str, run: &RunArgs<'_>, dual: DualArgs) -> (f64, Simulation) {
     let (steps, trace) = (run.steps, run.trace);
     let scene = scene(solver, run.block_model);
@@ -116,10 +119,13 @@ fn time_run(solver: &str, run: &RunArgs<'_>, dual: DualArgs) -> (f64, Simulation
     if let Some(g) = dual.proportioning {
         params.dual.proportioning = g;
     }
+    if let Some(a) = dual.stall_acceptance {
+        params.dual.stall_acceptance = a;
+    }
     let mut sim = Simulation::new(&scene, &GroundMotion::none(), params);
     let t = Instant::now();
     if trace {
-        println!("step  dt(s)      cuts  oc  numeric  symbolic  cg  mprgp  pc  detect  contacts  closed  ms");
+        println!("step  dt(s)      cuts  oc  numeric  symbolic  cg  mprgp  pc  loose  detect  contacts  closed  ms");
     }
     for k in 0..steps {
         let (stats, counts, detections) = (sim.stats, sim.solver_counts(), sim.contacts.detections);
@@ -137,7 +143,7 @@ fn time_run(solver: &str, run: &RunArgs<'_>, dual: DualArgs) -> (f64, Simulation
                 .filter(|c| c.state.is_closed())
                 .count();
             println!(
-                "{k:4}  {dt:.3e}  {:4}  {:2}  {:7}  {:8}  {:2}  {:6}  {:5}  {:6}  {:8}  {:6}  {:.0}",
+                "{k:4}  {dt:.3e}  {:4}  {:2}  {:7}  {:8}  {:2}  {:6}  {:5}  {:5}  {:6}  {:8}  {:6}  {:.0}",
                 sim.stats.time_step_cuts - stats.time_step_cuts,
                 sim.stats.open_close_iterations - stats.open_close_iterations,
                 c.numeric - counts.numeric,
@@ -145,6 +151,7 @@ fn time_run(solver: &str, run: &RunArgs<'_>, dual: DualArgs) -> (f64, Simulation
                 c.reuse_iterations - counts.reuse_iterations,
                 sim.stats.dual_cg_products - stats.dual_cg_products,
                 sim.stats.dual_iterations - stats.dual_iterations,
+                sim.stats.dual_loose_solves - stats.dual_loose_solves,
                 sim.contacts.detections - detections,
                 sim.contacts.contacts.len(),
                 closed,
@@ -176,6 +183,7 @@ fn main() {
         cg_budget: arg("--cg-budget").and_then(|s| s.parse().ok()),
         tolerance: arg("--dual-tolerance").and_then(|s| s.parse().ok()),
         proportioning: arg("--proportioning").and_then(|s| s.parse().ok()),
+        stall_acceptance: arg("--stall-acceptance").and_then(|s| s.parse().ok()),
     };
     let run = RunArgs {
         steps,
@@ -196,7 +204,8 @@ fn main() {
         println!(
             "{solver:>7}: {secs:.2} s for {steps} steps (simulated {:.4} s), {} contacts at the end, \
              projectile tip at y = {tip:.3} m, max penetration {:.2e} m, cuts {}, \
-             open–close iterations {}, MPRGP products with W {}, projection–contraction iterations {}, switches {}",
+             open–close iterations {}, MPRGP products with W {}, projection–contraction iterations {}, switches {}, \
+             loosely accepted dual solves {} (largest violation {:.2e} m)",
             sim.time,
             sim.contacts.contacts.len(),
             sim.stats.max_penetration,
@@ -205,6 +214,8 @@ fn main() {
             sim.stats.dual_cg_products,
             sim.stats.dual_iterations,
             sim.stats.dual_switches,
+            sim.stats.dual_loose_solves,
+            sim.stats.dual_loose_residual,
         );
         println!("         profile: {:?}", sim.profile);
     }

@@ -41,7 +41,7 @@ pub enum SimError {
         block: String,
     },
     #[error(
-        "dual contact solver did not converge at t = {time:.6} s after {cuts} time-step cuts (Δt = {dt:.3e} s, {iterations} iterations, remaining violation {residual:.3e} m) at the contact between blocks {block_a:?} and {block_b:?}; try a smaller time_step, or raise SimParams.dual.max_iterations / tolerance"
+        "dual contact solver did not converge at t = {time:.6} s after {cuts} time-step cuts (Δt = {dt:.3e} s, {iterations} iterations, remaining violation {residual:.3e} m) at the contact between blocks {block_a:?} and {block_b:?}; try a smaller time_step, or raise SimParams.dual.max_iterations, tolerance or stall_acceptance"
     )]
     DualNotConverged {
         time: f64,
@@ -112,6 +112,11 @@ pub struct Stats {
     pub dual_cg_products: u64,
     /// Vertex–vertex contact pairs switched by the dual solver.
     pub dual_switches: u64,
+    /// Steps whose dual solve stalled and was accepted within
+    /// `DualParams::stall_acceptance` × its tolerance (0 with the default of 1).
+    pub dual_loose_solves: u64,
+    /// Largest remaining violation of those steps' solves, m (0 if none).
+    pub dual_loose_residual: f64,
     /// Deepest penetration after a converged step, m.
     pub max_penetration: f64,
     pub min_dt: f64,
@@ -573,6 +578,10 @@ impl Simulation {
             if c.state.is_closed() {
                 self.stats.max_penetration = self.stats.max_penetration.max(-c.gap);
             }
+        }
+        if let Some(o) = self.last_dual.filter(|o| o.loose) {
+            self.stats.dual_loose_solves += 1;
+            self.stats.dual_loose_residual = self.stats.dual_loose_residual.max(o.residual);
         }
         self.time += dt;
         self.stats.steps += 1;

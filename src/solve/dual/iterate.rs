@@ -159,6 +159,14 @@ pub fn compatibility(
     }
     gf.displacements(flex, p, &mut s.d);
     gf.eval(&s.d, &mut s.g);
+    // The stopping test ran on the last iterate; the point returned is its projection, whose
+    // own violation can be a little larger. Report the larger, so that the violation reported
+    // bounds the gaps returned (a stalled solve is accepted or refused on it).
+    let (res, worst) = natural_residual(gf, p, &s.g);
+    if res > report.residual || res.is_nan() {
+        report.residual = res;
+        report.worst = worst;
+    }
     report
 }
 
