@@ -11,11 +11,13 @@
 //! running-bond wall with friction shaken at its base (the friction rounds of the QVI).
 //!
 //! Tolerance: each solve leaves at most the stopping tolerance ε = 1e-9 × the smallest block's
-//! half size (1e-10 m here) in any gap, so two solutions of one step differ by about ε; over
-//! N steps the differences add up to ~N·ε if nothing amplifies them. The bound 10·N·ε
-//! (1e-7 m for 100 steps) allows a tenfold amplification and is still 10⁴ times smaller than
-//! the motion checked to happen (≥ 1 mm), so a solver that moved the blocks differently
-//! cannot pass.
+//! half size in any gap, so two solutions of one step differ by about ε; over N steps the
+//! differences add up to ~N·ε if nothing amplifies them. The bound 10·N·ε (1e-7 m for 100
+//! steps) allows a tenfold amplification and is still 10⁴ times smaller than the motion
+//! checked to happen (≥ 1 mm), so a solver that moved the blocks differently cannot pass. The
+//! half size is the bounding box's half diagonal, 0.224 m for these 0.4 × 0.2 m blocks, so
+//! ε = 2.24e-10 m; the bound uses 1e-10 m (written when the half size was taken to be 0.1 m),
+//! which is stricter.
 mod common;
 use ashlar::contact::ContactState;
 use ashlar::motion::GroundMotion;

@@ -52,6 +52,20 @@ pub enum SimError {
         block_a: String,
         block_b: String,
     },
+    /// A step whose solution moves a block's vertex farther than the step's displacement limit
+    /// (Shi's g2 × the model's half size), even at the shortest step the cuts allow.
+    #[error(
+        "block {block:?} would move {moved:.3e} m in one step at t = {time:.6} s, more than the step limit of {limit:.3e} m (control.max_displacement_ratio × the model's half size), still after {cuts} time-step cuts (Δt = {dt:.3e} s): check the block's support and initial velocity; with the dual solver, a stalled solve taken by SimParams.dual.stall_acceptance can also leave forces this wrong"
+    )]
+    StepTooLarge {
+        time: f64,
+        cuts: u32,
+        dt: f64,
+        /// Largest vertex displacement of the block in the refused step, m.
+        moved: f64,
+        limit: f64,
+        block: String,
+    },
     #[error("non-finite state at t = {time:.6} s in block {block:?}; reduce the time step or the penalty stiffness")]
     NonFinite { time: f64, block: String },
     #[error("penetration of {depth:.3e} m at t = {time:.6} s between blocks {block_a:?} and {block_b:?} could not be reduced by cutting the time step; raise the penalty stiffness")]
@@ -89,6 +103,17 @@ fn thickness(v: &[nalgebra::Vector2<f64>]) -> f64 {
         perimeter += (b - a).norm();
     }
     2.0 * area2.abs() / perimeter
+}
+
+/// Why one attempt at a step is refused (the step is then cut, or the run stops).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Refusal {
+    /// The contact solver did not converge; the contact it changed last or left worst.
+    Unconverged(Option<usize>),
+    /// A vertex of this block (scene index) would move this far (m), beyond the step limit.
+    Moved { block: usize, by: f64 },
+    /// This contact deepened beyond what the time step resolves.
+    Overshot(usize),
 }
 
 /// Wall time spent in each stage (accumulated over steps).
@@ -298,26 +323,26 @@ impl Simulation {
         loop {
             self.assemble(dt);
             let t2 = Instant::now();
-            let trouble = match self.scene.control.contact_solver {
+            let refusal = match self.scene.control.contact_solver {
                 ContactSolver::Penalty => match self.open_close()? {
                     OpenClose::Converged { .. } => self.check_step(),
-                    OpenClose::NotConverged { contact, .. } => Some(contact),
+                    OpenClose::NotConverged { contact, .. } => Some(Refusal::Unconverged(contact)),
                 },
                 ContactSolver::Dual => match self.dual_solve()? {
                     DualOutcome {
                         converged: true, ..
                     } => self.check_step(),
-                    DualOutcome { worst, .. } => Some(worst),
+                    DualOutcome { worst, .. } => Some(Refusal::Unconverged(worst)),
                 },
             };
             self.profile.solve += t2.elapsed();
-            let Some(bad_contact) = trouble else { break };
+            let Some(refusal) = refusal else { break };
             cuts += 1;
             self.stats.time_step_cuts += 1;
             // Cutting below min_dt means the step cannot be resolved: fail with a diagnostic
             // instead of creeping forward at a vanishing step.
             if cuts > self.params.max_cuts || dt * self.params.cut_factor < self.params.min_dt {
-                return Err(self.not_converged(cuts, dt, bad_contact));
+                return Err(self.refused(cuts, dt, refusal));
             }
             dt *= self.params.cut_factor;
             self.states.clone_from(&self.start_states);
@@ -487,24 +512,27 @@ impl Simulation {
     }
 
     /// After convergence: is the step within the displacement limit and the penetration
-    /// tolerance? Returns the offending contact (if any) as `Some(..)`.
-    fn check_step(&self) -> Option<Option<usize>> {
+    /// tolerance? Returns why not, if not.
+    fn check_step(&self) -> Option<Refusal> {
         if self.scene.control.adaptive_time_step {
             let limit = self.max_step_displacement();
             for f in 0..self.dofs.block_of.len() {
                 let d = self.block_increment(f);
-                let g = &self.geoms[self.dofs.block_of[f]];
-                for p in &g.vertices {
-                    let u = displacement_matrix(*p, g.centroid) * d;
-                    if u.norm() > limit {
-                        return Some(None);
-                    }
+                let b = self.dofs.block_of[f];
+                let g = &self.geoms[b];
+                let by = g
+                    .vertices
+                    .iter()
+                    .map(|p| (displacement_matrix(*p, g.centroid) * d).norm())
+                    .fold(0.0, f64::max);
+                if by > limit {
+                    return Some(Refusal::Moved { block: b, by });
                 }
             }
         }
         for (k, c) in self.contacts.contacts.iter().enumerate() {
             if self.overshot(c) && self.dt * self.params.cut_factor > self.params.min_dt {
-                return Some(Some(k));
+                return Some(Refusal::Overshot(k));
             }
         }
         None
@@ -683,7 +711,22 @@ impl Simulation {
         })
     }
 
-    fn not_converged(&self, cuts: u32, dt: f64, contact: Option<usize>) -> SimError {
+    /// The typed error for a step refused at the last cut allowed.
+    fn refused(&self, cuts: u32, dt: f64, refusal: Refusal) -> SimError {
+        let contact = match refusal {
+            Refusal::Moved { block, by } => {
+                return SimError::StepTooLarge {
+                    time: self.time,
+                    cuts,
+                    dt,
+                    moved: by,
+                    limit: self.max_step_displacement(),
+                    block: self.scene.blocks[block].id.clone(),
+                }
+            }
+            Refusal::Unconverged(k) => k,
+            Refusal::Overshot(k) => Some(k),
+        };
         let (a, b) = match contact.and_then(|k| self.contacts.contacts.get(k)) {
             Some(c) => (
                 self.scene.blocks[c.vertex_block].id.clone(),
