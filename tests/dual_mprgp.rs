@@ -26,37 +26,6 @@ use ashlar::simulation::{SimParams, Simulation};
 use common::*;
 use serde_json::json;
 
-fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> serde_json::Value {
-    json!([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
-}
-
-/// `columns × rows` aligned 0.4 × 0.2 m blocks in a fixed U, frictionless, with the top middle
-/// block thrown down at 1 m/s.
-fn aligned_stack(columns: usize, rows: usize) -> Scene {
-    let (w, h) = (0.4, 0.2);
-    let (width, height) = (columns as f64 * w, rows as f64 * h);
-    let mut blocks = vec![
-        json!({ "id": "floor", "material": "stone", "fixed": true, "vertices": rect(-1.0, -1.0, width + 1.0, 0.0) }),
-        json!({ "id": "left", "material": "stone", "fixed": true, "vertices": rect(-1.0, 0.0, 0.0, height + 1.0) }),
-        json!({ "id": "right", "material": "stone", "fixed": true, "vertices": rect(width, 0.0, width + 1.0, height + 1.0) }),
-    ];
-    for r in 0..rows {
-        for c in 0..columns {
-            let (x0, y0) = (c as f64 * w, r as f64 * h);
-            blocks.push(json!({ "id": format!("b{r}_{c}"), "material": "stone",
-                                "vertices": rect(x0, y0, x0 + w, y0 + h) }));
-        }
-    }
-    let mut v = scene_json(
-        json!(blocks),
-        0.0,
-        json!({ "time_step": 1e-3, "contact_solver": "dual", "duration": 1.0 }),
-    );
-    v["initial"] =
-        json!([{ "block": format!("b{}_{}", rows - 1, columns / 2), "velocity": [0.0, -1.0] }]);
-    parse(&v)
-}
-
 /// A running-bond wall of `COURSES` courses, 30° joints, under `contact_solver: "dual"`.
 const COURSES: usize = 2;
 

@@ -11,39 +11,9 @@
 //! solve converged to the tolerance.
 mod common;
 use ashlar::motion::GroundMotion;
-use ashlar::scene::{BlockKind, Scene};
+use ashlar::scene::BlockKind;
 use ashlar::simulation::{SimError, SimParams, Simulation};
 use common::*;
-use serde_json::json;
-
-fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> serde_json::Value {
-    json!([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
-}
-
-/// 3 × 3 aligned 0.4 × 0.2 m blocks.
-fn stack() -> Scene {
-    let (w, h, columns, rows) = (0.4, 0.2, 3, 3);
-    let (width, height) = (columns as f64 * w, rows as f64 * h);
-    let mut blocks = vec![
-        json!({ "id": "floor", "material": "stone", "fixed": true, "vertices": rect(-1.0, -1.0, width + 1.0, 0.0) }),
-        json!({ "id": "left", "material": "stone", "fixed": true, "vertices": rect(-1.0, 0.0, 0.0, height + 1.0) }),
-        json!({ "id": "right", "material": "stone", "fixed": true, "vertices": rect(width, 0.0, width + 1.0, height + 1.0) }),
-    ];
-    for r in 0..rows {
-        for c in 0..columns {
-            let (x0, y0) = (c as f64 * w, r as f64 * h);
-            blocks.push(json!({ "id": format!("b{r}_{c}"), "material": "stone",
-                                "vertices": rect(x0, y0, x0 + w, y0 + h) }));
-        }
-    }
-    let mut v = scene_json(
-        json!(blocks),
-        0.0,
-        json!({ "time_step": 1e-3, "contact_solver": "dual", "duration": 1.0 }),
-    );
-    v["initial"] = json!([{ "block": "b2_1", "velocity": [0.0, -1.0] }]);
-    parse(&v)
-}
 
 /// The solver's stopping tolerance, m: `DualParams::tolerance` × the smallest free block's half
 /// size (its bounding box's half diagonal, 0.224 m here).
@@ -70,7 +40,7 @@ fn starved(iterations: usize, acceptance: f64) -> SimParams {
 }
 
 fn run_to_end(params: SimParams) -> Result<Simulation, SimError> {
-    let mut s = Simulation::new(&stack(), &GroundMotion::none(), params);
+    let mut s = Simulation::new(&aligned_stack(3, 3), &GroundMotion::none(), params);
     while s.time < T_END - 1e-12 {
         s.step(T_END - s.time)?;
     }
@@ -83,7 +53,11 @@ fn run_to_end(params: SimParams) -> Result<Simulation, SimError> {
 #[test]
 fn a_stall_with_nothing_accepted_cuts_and_then_names_the_contact() {
     let params = starved(0, 1.0);
-    let tol = tolerance(&Simulation::new(&stack(), &GroundMotion::none(), params));
+    let tol = tolerance(&Simulation::new(
+        &aligned_stack(3, 3),
+        &GroundMotion::none(),
+        params,
+    ));
     let err = match run_to_end(params) {
         Err(e) => e,
         Ok(s) => panic!(
