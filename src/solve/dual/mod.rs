@@ -127,7 +127,7 @@ pub struct DualOutcome {
     pub iterations: usize,
     /// Products with W of the MPRGP minimisation over all switching rounds.
     pub cg_products: usize,
-    /// Largest remaining contact-condition violation, m.
+    /// Largest remaining contact-condition violation over the step's switching rounds, m.
     pub residual: f64,
     /// Contact with the largest residual.
     pub worst: Option<usize>,
@@ -202,7 +202,7 @@ impl DualSolver {
             converged: false,
             iterations: 0,
             cg_products: 0,
-            residual: f64::INFINITY,
+            residual: 0.0,
             worst: None,
             switches: 0,
             loose: false,
@@ -259,8 +259,12 @@ impl DualSolver {
             let loose = !r.converged && r.residual <= prm.stall_acceptance * tol;
             outcome.converged = r.converged || loose;
             outcome.loose |= loose;
-            outcome.residual = r.residual;
-            outcome.worst = r.worst;
+            // The largest over the rounds: a loosely accepted round stays on record even when a
+            // later round (after switching) converges.
+            if r.residual >= outcome.residual || r.residual.is_nan() {
+                outcome.residual = r.residual;
+                outcome.worst = r.worst;
+            }
             if !outcome.converged {
                 return Ok(outcome);
             }
