@@ -335,6 +335,18 @@ async fn bad_requests_get_problems_naming_the_field() {
             },
             "/scene/control/duration",
         ),
+        (
+            // A forced reduced model on a scene it cannot represent: refused at submission,
+            // not failed later by a worker.
+            {
+                let mut s = scene.clone();
+                s["control"]["model"] = json!("rocking");
+                s["blocks"].as_array_mut().expect("blocks").push(json!({"id": "b2", "material": "limestone",
+                    "vertices": [[2.0, 0.0], [2.5, 0.0], [2.5, 0.5]]}));
+                json!({"scene": s})
+            },
+            "/scene/control/model",
+        ),
     ];
     for (body, pointer) in cases {
         let r = call(&app, post_json("/v1/jobs", &body)).await;

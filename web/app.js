@@ -100,6 +100,7 @@ function formatFromName(name) {
 // JSON pointer prefixes of the request bodies → the error slot next to the field.
 const POINTER_SLOTS = [
   ["/scene/control/duration", "duration"],
+  ["/scene/control/model", "model"],
   ["/scene", "scene"],
   ["/motion/scale", "scale"],
   ["/motions", "motion"],
@@ -115,6 +116,7 @@ const POINTER_SLOTS = [
 function slotInput(slot) {
   switch (slot) {
     case "duration": return $("duration");
+    case "model": return $("model");
     case "scene": return state.sceneSource === "file" ? $("scene-file") : $("scene-example");
     case "scale": return $("scale-value");
     case "motion": return radio("motion-source") === "pulse" ? $("pulse-amplitude") : $("record-file");
@@ -390,6 +392,8 @@ async function onSubmit(ev) {
     if (!Number.isFinite(d) || d <= 0) { showFieldError("duration", "The duration must be a number of seconds > 0."); return; }
     scene.control = Object.assign({}, scene.control || {}, { duration: d });
   }
+  const model = $("model").value;
+  if (model !== "") scene.control = Object.assign({}, scene.control || {}, { model });
   let url, body;
   if (kind === "run") {
     url = "/v1/jobs";

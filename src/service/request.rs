@@ -402,6 +402,12 @@ fn scene_and_motion(
         let p = point_at_named_field(dotted_to_pointer("/scene", &e.path), &e.message);
         ApiError::invalid_field(p.clone(), format!("{p}: {}", e.message))
     })?;
+    // A forced reduced model the scene cannot take is refused now, not failed later by a worker.
+    crate::analysis::run::choose_model(&scene, &Default::default()).map_err(|e| {
+        let e = e.to_string();
+        let why = e.strip_prefix("control.model: ").unwrap_or(&e);
+        ApiError::invalid_field("/scene/control/model", format!("/scene/control/model: {why}"))
+    })?;
     let motion = match motion {
         None | Some(Value::Null) => GroundMotion::none(),
         Some(v) => crate::motion::from_json(v).map_err(|e| {

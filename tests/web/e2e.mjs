@@ -7,7 +7,7 @@
 //   CHROMIUM           the browser (default /usr/bin/chromium)
 // Prints one line per check and a closing "N passed, N failed" line; exits non-zero on failure.
 import { chromium } from "playwright-core";
-import { mkdtempSync, rmSync } from "node:fs";
+import { mkdtempSync, readFileSync, rmSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { join } from "node:path";
 
@@ -181,10 +181,30 @@ try {
     assert(focused === "scene-file", `focus on ${focused}`);
   });
 
+  await check("a model the scene cannot take shows the server's error next to the model field", async () => {
+    const scene = JSON.parse(readFileSync(new URL("../../examples/column.json", import.meta.url), "utf8"));
+    const twin = JSON.parse(JSON.stringify(scene.blocks[1]));
+    twin.id = "twin";
+    twin.vertices = twin.vertices.map(([x, y]) => [x + 0.9, y]);
+    scene.blocks.push(twin);
+    await page.setInputFiles("#scene-file", { name: "two-columns.json", mimeType: "application/json", buffer: Buffer.from(JSON.stringify(scene)) });
+    await page.waitForFunction(() => /^two-columns\.json: .*\(2 free\)/.test(document.getElementById("scene-info").textContent), null, { timeout: 10000 });
+    await page.selectOption("#model", "rocking");
+    await page.click("#submit-button");
+    await page.waitForFunction(() => document.getElementById("model-error").textContent.length > 0, null, { timeout: 10000 });
+    const text = await page.textContent("#model-error");
+    assert(text.includes("/scene/control/model") && text.includes("2 free blocks"), text);
+    assert((await page.getAttribute("#model", "aria-invalid")) === "true", "the model field is not marked invalid");
+    await page.selectOption("#model", "");
+  });
+
   await check("cancel: a long run is cancelled from the queue", async () => {
     await page.selectOption("#scene-example", "column");
     await page.waitForFunction(() => !document.getElementById("scene-error").textContent);
     await page.fill("#duration", "600");
+    // The full engine: the default reduced model runs the column's 600 s in about a second,
+    // which CI once finished before the click landed (the cancel button was gone).
+    await page.selectOption("#model", "dda");
     await page.click("#submit-button");
     await page.waitForFunction((prev) => { const m = document.getElementById("submit-status").textContent.match(/Queued run (\w+)/); return m && m[1] !== prev; }, runId, { timeout: 20000 });
     // From here on the cancelled run's own record comes back 3 s late, as from a loaded server:
@@ -206,6 +226,7 @@ try {
 
   await check("PGA search: scan points and bracket are plotted", async () => {
     await page.fill("#duration", "4");
+    await page.selectOption("#model", "");
     await page.check('input[name="analysis"][value="pga"]');
     await page.selectOption("#criterion-kind", "toppled");
     await page.fill("#range-min", "0.1");
