@@ -341,7 +341,10 @@ async fn bad_requests_get_problems_naming_the_field() {
             {
                 let mut s = scene.clone();
                 s["control"]["model"] = json!("rocking");
-                s["blocks"].as_array_mut().expect("blocks").push(json!({"id": "b2", "material": "limestone",
+                s["blocks"]
+                    .as_array_mut()
+                    .expect("blocks")
+                    .push(json!({"id": "b2", "material": "limestone",
                     "vertices": [[2.0, 0.0], [2.5, 0.0], [2.5, 0.5]]}));
                 json!({"scene": s})
             },

@@ -406,7 +406,10 @@ fn scene_and_motion(
     crate::analysis::run::choose_model(&scene, &Default::default()).map_err(|e| {
         let e = e.to_string();
         let why = e.strip_prefix("control.model: ").unwrap_or(&e);
-        ApiError::invalid_field("/scene/control/model", format!("/scene/control/model: {why}"))
+        ApiError::invalid_field(
+            "/scene/control/model",
+            format!("/scene/control/model: {why}"),
+        )
     })?;
     let motion = match motion {
         None | Some(Value::Null) => GroundMotion::none(),
