@@ -10,7 +10,7 @@
 //! ν = 0.2; all joints frictionless and cohesionless (as the seed's); g = 9.81 m/s²; adaptive
 //! Δt ≤ 1 ms with the seed's displacement ratio 0.003.
 //!
-//! Run: `cargo run --release --example pile` (add `-- --write pile.json` to save the scene,
+//! Run: `cargo run --release --example pile` (`-- --help` lists the options; add `-- --write pile.json` to save the scene,
 //! `-- --steps N` to change the step count, `-- --only dual|penalty` to time one solver, `-- --trace` to print per-step work counts, `-- --cg-budget N` to
 //! give the dual solver's MPRGP minimisation N products with W, 0 for the projection–contraction
 //! iteration alone), `-- --dual-tolerance X` to stop its iterations at X × the smallest
@@ -21,6 +21,7 @@
 use ashlar::motion::GroundMotion;
 use ashlar::scene::{parse_scene, Scene};
 use ashlar::simulation::{SimParams, Simulation};
+use clap::Parser;
 use serde_json::{json, Value};
 use std::time::Instant;
 
@@ -106,7 +107,7 @@ struct RunArgs<'a> {
 /// Δt, cuts, open–close iterations, numeric and symbolic factorizations, preconditioned CG
 /// iterations, MPRGP products, projection–contraction iterations, loosely accepted dual solves,
 /// contact detections, contacts, closed contacts.
-fn time_run(solver: &str, run: &RunArgs<'_>, dual: DualArgs) -> (f64, Simulation) {
+fn time_run(solver: &str, run: &RunArgs<'_>, dual: DualArgs) -> Result<(f64, Simulation), String> {
     let (steps, trace) = (run.steps, run.trace);
     let scene = scene(solver, run.block_model);
     let mut params = SimParams::default();
@@ -132,7 +133,12 @@ fn time_run(solver: &str, run: &RunArgs<'_>, dual: DualArgs) -> (f64, Simulation
         let ts = Instant::now();
         let dt = match sim.step(1.0) {
             Ok(dt) => dt,
-            Err(e) => panic!("{solver}: step {k} failed: {e}"),
+            Err(e) => {
+                return Err(format!(
+                    "step {k} failed after {:.2} s: {e}",
+                    t.elapsed().as_secs_f64()
+                ))
+            }
         };
         if trace {
             let c = sim.solver_counts();
@@ -159,47 +165,101 @@ fn time_run(solver: &str, run: &RunArgs<'_>, dual: DualArgs) -> (f64, Simulation
             );
         }
     }
-    (t.elapsed().as_secs_f64(), sim)
+    Ok((t.elapsed().as_secs_f64(), sim))
 }
 
-fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    let arg = |name: &str| {
-        args.iter()
-            .position(|a| a == name)
-            .and_then(|i| args.get(i + 1))
-            .cloned()
-    };
-    let block_model = arg("--block-model").unwrap_or_else(|| "deformable".into());
-    if let Some(path) = arg("--write") {
-        let text = serde_json::to_string_pretty(&pile_scene("dual", &block_model)).expect("json");
-        std::fs::write(&path, text).expect("write scene");
-        eprintln!("wrote {path}");
+/// Command line (`cargo run --release --example pile -- --help`).
+#[derive(Parser)]
+#[command(
+    about = "Times the seed's 1700-block pile with the penalty and the dual contact solver in one run"
+)]
+struct Cli {
+    /// Steps to run with each solver.
+    #[arg(long, default_value_t = 280)]
+    steps: usize,
+    /// Time one solver only.
+    #[arg(long, value_parser = ["penalty", "dual"])]
+    only: Option<String>,
+    /// Print one line of work counters per step.
+    #[arg(long)]
+    trace: bool,
+    /// `deformable` (6 unknowns a block, as the seed's DDA) or `rigid` (3).
+    #[arg(long, default_value = "deformable", value_parser = ["deformable", "rigid"])]
+    block_model: String,
+    /// Also write the scene (`ashlar.scene/1`, dual solver) to this file.
+    #[arg(long, value_name = "PATH")]
+    write: Option<std::path::PathBuf>,
+    /// Products with W for the dual solver's MPRGP minimisation (0: projection–contraction alone).
+    #[arg(long, value_name = "N")]
+    cg_budget: Option<usize>,
+    /// The dual solver's stopping tolerance, × the smallest block's half size (default 1e-9).
+    #[arg(long, value_name = "X", value_parser = positive)]
+    dual_tolerance: Option<f64>,
+    /// MPRGP's proportioning constant Γ (default 1).
+    #[arg(long, value_name = "G", value_parser = positive)]
+    proportioning: Option<f64>,
+    /// Accept a stalled dual solve whose violation is within A × its tolerance (default 1: none).
+    #[arg(long, value_name = "A", value_parser = at_least_one)]
+    stall_acceptance: Option<f64>,
+}
+
+fn positive(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err(format!("{s:?} is not a finite number > 0")),
     }
-    let steps: usize = arg("--steps").and_then(|s| s.parse().ok()).unwrap_or(280);
-    let only = arg("--only");
-    let trace = args.iter().any(|a| a == "--trace");
+}
+
+fn at_least_one(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 1.0 => Ok(x),
+        _ => Err(format!(
+            "{s:?} is not a finite number ≥ 1 (1 accepts no stalled solve)"
+        )),
+    }
+}
+
+fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    let block_model = cli.block_model.as_str();
+    if let Some(path) = &cli.write {
+        let text = serde_json::to_string_pretty(&pile_scene("dual", block_model)).expect("json");
+        if let Err(e) = std::fs::write(path, text) {
+            eprintln!("pile: cannot write {}: {e}", path.display());
+            return std::process::ExitCode::FAILURE;
+        }
+        eprintln!("wrote {}", path.display());
+    }
+    let steps = cli.steps;
     let dual = DualArgs {
-        cg_budget: arg("--cg-budget").and_then(|s| s.parse().ok()),
-        tolerance: arg("--dual-tolerance").and_then(|s| s.parse().ok()),
-        proportioning: arg("--proportioning").and_then(|s| s.parse().ok()),
-        stall_acceptance: arg("--stall-acceptance").and_then(|s| s.parse().ok()),
+        cg_budget: cli.cg_budget,
+        tolerance: cli.dual_tolerance,
+        proportioning: cli.proportioning,
+        stall_acceptance: cli.stall_acceptance,
     };
     let run = RunArgs {
         steps,
-        trace,
-        block_model: &block_model,
+        trace: cli.trace,
+        block_model,
     };
-    let blocks = scene("dual", &block_model).blocks.len();
+    let blocks = scene("dual", block_model).blocks.len();
     println!(
         "pile: {blocks} {block_model} blocks, {steps} steps, {} rayon threads",
         rayon::current_num_threads()
     );
+    let mut code = std::process::ExitCode::SUCCESS;
     for solver in ["penalty", "dual"] {
-        if only.as_deref().is_some_and(|o| o != solver) {
+        if cli.only.as_deref().is_some_and(|o| o != solver) {
             continue;
         }
-        let (secs, sim) = time_run(solver, &run, dual);
+        let (secs, sim) = match time_run(solver, &run, dual) {
+            Ok(r) => r,
+            Err(e) => {
+                println!("{solver:>7}: {e}");
+                code = std::process::ExitCode::FAILURE;
+                continue;
+            }
+        };
         let tip = sim.geoms[blocks - 1].bounds().0.y;
         println!(
             "{solver:>7}: {secs:.2} s for {steps} steps (simulated {:.4} s), {} contacts at the end, \
@@ -219,4 +279,5 @@ fn main() {
         );
         println!("         profile: {:?}", sim.profile);
     }
+    code
 }
