@@ -12,6 +12,9 @@
 //! - a wrong CA is refused with the host and the reason, also by `ashlar worker` at start-up;
 //! - `PGSSLMODE`/`PGSSLROOTCERT` apply when the URL has no TLS parameters (libpq's variables);
 //! - `sslmode=disable` is refused by the server (hostssl only), with a hint;
+//! - `prefer` retries in plain text, as libpq, when the certificate check fails or the server
+//!   refuses the encrypted session, and says both reasons when the retry fails too; `require`
+//!   never does;
 //! - a database whose pg_hba line says `cert` admits a client presenting `sslcert`/`sslkey`
 //!   (signed by the CA) and refuses one without.
 mod service_support;
@@ -362,4 +365,88 @@ fn client_certificate_authentication() {
         .expect("current_user")
         .get(0);
     assert_eq!(who, "ashlar");
+}
+
+/// Create `db` once (several test runs may share a server).
+fn ensure_database(env: &Env, db: &str) {
+    let ca = env.ca("ca.pem");
+    let mut admin = connect(&env.url(
+        "localhost",
+        "postgres",
+        &format!("sslmode=verify-full&sslrootcert={ca}"),
+    ))
+    .expect("admin connection");
+    let exists = admin
+        .query_opt("SELECT 1 FROM pg_database WHERE datname = $1", &[&db])
+        .expect("pg_database")
+        .is_some();
+    if !exists {
+        admin
+            .batch_execute(&format!("CREATE DATABASE {db}"))
+            .unwrap_or_else(|e| panic!("create {db}: {e}"));
+    }
+}
+
+#[test]
+fn prefer_falls_back_to_plain_text_as_libpq() {
+    let Some(env) = env("prefer_falls_back_to_plain_text_as_libpq") else {
+        return;
+    };
+    // pg_hba.conf (tests/pg/tls.sh): `plaindb` takes TLS or plain text, `nossldb` plain text
+    // only, every other database TLS only.
+    ensure_database(&env, "plaindb");
+    ensure_database(&env, "nossldb");
+    let wrong = env.ca("wrong-ca.pem");
+
+    // TLS works: `prefer` stays encrypted.
+    let mut c = connect(&env.url("127.0.0.1", "plaindb", "sslmode=prefer")).expect("prefer");
+    assert!(encrypted(&mut c), "prefer fell back although TLS works");
+
+    // The certificate check fails (a root certificate that did not sign the server's):
+    // `prefer` retries in plain text; `require` refuses.
+    let mut c = connect(&env.url(
+        "localhost",
+        "plaindb",
+        &format!("sslmode=prefer&sslrootcert={wrong}"),
+    ))
+    .expect("prefer retries in plain text after a failed certificate check");
+    assert!(!encrypted(&mut c));
+    let e = refused(
+        &env.url(
+            "localhost",
+            "plaindb",
+            &format!("sslmode=require&sslrootcert={wrong}"),
+        ),
+        "require must not fall back to plain text",
+    );
+    assert!(e.contains("UnknownIssuer"), "{e}");
+
+    // The server refuses the encrypted session (`hostssl nossldb … reject`): `prefer`
+    // retries in plain text; `require` refuses.
+    let mut c = connect(&env.url("127.0.0.1", "nossldb", "sslmode=prefer"))
+        .expect("prefer retries in plain text when the server refuses TLS");
+    assert!(!encrypted(&mut c));
+    let e = refused(
+        &env.url("127.0.0.1", "nossldb", "sslmode=require"),
+        "require must not fall back to plain text",
+    );
+    eprintln!("require, nossldb: {e}");
+    assert!(e.contains("pg_hba.conf"), "{e}");
+
+    // Both attempts fail (a TLS-only database, a wrong root certificate): both reasons.
+    let e = refused(
+        &env.url(
+            "localhost",
+            "postgres",
+            &format!("sslmode=prefer&sslrootcert={wrong}"),
+        ),
+        "a TLS-only server refuses the plain-text retry",
+    );
+    eprintln!("prefer, wrong CA, hostssl only: {e}");
+    assert!(
+        e.contains("UnknownIssuer")
+            && e.contains("plain-text retry of sslmode=prefer failed too")
+            && e.contains("no encryption"),
+        "{e}"
+    );
 }

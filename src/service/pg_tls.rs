@@ -8,7 +8,7 @@
 //! | `sslmode` | encrypted | server certificate checked |
 //! |---|---|---|
 //! | `disable` | never | – |
-//! | `prefer` (default) | when the server offers TLS | only if a root certificate is given |
+//! | `prefer` (default) | when the server offers TLS and the TLS attempt succeeds (else one plain-text retry, as libpq) | only if a root certificate is given |
 //! | `require` | always | only if a root certificate is given (then as `verify-ca`) |
 //! | `verify-ca` | always | signed by a trusted CA |
 //! | `verify-full` | always | signed by a trusted CA **and** issued for the host name |
@@ -503,12 +503,49 @@ impl PgTarget {
     }
 
     /// A new connection, with an error that says which server, which mode and why.
+    ///
+    /// `prefer` falls back as libpq does: when the TLS attempt fails (the handshake, the
+    /// certificate check with a root certificate given, or the server refusing the encrypted
+    /// session, e.g. a `hostnossl` line), one more attempt is made in plain text, logged as a
+    /// warning. A server answering "no TLS" is taken in plain text by the client library itself.
     pub fn connect(&self) -> Result<Client, String> {
-        let res = match &self.tls {
-            Some(tls) => self.config.connect(tls.clone()),
-            None => self.config.connect(NoTls),
+        let Some(tls) = &self.tls else {
+            return self.config.connect(NoTls).map_err(|e| self.explain(&e));
         };
-        res.map_err(|e| self.explain(&e))
+        let first = match self.config.connect(tls.clone()) {
+            Ok(c) => return Ok(c),
+            Err(e) if self.mode == SslMode::Prefer && Self::plain_retry_helps(&e) => e,
+            Err(e) => return Err(self.explain(&e)),
+        };
+        let why = self.explain(&first);
+        let mut plain = self.config.clone();
+        plain.ssl_mode(PgSslMode::Disable);
+        match plain.connect(NoTls) {
+            Ok(c) => {
+                tracing::warn!(
+                    hosts = %self.hosts,
+                    "{why}; connected in plain text instead (sslmode=prefer falls back as libpq \
+                     does; sslmode=require or verify-full refuses plain text)"
+                );
+                Ok(c)
+            }
+            Err(e) => {
+                let detail = match e.as_db_error() {
+                    Some(db) => format!("the server refused: {}", db.message()),
+                    None => e.to_string(),
+                };
+                Err(format!(
+                    "{why}; the plain-text retry of sslmode=prefer failed too: {detail}"
+                ))
+            }
+        }
+    }
+
+    /// Whether libpq's `prefer` would retry in plain text after this failure of the TLS
+    /// attempt: a failed handshake, or an error the server sent in the encrypted session.
+    /// Not an unreachable host (a plain retry would fail the same way).
+    fn plain_retry_helps(e: &postgres::Error) -> bool {
+        rustls_error(e).is_some() || e.as_db_error().is_some()
     }
 
     fn roots_label(&self) -> String {

@@ -45,11 +45,15 @@ ssl_cert_file = 'server.crt'
 ssl_key_file = 'server.key'
 ssl_ca_file = 'ca.pem'
 EOF
-# TCP only over TLS; the Unix socket stays open for the test harness's own set-up.
+# TCP only over TLS, except database `plaindb` (TLS or plain text) and `nossldb` (plain text
+# only: libpq's `prefer` retry); the Unix socket stays open for the test harness's own set-up.
 cat > "$DATA/pg_hba.conf" <<EOF
 local   all    all                trust
 hostssl certdb all 127.0.0.1/32   cert
 hostssl certdb all ::1/128        cert
+host      plaindb all 127.0.0.1/32 trust
+hostssl   nossldb all 127.0.0.1/32 reject
+hostnossl nossldb all 127.0.0.1/32 trust
 hostssl all    all 127.0.0.1/32   trust
 hostssl all    all ::1/128        trust
 EOF
