@@ -12,6 +12,8 @@
 //! - a wrong CA is refused with the host and the reason, also by `ashlar worker` at start-up;
 //! - `PGSSLMODE`/`PGSSLROOTCERT` apply when the URL has no TLS parameters (libpq's variables);
 //! - `sslmode=disable` is refused by the server (hostssl only), with a hint;
+//! - `sslcrl`: a CRL revoking the server's certificate is refused naming the file, one that
+//!   revokes nothing is accepted, a file without a CRL is refused;
 //! - `prefer` retries in plain text, as libpq, when the certificate check fails or the server
 //!   refuses the encrypted session, and says both reasons when the retry fails too; `require`
 //!   never does;
@@ -449,4 +451,49 @@ fn prefer_falls_back_to_plain_text_as_libpq() {
             && e.contains("no encryption"),
         "{e}"
     );
+}
+
+#[test]
+fn revoked_server_certificate_is_refused() {
+    let Some(env) = env("revoked_server_certificate_is_refused") else {
+        return;
+    };
+    let ca = env.ca("ca.pem");
+    let with_crl = |crl: &str| {
+        format!(
+            "sslmode=verify-full&sslrootcert={ca}&sslcrl={}",
+            env.ca(crl)
+        )
+    };
+    let mut c = connect(&env.url("localhost", "postgres", &with_crl("empty.crl")))
+        .expect("a CRL revoking nothing is accepted");
+    assert!(encrypted(&mut c));
+    let e = refused(
+        &env.url("localhost", "postgres", &with_crl("revoked.crl")),
+        "a revoked server certificate must be refused",
+    );
+    eprintln!("verify-full, revoked: {e}");
+    assert!(
+        e.contains("Revoked") && e.contains("revoked") && e.contains(&env.ca("revoked.crl")),
+        "{e}"
+    );
+    // `require` with a root certificate checks the chain, revocation included (as libpq).
+    let e = refused(
+        &env.url(
+            "localhost",
+            "postgres",
+            &format!(
+                "sslmode=require&sslrootcert={ca}&sslcrl={}",
+                env.ca("revoked.crl")
+            ),
+        ),
+        "require with a CA and a CRL checks revocation",
+    );
+    assert!(e.contains("Revoked"), "{e}");
+    // A file that holds no CRL (here: a certificate) is refused before connecting.
+    let e = match pg_tls::parse(&env.url("localhost", "postgres", &with_crl("ca.pem"))) {
+        Ok(_) => panic!("a certificate taken for a CRL"),
+        Err(e) => e,
+    };
+    assert!(e.contains("no PEM CRL") && e.contains("sslcrl="), "{e}");
 }

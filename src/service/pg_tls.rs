@@ -1,5 +1,5 @@
 //! TLS for the PostgreSQL job store: reads libpq's connection parameters `sslmode`,
-//! `sslrootcert`, `sslcert` and `sslkey` from a `--database postgres://…` URL and makes
+//! `sslrootcert`, `sslcert`, `sslkey` and `sslcrl` from a `--database postgres://…` URL and makes
 //! connections through rustls (pure Rust, `ring` provider). Beside `pg_store`, which opens
 //! every connection (pool and `LISTEN`) through [`PgTarget::connect`].
 //!
@@ -18,14 +18,16 @@
 //! `~/.postgresql/root.crt` when that file exists. `sslcert=PATH&sslkey=PATH` present a client
 //! certificate (for `hostssl … cert` in `pg_hba.conf`). Over a Unix socket `sslmode` is
 //! ignored, as in libpq. A parameter the URL does not set is taken, as libpq does, from the
-//! environment: `PGSSLMODE`, `PGSSLROOTCERT`, `PGSSLCERT`, `PGSSLKEY` (empty means unset).
+//! environment: `PGSSLMODE`, `PGSSLROOTCERT`, `PGSSLCERT`, `PGSSLKEY`, `PGSSLCRL` (empty means unset).
 use postgres::config::{Host, SslMode as PgSslMode};
 use postgres::{Client, NoTls};
 use rustls::client::danger::{HandshakeSignatureValid, ServerCertVerified, ServerCertVerifier};
 use rustls::client::WebPkiServerVerifier;
 use rustls::crypto::CryptoProvider;
 use rustls::pki_types::pem::PemObject;
-use rustls::pki_types::{CertificateDer, PrivateKeyDer, ServerName, UnixTime};
+use rustls::pki_types::{
+    CertificateDer, CertificateRevocationListDer, PrivateKeyDer, ServerName, UnixTime,
+};
 use rustls::{
     CertificateError, ClientConfig, DigitallySignedStruct, RootCertStore, SignatureScheme,
 };
@@ -101,6 +103,8 @@ pub struct PgTarget {
     pub config: postgres::Config,
     pub mode: SslMode,
     pub roots: RootCerts,
+    /// `sslcrl`: revoked certificates (PEM CRLs), checked with the chain.
+    crl: Option<PathBuf>,
     /// Built once; `None` for `sslmode=disable` or when every host is a Unix socket.
     tls: Option<MakeRustlsConnect>,
     /// `host:port, …`, for messages (never the password).
@@ -124,6 +128,7 @@ struct TlsParams {
     sslrootcert: Option<String>,
     sslcert: Option<String>,
     sslkey: Option<String>,
+    sslcrl: Option<String>,
 }
 
 /// Split libpq's TLS parameters off a URL's query; the rest of the URL is kept verbatim.
@@ -146,6 +151,7 @@ fn split_tls_params(url: &str) -> Result<(String, TlsParams), String> {
             "sslrootcert" => &mut p.sslrootcert,
             "sslcert" => &mut p.sslcert,
             "sslkey" => &mut p.sslkey,
+            "sslcrl" => &mut p.sslcrl,
             _ => {
                 kept.push(pair);
                 continue;
@@ -182,6 +188,21 @@ fn load_certs(path: &str, what: &str) -> Result<Vec<CertificateDer<'static>>, St
         ));
     }
     Ok(certs)
+}
+
+/// The CRLs of `sslcrl=PATH` (PEM). As libpq with OpenSSL's CRL_CHECK_ALL, every certificate
+/// of the chain below the trust anchor must then be covered by a CRL of its issuer.
+fn load_crls(path: &std::path::Path) -> Result<Vec<CertificateRevocationListDer<'static>>, String> {
+    let shown = path.display();
+    let crls = CertificateRevocationListDer::pem_file_iter(path)
+        .and_then(|it| it.collect::<Result<Vec<_>, _>>())
+        .map_err(|e| format!("--database: sslcrl={shown}: cannot read PEM CRLs: {e}"))?;
+    if crls.is_empty() {
+        return Err(format!(
+            "--database: sslcrl={shown}: no PEM CRL (-----BEGIN X509 CRL-----) in it"
+        ));
+    }
+    Ok(crls)
 }
 
 fn root_store(roots: &RootCerts) -> Result<RootCertStore, String> {
@@ -317,6 +338,7 @@ impl ServerCertVerifier for ChainOnly {
 fn client_config(
     mode: SslMode,
     roots: &RootCerts,
+    crl: Option<&std::path::Path>,
     client_cert: Option<(&str, &str)>,
 ) -> Result<ClientConfig, String> {
     let provider = provider();
@@ -330,6 +352,10 @@ fn client_config(
             Arc::new(root_store(roots)?),
             provider.clone(),
         )
+        .with_crls(match crl {
+            Some(path) => load_crls(path)?,
+            None => Vec::new(),
+        })
         .build()
         .map_err(|e| format!("--database: sslrootcert: {e}"))?;
         if mode == SslMode::VerifyFull {
@@ -367,7 +393,13 @@ pub fn parse(url: &str) -> Result<PgTarget, String> {
 }
 
 /// libpq's environment variables for the TLS parameters.
-const TLS_ENV: [&str; 4] = ["PGSSLMODE", "PGSSLROOTCERT", "PGSSLCERT", "PGSSLKEY"];
+const TLS_ENV: [&str; 5] = [
+    "PGSSLMODE",
+    "PGSSLROOTCERT",
+    "PGSSLCERT",
+    "PGSSLKEY",
+    "PGSSLCRL",
+];
 
 /// [`parse`] with libpq's default root certificate file and the environment given (tests
 /// pass `None` and an empty environment).
@@ -383,6 +415,7 @@ fn parse_with(
         &mut p.sslrootcert,
         &mut p.sslcert,
         &mut p.sslkey,
+        &mut p.sslcrl,
     ];
     for (slot, name) in slots.into_iter().zip(TLS_ENV) {
         if slot.is_none() {
@@ -439,6 +472,19 @@ fn parse_params(
             mode.name()
         ));
     }
+    let crl = match p.sslcrl {
+        None => None,
+        Some(path) if path.is_empty() => None,
+        Some(_) if roots == RootCerts::None => {
+            return Err(format!(
+                "--database: sslcrl needs a root certificate (sslrootcert): revocation is \
+                 checked along the chain to a trusted CA, and sslmode={} without one checks no \
+                 chain",
+                mode.name()
+            ))
+        }
+        Some(path) => Some(PathBuf::from(path)),
+    };
     let client_cert = match (&p.sslcert, &p.sslkey) {
         (Some(c), Some(k)) => Some((c.as_str(), k.as_str())),
         (None, None) => None,
@@ -484,6 +530,7 @@ fn parse_params(
         Some(MakeRustlsConnect::new(client_config(
             mode,
             &roots,
+            crl.as_deref(),
             client_cert,
         )?))
     };
@@ -491,6 +538,7 @@ fn parse_params(
         config,
         mode,
         roots,
+        crl,
         tls,
         hosts,
     })
@@ -548,6 +596,12 @@ impl PgTarget {
         rustls_error(e).is_some() || e.as_db_error().is_some()
     }
 
+    fn crl_label(&self) -> String {
+        self.crl
+            .as_ref()
+            .map_or("none".into(), |p| p.display().to_string())
+    }
+
     fn roots_label(&self) -> String {
         match &self.roots {
             RootCerts::None => "none".into(),
@@ -577,6 +631,22 @@ impl PgTarget {
                 rustls::Error::InvalidCertificate(
                     CertificateError::Expired | CertificateError::ExpiredContext { .. },
                 ) => "it has expired".to_string(),
+                rustls::Error::InvalidCertificate(CertificateError::Revoked) => {
+                    format!("it has been revoked (sslcrl={})", self.crl_label())
+                }
+                rustls::Error::InvalidCertificate(CertificateError::UnknownRevocationStatus) => {
+                    format!(
+                        "sslcrl={} has no CRL from the issuer of a certificate in its chain",
+                        self.crl_label()
+                    )
+                }
+                rustls::Error::InvalidCertificate(
+                    CertificateError::ExpiredRevocationList
+                    | CertificateError::ExpiredRevocationListContext { .. },
+                ) => format!(
+                    "the CRL in sslcrl={} is past its next update",
+                    self.crl_label()
+                ),
                 rustls::Error::InvalidCertificate(_) => "it was rejected".to_string(),
                 _ => "the TLS handshake failed".to_string(),
             };
@@ -674,6 +744,19 @@ mod tests {
         assert!(e.contains("verify-full"), "{e}");
         let e = err("postgres://h/d?sslcert=/x.pem");
         assert!(e.contains("sslkey"), "{e}");
+    }
+
+    #[test]
+    fn a_revocation_list_needs_a_root_certificate() {
+        let e = err("postgres://h/d?sslcrl=/tmp/revoked.crl");
+        assert!(e.contains("sslcrl") && e.contains("sslrootcert"), "{e}");
+        let crl = |k: &str| (k == "PGSSLCRL").then(|| "/tmp/revoked.crl".to_string());
+        let e = parse_with("postgres://h/d?sslmode=require", None, &crl)
+            .map(|_| ())
+            .expect_err("PGSSLCRL without a CA");
+        assert!(e.contains("sslcrl") && e.contains("PGSSLCRL"), "{e}");
+        // Empty means unset, as in libpq.
+        parse_with("postgres://h/d?sslcrl=", None, &|_| None).expect("empty sslcrl");
     }
 
     #[test]

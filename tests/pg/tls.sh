@@ -33,6 +33,14 @@ mkdir -p "$CERTS"
     printf 'basicConstraints=CA:FALSE\nkeyUsage=digitalSignature,keyEncipherment\nextendedKeyUsage=clientAuth\n' > client.ext
     openssl x509 -req -in client.csr -CA ca.pem -CAkey ca.key -CAcreateserial -days 2 \
         -extfile client.ext -out client.crt 2>/dev/null
+    # Revocation lists (`sslcrl`) signed by the CA: one revoking nothing, one revoking the
+    # server's certificate.
+    printf '[ca]\ndefault_ca = test_ca\n[test_ca]\ndatabase = index.txt\ncrlnumber = crlnumber\ndefault_md = sha256\ndefault_crl_days = 2\n' > crl.cnf
+    : > index.txt
+    echo 01 > crlnumber
+    openssl ca -batch -config crl.cnf -keyfile ca.key -cert ca.pem -gencrl -out empty.crl 2>/dev/null
+    openssl ca -batch -config crl.cnf -keyfile ca.key -cert ca.pem -revoke server.crt 2>/dev/null
+    openssl ca -batch -config crl.cnf -keyfile ca.key -cert ca.pem -gencrl -out revoked.crl 2>/dev/null
 )
 DATA="$TMP/data"
 cp "$CERTS/server.crt" "$CERTS/server.key" "$CERTS/ca.pem" "$DATA/"
