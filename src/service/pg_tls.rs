@@ -178,31 +178,28 @@ fn provider() -> Arc<CryptoProvider> {
     Arc::new(rustls::crypto::ring::default_provider())
 }
 
-fn load_certs(path: &str, what: &str) -> Result<Vec<CertificateDer<'static>>, String> {
-    let certs = CertificateDer::pem_file_iter(path)
+/// Every `-----BEGIN {label}-----` object of the PEM file given as `param=path`; none is an
+/// error naming the parameter.
+fn load_pem<T: PemObject>(path: &str, param: &str, label: &str) -> Result<Vec<T>, String> {
+    let items = T::pem_file_iter(path)
         .and_then(|it| it.collect::<Result<Vec<_>, _>>())
-        .map_err(|e| format!("--database: {what}={path}: cannot read PEM certificates: {e}"))?;
-    if certs.is_empty() {
+        .map_err(|e| format!("--database: {param}={path}: cannot read PEM ({label}): {e}"))?;
+    if items.is_empty() {
         return Err(format!(
-            "--database: {what}={path}: no PEM certificate (-----BEGIN CERTIFICATE-----) in it"
+            "--database: {param}={path}: no PEM block -----BEGIN {label}----- in it"
         ));
     }
-    Ok(certs)
+    Ok(items)
+}
+
+fn load_certs(path: &str, what: &str) -> Result<Vec<CertificateDer<'static>>, String> {
+    load_pem(path, what, "CERTIFICATE")
 }
 
 /// The CRLs of `sslcrl=PATH` (PEM). As libpq with OpenSSL's CRL_CHECK_ALL, every certificate
 /// of the chain below the trust anchor must then be covered by a CRL of its issuer.
 fn load_crls(path: &std::path::Path) -> Result<Vec<CertificateRevocationListDer<'static>>, String> {
-    let shown = path.display();
-    let crls = CertificateRevocationListDer::pem_file_iter(path)
-        .and_then(|it| it.collect::<Result<Vec<_>, _>>())
-        .map_err(|e| format!("--database: sslcrl={shown}: cannot read PEM CRLs: {e}"))?;
-    if crls.is_empty() {
-        return Err(format!(
-            "--database: sslcrl={shown}: no PEM CRL (-----BEGIN X509 CRL-----) in it"
-        ));
-    }
-    Ok(crls)
+    load_pem(&path.display().to_string(), "sslcrl", "X509 CRL")
 }
 
 fn root_store(roots: &RootCerts) -> Result<RootCertStore, String> {
@@ -767,7 +764,10 @@ mod tests {
             "postgres://h/d?sslmode=verify-full&sslrootcert={}",
             p.display()
         ));
-        assert!(e.contains("no PEM certificate"), "{e}");
+        assert!(
+            e.contains("no PEM block -----BEGIN CERTIFICATE-----"),
+            "{e}"
+        );
         std::fs::remove_file(p).ok();
     }
 
