@@ -10,6 +10,7 @@ use super::gap::{GapFunction, Pair};
 use super::DualInput;
 use crate::contact::{edge_points, Contact, ContactState};
 use crate::geometry::{displacement_matrix, BlockGeometry, Vec6};
+use crate::scene::inside_depth;
 use nalgebra::Vector2;
 
 /// A possible pair: vertex (block, index) against edge (block, index).
@@ -69,30 +70,12 @@ pub fn vertex_vertex(
             let dj = d[f] + (t.kn_j * pn + t.kt_j * pt);
             delta -= displacement_matrix(ej, gj.centroid) * dj;
         }
-        let gi = &geoms[c.vertex_block];
-        let ni = gi.vertices.len();
-        // Step-end gap of each admissible separating line through the two corners.
-        let mut options: Vec<(PairKey, f64)> = Vec::with_capacity(4);
-        for e in [corner, (corner + nj - 1) % nj] {
-            let n = outward_normal(gj, e);
-            if admissible(gi, c.vertex, &n, sin_tol) {
-                let g0 = n.dot(&(vi - gj.vertices[e]));
-                options.push((
-                    (c.vertex_block, c.vertex, c.edge_block, e),
-                    g0 + n.dot(&delta),
-                ));
-            }
-        }
-        for e in [c.vertex, (c.vertex + ni - 1) % ni] {
-            let n = outward_normal(gi, e);
-            if admissible(gj, corner, &n, sin_tol) {
-                let g0 = n.dot(&(ej - gi.vertices[e]));
-                options.push((
-                    (c.edge_block, corner, c.vertex_block, e),
-                    g0 - n.dot(&delta),
-                ));
-            }
-        }
+        let options = lines(
+            (c.vertex_block, &geoms[c.vertex_block], c.vertex),
+            (c.edge_block, gj, corner),
+            &delta,
+            sin_tol,
+        );
         let current = (c.vertex_block, c.vertex, c.edge_block, c.edge);
         let Some(&(best, best_gap)) = options.iter().max_by(|x, y| x.1.total_cmp(&y.1)) else {
             continue;
@@ -124,6 +107,48 @@ pub fn vertex_vertex(
         contacts[k] = new;
     }
     count
+}
+
+/// Step-end gap of each admissible separating line through vertex `v` of block `i` and corner
+/// `corner` of block `j` (each given as (index, geometry, vertex)), `delta` being the relative
+/// motion of the vertex with respect to the corner over the step.
+///
+/// A line must separate the corners at the step start: one that the step-start geometry
+/// already puts a corner deeper beyond than the corner is inside the other block (a corner
+/// beside the other block's face, not at its corner) would assert a penetration of that depth,
+/// and the solve would throw the block out by as much. In the 1700-block pile (step 192, rigid
+/// blocks) a corner lying on its neighbour's face 7.7 cm below that block's top corner was
+/// switched to the top edge's line, g₀ = −7.7 cm, and the solves moved the block 6 cm in one
+/// step. Depths within the entrance criterion's round-off scale (angle tolerance × edge
+/// length) are kept, as in detection (`contact::vertex_edge::candidate`).
+fn lines(
+    (ib, gi, v): (usize, &BlockGeometry, usize),
+    (jb, gj, corner): (usize, &BlockGeometry, usize),
+    delta: &Vector2<f64>,
+    sin_tol: f64,
+) -> Vec<(PairKey, f64)> {
+    let (ni, nj) = (gi.vertices.len(), gj.vertices.len());
+    let (vi, ej) = (gi.vertices[v], gj.vertices[corner]);
+    let separates = |g0: f64, p: Vector2<f64>, other: &BlockGeometry, e: usize| {
+        let (a, b) = edge_points(other, e);
+        g0 >= -(inside_depth(p, &other.vertices).max(0.0) + sin_tol * (b - a).norm())
+    };
+    let mut options: Vec<(PairKey, f64)> = Vec::with_capacity(4);
+    for e in [corner, (corner + nj - 1) % nj] {
+        let n = outward_normal(gj, e);
+        let g0 = n.dot(&(vi - gj.vertices[e]));
+        if admissible(gi, v, &n, sin_tol) && separates(g0, vi, gj, e) {
+            options.push(((ib, v, jb, e), g0 + n.dot(delta)));
+        }
+    }
+    for e in [v, (v + ni - 1) % ni] {
+        let n = outward_normal(gi, e);
+        let g0 = n.dot(&(ej - gi.vertices[e]));
+        if admissible(gj, corner, &n, sin_tol) && separates(g0, ej, gi, e) {
+            options.push(((jb, corner, ib, e), g0 - n.dot(delta)));
+        }
+    }
+    options
 }
 
 /// Outward unit normal of edge `e` of a counter-clockwise polygon.
@@ -167,4 +192,61 @@ fn linearize(c: &mut Contact, geoms: &[BlockGeometry]) {
     c.e_j = tq.transpose() * n;
     c.f_i = ti.transpose() * t;
     c.f_j = tq.transpose() * t;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> BlockGeometry {
+        let v = Vector2::new;
+        BlockGeometry::new(vec![v(x0, y0), v(x1, y0), v(x1, y1), v(x0, y1)])
+    }
+
+    /// Regression (the 1700-block pile, rigid blocks, step 192): two neighbours of the top row,
+    /// the right one 12.3 cm lower. The left block's bottom-right corner V lies on the right
+    /// block's left face, 7.7 cm below that block's top-left corner E. With a relative motion
+    /// that carries V into the face and upwards, the right block's top edge (V 7.7 cm below
+    /// its line) and the left block's bottom edge (E 7.7 cm above its line) used to offer the
+    /// largest step-end gaps, and V was switched onto the top edge with g₀ = −7.7 cm: the
+    /// solves then moved the block 6 cm in one step and the run stopped.
+    #[test]
+    fn a_line_the_corner_is_already_deep_beyond_is_not_an_option() {
+        let left = rect(0.4, 8.0, 0.8, 8.2);
+        let right = rect(0.8, 7.877, 1.2, 8.077);
+        let sin_tol = crate::contact::ContactParams::default()
+            .angle_tolerance
+            .sin();
+        // V = vertex 1 of the left block (block 0), E = vertex 3 of the right block (block 1).
+        let delta = Vector2::new(0.05, 0.1);
+        let options = lines((0, &left, 1), (1, &right, 3), &delta, sin_tol);
+        let keys: Vec<PairKey> = options.iter().map(|o| o.0).collect();
+        // Kept: V on the right block's left face (edge 3) and E on the left block's right face
+        // (edge 1), both touching at the step start.
+        assert_eq!(keys, vec![(0, 1, 1, 3), (1, 3, 0, 1)], "{options:?}");
+        for (_, gap) in &options {
+            assert!((gap + 0.05).abs() < 1e-12, "{options:?}");
+        }
+        // A corner genuinely inside by 1 cm keeps the lines it is up to that deep beyond.
+        let right_lower = rect(0.79, 7.877, 1.19, 8.077);
+        let options = lines((0, &left, 1), (1, &right_lower, 3), &delta, sin_tol);
+        assert!(
+            options.iter().any(|o| o.0 == (0, 1, 1, 3)),
+            "the 1 cm penetration through the left face is still an option: {options:?}"
+        );
+    }
+
+    /// At a true vertex–vertex contact (corners coincide), every admissible line is an option.
+    #[test]
+    fn coincident_corners_keep_every_admissible_line() {
+        let left = rect(0.0, 0.0, 0.4, 0.2);
+        let right = rect(0.4, -0.2, 0.8, 0.0);
+        let sin_tol = crate::contact::ContactParams::default()
+            .angle_tolerance
+            .sin();
+        // V = left's bottom-right corner (vertex 1), E = right's top-left corner (vertex 3).
+        let options = lines((0, &left, 1), (1, &right, 3), &Vector2::zeros(), sin_tol);
+        assert_eq!(options.len(), 4, "{options:?}");
+        assert!(options.iter().all(|o| o.1.abs() < 1e-12), "{options:?}");
+    }
 }
