@@ -87,40 +87,25 @@ fn scene(solver: &str, block_model: &str) -> Scene {
     }
 }
 
-/// Overrides of the dual solver's parameters from the command line.
-#[derive(Clone, Copy)]
-struct DualArgs {
-    cg_budget: Option<usize>,
-    tolerance: Option<f64>,
-    proportioning: Option<f64>,
-    stall_acceptance: Option<f64>,
-}
-
-/// What the command line sets besides the dual solver's parameters.
-struct RunArgs<'a> {
-    steps: usize,
-    trace: bool,
-    block_model: &'a str,
-}
-
-/// Run `steps` steps; returns (seconds, simulation). With `trace`, print one line per step:
+/// Run `cli.steps` steps with `solver` and the command line's block model and dual-solver
+/// overrides; returns (seconds, simulation). With `--trace`, print one line per step:
 /// Δt, cuts, open–close iterations, numeric and symbolic factorizations, preconditioned CG
 /// iterations, MPRGP products, projection–contraction iterations, loosely accepted dual solves,
 /// contact detections, contacts, closed contacts.
-fn time_run(solver: &str, run: &RunArgs<'_>, dual: DualArgs) -> Result<(f64, Simulation), String> {
-    let (steps, trace) = (run.steps, run.trace);
-    let scene = scene(solver, run.block_model);
+fn time_run(solver: &str, cli: &Cli) -> Result<(f64, Simulation), String> {
+    let (steps, trace) = (cli.steps, cli.trace);
+    let scene = scene(solver, &cli.block_model);
     let mut params = SimParams::default();
-    if let Some(n) = dual.cg_budget {
+    if let Some(n) = cli.cg_budget {
         params.dual.max_cg_iterations = n;
     }
-    if let Some(t) = dual.tolerance {
+    if let Some(t) = cli.dual_tolerance {
         params.dual.tolerance = t;
     }
-    if let Some(g) = dual.proportioning {
+    if let Some(g) = cli.proportioning {
         params.dual.proportioning = g;
     }
-    if let Some(a) = dual.stall_acceptance {
+    if let Some(a) = cli.stall_acceptance {
         params.dual.stall_acceptance = a;
     }
     let mut sim = Simulation::new(&scene, &GroundMotion::none(), params);
@@ -231,17 +216,6 @@ fn main() -> std::process::ExitCode {
         eprintln!("wrote {}", path.display());
     }
     let steps = cli.steps;
-    let dual = DualArgs {
-        cg_budget: cli.cg_budget,
-        tolerance: cli.dual_tolerance,
-        proportioning: cli.proportioning,
-        stall_acceptance: cli.stall_acceptance,
-    };
-    let run = RunArgs {
-        steps,
-        trace: cli.trace,
-        block_model,
-    };
     let blocks = scene("dual", block_model).blocks.len();
     println!(
         "pile: {blocks} {block_model} blocks, {steps} steps, {} rayon threads",
@@ -252,7 +226,7 @@ fn main() -> std::process::ExitCode {
         if cli.only.as_deref().is_some_and(|o| o != solver) {
             continue;
         }
-        let (secs, sim) = match time_run(solver, &run, dual) {
+        let (secs, sim) = match time_run(solver, &cli) {
             Ok(r) => r,
             Err(e) => {
                 println!("{solver:>7}: {e}");

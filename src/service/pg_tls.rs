@@ -574,15 +574,10 @@ impl PgTarget {
                 );
                 Ok(c)
             }
-            Err(e) => {
-                let detail = match e.as_db_error() {
-                    Some(db) => format!("the server refused: {}", db.message()),
-                    None => e.to_string(),
-                };
-                Err(format!(
-                    "{why}; the plain-text retry of sslmode=prefer failed too: {detail}"
-                ))
-            }
+            Err(e) => Err(format!(
+                "{why}; the plain-text retry of sslmode=prefer failed too: {}",
+                failure(&e)
+            )),
         }
     }
 
@@ -649,10 +644,7 @@ impl PgTarget {
             };
             return format!("{head}: the server's certificate failed verification: {tls}; {why}");
         }
-        let detail = match e.as_db_error() {
-            Some(db) => format!("the server refused: {}", db.message()),
-            None => e.to_string(),
-        };
+        let detail = failure(e);
         let hint = if detail.contains("server does not support TLS") {
             " (its postgresql.conf has ssl = off: turn it on, or use sslmode=prefer/disable)"
         } else if detail.contains("no encryption") && self.mode == SslMode::Disable {
@@ -661,6 +653,15 @@ impl PgTarget {
             ""
         };
         format!("{head}: {detail}{hint}")
+    }
+}
+
+/// A connection error that is not a certificate failure: the server's own message if it
+/// refused, else the client library's.
+fn failure(e: &postgres::Error) -> String {
+    match e.as_db_error() {
+        Some(db) => format!("the server refused: {}", db.message()),
+        None => e.to_string(),
     }
 }
 

@@ -129,22 +129,27 @@ fn lines(
 ) -> Vec<(PairKey, f64)> {
     let (ni, nj) = (gi.vertices.len(), gj.vertices.len());
     let (vi, ej) = (gi.vertices[v], gj.vertices[corner]);
-    let separates = |g0: f64, p: Vector2<f64>, other: &BlockGeometry, e: usize| {
+    // How deep each corner is inside the other block (0 outside), once for its two lines.
+    let (vi_depth, ej_depth) = (
+        inside_depth(vi, &gj.vertices).max(0.0),
+        inside_depth(ej, &gi.vertices).max(0.0),
+    );
+    let separates = |g0: f64, depth: f64, other: &BlockGeometry, e: usize| {
         let (a, b) = edge_points(other, e);
-        g0 >= -(inside_depth(p, &other.vertices).max(0.0) + sin_tol * (b - a).norm())
+        g0 >= -(depth + sin_tol * (b - a).norm())
     };
     let mut options: Vec<(PairKey, f64)> = Vec::with_capacity(4);
     for e in [corner, (corner + nj - 1) % nj] {
         let n = outward_normal(gj, e);
         let g0 = n.dot(&(vi - gj.vertices[e]));
-        if admissible(gi, v, &n, sin_tol) && separates(g0, vi, gj, e) {
+        if admissible(gi, v, &n, sin_tol) && separates(g0, vi_depth, gj, e) {
             options.push(((ib, v, jb, e), g0 + n.dot(delta)));
         }
     }
     for e in [v, (v + ni - 1) % ni] {
         let n = outward_normal(gi, e);
         let g0 = n.dot(&(ej - gi.vertices[e]));
-        if admissible(gj, corner, &n, sin_tol) && separates(g0, ej, gi, e) {
+        if admissible(gj, corner, &n, sin_tol) && separates(g0, ej_depth, gi, e) {
             options.push(((jb, corner, ib, e), g0 - n.dot(delta)));
         }
     }
