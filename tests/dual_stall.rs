@@ -158,3 +158,58 @@ fn a_stall_within_the_acceptance_is_taken_counted_and_bounded() {
         "the loose run differs by {diff} m"
     );
 }
+
+/// The scene's own knob (`control.dual_stall_acceptance`, what CLI and service users set) does
+/// what `SimParams::dual.stall_acceptance` does: the starved run accepting through the scene is
+/// bit-for-bit the run accepting through the engine knob, and the run's summary counts the
+/// accepted solves. Without the scene knob reaching the solver the first run would cut or
+/// stop instead (the previous test shows the starved solver cannot keep the step alone).
+#[test]
+fn the_scene_knobs_reach_the_solver_and_the_summary() {
+    let (iterations, acceptance) = (1000, 1e4);
+    let by_engine = run_to_end(starved(iterations, acceptance)).expect("engine knob");
+    let mut scene = aligned_stack(3, 3);
+    scene.control.dual_stall_acceptance = Some(acceptance);
+    let mut s = Simulation::new(&scene, &GroundMotion::none(), starved(iterations, 1.0));
+    assert_eq!(s.params.dual.stall_acceptance, acceptance);
+    while s.time < T_END - 1e-12 {
+        s.step(T_END - s.time).expect("scene knob");
+    }
+    assert_eq!(
+        (
+            s.stats.steps,
+            s.stats.dual_loose_solves,
+            s.stats.dual_loose_residual.to_bits()
+        ),
+        (
+            by_engine.stats.steps,
+            by_engine.stats.dual_loose_solves,
+            by_engine.stats.dual_loose_residual.to_bits()
+        )
+    );
+    for b in 0..s.geoms.len() {
+        assert_eq!(
+            s.geoms[b].centroid, by_engine.geoms[b].centroid,
+            "block {b}"
+        );
+    }
+    // The tolerance too, and both are reported by a run (summary diagnostics and controls).
+    scene.control.dual_tolerance = Some(1e-6);
+    scene.control.duration = Some(T_END);
+    let options = ashlar::analysis::run::RunOptions {
+        sim_params: Some(starved(iterations, 1.0)),
+        ..Default::default()
+    };
+    let summary = ashlar::analysis::run::run(&scene, &GroundMotion::none(), &options)
+        .expect("the run through the entry point")
+        .summary;
+    let d = &summary.diagnostics;
+    eprintln!("summary diagnostics: {d:?}");
+    assert!(d.dual_loose_solves.is_some_and(|n| n > 0), "{d:?}");
+    let r = d.dual_loose_residual.expect("reported");
+    // The smallest free block's half size: half the diagonal of a 0.4 × 0.2 m block.
+    let half = 0.5 * 0.4f64.hypot(0.2);
+    assert!(r > 1e-6 * half && r <= acceptance * 1e-6 * half, "{r}");
+    assert_eq!(summary.control["dual_tolerance"], 1e-6);
+    assert_eq!(summary.control["dual_stall_acceptance"], acceptance);
+}

@@ -350,6 +350,15 @@ async fn bad_requests_get_problems_naming_the_field() {
             },
             "/scene/control/model",
         ),
+        (
+            // A dual-solver knob with the penalty solver: refused, not silently ignored.
+            {
+                let mut s = scene.clone();
+                s["control"]["dual_tolerance"] = json!(1e-4);
+                json!({"scene": s})
+            },
+            "/scene/control/dual_tolerance",
+        ),
     ];
     for (body, pointer) in cases {
         let r = call(&app, post_json("/v1/jobs", &body)).await;

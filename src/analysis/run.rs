@@ -10,7 +10,7 @@ use crate::record::mcap::{McapParams, McapRecorder};
 use crate::record::{
     BlockFrame, BlockMotionState, Frame, FrameBlockKind, GroundFrame, RecordHeader,
 };
-use crate::scene::{ModelChoice, Scene};
+use crate::scene::{ContactSolver, ModelChoice, Scene};
 use crate::simulation::{SimParams, Simulation};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -54,6 +54,14 @@ pub struct Diagnostics {
     /// Rocking model only: number of impacts (changes of pivot).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub impacts: Option<u64>,
+    /// Dual contact solver only: stalled solves accepted under
+    /// `control.dual_stall_acceptance` (0 with the default, which accepts none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dual_loose_solves: Option<u64>,
+    /// Dual contact solver only: m, the largest remaining violation of an accepted stalled
+    /// solve (0 when none was accepted).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dual_loose_residual: Option<f64>,
 }
 
 /// `summary.json` (FORMAT.md §3).
@@ -642,6 +650,7 @@ fn summarize(
         })
         .collect();
     let st = &sim.stats;
+    let dual = sim.scene.control.contact_solver == ContactSolver::Dual;
     Summary {
         completed: stopped_reason.is_none() && sim.time >= duration - 1e-9,
         simulated_time: sim.time,
@@ -661,6 +670,8 @@ fn summarize(
             },
             min_time_step: (st.steps > 0).then_some(st.min_dt),
             max_time_step: (st.steps > 0).then_some(st.max_dt),
+            dual_loose_solves: dual.then_some(st.dual_loose_solves),
+            dual_loose_residual: dual.then_some(st.dual_loose_residual),
             ..Default::default()
         },
         model,

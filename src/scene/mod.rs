@@ -131,6 +131,15 @@ pub struct Control {
     /// s.
     pub output_interval: f64,
     pub max_steps: u64,
+    /// The dual solver's stopping tolerance, as a fraction of the smallest free block's half
+    /// size. `None`: the engine's default (`DualParams::tolerance`, 1e-9). Omitted from the
+    /// reported controls when unset, so recorded outputs of scenes without it are unchanged.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dual_tolerance: Option<f64>,
+    /// Multiple of the dual tolerance up to which a stalled dual solve is accepted (≥ 1).
+    /// `None`: the engine's default (`DualParams::stall_acceptance`, 1: none accepted).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dual_stall_acceptance: Option<f64>,
 }
 
 fn ser_penalty<S: serde::Serializer>(p: &Penalty, s: S) -> Result<S::Ok, S::Error> {
@@ -167,6 +176,10 @@ impl Default for Control {
             output_interval: 0.01,
             // 50 million steps is hours of CPU: far beyond any sensible run, well short of a hang.
             max_steps: 50_000_000,
+            // The engine's own defaults (the scene layer sits above the solver and does not
+            // repeat them).
+            dual_tolerance: None,
+            dual_stall_acceptance: None,
         }
     }
 }

@@ -172,4 +172,9 @@ pub struct ControlSpec {
     pub output_interval: Option<f64>,
     /// Extension: hard cap on the number of steps (protects against runaway runs).
     pub max_steps: Option<u64>,
+    /// Extension: the dual solver's stopping tolerance, a fraction of the smallest free
+    /// block's half size.
+    pub dual_tolerance: Option<f64>,
+    /// Extension: the multiple of `dual_tolerance` up to which a stalled dual solve is taken.
+    pub dual_stall_acceptance: Option<f64>,
 }

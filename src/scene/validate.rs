@@ -411,7 +411,61 @@ fn control(c: &ControlSpec) -> Result<Control, SceneError> {
         }
         out.max_steps = n;
     }
+    dual_knobs(c, &mut out)?;
     Ok(out)
+}
+
+/// Largest `control.dual_tolerance`: 1 % of the smallest block's half size. Beyond it the
+/// accepted overlaps and gaps are visible in any drawing of the blocks, and the vertex–edge
+/// linearisation the solver relies on degrades (the same bound as the penalty runs'
+/// `max_penetration_ratio` of 5 % of the block's thickness, with a margin).
+const MAX_DUAL_TOLERANCE: f64 = 1e-2;
+
+/// The dual solver's knobs: meaningful only with `contact_solver: "dual"`, so a scene that sets
+/// them for the penalty solver is refused rather than silently ignored.
+fn dual_knobs(c: &ControlSpec, out: &mut Control) -> Result<(), SceneError> {
+    for (field, set) in [
+        ("control.dual_tolerance", c.dual_tolerance.is_some()),
+        (
+            "control.dual_stall_acceptance",
+            c.dual_stall_acceptance.is_some(),
+        ),
+    ] {
+        if set && out.contact_solver != ContactSolver::Dual {
+            return err(
+                field,
+                "applies only with contact_solver \"dual\" (the penalty solver has no such \
+                 iteration); remove it or set control.contact_solver to \"dual\"",
+            );
+        }
+    }
+    if let Some(t) = c.dual_tolerance {
+        positive("control.dual_tolerance", t)?;
+        if t > MAX_DUAL_TOLERANCE {
+            return err(
+                "control.dual_tolerance",
+                format!(
+                    "must be ≤ {MAX_DUAL_TOLERANCE} (a fraction of the smallest block's half \
+                     size; larger overlaps are visible), got {t}"
+                ),
+            );
+        }
+        out.dual_tolerance = Some(t);
+    }
+    if let Some(a) = c.dual_stall_acceptance {
+        finite("control.dual_stall_acceptance", a)?;
+        if a < 1.0 {
+            return err(
+                "control.dual_stall_acceptance",
+                format!(
+                    "must be ≥ 1 (a multiple of control.dual_tolerance; 1 accepts no stalled \
+                     solve), got {a}"
+                ),
+            );
+        }
+        out.dual_stall_acceptance = Some(a);
+    }
+    Ok(())
 }
 
 /// Blocks must not overlap at the start (touching along edges or at vertices is fine). A sweep
@@ -542,6 +596,61 @@ mod tests {
             json!({ "integrator": "dda", "contact_solver": "dual" }),
         ] {
             assert!(parse_scene(&scene(ok.clone())).is_ok(), "{ok}");
+        }
+    }
+
+    /// The dual solver's knobs: taken with the dual solver, refused by name otherwise and out of
+    /// range (each message checked for the field and the reason).
+    #[test]
+    fn dual_knobs_are_checked_by_name() {
+        let ok = parse_scene(&scene(json!({
+            "contact_solver": "dual", "dual_tolerance": 1e-4, "dual_stall_acceptance": 10.0
+        })))
+        .expect("valid");
+        assert_eq!(ok.control.dual_tolerance, Some(1e-4));
+        assert_eq!(ok.control.dual_stall_acceptance, Some(10.0));
+        let unset = parse_scene(&scene(json!({ "contact_solver": "dual" }))).expect("valid");
+        assert_eq!(
+            (
+                unset.control.dual_tolerance,
+                unset.control.dual_stall_acceptance
+            ),
+            (None, None)
+        );
+        for (control, field, reason) in [
+            (
+                json!({ "dual_tolerance": 1e-4 }),
+                "control.dual_tolerance",
+                "contact_solver \"dual\"",
+            ),
+            (
+                json!({ "contact_solver": "penalty", "dual_stall_acceptance": 2.0 }),
+                "control.dual_stall_acceptance",
+                "contact_solver \"dual\"",
+            ),
+            (
+                json!({ "contact_solver": "dual", "dual_tolerance": 0.0 }),
+                "control.dual_tolerance",
+                "> 0",
+            ),
+            (
+                json!({ "contact_solver": "dual", "dual_tolerance": 0.05 }),
+                "control.dual_tolerance",
+                "≤ 0.01",
+            ),
+            (
+                json!({ "contact_solver": "dual", "dual_stall_acceptance": 0.5 }),
+                "control.dual_stall_acceptance",
+                "≥ 1",
+            ),
+        ] {
+            let text = parse_scene(&scene(control.clone()))
+                .expect_err("refused")
+                .to_string();
+            assert!(
+                text.contains(field) && text.contains(reason),
+                "{control}: {text}"
+            );
         }
     }
 }

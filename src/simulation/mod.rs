@@ -14,7 +14,7 @@ use crate::contact::{Contact, ContactSet, ContactState, Mobility};
 use crate::geometry::{displacement_matrix, BlockGeometry, Vec6};
 use crate::integrate;
 use crate::motion::GroundMotion;
-use crate::scene::{BlockKind, BlockModel, ContactSolver, Excitation, Scene};
+use crate::scene::{BlockKind, BlockModel, ContactSolver, Control, Excitation, Scene};
 use crate::solve::dual::{DualInput, DualOutcome, DualSolver};
 use crate::solve::open_close::{self, OpenClose};
 use crate::solve::{LinearSolver, SolveError};
@@ -41,7 +41,7 @@ pub enum SimError {
         block: String,
     },
     #[error(
-        "dual contact solver did not converge at t = {time:.6} s after {cuts} time-step cuts (Δt = {dt:.3e} s, {iterations} iterations, remaining violation {residual:.3e} m) at the contact between blocks {block_a:?} and {block_b:?}; try a smaller time_step, or raise SimParams.dual.max_iterations, tolerance or stall_acceptance"
+        "dual contact solver did not converge at t = {time:.6} s after {cuts} time-step cuts (Δt = {dt:.3e} s, {iterations} iterations, remaining violation {residual:.3e} m) at the contact between blocks {block_a:?} and {block_b:?}; try a smaller control.time_step, a larger control.dual_tolerance (default 1e-9 of the smallest block's half size), or control.dual_stall_acceptance above 1 to accept stalled solves within that multiple of the tolerance"
     )]
     DualNotConverged {
         time: f64,
@@ -55,7 +55,7 @@ pub enum SimError {
     /// A step whose solution moves a block's vertex farther than the step's displacement limit
     /// (Shi's g2 × the model's half size), even at the shortest step the cuts allow.
     #[error(
-        "block {block:?} would move {moved:.3e} m in one step at t = {time:.6} s, more than the step limit of {limit:.3e} m (control.max_displacement_ratio × the model's half size), still after {cuts} time-step cuts (Δt = {dt:.3e} s): check the block's support and initial velocity; with the dual solver, a stalled solve taken by SimParams.dual.stall_acceptance can also leave forces this wrong"
+        "block {block:?} would move {moved:.3e} m in one step at t = {time:.6} s, more than the step limit of {limit:.3e} m (control.max_displacement_ratio × the model's half size), still after {cuts} time-step cuts (Δt = {dt:.3e} s): check the block's support and initial velocity; with the dual solver, a stalled solve taken by control.dual_stall_acceptance can also leave forces this wrong"
     )]
     StepTooLarge {
         time: f64,
@@ -197,8 +197,21 @@ impl std::fmt::Debug for Simulation {
     }
 }
 
+/// The engine knobs a scene may set (`control.dual_tolerance`, `control.dual_stall_acceptance`)
+/// override the caller's; unset ones keep them.
+fn with_scene_knobs(mut params: SimParams, control: &Control) -> SimParams {
+    if let Some(t) = control.dual_tolerance {
+        params.dual.tolerance = t;
+    }
+    if let Some(a) = control.dual_stall_acceptance {
+        params.dual.stall_acceptance = a;
+    }
+    params
+}
+
 impl Simulation {
     pub fn new(scene: &Scene, motion: &GroundMotion, params: SimParams) -> Self {
+        let params = with_scene_knobs(params, &scene.control);
         let geoms: Vec<BlockGeometry> = scene
             .blocks
             .iter()

@@ -322,6 +322,7 @@ pub fn run(
             max_time_step: (st.steps > 0).then_some(st.max_dt),
             restitution: (model == "rocking").then_some(restitution),
             impacts: (model == "rocking").then_some(st.impacts),
+            ..Default::default()
         },
         model: model.into(),
         model_reason: why,
