@@ -17,7 +17,9 @@
 //! block's half size instead of the default 1e-9, `-- --proportioning G` for MPRGP's
 //! proportioning constant Γ instead of 1, `-- --block-model rigid` for 3 unknowns a block
 //! instead of the seed's 6, `-- --stall-acceptance A` to accept a stalled dual solve whose
-//! violation is within A × its tolerance instead of cutting the step).
+//! violation is within A × its tolerance instead of cutting the step). The scene written by
+//! `--write` carries the last two as `control.dual_tolerance` and
+//! `control.dual_stall_acceptance`, so `ashlar run pile.json` runs the dual solver as this does.
 use ashlar::motion::GroundMotion;
 use ashlar::scene::{parse_scene, Scene};
 use ashlar::simulation::{SimParams, Simulation};
@@ -171,7 +173,7 @@ struct Cli {
     /// `deformable` (6 unknowns a block, as the seed's DDA) or `rigid` (3).
     #[arg(long, default_value = "deformable", value_parser = ["deformable", "rigid"])]
     block_model: String,
-    /// Also write the scene (`ashlar.scene/1`, dual solver) to this file.
+    /// Also write the scene (`ashlar.scene/1`, dual solver, with the dual options given) to this file.
     #[arg(long, value_name = "PATH")]
     write: Option<std::path::PathBuf>,
     /// Products with W for the dual solver's MPRGP minimisation (0: projection–contraction alone).
@@ -208,7 +210,15 @@ fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let block_model = cli.block_model.as_str();
     if let Some(path) = &cli.write {
-        let text = serde_json::to_string_pretty(&pile_scene("dual", block_model)).expect("json");
+        let mut v = pile_scene("dual", block_model);
+        // The written scene runs the dual solver as this run does (`ashlar run`).
+        if let Some(t) = cli.dual_tolerance {
+            v["control"]["dual_tolerance"] = t.into();
+        }
+        if let Some(a) = cli.stall_acceptance {
+            v["control"]["dual_stall_acceptance"] = a.into();
+        }
+        let text = serde_json::to_string_pretty(&v).expect("json");
         if let Err(e) = std::fs::write(path, text) {
             eprintln!("pile: cannot write {}: {e}", path.display());
             return std::process::ExitCode::FAILURE;
