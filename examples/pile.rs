@@ -82,8 +82,24 @@ pub fn pile_scene(solver: &str, block_model: &str) -> Value {
     })
 }
 
-fn scene(solver: &str, block_model: &str) -> Scene {
-    match parse_scene(&pile_scene(solver, block_model).to_string()) {
+/// The pile for `solver` with the command line's block model; with the dual solver, its
+/// `--dual-tolerance` and `--stall-acceptance` become the scene's `control.dual_tolerance` and
+/// `control.dual_stall_acceptance` (so the scene written by `--write` runs as this does).
+fn scene_json(solver: &str, cli: &Cli) -> Value {
+    let mut v = pile_scene(solver, &cli.block_model);
+    if solver == "dual" {
+        if let Some(t) = cli.dual_tolerance {
+            v["control"]["dual_tolerance"] = t.into();
+        }
+        if let Some(a) = cli.stall_acceptance {
+            v["control"]["dual_stall_acceptance"] = a.into();
+        }
+    }
+    v
+}
+
+fn scene(solver: &str, cli: &Cli) -> Scene {
+    match parse_scene(&scene_json(solver, cli).to_string()) {
         Ok(s) => s,
         Err(e) => panic!("pile scene invalid: {e}"),
     }
@@ -96,19 +112,14 @@ fn scene(solver: &str, block_model: &str) -> Scene {
 /// contact detections, contacts, closed contacts.
 fn time_run(solver: &str, cli: &Cli) -> Result<(f64, Simulation), String> {
     let (steps, trace) = (cli.steps, cli.trace);
-    let scene = scene(solver, &cli.block_model);
+    let scene = scene(solver, cli);
+    // The knobs a scene cannot set; the tolerance and stall acceptance are in `scene`.
     let mut params = SimParams::default();
     if let Some(n) = cli.cg_budget {
         params.dual.max_cg_iterations = n;
     }
-    if let Some(t) = cli.dual_tolerance {
-        params.dual.tolerance = t;
-    }
     if let Some(g) = cli.proportioning {
         params.dual.proportioning = g;
-    }
-    if let Some(a) = cli.stall_acceptance {
-        params.dual.stall_acceptance = a;
     }
     let mut sim = Simulation::new(&scene, &GroundMotion::none(), params);
     let t = Instant::now();
@@ -210,15 +221,7 @@ fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let block_model = cli.block_model.as_str();
     if let Some(path) = &cli.write {
-        let mut v = pile_scene("dual", block_model);
-        // The written scene runs the dual solver as this run does (`ashlar run`).
-        if let Some(t) = cli.dual_tolerance {
-            v["control"]["dual_tolerance"] = t.into();
-        }
-        if let Some(a) = cli.stall_acceptance {
-            v["control"]["dual_stall_acceptance"] = a.into();
-        }
-        let text = serde_json::to_string_pretty(&v).expect("json");
+        let text = serde_json::to_string_pretty(&scene_json("dual", &cli)).expect("json");
         if let Err(e) = std::fs::write(path, text) {
             eprintln!("pile: cannot write {}: {e}", path.display());
             return std::process::ExitCode::FAILURE;
@@ -226,7 +229,7 @@ fn main() -> std::process::ExitCode {
         eprintln!("wrote {}", path.display());
     }
     let steps = cli.steps;
-    let blocks = scene("dual", block_model).blocks.len();
+    let blocks = scene("dual", &cli).blocks.len();
     println!(
         "pile: {blocks} {block_model} blocks, {steps} steps, {} rayon threads",
         rayon::current_num_threads()
