@@ -45,13 +45,42 @@ pub struct PairTerms {
     pub tension: f64,
 }
 
+/// One contact seen from one of its blocks: `K⁻¹w` with the side's sign folded in (+ for the
+/// vertex block, − for the edge block, which receives the opposite force).
+#[derive(Debug, Clone, Copy)]
+struct GatherRow {
+    contact: u32,
+    kn: Vec6,
+    kt: Vec6,
+}
+
+/// One contact's gap gradients, the edge side's negated; `NONE` marks a side without unknowns.
+#[derive(Debug, Clone, Copy)]
+struct ScatterRow {
+    fi: u32,
+    fj: u32,
+    constant: Pair,
+    wn_i: Vec6,
+    wt_i: Vec6,
+    wn_j: Vec6,
+    wt_j: Vec6,
+}
+
+const NONE: u32 = u32::MAX;
+
 /// The contact terms of a step plus the block incidence used to gather forces per block.
 #[derive(Debug, Default)]
 pub struct GapFunction {
     pub terms: Vec<PairTerms>,
-    /// Per free block, the (contact, is-vertex-side) entries in `incidence[start[f]..start[f+1]]`.
+    /// Per free block, its contacts' entries in `gather_rows[start[f]..start[f+1]]`.
     start: Vec<usize>,
-    incidence: Vec<(u32, bool)>,
+    /// The product with W reads packed copies of the terms, in the order its loops run: a
+    /// product streams ~2 MB instead of striding through 400-byte `PairTerms` (docs/dual.md,
+    /// "The product with W").
+    gather_rows: Vec<GatherRow>,
+    scatter_rows: Vec<ScatterRow>,
+    /// `terms[k].diag` packed, for the minimisation's per-component loops.
+    pub diag: Vec<Pair>,
     /// Item count from which loops run on rayon.
     pub parallel_from: usize,
 }
@@ -99,19 +128,47 @@ impl GapFunction {
         for f in 0..nf {
             self.start[f + 1] += self.start[f];
         }
-        self.incidence.clear();
-        self.incidence.resize(self.start[nf], (0, false));
+        self.gather_rows.clear();
+        let empty = GatherRow {
+            contact: 0,
+            kn: Vec6::zeros(),
+            kt: Vec6::zeros(),
+        };
+        self.gather_rows.resize(self.start[nf], empty);
         let mut fill = self.start.clone();
         for (k, t) in self.terms.iter().enumerate() {
+            let contact = k as u32;
             if let Some(f) = t.fi {
-                self.incidence[fill[f]] = (k as u32, true);
+                self.gather_rows[fill[f]] = GatherRow {
+                    contact,
+                    kn: t.kn_i,
+                    kt: t.kt_i,
+                };
                 fill[f] += 1;
             }
             if let Some(f) = t.fj {
-                self.incidence[fill[f]] = (k as u32, false);
+                self.gather_rows[fill[f]] = GatherRow {
+                    contact,
+                    kn: -t.kn_j,
+                    kt: -t.kt_j,
+                };
                 fill[f] += 1;
             }
         }
+        self.diag.clear();
+        self.diag.extend(self.terms.iter().map(|t| t.diag));
+        let index = |f: Option<usize>| f.map_or(NONE, |f| f as u32);
+        self.scatter_rows.clear();
+        self.scatter_rows
+            .extend(self.terms.iter().map(|t| ScatterRow {
+                fi: index(t.fi),
+                fj: index(t.fj),
+                constant: t.constant,
+                wn_i: t.wn_i,
+                wt_i: t.wt_i,
+                wn_j: -t.wn_j,
+                wt_j: -t.wt_j,
+            }));
     }
 
     /// Block increments `d_f = f_f + Σ K⁻¹ w p` for contact forces `p`.
@@ -140,14 +197,9 @@ impl GapFunction {
             } else {
                 Vec6::zeros()
             };
-            for &(k, vertex_side) in &self.incidence[self.start[f]..self.start[f + 1]] {
-                let t = &self.terms[k as usize];
-                let [pn, pt] = p[k as usize];
-                if vertex_side {
-                    v += t.kn_i * pn + t.kt_i * pt;
-                } else {
-                    v -= t.kn_j * pn + t.kt_j * pt;
-                }
+            for row in &self.gather_rows[self.start[f]..self.start[f + 1]] {
+                let [pn, pt] = p[row.contact as usize];
+                v += row.kn * pn + row.kt * pt;
             }
             *out = v;
         };
@@ -160,22 +212,25 @@ impl GapFunction {
 
     fn scatter(&self, d: &[Vec6], with_constant: bool, out: &mut Vec<Pair>) {
         out.resize(self.terms.len(), [0.0; 2]);
-        let one = |(t, g): (&PairTerms, &mut Pair)| {
-            let [mut gn, mut gt] = if with_constant { t.constant } else { [0.0; 2] };
-            if let Some(f) = t.fi {
-                gn += t.wn_i.dot(&d[f]);
-                gt += t.wt_i.dot(&d[f]);
+        let one = |(r, g): (&ScatterRow, &mut Pair)| {
+            let [mut gn, mut gt] = if with_constant { r.constant } else { [0.0; 2] };
+            if r.fi != NONE {
+                let di = &d[r.fi as usize];
+                gn += r.wn_i.dot(di);
+                gt += r.wt_i.dot(di);
             }
-            if let Some(f) = t.fj {
-                gn -= t.wn_j.dot(&d[f]);
-                gt -= t.wt_j.dot(&d[f]);
+            if r.fj != NONE {
+                let dj = &d[r.fj as usize];
+                gn += r.wn_j.dot(dj);
+                gt += r.wt_j.dot(dj);
             }
             *g = [gn, gt];
         };
         if self.terms.len() >= self.parallel_from {
-            self.terms.par_iter().zip(out.par_iter_mut()).for_each(one);
+            let rows = self.scatter_rows.par_iter();
+            rows.zip(out.par_iter_mut()).for_each(one);
         } else {
-            self.terms.iter().zip(out.iter_mut()).for_each(one);
+            self.scatter_rows.iter().zip(out.iter_mut()).for_each(one);
         }
     }
 }

@@ -195,8 +195,8 @@ fn bounded_cg(
     products: &mut usize,
 ) -> bool {
     let n = p.len();
-    let terms = &gf.terms;
-    let w = |k: usize, j: usize| terms[k].diag[j];
+    let diag = &gf.diag;
+    let w = |k: usize, j: usize| diag[k][j];
     let gradient = |p: &[Pair], c: &mut CgScratch, products: &mut usize| {
         gf.displacements(flex, p, &mut c.d_tmp);
         gf.eval(&c.d_tmp, &mut c.grad);
