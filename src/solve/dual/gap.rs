@@ -80,7 +80,7 @@ pub struct GapFunction {
     gather_rows: Vec<GatherRow>,
     scatter_rows: Vec<ScatterRow>,
     /// `terms[k].diag` packed, for the minimisation's per-component loops.
-    pub diag: Vec<Pair>,
+    diag: Vec<Pair>,
     /// Item count from which loops run on rayon.
     pub parallel_from: usize,
 }
@@ -173,6 +173,11 @@ impl GapFunction {
                 wn_j: -t.wn_j,
                 wt_j: -t.wt_j,
             }));
+    }
+
+    /// The diagonal of W per contact (m/N), packed: `terms[k].diag`.
+    pub fn diag(&self) -> &[Pair] {
+        &self.diag
     }
 
     /// Block increments `d_f = f_f + Σ K⁻¹ w p` for contact forces `p`.

@@ -195,7 +195,7 @@ fn bounded_cg(
     products: &mut usize,
 ) -> bool {
     let n = p.len();
-    let diag = &gf.diag;
+    let diag = gf.diag();
     let w = |k: usize, j: usize| diag[k][j];
     let gradient = |p: &[Pair], c: &mut CgScratch, products: &mut usize| {
         gf.displacements(flex, p, &mut c.d_tmp);
