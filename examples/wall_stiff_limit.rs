@@ -5,10 +5,11 @@
 //!
 //! `cargo run --release --example wall_stiff_limit [-- DURATION_S]` (default 8 s, as the study).
 use ashlar::analysis::run::{run, RunOptions};
+use ashlar::analysis::study::wall_params;
 use ashlar::motion;
 use ashlar::record::Frame;
-use ashlar::scene::generate::{running_bond_wall, WallParams};
-use ashlar::scene::{scene_from_value, BlockModel};
+use ashlar::scene::generate::running_bond_wall;
+use ashlar::scene::scene_from_value;
 use serde_json::json;
 use std::sync::Mutex;
 
@@ -26,14 +27,7 @@ fn history(s: Setting, duration: f64) -> Result<(Vec<(f64, f64)>, f64), String> 
     let gm = motion::load_path(std::path::Path::new(path))
         .map_err(|e| format!("{path}: {e}"))?
         .scaled_to_pga(0.4 * motion::STANDARD_GRAVITY);
-    let wall = running_bond_wall(&WallParams {
-        courses: 3,
-        blocks_per_course: 2,
-        block_length: 0.6,
-        block_height: 0.3,
-        friction_angle: 35.0,
-        block_model: BlockModel::Deformable,
-    });
+    let wall = running_bond_wall(&wall_params());
     let mut v = serde_json::to_value(&wall).map_err(|e| e.to_string())?;
     let top = v["blocks"].as_array().map_or(0, |b| b.len() - 1);
     v["control"] = json!({ "duration": duration, "time_step": dt,

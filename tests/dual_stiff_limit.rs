@@ -11,10 +11,11 @@
 //! and why the dual's default tolerance (1e-9 × half the block size, 3.4e-10 m a step) is
 //! visible there (docs/dual.md, "The wall").
 use ashlar::analysis::run::{run, RunOptions};
+use ashlar::analysis::study::wall_params;
 use ashlar::motion::{self, GroundMotion};
 use ashlar::record::Frame;
-use ashlar::scene::generate::{running_bond_wall, WallParams};
-use ashlar::scene::{scene_from_value, BlockModel};
+use ashlar::scene::generate::running_bond_wall;
+use ashlar::scene::scene_from_value;
 use serde_json::{json, Value};
 use std::sync::Mutex;
 
@@ -28,14 +29,7 @@ fn wall_and_record() -> (Value, GroundMotion) {
     let gm = motion::load_path(std::path::Path::new(path))
         .expect("shared record")
         .scaled_to_pga(0.4 * motion::STANDARD_GRAVITY);
-    let wall = running_bond_wall(&WallParams {
-        courses: 3,
-        blocks_per_course: 2,
-        block_length: 0.6,
-        block_height: 0.3,
-        friction_angle: 35.0,
-        block_model: BlockModel::Deformable,
-    });
+    let wall = running_bond_wall(&wall_params());
     (serde_json::to_value(&wall).expect("wall scene"), gm)
 }
 

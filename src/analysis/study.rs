@@ -351,6 +351,19 @@ fn column_scene() -> Value {
 }
 
 /// The benchmark scenes.
+/// The study's masonry wall: 3 courses of two 0.6 × 0.3 m deformable blocks, φ = 35°
+/// (also the scene of `tests/dual_stiff_limit.rs` and `examples/wall_stiff_limit.rs`).
+pub fn wall_params() -> WallParams {
+    WallParams {
+        courses: 3,
+        blocks_per_course: 2,
+        block_length: 0.6,
+        block_height: 0.3,
+        friction_angle: 35.0,
+        block_model: BlockModel::Deformable,
+    }
+}
+
 fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
     let every: f64 = 0.01;
     let mut out = Vec::new();
@@ -452,14 +465,7 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
         .join("northridge-1994-mulholland-009.at2");
     let gm = motion::load_path(&record).map_err(|e| format!("{}: {e}", record.display()))?;
     let gm = gm.scaled_to_pga(0.4 * motion::STANDARD_GRAVITY);
-    let wall = running_bond_wall(&WallParams {
-        courses: 3,
-        blocks_per_course: 2,
-        block_length: 0.6,
-        block_height: 0.3,
-        friction_angle: 35.0,
-        block_model: BlockModel::Deformable,
-    });
+    let wall = running_bond_wall(&wall_params());
     let scene = serde_json::to_value(&wall).map_err(|e| e.to_string())?;
     let observed = scene["blocks"].as_array().map(|b| b.len() - 1).unwrap_or(1);
     let duration = if opts.quick { 3.0 } else { 8.0 };
