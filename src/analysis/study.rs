@@ -350,7 +350,6 @@ fn column_scene() -> Value {
     )
 }
 
-/// The benchmark scenes.
 /// The study's masonry wall: 3 courses of two 0.6 × 0.3 m deformable blocks, φ = 35°
 /// (also the scene of `tests/dual_stiff_limit.rs` and `examples/wall_stiff_limit.rs`).
 pub fn wall_params() -> WallParams {
@@ -364,6 +363,7 @@ pub fn wall_params() -> WallParams {
     }
 }
 
+/// The benchmark scenes.
 fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
     let every: f64 = 0.01;
     let mut out = Vec::new();
