@@ -11,8 +11,8 @@
 //! and why the dual's default tolerance (1e-9 × half the block size, 3.4e-10 m a step) is
 //! visible there (docs/dual.md, "The wall").
 use ashlar::analysis::run::{run, RunOptions};
-use ashlar::analysis::study::wall_params;
-use ashlar::motion::{self, GroundMotion};
+use ashlar::analysis::study::{wall_params, wall_record};
+use ashlar::motion::GroundMotion;
 use ashlar::record::Frame;
 use ashlar::scene::generate::running_bond_wall;
 use ashlar::scene::scene_from_value;
@@ -22,13 +22,8 @@ use std::sync::Mutex;
 const DURATION: f64 = 3.0;
 
 fn wall_and_record() -> (Value, GroundMotion) {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../shared/ground-motions/northridge-1994-mulholland-009.at2"
-    );
-    let gm = motion::load_path(std::path::Path::new(path))
-        .expect("shared record")
-        .scaled_to_pga(0.4 * motion::STANDARD_GRAVITY);
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/ground-motions");
+    let gm = wall_record(std::path::Path::new(dir)).expect("shared record");
     let wall = running_bond_wall(&wall_params());
     (serde_json::to_value(&wall).expect("wall scene"), gm)
 }

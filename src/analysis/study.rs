@@ -363,6 +363,13 @@ pub fn wall_params() -> WallParams {
     }
 }
 
+/// The wall's record: Northridge (Mulholland 009) from `ground_motions`, scaled to 0.4 g.
+pub fn wall_record(ground_motions: &Path) -> Result<GroundMotion, String> {
+    let record = ground_motions.join("northridge-1994-mulholland-009.at2");
+    let gm = motion::load_path(&record).map_err(|e| format!("{}: {e}", record.display()))?;
+    Ok(gm.scaled_to_pga(0.4 * motion::STANDARD_GRAVITY))
+}
+
 /// The benchmark scenes.
 fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
     let every: f64 = 0.01;
@@ -460,11 +467,7 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
         reducible: true,
     });
     // 6. Masonry wall under a shared record.
-    let record = opts
-        .ground_motions
-        .join("northridge-1994-mulholland-009.at2");
-    let gm = motion::load_path(&record).map_err(|e| format!("{}: {e}", record.display()))?;
-    let gm = gm.scaled_to_pga(0.4 * motion::STANDARD_GRAVITY);
+    let gm = wall_record(&opts.ground_motions)?;
     let wall = running_bond_wall(&wall_params());
     let scene = serde_json::to_value(&wall).map_err(|e| e.to_string())?;
     let observed = scene["blocks"].as_array().map(|b| b.len() - 1).unwrap_or(1);
