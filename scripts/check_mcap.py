@@ -5,7 +5,7 @@
     python3 scripts/check_mcap.py trajectory.mcap [--frames N] [--csv histories.csv]
 
 Reads the file twice, with the indexed (seeking) reader and with a linear stream reader that
-validates every CRC, and checks FORMAT.md section 5: the channels, their schemas (JSON Schema,
+validates every CRC, and checks docs/format.md section 5: the channels, their schemas (JSON Schema,
 embedded, titled by the schema name), one message per frame on each frame channel with
 strictly increasing log times equal to the message's "time" in ns, the static transform, the
 `ashlar.run` metadata, that every message has the fields its schema requires, and (with --csv)

@@ -1,4 +1,4 @@
-//! `ashlar motion RECORD [--svg FILE]`: the JSON has exactly the FORMAT.md §3 fields (plus the
+//! `ashlar motion RECORD [--svg FILE]`: the JSON has exactly the docs/format.md §3 fields (plus the
 //! documented extensions) and the SVG is written.
 use ashlar::motion::command::{parse_pga, report_json, MotionArgs};
 use std::path::PathBuf;
@@ -21,10 +21,19 @@ fn args(record: &str) -> MotionArgs {
     }
 }
 
+/// `args` for one of the repository's recorded ground motions (data/ground-motions).
+fn recorded(name: &str) -> MotionArgs {
+    MotionArgs {
+        record: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/data/ground-motions"))
+            .join(name),
+        ..args("")
+    }
+}
+
 #[test]
 fn json_fields_and_svg() {
     let svg = std::env::temp_dir().join(format!("ashlar-spectrum-{}.svg", std::process::id()));
-    let mut a = args("ground-motions/friuli-1976-tolmezzo-000.at2");
+    let mut a = recorded("friuli-1976-tolmezzo-000.at2");
     a.svg = Some(svg.clone());
     let json: serde_json::Value =
         serde_json::from_str(&report_json(&a).expect("report")).expect("json");
@@ -61,7 +70,7 @@ fn options_and_errors() {
     assert!((parse_pga("0.3g").expect("g") - 0.3 * 9.80665).abs() < 1e-12);
     assert_eq!(parse_pga("2.5").expect("m/s2"), 2.5);
     assert!(parse_pga("fast").is_err());
-    let mut a = args("ground-motions/kobe-1995-nishi-akashi-000.csv");
+    let mut a = recorded("kobe-1995-nishi-akashi-000.csv");
     a.pga = Some("0.5g".into());
     let json: serde_json::Value =
         serde_json::from_str(&report_json(&a).expect("report")).expect("json");

@@ -229,7 +229,7 @@ fn pulse_integrals_are_consistent() {
 fn scaling() {
     let gm = motion::load_path(std::path::Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/tests/fixtures/motion/ground-motions/northridge-1994-mulholland-009.at2"
+        "/data/ground-motions/northridge-1994-mulholland-009.at2"
     )))
     .expect("record");
     let base = report(&gm);
@@ -272,7 +272,7 @@ fn linear_baseline_on_a_record() {
     use motion::{Baseline, ProcessParams, RecordKind};
     let path = std::path::Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/tests/fixtures/motion/ground-motions/kobe-1995-nishi-akashi-000.csv"
+        "/data/ground-motions/kobe-1995-nishi-akashi-000.csv"
     ));
     let raw = motion::load_path(path).expect("record");
     let Signal::Sampled(s) = &raw.horizontal else {

@@ -10,6 +10,13 @@ fn fixture(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// One of the repository's recorded ground motions.
+fn recorded(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("data/ground-motions")
+        .join(name)
+}
+
 fn sampled(gm: &GroundMotion) -> &motion::Sampled {
     match &gm.horizontal {
         Signal::Sampled(s) => s,
@@ -22,8 +29,8 @@ fn synthetic(i: usize) -> f64 {
     100.0 * (0.7 * i as f64).sin() * (-0.05 * i as f64).exp()
 }
 
-/// Shared records: sample count, time step and PGA as tabulated in their README (copied with
-/// the records into tests/fixtures/motion/ground-motions). PGA must agree to 3 significant
+/// Recorded ground motions: sample count, time step and PGA as tabulated in their README
+/// (data/ground-motions/README.md). PGA must agree to 3 significant
 /// digits, i.e. |pga − table| ≤ 0.0005 g, the table's rounding.
 #[test]
 fn shared_records_match_the_readme_table() {
@@ -41,7 +48,7 @@ fn shared_records_match_the_readme_table() {
         ("kobe-1995-nishi-akashi-000.csv", 4096, 0.01, 0.509),
     ];
     for (name, npts, dt, pga_g) in table {
-        let gm = motion::load_path(&fixture(&format!("ground-motions/{name}"))).expect(name);
+        let gm = motion::load_path(&recorded(name)).expect(name);
         let s = sampled(&gm);
         assert_eq!(s.accel.len(), npts, "{name}: samples");
         assert!((s.dt - dt).abs() < 1e-9 * dt, "{name}: dt {} vs {dt}", s.dt);
@@ -163,7 +170,7 @@ fn esm_full_header() {
     );
 }
 
-/// The same AT2 text embedded in FORMAT.md §2 JSON reads to the same record, and JSON errors
+/// The same AT2 text embedded in docs/format.md §2 JSON reads to the same record, and JSON errors
 /// inside embedded content name the JSON field and the content line.
 #[test]
 fn json_embedded_formats_match_files() {
@@ -187,7 +194,7 @@ fn json_embedded_formats_match_files() {
     assert_eq!(e.line, Some(5));
 }
 
-/// A FORMAT.md §2 JSON file through load_path: target PGA in g, a cosine pulse.
+/// A docs/format.md §2 JSON file through load_path: target PGA in g, a cosine pulse.
 #[test]
 fn json_file_with_pulse_and_target_pga() {
     let dir = std::env::temp_dir().join(format!("ashlar-motion-{}", std::process::id()));

@@ -48,7 +48,7 @@ const RECORDS: [&str; 2] = [
 
 fn load(name: &str) -> motion::GroundMotion {
     let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/motion/ground-motions")
+        .join("data/ground-motions")
         .join(name);
     motion::load_path(&p).expect(name)
 }

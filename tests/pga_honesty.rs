@@ -20,10 +20,10 @@ use std::path::Path;
 
 const WINDOW: f64 = 9.0;
 
-/// A shared record, from the repository's copy of /work/shared/ground-motions.
+/// One of the repository's recorded ground motions (data/ground-motions).
 fn record(name: &str) -> GroundMotion {
     let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/motion/ground-motions")
+        .join("data/ground-motions")
         .join(name);
     load_path(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
@@ -56,7 +56,7 @@ fn pair() -> ashlar::scene::Scene {
     parse(&scene_json(blocks, 75.0, json!({ "duration": WINDOW })))
 }
 
-/// The criterion read from a run's summary (the definitions of FORMAT.md §3).
+/// The criterion read from a run's summary (the definitions of docs/format.md §3).
 fn met_in(c: &Criterion, s: &Summary) -> bool {
     let b = s
         .blocks

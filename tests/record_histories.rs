@@ -1,4 +1,4 @@
-//! Integration tests of `histories.csv` (`record::histories`): layout of FORMAT.md §3, exact
+//! Integration tests of `histories.csv` (`record::histories`): layout of docs/format.md §3, exact
 //! round trip of every value, streaming, early finish and clear errors.
 use ashlar::record::synthetic::RockingSquare;
 use ashlar::record::{HistoryWriter, RecordError};

@@ -1,4 +1,4 @@
-//! Model selection (`control.model`, FORMAT.md §1) and the combined sliding–rocking
+//! Model selection (`control.model`, docs/format.md §1) and the combined sliding–rocking
 //! first-motion check of the reduced models.
 //!
 //! The first-motion check is verified against the analytic chart of a block on an incline

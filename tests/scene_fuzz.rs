@@ -294,7 +294,7 @@ proptest! {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Ground motion JSON (FORMAT.md §2)
+// Ground motion JSON (docs/format.md §2)
 
 fn motion_seeds() -> Vec<Value> {
     vec![

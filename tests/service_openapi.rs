@@ -77,7 +77,7 @@ async fn router_and_openapi_describe_the_same_operations() {
         missing_in_router.is_empty(),
         "operations of openapi.yaml not in the router: {missing_in_router:?}"
     );
-    // FORMAT.md §4's minimum is all there.
+    // docs/format.md §4's minimum is all there.
     for (m, p) in [
         ("POST", "/v1/jobs"),
         ("GET", "/v1/jobs/{id}"),
@@ -92,7 +92,7 @@ async fn router_and_openapi_describe_the_same_operations() {
     ] {
         assert!(
             spec.contains(&(m.to_string(), p.to_string())),
-            "FORMAT.md §4 requires {m} {p}"
+            "docs/format.md §4 requires {m} {p}"
         );
     }
 

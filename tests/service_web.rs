@@ -26,7 +26,7 @@ fn start(tag: &str, job_time: Duration) -> (Service, axum::Router, PathBuf) {
 
 fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/motion/ground-motions")
+        .join("data/ground-motions")
         .join(name)
 }
 

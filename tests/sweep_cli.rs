@@ -1,7 +1,7 @@
 //! `ashlar sweep`: a manifest's lines run one by one (as a Slurm array or Kubernetes indexed
 //! job would), then `--collect` builds the report. Checked against independent facts: each
 //! line's verdict for `toppled:column` must equal the summary's own `toppled` flag (computed by
-//! the run from the final rotation, FORMAT.md §3), the applied PGA must be the line's
+//! the run from the final rotation, docs/format.md §3), the applied PGA must be the line's
 //! amplitude, and the report's bracket must follow from the verdicts by the PGA search's rules
 //! (recomputed here by hand).
 use serde_json::{json, Value};

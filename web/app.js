@@ -5,7 +5,7 @@
 
 const $ = (id) => document.getElementById(id);
 const G = 9.80665; // standard gravity, m/s² (the service's "g")
-const TOPPLE_RAD = 0.5236; // 30°: FORMAT.md §3's toppled threshold on |rotation|
+const TOPPLE_RAD = 0.5236; // 30°: docs/format.md §3's toppled threshold on |rotation|
 // Speed above which a block is drawn as moving: 5 mm/s (at the centroid, or at the block's
 // corners for rotation) is well above the numerical creep of a block at rest and well below
 // any rocking or sliding worth seeing.
@@ -256,7 +256,7 @@ async function onRecordFiles() {
   scheduleInspect();
 }
 
-// One record → a FORMAT.md §2 component.
+// One record → a docs/format.md §2 component.
 function recordComponent(rec) {
   const format = $("record-format").value || rec.format;
   if (format === "json") {
@@ -279,7 +279,7 @@ function scaleSpec() {
   return mode === "factor" ? { factor: v } : { target_pga: v, units: $("scale-units").value };
 }
 
-// The motions of the form (several only for record files), each a FORMAT.md §2 object.
+// The motions of the form (several only for record files), each a docs/format.md §2 object.
 async function buildMotions(withScale) {
   const src = radio("motion-source");
   let motions;

@@ -149,7 +149,7 @@ impl Combine {
         all_known.then_some(!short)
     }
 
-    /// The `criterion` text of a result: one criterion as given (FORMAT.md §3); several joined
+    /// The `criterion` text of a result: one criterion as given (docs/format.md §3); several joined
     /// by `,` for `all` (as before) and written `any(a,b)` for `any`.
     pub fn label(self, criteria: &[Criterion]) -> String {
         let joined = criteria
@@ -182,7 +182,7 @@ pub struct PgaRun {
     pub failed: bool,
 }
 
-/// `result.json` of FORMAT.md §3.
+/// `result.json` of docs/format.md §3.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PgaResult {
     pub criterion: String,

@@ -1,5 +1,5 @@
 //! One run of a scene under a ground motion: drives the simulation to the end, records frames
-//! (histories, trajectory), classifies the outcome and writes `summary.json` (FORMAT.md §3).
+//! (histories, trajectory), classifies the outcome and writes `summary.json` (docs/format.md §3).
 use crate::analysis::reduced::{
     self, record::ReducedError, Modes, ReducedParams, Restitution, SingleBlock,
 };
@@ -17,7 +17,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-/// Per-block results (FORMAT.md §3).
+/// Per-block results (docs/format.md §3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BlockSummary {
     pub id: String,
@@ -64,7 +64,7 @@ pub struct Diagnostics {
     pub dual_loose_residual: Option<f64>,
 }
 
-/// `summary.json` (FORMAT.md §3).
+/// `summary.json` (docs/format.md §3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
     pub completed: bool,
@@ -130,7 +130,7 @@ pub struct RunOutcome {
 /// Thresholds of the outcome classification. Each default says why.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FailureParams {
-    /// |rotation| beyond which a block has toppled: FORMAT.md fixes 30°.
+    /// |rotation| beyond which a block has toppled: docs/format.md fixes 30°.
     pub toppled_rotation: f64,
     /// Sliding distance (m) that counts as sliding: 1 mm is above the contact springs'
     /// elastic slip and below any displacement an archaeologist would record.
@@ -226,7 +226,7 @@ pub fn duration(scene: &Scene, motion: &GroundMotion) -> Result<f64, RunError> {
     }
 }
 
-/// The model a run uses, decided from the scene alone (FORMAT.md §1 `control.model`).
+/// The model a run uses, decided from the scene alone (docs/format.md §1 `control.model`).
 #[derive(Debug, Clone)]
 pub enum ModelPlan {
     /// The full DDA engine, and why.

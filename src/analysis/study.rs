@@ -27,12 +27,17 @@ const G: f64 = 9.81;
 const REF_DT: f64 = 1e-5;
 const PI: f64 = std::f64::consts::PI;
 
+/// The repository's folder of recorded ground motions (`data/ground-motions`, with their source
+/// and licence), relative to the repository root: `ashlar study`'s default `--ground-motions`;
+/// tests and examples join it to `CARGO_MANIFEST_DIR`.
+pub const GROUND_MOTIONS_DIR: &str = "data/ground-motions";
+
 /// What to run.
 #[derive(Debug, Clone)]
 pub struct StudyOptions {
     /// The reduced sweep for CI (minutes in a debug build).
     pub quick: bool,
-    /// Directory of the shared ground-motion records.
+    /// Directory of the recorded ground motions (the repository's `GROUND_MOTIONS_DIR`).
     pub ground_motions: PathBuf,
     /// Wall-clock budget of one point, s: a point over budget is recorded as such.
     pub point_budget_s: f64,
@@ -61,7 +66,7 @@ pub struct Setting {
 }
 
 impl Setting {
-    /// The project's defaults as the study sees them (FORMAT.md §1; `scene::Control`).
+    /// The project's defaults as the study sees them (docs/format.md §1; `scene::Control`).
     fn baseline() -> Self {
         let c = crate::scene::Control::default();
         Self {
@@ -366,7 +371,12 @@ pub fn wall_params() -> WallParams {
 /// The wall's record: Northridge (Mulholland 009) from `ground_motions`, scaled to 0.4 g.
 pub fn wall_record(ground_motions: &Path) -> Result<GroundMotion, String> {
     let record = ground_motions.join("northridge-1994-mulholland-009.at2");
-    let gm = motion::load_path(&record).map_err(|e| format!("{}: {e}", record.display()))?;
+    let gm = motion::load_path(&record).map_err(|e| {
+        format!(
+            "{}: {e} (the record is in the repository, {GROUND_MOTIONS_DIR}/)",
+            record.display()
+        )
+    })?;
     Ok(gm.scaled_to_pga(0.4 * motion::STANDARD_GRAVITY))
 }
 
@@ -466,7 +476,7 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
         metric_text: "relative error of the overturning amplitude (bisection to the stated tolerance)".into(),
         reducible: true,
     });
-    // 6. Masonry wall under a shared record.
+    // 6. Masonry wall under a recorded ground motion (data/ground-motions).
     let gm = wall_record(&opts.ground_motions)?;
     let wall = running_bond_wall(&wall_params());
     let scene = serde_json::to_value(&wall).map_err(|e| e.to_string())?;

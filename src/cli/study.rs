@@ -1,6 +1,6 @@
 //! `ashlar study`: the speed/accuracy sweep of `analysis::study`, written as data, plots and
 //! (optionally) the Markdown report.
-use crate::analysis::study::{report, run_study, write_outputs, StudyOptions};
+use crate::analysis::study::{report, run_study, write_outputs, StudyOptions, GROUND_MOTIONS_DIR};
 use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
@@ -14,8 +14,9 @@ pub struct StudyArgs {
     /// Also write the Markdown report here (its plots are linked relative to it).
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// Directory of the shared ground-motion records (the wall benchmark's record).
-    #[arg(long, default_value = "../shared/ground-motions")]
+    /// Directory of the recorded ground motions (the wall benchmark's record): the repository's
+    /// data/ground-motions, relative to the working directory (run from the repository root).
+    #[arg(long, default_value = GROUND_MOTIONS_DIR)]
     pub ground_motions: PathBuf,
     /// Wall-clock budget of one point, s (a point over budget is reported as such).
     #[arg(long)]
@@ -34,7 +35,9 @@ pub fn run(args: &StudyArgs) -> Result<(), String> {
     }
     if !args.ground_motions.is_dir() {
         return Err(format!(
-            "--ground-motions {}: not a directory (the shared records, ../shared/ground-motions)",
+            "--ground-motions {}: not a directory (the records are in the repository's \
+             {GROUND_MOTIONS_DIR}/: run from the repository root or pass \
+             --ground-motions PATH/TO/ashlar/{GROUND_MOTIONS_DIR})",
             args.ground_motions.display()
         ));
     }

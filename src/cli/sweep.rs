@@ -1,7 +1,7 @@
 //! `ashlar sweep`: studies on batch systems with no server. `--index N` runs line N of a JSONL
 //! manifest (one scene × record × amplitude per line) into `OUT/NNNNNN/`; `--collect OUT`
 //! gathers the lines into `report.json`: per scene, record and criterion, the runs and the
-//! threshold bracket in the shape of the PGA search's `result.json` (FORMAT.md §3).
+//! threshold bracket in the shape of the PGA search's `result.json` (docs/format.md §3).
 //! Thin: parsing and files here, the runs in `analysis`.
 use super::run::parse_acceleration;
 use crate::analysis::pga::{met_by_summary, Criterion, PgaResult, PgaRun};

@@ -1,4 +1,4 @@
-//! PEER NGA AT2 reader (FORMAT.md §2): four header lines, the fourth either
+//! PEER NGA AT2 reader (docs/format.md §2): four header lines, the fourth either
 //! `NPTS=  N, DT=  dt SEC` (NGA-West2, trailing commas allowed) or `N  dt  NPTS, DT` (the older
 //! NGA layout); then free-format values in g, any number a line, the last line short.
 use super::text::{self, RawRecord, RecordKind};

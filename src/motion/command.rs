@@ -1,4 +1,4 @@
-//! `ashlar motion RECORD`: read a record, print its intensity measures as JSON (FORMAT.md §3),
+//! `ashlar motion RECORD`: read a record, print its intensity measures as JSON (docs/format.md §3),
 //! optionally write the response spectrum as SVG. The CLI wires `Command::Motion(MotionArgs)`
 //! to `run`.
 use super::{

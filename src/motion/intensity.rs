@@ -1,11 +1,11 @@
-//! Intensity measures of a ground motion (FORMAT.md §3, output of `ashlar motion`): peaks,
+//! Intensity measures of a ground motion (docs/format.md §3, output of `ashlar motion`): peaks,
 //! Arias intensity, significant duration, CAV, mean period and the pseudo-acceleration response
 //! spectrum, plus the spectrum as a hand-written SVG. Reads `GroundMotion`; nothing reads it
 //! back but the CLI, the service and job reports.
 use super::{GroundMotion, Signal, Units, STANDARD_GRAVITY};
 use serde::{Deserialize, Serialize};
 
-/// Knobs of `report_with`. The defaults reproduce the FORMAT.md §3 output.
+/// Knobs of `report_with`. The defaults reproduce the docs/format.md §3 output.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReportParams {
     /// Oscillator damping ratio of the spectrum; 5 % is the engineering convention.
@@ -44,7 +44,7 @@ pub struct Spectrum {
     pub psa: Vec<f64>,
 }
 
-/// Intensity measures of the horizontal component after scaling, SI units (FORMAT.md §3).
+/// Intensity measures of the horizontal component after scaling, SI units (docs/format.md §3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct IntensityMeasures {
     pub npts: usize,

@@ -1,9 +1,9 @@
-//! Ground motion as JSON (FORMAT.md §2): embedded records (`{"format", "content", "units"}`),
+//! Ground motion as JSON (docs/format.md §2): embedded records (`{"format", "content", "units"}`),
 //! uniform samples, analytic pulses and steady sines, and the common scale. Extension: a sampled
 //! component may carry `"processing": {"highpass": {"corner_hz", "order"}, "baseline": "linear"}`.
 use super::*;
 
-/// Parse a FORMAT.md §2 ground-motion object.
+/// Parse a docs/format.md §2 ground-motion object.
 pub fn from_json(value: &serde_json::Value) -> Result<GroundMotion, MotionError> {
     from_json_with(value, &ProcessParams::default())
 }

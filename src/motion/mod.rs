@@ -43,7 +43,7 @@ pub enum Units {
 pub const STANDARD_GRAVITY: f64 = 9.80665;
 
 impl Units {
-    /// The FORMAT.md name ("g", "m/s2", "cm/s2").
+    /// The docs/format.md name ("g", "m/s2", "cm/s2").
     pub fn name(self) -> &'static str {
         match self {
             Units::G => "g",
@@ -518,7 +518,7 @@ fn describe(description: &str, p: &ProcessParams) -> String {
 }
 
 /// Read a record file by extension: `.at2`, `.csv`, `.v1`/`.v2` (COSMOS), `.asc` (ESM), `.json`
-/// (a FORMAT.md §2 object). Errors name the file and line.
+/// (a docs/format.md §2 object). Errors name the file and line.
 pub fn load_path(path: &Path) -> Result<GroundMotion, MotionError> {
     load_path_with(path, &LoadParams::default())
 }

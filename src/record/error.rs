@@ -63,7 +63,7 @@ pub(crate) fn check_header(header: &RecordHeader) -> Result<(), String> {
             return Err(format!("header: block {i} has an empty id"));
         }
         // A comma, quote or line break would shift the CSV columns (ids are written unquoted,
-        // as FORMAT.md's `<id>.x` header shows).
+        // as docs/format.md's `<id>.x` header shows).
         if id.contains([',', '"', '\n', '\r']) {
             return Err(format!(
                 "header: block id {id:?} contains a comma, quote or line break (not allowed in \

@@ -1,5 +1,5 @@
 //! `histories.csv` writer: one row a recorded frame, streamed as the run proceeds. Sits in
-//! `record`, after `simulation`; the column layout is FORMAT.md §3.
+//! `record`, after `simulation`; the column layout is docs/format.md §3.
 use super::error::{check_frame, check_header};
 use super::{Frame, RecordError, RecordHeader};
 use std::fs::File;

@@ -1,4 +1,4 @@
-//! `trajectory.mcap` writer: streams a run to an MCAP file (FORMAT.md §5) that Foxglove opens
+//! `trajectory.mcap` writer: streams a run to an MCAP file (docs/format.md §5) that Foxglove opens
 //! as is. Sits in `record`, after `simulation`; `analysis` calls it once per output frame.
 //!
 //! Layout: channels `/ashlar/blocks` (`ashlar.BlockStates`), `/ashlar/ground`

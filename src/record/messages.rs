@@ -1,5 +1,5 @@
 //! The JSON messages of the trajectory recording, built from plain [`Frame`]s: ashlar's own
-//! `ashlar.BlockStates` and `ashlar.GroundMotion` (FORMAT.md §5) with their JSON Schemas, and the
+//! `ashlar.BlockStates` and `ashlar.GroundMotion` (docs/format.md §5) with their JSON Schemas, and the
 //! `foxglove.SceneUpdate` that draws every block. Sits in `record`, under the MCAP recorder.
 use super::foxglove::{
     Color, Duration, FrameTransform, FrameTransforms, KeyValuePair, LinePrimitive, Point3, Pose,
@@ -35,7 +35,7 @@ pub struct BlockStates<'a> {
 }
 
 /// `ashlar.GroundMotion`: the ground at one recorded frame; horizontal components under the
-/// FORMAT.md names, vertical ones beside them (zero when the run has no vertical record).
+/// docs/format.md names, vertical ones beside them (zero when the run has no vertical record).
 #[derive(Debug, Clone, Serialize)]
 pub struct GroundMotion {
     pub time: f64,

@@ -8,7 +8,7 @@
 use super::{BlockFrame, BlockMotionState, Frame, FrameBlockKind, GroundFrame, RecordHeader};
 use std::collections::BTreeMap;
 
-/// |rotation| beyond which a block counts as toppled (FORMAT.md: 30°), rad.
+/// |rotation| beyond which a block counts as toppled (docs/format.md: 30°), rad.
 pub const TOPPLE_ROTATION: f64 = std::f64::consts::FRAC_PI_6;
 
 /// A rocking square (side `side`, m) on a fixed base, with a sliding block beside it, repeated

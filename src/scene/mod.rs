@@ -1,4 +1,4 @@
-//! Scene: parse and validate `ashlar.scene/1` (FORMAT.md §1). First stage of the flow;
+//! Scene: parse and validate `ashlar.scene/1` (docs/format.md §1). First stage of the flow;
 //! everything downstream receives a [`Scene`] that is known to be well formed.
 //!
 //! Conventions fixed here for the whole engine: SI units, y up, gravity along −y,

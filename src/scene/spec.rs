@@ -1,4 +1,4 @@
-//! The scene file as written by users (`ashlar.scene/1`, FORMAT.md §1): plain serde types.
+//! The scene file as written by users (`ashlar.scene/1`, docs/format.md §1): plain serde types.
 //!
 //! Every struct rejects unknown fields so a typo is an error, not a silently ignored setting.
 //! Validation into the engine's model happens in [`super::validate`].

@@ -1,4 +1,4 @@
-//! HTTP routes (FORMAT.md §4, `openapi.yaml`): thin async handlers that validate, talk to the
+//! HTTP routes (docs/format.md §4, `openapi.yaml`): thin async handlers that validate, talk to the
 //! store on the blocking pool, and answer. No simulation work happens here.
 use super::events::{job_stream, EventParams, JobEvent};
 use super::histories::Histories;

@@ -356,7 +356,7 @@ fn motion_pointer(origin: &str, message: &str, body: &Value) -> String {
     p
 }
 
-/// What the motion parser lets pass but FORMAT.md §2 (and `openapi.yaml`) does not: members of
+/// What the motion parser lets pass but docs/format.md §2 (and `openapi.yaml`) does not: members of
 /// a component that belong to another form (`{"pulse": …, "dt": 1}`), and nulls where a value
 /// or nothing is expected. The job routes refuse the same (`request::check_shapes`).
 fn check_motion_shape(body: &Value) -> Result<(), ApiError> {
@@ -434,7 +434,7 @@ pub fn inspect_motion(
     if !body.is_object() {
         return Err(ApiError::invalid_field(
             "",
-            "the body must be a ground motion object {\"horizontal\": …, \"vertical\": …, \"scale\": …} (FORMAT.md §2)",
+            "the body must be a ground motion object {\"horizontal\": …, \"vertical\": …, \"scale\": …} (docs/format.md §2)",
         ));
     }
     check_motion_shape(body)?;

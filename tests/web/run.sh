@@ -28,9 +28,8 @@ else
     BIN=$TARGET/debug/ashlar
 fi
 
-# A shared record (../shared beside the checkout), or the test fixtures' copy of it.
-RECORD=$ROOT/../shared/ground-motions/friuli-1976-tolmezzo-000.at2
-[ -f "$RECORD" ] || RECORD=$ROOT/tests/fixtures/motion/ground-motions/friuli-1976-tolmezzo-000.at2
+# One of the repository's recorded ground motions.
+RECORD=$ROOT/data/ground-motions/friuli-1976-tolmezzo-000.at2
 
 WORK=$(mktemp -d)
 "$BIN" serve --addr 127.0.0.1:0 --data "$WORK/data" --workers 1 >"$WORK/stdout" 2>"$WORK/server.log" &

@@ -1,5 +1,5 @@
 //! Reduced models: scenes that are exactly one classic problem — one rigid block on a fixed or
-//! driven base — run as an ODE instead of the full DDA engine (FORMAT.md §1 `control.model`).
+//! driven base — run as an ODE instead of the full DDA engine (docs/format.md §1 `control.model`).
 //! Sits beside `analysis::run`, which chooses between them; shares its outputs (summary,
 //! histories, trajectory) so callers (CLI, service, PGA search) cannot tell the difference
 //! except by `model` and the cost.
