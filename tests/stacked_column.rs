@@ -10,7 +10,12 @@
 //! with it on both rotations until 0.01 s before that impact.
 //!
 //! Tolerance: 2 % of the peak rotation, as for the single column up to its first impact
-//! (`tests/rocking.rs`): the same physics with one more joint. Regression bound: 5× measured.
+//! (`tests/rocking.rs`): the same physics with one more joint. Regression bound: 5× measured
+//! where that is tighter (numbers beside the tests).
+//!
+//! Not represented by the reference (and not met in these cases, where the engine agrees to
+//! 0.6 %): the upper block tipping before the stack (asserted absent), sliding (φ = 75°), and
+//! loss of contact at a pivot in the two-degree-of-freedom mode (unchecked).
 mod common;
 use ashlar::motion::{GroundMotion, Signal};
 use common::*;
@@ -390,6 +395,11 @@ fn check(st: Stack, a: f64, f: f64, solver: &str, expect_opening: bool, regressi
         r.opened,
         100.0 * worst / peak
     );
+    assert_eq!(
+        engine_opened.is_some(),
+        expect_opening,
+        "{solver}: the engine's joint opening"
+    );
     assert!(
         worst < 0.02 * peak,
         "{solver}: {worst} rad against peak {peak}"
@@ -401,6 +411,10 @@ fn check(st: Stack, a: f64, f: f64, solver: &str, expect_opening: bool, regressi
         100.0 * regression
     );
 }
+
+// Measured worst |Δθ| / peak: equal blocks (penalty) 0.576 %; tall top block 2 Hz penalty
+// 0.210 %, dual 0.254 %; 4 Hz penalty 0.505 %, dual 0.507 %. Regression bounds 5× those where
+// that is below the 2 % tolerance (2 Hz: 1.05 %, 1.3 %), otherwise the tolerance binds.
 
 const EQUAL: Stack = Stack {
     b: 0.2,
@@ -420,12 +434,12 @@ fn equal_blocks_rock_as_one_penalty() {
 
 #[test]
 fn joint_opens_two_hertz_penalty() {
-    check(TALL_TOP, 14.0, 2.0, "penalty", true, 0.02);
+    check(TALL_TOP, 14.0, 2.0, "penalty", true, 0.0105);
 }
 
 #[test]
 fn joint_opens_two_hertz_dual() {
-    check(TALL_TOP, 14.0, 2.0, "dual", true, 0.02);
+    check(TALL_TOP, 14.0, 2.0, "dual", true, 0.013);
 }
 
 #[test]
