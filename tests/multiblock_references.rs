@@ -319,6 +319,106 @@ fn rocking_frame_history_to_first_impact() {
 /// Measured 0.807 % of the peak (penalty); 5× that exceeds the tolerance: the tolerance binds.
 const REGRESSION_FRAME_HISTORY: f64 = 0.02;
 
+/// The frame released from rest tilted by θ0 (columns rotated clockwise about their
+/// bottom-right corners, the cap translated with their top-left corners, on which it rests):
+/// the engine's ratio of angular velocities across the first impact, from the turning points on
+/// either side (the frame is one degree of freedom with the column's potential shape, so
+/// r² = (cos(α − θ1) − cos α)/(cos(α − θ0) − cos α) as for one column).
+fn frame_restitution(gamma: f64, solver: &str, dt: Option<f64>) -> f64 {
+    let alpha = (B / H).atan();
+    let theta0 = 0.5 * alpha;
+    let (co, si) = (theta0.cos(), theta0.sin());
+    let column = |xc: f64| {
+        let pivot = xc + B;
+        let rot = |x: f64, y: f64| {
+            let (dx, dy) = (x - pivot, y);
+            [pivot + co * dx + si * dy, -si * dx + co * dy]
+        };
+        json!([
+            rot(xc - B, 0.0),
+            rot(xc + B, 0.0),
+            rot(xc + B, 2.0 * H),
+            rot(xc - B, 2.0 * H)
+        ])
+    };
+    // The top-left corner of the column at x = 0.8 after the rotation carries the cap.
+    let top_left = |xc: f64| {
+        let pivot = xc + B;
+        let (dx, dy) = (-2.0 * B, 2.0 * H);
+        (pivot + co * dx + si * dy, -si * dx + co * dy)
+    };
+    let (x_shift, y_cap) = {
+        let (x, y) = top_left(0.8);
+        (x - (0.8 - B), y)
+    };
+    let column_area = 2.0 * (2.0 * B) * (2.0 * H);
+    let (x0, x1) = (-0.8 - B + x_shift, 0.8 + B + x_shift);
+    let t = gamma * column_area / (x1 - x0);
+    let mut control = json!({ "model": "dda", "duration": 3.0, "contact_solver": solver });
+    if let Some(dt) = dt {
+        control["time_step"] = json!(dt);
+    }
+    let blocks = json!([
+        { "id": "base", "material": "stone", "fixed": true, "vertices": rect(-3.0, -0.5, 3.0, 0.0) },
+        { "id": "left", "material": "stone", "block_model": "rigid", "vertices": column(-0.8) },
+        { "id": "right", "material": "stone", "block_model": "rigid", "vertices": column(0.8) },
+        { "id": "cap", "material": "stone", "block_model": "rigid", "vertices": rect(x0, y_cap, x1, y_cap + t) },
+    ]);
+    let scene = parse(&scene_json(blocks, 75.0, control));
+    let mut s = sim(&scene, &GroundMotion::none());
+    let (mut hit, mut peak) = (false, f64::NEG_INFINITY);
+    let done = run_until(&mut s, 3.0, |s| {
+        let th = s.geoms[1].rotation;
+        let w = s.block_velocity(1)[2];
+        if !hit {
+            hit = th >= theta0;
+            false
+        } else {
+            peak = peak.max(th);
+            w < 0.0
+        }
+    });
+    assert!(done, "no turning point after the impact");
+    let theta1 = peak - theta0;
+    (((alpha - theta1).cos() - alpha.cos()) / ((alpha - theta0).cos() - alpha.cos())).sqrt()
+}
+
+/// The engine's restitution of the rocking frame against Makris & Vassiliou's law,
+/// r = (1 − 1.5 sin²α + 3γ cos 2α)/(1 + 3γ), at the default Δt; tolerance 1 % as for the single
+/// column (`tests/rocking_impacts.rs`). Their law rests on an assumption about the cap's
+/// momentum at the impact (it is not derived from a full impact model), so a miss is not by
+/// itself an engine bug; but the engine's value depends on the solver and on Δt (below), so it
+/// follows no law at all.
+#[test]
+#[ignore = "engine's frame restitution misses Makris–Vassiliou's by more than 1 %: measured γ = 0.5: penalty 0.8067 (−1.63 %), dual 0.7819 (−4.64 %) against 0.8200; γ = 1: penalty 0.8046 (−0.97 %), dual 0.7985 (−1.73 %) against 0.8125; at smaller Δt the penalty goes above (+3.05 %, +5.61 % at 1e-4 s) and the dual further below (−13.6 %, −9.1 % at 2e-4 s, −18.7 % at γ = 0.5, 5e-4 s)"]
+fn rocking_frame_restitution_makris_vassiliou() {
+    let alpha = (B / H).atan();
+    let mut worst: f64 = 0.0;
+    for gamma in [0.5, 1.0] {
+        let mv = (1.0 - 1.5 * alpha.sin().powi(2) + 3.0 * gamma * (2.0 * alpha).cos())
+            / (1.0 + 3.0 * gamma);
+        for solver in ["penalty", "dual"] {
+            let r = frame_restitution(gamma, solver, None);
+            let e = r / mv - 1.0;
+            eprintln!(
+                "frame γ = {gamma}, {solver}: engine r = {r:.5}, Makris–Vassiliou {mv:.5} ({:+.3} %), single column {:.5}",
+                100.0 * e,
+                1.0 - 1.5 * alpha.sin().powi(2)
+            );
+            worst = worst.max(e.abs());
+        }
+    }
+    assert!(worst < 0.01, "{worst}");
+}
+
+/// The dual solver at the frame's impact with a shorter step: it must complete.
+#[test]
+#[ignore = "engine fails: the dual solver does not converge at the frame's first impact (γ = 1, Δt = 5e-4 s: t = 0.4755 s, remaining violation 1.4e-6 m at the contact right column–cap after its time-step cuts; also γ = 0.5 at Δt = 1e-4 s); default Δt completes"]
+fn rocking_frame_impact_dual_short_step() {
+    frame_restitution(1.0, "dual", Some(5e-4));
+    frame_restitution(0.5, "dual", Some(1e-4));
+}
+
 // ---------------------------------------------------------------------------------------------
 // Pier of stacked blocks moving as one body
 // ---------------------------------------------------------------------------------------------
