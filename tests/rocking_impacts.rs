@@ -22,7 +22,8 @@
 //! Δt = 1 ms the engine misses Housner through five impacts (penalty 11.4 %, dual 9.5 % of the
 //! peak rotation against 5 %) and at h/b = 2 its restitution is 4–5 % below Housner's; at
 //! Δt = 2e-4 s both solvers pass the histories; the dual solver's restitution converges to
-//! Housner's with Δt, the penalty solver's does not.
+//! Housner's with Δt, the penalty solver's does not. With the scenes' default deformable block
+//! the histories miss at every Δt tried (5.5–8.8 %).
 mod common;
 use ashlar::analysis::run::{run as run_scene, RunOptions};
 use ashlar::motion::{GroundMotion, Signal};
@@ -164,6 +165,16 @@ const SEED: Column = Column { b: 0.2, h: 0.6 };
 /// The column standing on a fixed base, rotated clockwise by θ0 about its bottom-right corner
 /// (θ0 = 0: upright), with the given controls.
 fn column_scene(c: Column, theta0: f64, control: serde_json::Value) -> serde_json::Value {
+    column_scene_of(c, theta0, control, "rigid")
+}
+
+/// As `column_scene`, with the column's block model ("rigid" or "deformable").
+fn column_scene_of(
+    c: Column,
+    theta0: f64,
+    control: serde_json::Value,
+    block_model: &str,
+) -> serde_json::Value {
     let (co, si) = (theta0.cos(), theta0.sin());
     let rot = |x: f64, y: f64| {
         let (dx, dy) = (x - c.b, y);
@@ -177,7 +188,7 @@ fn column_scene(c: Column, theta0: f64, control: serde_json::Value) -> serde_jso
     ];
     let blocks = json!([
         { "id": "base", "material": "stone", "fixed": true, "vertices": rect(-2.0, -0.5, 2.0, 0.0) },
-        { "id": "column", "material": "stone", "block_model": "rigid", "vertices": v },
+        { "id": "column", "material": "stone", "block_model": block_model, "vertices": v },
     ]);
     // φ = 75°: the column's pivot never slips (tan 75° = 3.7 ≫ the friction demand of rocking).
     scene_json(blocks, 75.0, control)
@@ -394,7 +405,16 @@ fn compare(history: &[(f64, f64)], reference: &Housner, t_end: f64) -> (f64, usi
 }
 
 fn engine_history(solver: &str, t_end: f64, dt: Option<f64>) -> Vec<(f64, f64)> {
-    let v = column_scene(SEED, 0.0, controls(solver, t_end, dt));
+    engine_history_of(solver, t_end, dt, "rigid")
+}
+
+fn engine_history_of(
+    solver: &str,
+    t_end: f64,
+    dt: Option<f64>,
+    block_model: &str,
+) -> Vec<(f64, f64)> {
+    let v = column_scene_of(SEED, 0.0, controls(solver, t_end, dt), block_model);
     let scene = parse(&v);
     let mut s = sim(&scene, &seed_pulse(A_PULSE));
     let mut out = vec![(0.0, 0.0)];
@@ -431,11 +451,15 @@ fn reduced_history(t_end: f64) -> Vec<(f64, f64)> {
 /// shift the later impacts, where the column turns at its fastest. `regression`: about 5× the
 /// error measured when the test was written, or the tolerance where that is smaller.
 fn check_history(solver: &str, dt: Option<f64>, regression: f64) {
+    check_history_of(solver, dt, regression, "rigid");
+}
+
+fn check_history_of(solver: &str, dt: Option<f64>, regression: f64, block_model: &str) {
     let (reference, t_end, peak) = reference_history();
-    let history = engine_history(solver, t_end, dt);
+    let history = engine_history_of(solver, t_end, dt, block_model);
     let (worst, changes) = compare(&history, &reference, t_end);
     eprintln!(
-        "{solver} Δt = {dt:?}: peak θ = {peak:.4} rad, {} reference impacts to t = {t_end:.3} s (at {:?}), engine pivot changes {changes}, worst |Δθ| = {worst:.3e} rad ({:.3} % of peak)",
+        "{solver} {block_model} Δt = {dt:?}: peak θ = {peak:.4} rad, {} reference impacts to t = {t_end:.3} s (at {:?}), engine pivot changes {changes}, worst |Δθ| = {worst:.3e} rad ({:.3} % of peak)",
         reference.impacts.iter().filter(|&&t| t <= t_end).count(),
         reference.impacts.iter().take(6).map(|t| (t * 1e3).round() / 1e3).collect::<Vec<_>>(),
         100.0 * worst / peak
@@ -489,6 +513,18 @@ fn history_through_five_impacts_dual_dt_2e4() {
 fn history_through_five_impacts_small_time_step() {
     check_history("dual", Some(1e-4), 0.05);
     check_history("penalty", Some(1e-4), 0.05);
+}
+
+/// The scenes' default block model is deformable (6 unknowns a block): the column's elastic
+/// strains take part in the impact. Housner's equation is a rigid-body model; the stone's strain
+/// under self-weight is 1e-6, so the tolerance is the rigid column's.
+#[test]
+#[ignore = "deformable column misses Housner through five impacts at every Δt tried: measured penalty 8.70 % (Δt = 1 ms), 5.47 % (2e-4 s); dual 7.00 % (1 ms), 8.77 % (2e-4 s), 7.92 % (1e-4 s) of peak against 5 %; its single-impact restitution is within 0.76 % of Housner's at h/b = 3, 4, 6"]
+fn history_through_five_impacts_deformable() {
+    check_history_of("penalty", None, 0.05, "deformable");
+    check_history_of("dual", None, 0.05, "deformable");
+    check_history_of("penalty", Some(2e-4), 0.05, "deformable");
+    check_history_of("dual", Some(2e-4), 0.05, "deformable");
 }
 
 /// The reduced model (`"model": "rocking"`, Dormand–Prince with event location, Housner's law)
