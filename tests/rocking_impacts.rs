@@ -404,10 +404,6 @@ fn compare(history: &[(f64, f64)], reference: &Housner, t_end: f64) -> (f64, usi
     (worst, changes)
 }
 
-fn engine_history(solver: &str, t_end: f64, dt: Option<f64>) -> Vec<(f64, f64)> {
-    engine_history_of(solver, t_end, dt, "rigid")
-}
-
 fn engine_history_of(
     solver: &str,
     t_end: f64,
