@@ -33,6 +33,8 @@ RECORD=$ROOT/../shared/ground-motions/friuli-1976-tolmezzo-000.at2
 [ -f "$RECORD" ] || RECORD=$ROOT/tests/fixtures/motion/ground-motions/friuli-1976-tolmezzo-000.at2
 
 WORK=$(mktemp -d)
+# Created before the server starts: the loop below may read it before the server's shell opens it.
+: >"$WORK/stdout"
 "$BIN" serve --addr 127.0.0.1:0 --data "$WORK/data" --workers 1 >"$WORK/stdout" 2>"$WORK/server.log" &
 PID=$!
 cleanup() {
