@@ -629,12 +629,15 @@ mod tests {
         assert!(svg.matches(',').count() >= im.spectrum.periods.len());
     }
 
+    /// A text and its box: (text, x0, y0, x1, y1) in the SVG's user units.
+    type TextBox = (String, f64, f64, f64, f64);
+
     /// Boxes of every `<text>` of an SVG written by `spectrum_svg`, estimated independently of
     /// the writer's own layout: 0.7 em a character (DejaVu Sans averages 0.68 em over capitals,
     /// less over anything else, so the estimate is conservative), a font size above the baseline
     /// and 0.3 of it below (descenders); `rotate(±90)` about a `translate` swaps the extents.
     /// Returns (text, x0, y0, x1, y1) and the viewBox.
-    fn svg_text_boxes(svg: &str) -> (Vec<(String, f64, f64, f64, f64)>, [f64; 4]) {
+    fn svg_text_boxes(svg: &str) -> (Vec<TextBox>, [f64; 4]) {
         let attr = |tag: &str, name: &str| -> Option<String> {
             let key = format!(" {name}=\"");
             let i = tag.find(&key)? + key.len();
@@ -679,7 +682,7 @@ mod tests {
                         tr[tr.find(f).expect(f) + f.len()..]
                             .split(')')
                             .next()
-                            .unwrap()
+                            .expect("a closing parenthesis")
                             .to_string()
                     };
                     let xy: Vec<f64> = inner("translate(").split(',').map(num).collect();
