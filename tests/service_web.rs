@@ -407,3 +407,43 @@ async fn a_runs_geometry_and_ground_motion() {
     svc.shutdown(Duration::ZERO);
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// `ashlar serve` wrote its log with ANSI colour codes to a file (`2> server.log` was full of
+/// `ESC[2m…`): colours are for a terminal only. The real binary, its stderr to a file, must log
+/// plain text (and log at all: the check is void on an empty log).
+#[test]
+fn server_log_to_a_file_has_no_colour_codes() {
+    use std::io::BufRead;
+    let dir = temp_dir("web-plain-log");
+    let log_path = dir.join("server.log");
+    let log = std::fs::File::create(&log_path).expect("create the log file");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_ashlar"))
+        .args(["serve", "--addr", "127.0.0.1:0", "--workers", "1", "--data"])
+        .arg(dir.join("data"))
+        .env_remove("RUST_LOG")
+        .stdout(std::process::Stdio::piped())
+        .stderr(log)
+        .spawn()
+        .expect("spawn ashlar serve");
+    // Held open until the server has exited: it writes to stdout on shutdown too.
+    let mut stdout = std::io::BufReader::new(child.stdout.take().expect("stdout"));
+    let mut line = String::new();
+    stdout
+        .read_line(&mut line)
+        .expect("read the listening line");
+    assert!(line.contains("listening on"), "first line {line:?}");
+    let status = std::process::Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .expect("kill -TERM");
+    assert!(status.success());
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut stdout, &mut rest).expect("read stdout");
+    let exit = child.wait().expect("wait");
+    assert!(exit.success(), "ashlar serve: {exit}, stdout {rest:?}");
+    let text = std::fs::read(&log_path).expect("read the log");
+    let shown = String::from_utf8_lossy(&text);
+    assert!(shown.contains("listening"), "no log line: {shown:?}");
+    assert!(!text.contains(&0x1b), "ESC in the log: {shown:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

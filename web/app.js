@@ -538,7 +538,7 @@ function renderJobRow(id) {
   if (old && old.dataset.status === j.status) {
     const pct = Math.round((j.progress || 0) * 100);
     const bar = old.querySelector("progress");
-    if (bar) { bar.value = pct; bar.nextSibling.textContent = ` ${pct} %`; }
+    if (bar) { bar.value = pct; old.querySelector(".pct").textContent = `${pct} %`; }
     return;
   }
   const fresh = jobRow(j);
@@ -554,7 +554,7 @@ function jobRow(j) {
   if (!j) return null;
   const pct = Math.round((j.progress || 0) * 100);
   const label = j.kind === "run" ? "run" : "PGA search";
-  const actions = el("td");
+  const actions = el("td", { class: "actions" });
   const viewable = j.status === "succeeded" || (j.kind === "run" && j.status === "cancelled" && j.started_at) || j.status === "failed";
   if (viewable) actions.append(el("button", { type: "button", class: "secondary", "data-action": "view", "aria-label": `View ${label} ${j.id.slice(0, 8)}`, onclick: () => show(j.id), text: "View" }));
   if (!TERMINAL.has(j.status)) actions.append(el("button", { type: "button", class: "danger", "data-action": "cancel", "aria-label": `Cancel ${label} ${j.id.slice(0, 8)}`, onclick: () => cancel(j.id), text: "Cancel" }));
@@ -563,7 +563,7 @@ function jobRow(j) {
     el("td", { title: `${j.id}\n${(j.motion && j.motion.provenance) || ""}` }, el("code", { text: j.id.slice(0, 8) })),
     el("td", { text: label }),
     el("td", {}, el("span", { class: `state ${j.status}`, text: j.status })),
-    el("td", {}, el("progress", { max: "100", value: String(pct), "aria-label": `Progress of ${j.id.slice(0, 8)}` }), ` ${pct} %`),
+    el("td", {}, el("progress", { max: "100", value: String(pct), "aria-label": `Progress of ${j.id.slice(0, 8)}` }), " ", el("span", { class: "pct", text: `${pct} %` })),
     el("td", { text: isNaN(when) ? "" : when.toLocaleTimeString() }),
     actions);
 }
@@ -900,7 +900,14 @@ async function init() {
   $("job-form").addEventListener("submit", onSubmit);
   $("play").addEventListener("click", togglePlay);
   $("time-slider").addEventListener("input", () => { stopPlaying(); drawFrame(Number($("time-slider").value)); });
-  window.addEventListener("resize", () => { if (state.view) { state.view.lastPlotFrame = -1; drawFrame(state.view.frame); } });
+  let resizing = 0;
+  window.addEventListener("resize", () => {
+    cancelAnimationFrame(resizing);
+    resizing = requestAnimationFrame(() => {
+      window.ashlarPlot.replotAll();
+      if (state.view) { state.view.lastPlotFrame = -1; drawFrame(state.view.frame); }
+    });
+  });
   syncVisibility();
   await refreshJobs();
   // The listing catches jobs submitted elsewhere and those without a live stream.

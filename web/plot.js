@@ -50,10 +50,55 @@ function fitCanvas(canvas) {
 // spec: { title, xlabel, ylabel, xlog, ylog, xrange:[a,b], yrange:[a,b], series:[{x, y, color, label,
 //   width, dash}], points:[{x, y, color, label, shape:"o"|"x"}], bands:[{x0, x1, color, label}],
 //   vlines:[{x, color, label}], cursor: x, legend: true }
+// The spec last drawn on each canvas, so that a resized page can redraw its plots (replotAll).
+const PLOTTED = new Map();
+
+// Does the rectangle r ({x, y, w, h}, CSS px) cover any drawn data of the spec under the
+// mapping sx, sy: a point's marker, a series' line, a vertical line? Shaded bands and the cursor
+// are background and may be covered.
+function coversData(r, spec, sx, sy) {
+  const x0 = r.x, x1 = r.x + r.w, y0 = r.y, y1 = r.y + r.h;
+  const ok = (v, log) => Number.isFinite(v) && (!log || v > 0);
+  for (const p of spec.points || []) {
+    if (!ok(p.x, spec.xlog) || !ok(p.y, spec.ylog)) continue;
+    const X = sx(p.x), Y = sy(p.y);
+    if (X + 7 > x0 && X - 7 < x1 && Y + 7 > y0 && Y - 7 < y1) return true;
+  }
+  for (const v of spec.vlines || []) { const X = sx(v.x); if (X + 2 > x0 && X - 2 < x1) return true; }
+  // A segment meets the rectangle (grown by the line's half width) unless both ends lie beyond
+  // one of its sides or the rectangle's corners all lie on one side of the segment's line.
+  for (const s of spec.series || []) {
+    const g = (s.width || 1.5) / 2 + 1;
+    const a0 = x0 - g, a1 = x1 + g, b0 = y0 - g, b1 = y1 + g;
+    let px = NaN, py = NaN;
+    for (let i = 0; i < s.x.length; i++) {
+      if (!ok(s.x[i], spec.xlog) || !ok(s.y[i], spec.ylog)) { px = NaN; continue; }
+      const X = sx(s.x[i]), Y = sy(s.y[i]);
+      if (Number.isFinite(px) && !((px < a0 && X < a0) || (px > a1 && X > a1) || (py < b0 && Y < b0) || (py > b1 && Y > b1))) {
+        const side = (cx, cy) => Math.sign((X - px) * (cy - py) - (Y - py) * (cx - px));
+        const sides = new Set([side(a0, b0), side(a1, b0), side(a0, b1), side(a1, b1)]);
+        if (sides.size > 1 || sides.has(0)) return true;
+      }
+      px = X; py = Y;
+    }
+  }
+  return false;
+}
+
 function plot(canvas, spec) {
+  PLOTTED.set(canvas, spec);
   const { ctx, w, h } = fitCanvas(canvas);
+  // The legend's entries, measured first: where it goes decides the plot frame.
+  const items = [];
+  (spec.series || []).forEach((s, k) => { if (s.label) items.push([s.label, s.color || PLOT_COLORS[k % PLOT_COLORS.length], "line"]); });
+  const seen = new Set();
+  for (const p of spec.points || []) if (p.label && !seen.has(p.label)) { seen.add(p.label); items.push([p.label, p.color || "#000", p.shape || "o"]); }
+  for (const b of spec.bands || []) if (b.label) items.push([b.label, b.color, "band"]);
+  const showLegend = items.length > 0 && spec.legend !== false;
+  ctx.font = "11px system-ui, sans-serif";
+  const itemW = items.map(([t]) => ctx.measureText(t).width + 30);
   const m = { l: 58, r: 12, t: spec.title ? 22 : 10, b: 38 };
-  const pw = w - m.l - m.r, ph = h - m.t - m.b;
+  let pw = w - m.l - m.r, ph = h - m.t - m.b;
   const tx = spec.xlog ? Math.log10 : (v) => v;
   const ty = spec.ylog ? Math.log10 : (v) => v;
   let [x0, x1] = spec.xrange || [Infinity, -Infinity];
@@ -77,6 +122,28 @@ function plot(canvas, spec) {
   const X0 = tx(x0), X1 = tx(x1), Y0 = ty(y0), Y1 = ty(y1);
   const sx = (v) => m.l + ((tx(v) - X0) / (X1 - X0)) * pw;
   const sy = (v) => m.t + ph - ((ty(v) - Y0) / (Y1 - Y0)) * ph;
+
+  // The legend never covers data: a corner of the frame that no point, line or marker line
+  // crosses (top right, top left, bottom right, bottom left), else rows above the frame, under
+  // the title, for which the frame gives up its height.
+  let legend = null; // {x, y, w, h, place}: the legend's box, CSS px
+  if (showLegend) {
+    const bw = Math.max(...itemW) + 8, bh = items.length * 15 + 6;
+    const corners = [["top-right", m.l + pw - bw - 2, m.t + 2], ["top-left", m.l + 2, m.t + 2],
+      ["bottom-right", m.l + pw - bw - 2, m.t + ph - bh - 2], ["bottom-left", m.l + 2, m.t + ph - bh - 2]];
+    for (const [place, x, y] of corners) {
+      const r = { x, y, w: bw, h: bh };
+      if (bw <= pw - 4 && bh <= ph - 4 && !coversData(r, spec, sx, sy)) { legend = { ...r, place }; break; }
+    }
+    if (!legend) {
+      let rows = 1, lineW = 0;
+      for (const iw of itemW) { if (lineW > 0 && lineW + iw > pw) { rows++; lineW = 0; } lineW += iw + 8; }
+      const top = m.t - 2;
+      legend = { x: m.l, y: top, w: pw, h: rows * 15 + 2, place: "above" };
+      m.t = top + rows * 15 + 6;
+      ph = h - m.t - m.b;
+    }
+  }
 
   ctx.font = "12px system-ui, sans-serif";
   ctx.fillStyle = "#222";
@@ -168,20 +235,16 @@ function plot(canvas, spec) {
   }
   ctx.restore();
 
-  // Legend (top right, inside the frame).
-  const items = [];
-  (spec.series || []).forEach((s, k) => { if (s.label) items.push([s.label, s.color || PLOT_COLORS[k % PLOT_COLORS.length], "line"]); });
-  const seen = new Set();
-  for (const p of spec.points || []) if (p.label && !seen.has(p.label)) { seen.add(p.label); items.push([p.label, p.color || "#000", p.shape || "o"]); }
-  for (const b of spec.bands || []) if (b.label) items.push([b.label, b.color, "band"]);
-  if (items.length && spec.legend !== false) {
+  // Legend: a boxed column in a free corner, or rows of entries above the frame.
+  if (legend) {
     ctx.font = "11px system-ui, sans-serif";
-    const lw = Math.max(...items.map(([t]) => ctx.measureText(t).width)) + 30;
-    let y = m.t + 6;
-    const x = m.l + pw - lw - 6;
-    ctx.fillStyle = "rgba(255,255,255,0.85)";
-    ctx.fillRect(x - 4, y - 4, lw + 8, items.length * 15 + 6);
-    for (const [t, c, kind] of items) {
+    if (legend.place !== "above") {
+      ctx.fillStyle = "rgba(255,255,255,0.85)";
+      ctx.fillRect(legend.x, legend.y, legend.w, legend.h);
+    }
+    let x = legend.x + 4, y = legend.y + 4;
+    items.forEach(([t, c, kind], k) => {
+      if (legend.place === "above" && x > legend.x + 4 && x + itemW[k] > legend.x + legend.w) { x = legend.x + 4; y += 15; }
       ctx.strokeStyle = c; ctx.fillStyle = c; ctx.lineWidth = 2;
       if (kind === "band") ctx.fillRect(x, y + 2, 18, 8);
       else if (kind === "line") { ctx.beginPath(); ctx.moveTo(x, y + 6); ctx.lineTo(x + 18, y + 6); ctx.stroke(); }
@@ -189,11 +252,25 @@ function plot(canvas, spec) {
       else { ctx.beginPath(); ctx.arc(x + 9, y + 6, 4, 0, 2 * Math.PI); ctx.stroke(); }
       ctx.fillStyle = "#222"; ctx.textAlign = "left"; ctx.textBaseline = "middle";
       ctx.fillText(t, x + 24, y + 6);
-      y += 15;
-    }
+      if (legend.place === "above") x += itemW[k] + 8; else y += 15;
+    });
+    canvas.dataset.legend = [legend.x, legend.y, legend.w, legend.h].map((v) => v.toFixed(1)).join(",");
+    canvas.dataset.legendPlace = legend.place;
+  } else {
+    delete canvas.dataset.legend;
+    delete canvas.dataset.legendPlace;
   }
   canvas.dataset.drawn = String(drawn);
-  return { sx, sy };
+  return { sx, sy, legend };
+}
+
+// Redraw every plot still on the page at its current size (after a resize: a canvas stretched
+// by CSS would blur and keep a legend placed for its old shape).
+function replotAll() {
+  for (const [canvas, spec] of PLOTTED) {
+    if (!canvas.isConnected) PLOTTED.delete(canvas);
+    else if (canvas.getClientRects().length) plot(canvas, spec);
+  }
 }
 
 // Standard normal CDF (Abramowitz & Stegun 7.1.26 for erf, |error| < 1.5e-7: far below what a
@@ -205,4 +282,4 @@ function normalCdf(z) {
   return z >= 0 ? 0.5 * (1 + y) : 0.5 * (1 - y);
 }
 
-window.ashlarPlot = { plot, normalCdf, PLOT_COLORS, fitCanvas };
+window.ashlarPlot = { plot, replotAll, normalCdf, PLOT_COLORS, fitCanvas };

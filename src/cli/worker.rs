@@ -55,6 +55,8 @@ pub fn run(args: &WorkerArgs) -> Result<(), String> {
                 .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
         )
         .with_writer(std::io::stderr)
+        // Colour codes only for a terminal: a log written to a file or a pipe stays plain text.
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .try_init();
     let url = match service::parse_database(&args.database)? {
         service::Database::Postgres(url) => url,

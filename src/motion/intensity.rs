@@ -388,13 +388,85 @@ impl Recurrence {
     }
 }
 
+/// Estimated width of one character, in em, when laying out SVG text without a font at hand:
+/// DejaVu Sans, the widest common sans-serif, averages 0.68 em over capitals and less over
+/// lower case, digits and spaces, so 0.7 em over-estimates any realistic line (a title that
+/// fits by this estimate fits in the browser).
+const SVG_CHAR_EM: f64 = 0.7;
+
+/// `text` broken into lines of at most `max_chars` characters, at spaces (or at `/` in paths)
+/// where possible, hard-broken otherwise; at most `max_lines` lines, the last one ending in `…`
+/// when text was left out.
+fn wrap_text(text: &str, max_chars: usize, max_lines: usize) -> Vec<String> {
+    let max_chars = max_chars.max(2);
+    let mut lines: Vec<String> = Vec::new();
+    let mut rest: Vec<char> = text
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
+        .chars()
+        .collect();
+    while !rest.is_empty() {
+        if rest.len() <= max_chars {
+            lines.push(rest.iter().collect());
+            break;
+        }
+        // The last space (dropped) or slash (kept) within the line; else a hard break.
+        let window = &rest[..=max_chars];
+        let cut = match window.iter().rposition(|c| *c == ' ' || *c == '/') {
+            Some(i) if i > 0 && window[i] == ' ' => (i, i + 1),
+            Some(i) if i > 0 && i < max_chars => (i + 1, i + 1),
+            _ => (max_chars, max_chars),
+        };
+        lines.push(rest[..cut.0].iter().collect());
+        rest.drain(..cut.1);
+    }
+    if lines.len() > max_lines {
+        lines.truncate(max_lines);
+        let last = &mut lines[max_lines - 1];
+        let mut chars: Vec<char> = last.chars().collect();
+        chars.truncate(max_chars - 1);
+        *last = chars.into_iter().collect::<String>() + "…";
+    }
+    lines
+}
+
 /// The spectrum as a standalone SVG: log period axis, linear PSA axis in m/s² (and g on the
-/// right), title from the provenance.
+/// right), title from the provenance. The title wraps to the drawing's width (a record's
+/// provenance, file path and header included, is often wider than the plot), and the top margin
+/// grows with its lines, so that no text leaves the viewBox.
 pub fn spectrum_svg(im: &IntensityMeasures) -> String {
-    let (w, h) = (720.0, 440.0);
-    let (l, r, t, b) = (70.0, 60.0, 40.0, 50.0);
-    let (pw, ph) = (w - l - r, h - t - b);
     let sp = &im.spectrum;
+    let w = 720.0;
+    // Title: the heading at 14 px, then the provenance at 12 px on up to 4 lines, both centred
+    // with a 10 px margin on each side.
+    let heading = format!(
+        "{} % damped pseudo-acceleration spectrum",
+        fmt(100.0 * sp.damping)
+    );
+    let usable = w - 20.0;
+    let mut title: Vec<(String, f64)> =
+        wrap_text(&heading, (usable / (14.0 * SVG_CHAR_EM)) as usize, 2)
+            .into_iter()
+            .map(|line| (line, 14.0))
+            .collect();
+    title.extend(
+        wrap_text(&im.provenance, (usable / (12.0 * SVG_CHAR_EM)) as usize, 4)
+            .into_iter()
+            .map(|line| (line, 12.0)),
+    );
+    // Baselines: each line a font size and a third below the previous one.
+    let mut baselines = Vec::with_capacity(title.len());
+    let mut y_text = 4.0;
+    for (_, size) in &title {
+        y_text += size * 1.3;
+        baselines.push(y_text);
+    }
+    let (l, r, b) = (70.0, 60.0, 50.0);
+    let t = y_text + 14.0;
+    let ph = 350.0;
+    let h = t + ph + b;
+    let pw = w - l - r;
     let (lo, hi) = (
         sp.periods.first().copied().unwrap_or(0.01).max(1e-6),
         sp.periods.last().copied().unwrap_or(10.0).max(1e-5),
@@ -405,12 +477,13 @@ pub fn spectrum_svg(im: &IntensityMeasures) -> String {
     let mut s = format!(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
     );
-    s += &format!(
-        "<text x=\"{}\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">{} % damped pseudo-acceleration spectrum: {}</text>\n",
-        w / 2.0,
-        fmt(100.0 * sp.damping),
-        xml_escape(&im.provenance)
-    );
+    for ((line, size), y_line) in title.iter().zip(&baselines) {
+        s += &format!(
+            "<text class=\"title\" x=\"{}\" y=\"{y_line:.1}\" text-anchor=\"middle\" font-size=\"{size}\">{}</text>\n",
+            w / 2.0,
+            xml_escape(line)
+        );
+    }
     // Decade grid on the period axis.
     let mut dec = 10f64.powf(lo.log10().floor());
     while dec <= hi * 1.0001 {
@@ -554,5 +627,127 @@ mod tests {
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
         assert_eq!(svg.matches("<polyline").count(), 1);
         assert!(svg.matches(',').count() >= im.spectrum.periods.len());
+    }
+
+    /// A text and its box: (text, x0, y0, x1, y1) in the SVG's user units.
+    type TextBox = (String, f64, f64, f64, f64);
+
+    /// Boxes of every `<text>` of an SVG written by `spectrum_svg`, estimated independently of
+    /// the writer's own layout: 0.7 em a character (DejaVu Sans averages 0.68 em over capitals,
+    /// less over anything else, so the estimate is conservative), a font size above the baseline
+    /// and 0.3 of it below (descenders); `rotate(±90)` about a `translate` swaps the extents.
+    /// Returns (text, x0, y0, x1, y1) and the viewBox.
+    fn svg_text_boxes(svg: &str) -> (Vec<TextBox>, [f64; 4]) {
+        let attr = |tag: &str, name: &str| -> Option<String> {
+            let key = format!(" {name}=\"");
+            let i = tag.find(&key)? + key.len();
+            Some(tag[i..i + tag[i..].find('"')?].to_string())
+        };
+        let root = &svg[..svg.find('>').expect("svg tag")];
+        let vb: Vec<f64> = attr(root, "viewBox")
+            .expect("viewBox")
+            .split_whitespace()
+            .map(|v| v.parse().expect("viewBox number"))
+            .collect();
+        let base_size: f64 = attr(root, "font-size").map_or(16.0, |v| v.parse().expect("size"));
+        let mut boxes = Vec::new();
+        for chunk in svg.split("<text").skip(1) {
+            let close = chunk.find('>').expect("text tag");
+            let tag = &chunk[..close];
+            let content = &chunk[close + 1..chunk.find("</text>").expect("</text>")];
+            let text = content
+                .replace("&lt;", "<")
+                .replace("&gt;", ">")
+                .replace("&quot;", "\"")
+                .replace("&amp;", "&");
+            let size: f64 = attr(tag, "font-size").map_or(base_size, |v| v.parse().expect("size"));
+            let width = 0.7 * size * text.chars().count() as f64;
+            let (along0, along1) = match attr(tag, "text-anchor").as_deref() {
+                Some("middle") => (-width / 2.0, width / 2.0),
+                Some("end") => (-width, 0.0),
+                _ => (0.0, width),
+            };
+            let (across0, across1) = (-size, 0.3 * size);
+            let num = |v: &str| v.trim().parse::<f64>().expect("coordinate");
+            let (x0, y0, x1, y1) = match attr(tag, "transform") {
+                None => {
+                    let (x, y) = (
+                        num(&attr(tag, "x").expect("x")),
+                        num(&attr(tag, "y").expect("y")),
+                    );
+                    (x + along0, y + across0, x + along1, y + across1)
+                }
+                Some(tr) => {
+                    let inner = |f: &str| {
+                        tr[tr.find(f).expect(f) + f.len()..]
+                            .split(')')
+                            .next()
+                            .expect("a closing parenthesis")
+                            .to_string()
+                    };
+                    let xy: Vec<f64> = inner("translate(").split(',').map(num).collect();
+                    let (x, y) = (xy[0], xy[1]);
+                    match num(&inner("rotate(")) as i64 {
+                        // rotate(-90): text runs upwards, its top faces left.
+                        -90 => (x + across0, y - along1, x + across1, y - along0),
+                        90 => (x - across1, y + along0, x - across0, y + along1),
+                        other => panic!("rotation {other} not handled"),
+                    }
+                }
+            };
+            boxes.push((text, x0, y0, x1, y1));
+        }
+        (boxes, [vb[0], vb[1], vb[0] + vb[2], vb[1] + vb[3]])
+    }
+
+    /// The title of `ashlar motion --svg` was one line of 14 px text centred on a 720 px wide
+    /// drawing; a record's provenance (path, format and header) made it some 1,400 px wide, so
+    /// both ends were cut off. Every text of the drawing, the title's lines above all, must lie
+    /// inside the viewBox, for a short provenance and for a long one.
+    #[test]
+    fn svg_text_lies_inside_the_viewbox() {
+        let gm = GroundMotion::horizontal(Signal::Pulse {
+            amplitude: 3.0,
+            period: 0.5,
+            cycles: 2.0,
+            phase: 0.0,
+        });
+        let long =
+            "tests/fixtures/motion/ground-motions/friuli-1976-tolmezzo-000.at2 (at2: Friuli, \
+                    Italy, Tolmezzo, FRIULI/A-TMZ000 PEER NGA STRONG MOTION DATABASE RECORD)";
+        let unbroken = "W".repeat(400);
+        for provenance in ["pulse", long, &unbroken] {
+            let mut im = report(&gm);
+            im.provenance = provenance.to_string();
+            let svg = spectrum_svg(&im);
+            let (boxes, [vx0, vy0, vx1, vy1]) = svg_text_boxes(&svg);
+            let titles = svg.matches("class=\"title\"").count();
+            assert!(titles >= 2, "{provenance}: {titles} title lines");
+            for (text, x0, y0, x1, y1) in &boxes {
+                assert!(
+                    *x0 >= vx0 && *y0 >= vy0 && *x1 <= vx1 && *y1 <= vy1,
+                    "{provenance}: {text:?} spans ({x0:.1}, {y0:.1})–({x1:.1}, {y1:.1}), \
+                     outside the viewBox ({vx0}, {vy0})–({vx1}, {vy1})"
+                );
+            }
+            // The title is all there: every word of a provenance that fits in 4 lines.
+            if provenance != unbroken {
+                let shown: String = boxes
+                    .iter()
+                    .map(|b| b.0.as_str())
+                    .collect::<Vec<_>>()
+                    .join(" ");
+                for word in provenance.split_whitespace() {
+                    for part in word.split('/') {
+                        assert!(shown.contains(part), "{part:?} missing from the title");
+                    }
+                }
+            } else {
+                assert!(
+                    boxes.iter().any(|b| b.0.ends_with('…')),
+                    "an overlong title is not marked as cut"
+                );
+            }
+        }
     }
 }

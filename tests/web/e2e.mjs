@@ -3,13 +3,14 @@
 //   ASHLAR_URL         base URL of the running server (http://127.0.0.1:PORT)
 //   ASHLAR_RECORD      a ground-motion record file (AT2) to upload
 //   ASHLAR_SCENE_BAD   a scene file the server must refuse (a block with two vertices)
-//   ASHLAR_SCREENSHOT  where to save the screenshot of the finished run
+//   ASHLAR_SCREENSHOT  where to save the screenshot of the finished run (and, beside it,
+//                      web-<width>.png of the PGA result at each width the layout is checked at)
 //   CHROMIUM           the browser (default /usr/bin/chromium)
 // Prints one line per check and a closing "N passed, N failed" line; exits non-zero on failure.
 import { chromium } from "playwright-core";
 import { mkdtempSync, readFileSync, rmSync } from "node:fs";
 import { tmpdir } from "node:os";
-import { join } from "node:path";
+import { dirname, join } from "node:path";
 
 const base = process.env.ASHLAR_URL;
 const record = process.env.ASHLAR_RECORD;
@@ -51,6 +52,108 @@ async function colouredPixels(page, id) {
   }, id);
 }
 
+// The widths the layout is checked at: the issue's three, plus the narrowest supported width
+// and the narrowest three-column layout (the tightest jobs panel).
+const WIDTHS = [1280, 1400, 1920];
+const EXTRA_WIDTHS = [1024, 1201];
+
+async function atWidth(page, width) {
+  await page.setViewportSize({ width, height: 900 });
+  // The page redraws its plots on the next animation frame after a resize.
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
+  await page.waitForTimeout(100);
+}
+
+// Every element of the jobs table lies inside the jobs panel's content box and the viewport,
+// and nothing scrolls sideways (a scrolled-away View button is as cut off as a clipped one).
+// Returns the number of rows and action buttons checked, so that a caller can tell the check
+// was not vacuous.
+async function jobsTableFits(page, width) {
+  const r = await page.evaluate(() => {
+    const q = document.getElementById("queue");
+    const cs = getComputedStyle(q);
+    const qr = q.getBoundingClientRect();
+    const left = qr.left + parseFloat(cs.borderLeftWidth) + parseFloat(cs.paddingLeft);
+    const right = qr.right - parseFloat(cs.borderRightWidth) - parseFloat(cs.paddingRight);
+    const vw = document.documentElement.clientWidth;
+    const bad = [];
+    for (const e of q.querySelectorAll("table.jobs, table.jobs *")) {
+      const b = e.getBoundingClientRect();
+      if (b.width === 0 && b.height === 0) continue;
+      if (e.closest("thead") && getComputedStyle(e.closest("thead")).position === "absolute") continue; // visually hidden header
+      if (e.classList.contains("sr-only")) continue;
+      if (b.left < left - 0.5 || b.right > right + 0.5 || b.right > vw + 0.5) {
+        bad.push(`${e.tagName.toLowerCase()}${e.dataset.action ? `[${e.dataset.action}]` : ""} "${e.textContent.trim().slice(0, 20)}" spans ${b.left.toFixed(0)}–${b.right.toFixed(0)} px, panel content ${left.toFixed(0)}–${right.toFixed(0)}, viewport ${vw}`);
+      }
+    }
+    if (q.scrollWidth > q.clientWidth + 1) bad.push(`the jobs panel scrolls sideways: ${q.scrollWidth} > ${q.clientWidth} px`);
+    const de = document.documentElement;
+    if (de.scrollWidth > de.clientWidth + 1) bad.push(`the page scrolls sideways: ${de.scrollWidth} > ${de.clientWidth} px`);
+    const buttons = [...q.querySelectorAll("tbody button")].map((b) => b.dataset.action);
+    return { bad, rows: q.querySelectorAll("tbody tr").length, buttons };
+  });
+  assert(r.bad.length === 0, `at ${width} px: ${r.bad.length} elements outside, e.g. ${r.bad.filter((b) => /^(button|td|th)/.test(b)).slice(0, 3).join("; ") || r.bad[0]}`);
+  return r;
+}
+
+// The legend of a plot covers none of its points. Independent of where the plot says it put
+// its legend: the test wraps window.ashlarPlot.plot to keep each canvas' spec and the mapping
+// the data was drawn with, redraws the canvas with and without its legend, and takes the
+// legend's footprint from the pixels that differ (plus the box the plot reports, when the
+// layout does not allow the comparison). A point's footprint is its marker (radius 5, line 2).
+async function legendClearOfPoints(page, id) {
+  return page.evaluate((id) => {
+    const c = document.getElementById(id);
+    const plotted = () => c.__e2e;
+    const draw = (spec) => { window.ashlarPlot.plot(c, spec); return plotted(); };
+    const image = () => c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+    const spec = plotted().spec;
+    const pts = (spec.points || []).filter((p) => Number.isFinite(p.x) && Number.isFinite(p.y));
+    if (!pts.length) return { error: `${id}: no points plotted` };
+    const without = draw({ ...spec, legend: false });
+    const mapNo = pts.map((p) => [without.sx(p.x), without.sy(p.y)]);
+    const imgNo = image();
+    const withL = draw(spec);
+    const mapL = pts.map((p) => [withL.sx(p.x), withL.sy(p.y)]);
+    const imgL = image();
+    // Device pixels per CSS pixel, once the canvas has been redrawn at its current size.
+    const dpr = c.width / c.getBoundingClientRect().width;
+    const regions = [];
+    const reported = c.dataset.legend ? c.dataset.legend.split(",").map(Number) : null;
+    if (reported) regions.push({ from: "reported box", x: reported[0], y: reported[1], w: reported[2], h: reported[3] });
+    const sameLayout = mapNo.every(([X, Y], k) => Math.abs(X - mapL[k][0]) < 0.01 && Math.abs(Y - mapL[k][1]) < 0.01);
+    let diff = null;
+    if (sameLayout) {
+      let [a0, b0, a1, b1] = [Infinity, Infinity, -Infinity, -Infinity];
+      for (let i = 0; i < imgL.length; i += 4) {
+        if (Math.abs(imgL[i] - imgNo[i]) + Math.abs(imgL[i + 1] - imgNo[i + 1]) + Math.abs(imgL[i + 2] - imgNo[i + 2]) + Math.abs(imgL[i + 3] - imgNo[i + 3]) > 8) {
+          const px = (i / 4) % c.width, py = Math.floor(i / 4 / c.width);
+          a0 = Math.min(a0, px); a1 = Math.max(a1, px); b0 = Math.min(b0, py); b1 = Math.max(b1, py);
+        }
+      }
+      if (a1 >= a0) {
+        diff = { from: "pixels the legend changes", x: a0 / dpr, y: b0 / dpr, w: (a1 - a0 + 1) / dpr, h: (b1 - b0 + 1) / dpr };
+        regions.push(diff);
+      }
+    }
+    if (!regions.length) return { error: `${id}: no legend found (labels: ${pts.map((p) => p.label).join(",")})` };
+    const problems = [];
+    // The reported box holds all the legend's ink (the report is what the pixels show).
+    if (reported && diff && (diff.x < reported[0] - 1 || diff.y < reported[1] - 1 || diff.x + diff.w > reported[0] + reported[2] + 1 || diff.y + diff.h > reported[1] + reported[3] + 1)) {
+      problems.push(`the legend draws outside its reported box: ${JSON.stringify(diff)} vs ${reported}`);
+    }
+    pts.forEach((p, k) => {
+      const [X, Y] = mapL[k];
+      for (const r of regions) {
+        if (X + 6 > r.x && X - 6 < r.x + r.w && Y + 6 > r.y && Y - 6 < r.y + r.h) {
+          problems.push(`${p.label || "point"} at PGA ${p.x} (${X.toFixed(0)}, ${Y.toFixed(0)} px) under the legend (${r.from}: ${r.x.toFixed(0)}, ${r.y.toFixed(0)}, ${r.w.toFixed(0)} × ${r.h.toFixed(0)} px)`);
+        }
+      }
+    });
+    return { problems, points: pts.length, place: c.dataset.legendPlace || "(not reported)", regions: regions.map((r) => r.from) };
+  }, id);
+}
+
 const userDataDir = mkdtempSync(join(tmpdir(), "ashlar-e2e-chromium-"));
 const context = await chromium.launchPersistentContext(userDataDir, {
   executablePath: process.env.CHROMIUM || "/usr/bin/chromium",
@@ -83,6 +186,11 @@ try {
     assert(r.status() === 200, `status ${r.status()}`);
     await page.waitForSelector("#scene-example option[value=column]", { state: "attached", timeout: 10000 });
     assert((await page.title()).includes("ashlar"), "title");
+    // Keep, per canvas, the spec drawn and the mapping it was drawn with (legend check).
+    await page.evaluate(() => {
+      const inner = window.ashlarPlot.plot;
+      window.ashlarPlot.plot = (c, spec) => { const r = inner(c, spec); c.__e2e = { spec, sx: r.sx, sy: r.sy }; return r; };
+    });
   });
 
   await check("every input and select has a label", async () => {
@@ -220,15 +328,26 @@ try {
     const row = "#jobs-body tr:first-child";
     await page.waitForFunction((sel) => document.querySelector(sel).dataset.status === "running", row, { timeout: 30000 });
     await page.waitForFunction((sel) => parseFloat(document.querySelector(`${sel} progress`).value) > 0, row, { timeout: 30000 });
+    // The jobs table with a running job (its Cancel button) and finished ones (View) fits its
+    // panel at every width.
+    for (const w of [...EXTRA_WIDTHS, ...WIDTHS]) {
+      const r = await jobsTableFits(page, w);
+      assert(r.buttons.includes("cancel") && r.buttons.includes("view"), `at ${w} px: buttons ${r.buttons}`);
+    }
+    await atWidth(page, 1440);
     await page.click(`${row} button[data-action=cancel]`);
     await page.waitForFunction((sel) => document.querySelector(sel).dataset.status === "cancelled", row, { timeout: 30000 });
   });
 
   await check("PGA search: scan points and bracket are plotted", async () => {
-    await page.fill("#duration", "4");
+    // Rotation beyond 2° within 8 s: the column (7.5° at 1 g, the first run) passes the
+    // low scan points and fails the high ones, so the plot has failed points at the top right,
+    // where the legend used to sit (the layout check below).
+    await page.fill("#duration", "8");
     await page.selectOption("#model", "");
     await page.check('input[name="analysis"][value="pga"]');
-    await page.selectOption("#criterion-kind", "toppled");
+    await page.selectOption("#criterion-kind", "rotation");
+    await page.fill("#criterion-value", "2");
     await page.fill("#range-min", "0.1");
     await page.fill("#range-max", "1.5");
     await page.selectOption("#range-units", "g");
@@ -267,7 +386,9 @@ try {
     const n = await colouredPixels(page, "plot-scan");
     assert(n > 50, `plot-scan: ${n} coloured pixels`);
     const text = await page.textContent("#pga-summary");
-    assert(text.includes("toppled:column"), text);
+    assert(text.includes("rotation:column:2"), text);
+    const outcomes = await page.evaluate(() => document.getElementById("plot-scan").__e2e.spec.points.map((p) => p.label));
+    assert(outcomes.includes("failed") && outcomes.includes("safe"), `scan outcomes: ${outcomes}`);
     // Every held request of the cancelled run has been answered and its handlers have run.
     for (let quiet = 0; quiet < 2; ) {
       await page.waitForTimeout(500);
@@ -276,6 +397,31 @@ try {
     const head = await page.textContent("#result-head");
     assert(/^PGA search \w+: succeeded/.test(head) && !(await page.isHidden("#pga-view")), `after the cancelled run's late answers: ${head}`);
     await page.unrouteAll();
+  });
+
+  await check(`layout at ${WIDTHS.join(", ")} px: the jobs table fits its panel, the PGA legend covers no point`, async () => {
+    // Every width and both checks run before failing, so that a failure lists them all.
+    const failures = [];
+    const found = [];
+    for (const w of [...EXTRA_WIDTHS, ...WIDTHS]) {
+      await atWidth(page, w);
+      try {
+        const t = await jobsTableFits(page, w);
+        assert(t.rows >= 3 && t.buttons.filter((b) => b === "view").length >= 2, `at ${w} px: ${t.rows} rows, buttons ${t.buttons}`);
+      } catch (e) { failures.push(`jobs table: ${e.message}`); }
+      if (!WIDTHS.includes(w)) continue;
+      const l = await legendClearOfPoints(page, "plot-scan");
+      if (l.error) failures.push(`PGA legend at ${w} px: ${l.error}`);
+      else if (l.problems.length) failures.push(`PGA legend at ${w} px: ${l.problems.join("; ")}`);
+      else found.push(`${w} px: legend ${l.place} (${l.points} points clear)`);
+      if (screenshot) {
+        await page.evaluate(() => window.scrollTo(0, 0));
+        await page.screenshot({ path: join(dirname(screenshot), `web-${w}.png`), fullPage: true });
+      }
+    }
+    await atWidth(page, 1440);
+    if (found.length) console.log(`     ${found.join("; ")}`);
+    assert(failures.length === 0, `\n     ${failures.join("\n     ")}`);
   });
 
   await check("no script errors, nothing fetched from another host", async () => {

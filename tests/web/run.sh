@@ -32,6 +32,8 @@ fi
 RECORD=$ROOT/data/ground-motions/friuli-1976-tolmezzo-000.at2
 
 WORK=$(mktemp -d)
+# Created before the server starts: the loop below may read it before the server's shell opens it.
+: >"$WORK/stdout"
 "$BIN" serve --addr 127.0.0.1:0 --data "$WORK/data" --workers 1 >"$WORK/stdout" 2>"$WORK/server.log" &
 PID=$!
 cleanup() {
@@ -64,6 +66,14 @@ ASHLAR_SCREENSHOT=${ASHLAR_SCREENSHOT:-$TARGET/web-screenshot.png} \
     node tests/web/e2e.mjs
 STATUS=$?
 set -e
+# The server's log went to a file: plain text, no ANSI colour codes (those are for a terminal).
+if grep -q $'\x1b' "$WORK/server.log"; then
+    echo "FAIL the server's log file holds ANSI escape codes:" >&2
+    head -n 3 "$WORK/server.log" | cat -v >&2
+    STATUS=1
+else
+    echo "ok   the server's log file is plain text (no ANSI escape codes)"
+fi
 if [ "$STATUS" -ne 0 ]; then
     echo "--- server log (tail) ---" >&2
     tail -n 40 "$WORK/server.log" >&2
