@@ -713,7 +713,7 @@ mod tests {
             phase: 0.0,
         });
         let long =
-            "tests/fixtures/motion/ground-motions/friuli-1976-tolmezzo-000.at2 (at2: Friuli, \
+            "data/ground-motions/friuli-1976-tolmezzo-000.at2 (at2: Friuli, \
                     Italy, Tolmezzo, FRIULI/A-TMZ000 PEER NGA STRONG MOTION DATABASE RECORD)";
         let unbroken = "W".repeat(400);
         for provenance in ["pulse", long, &unbroken] {
