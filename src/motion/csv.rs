@@ -171,8 +171,9 @@ fn uniform_step(origin: &str, times: &[(f64, usize)]) -> Result<f64, MotionError
                 origin,
                 Some(w[1].1),
                 format!(
-                    "non-uniform time column: expected t = {:.6} s (the step is {median} s elsewhere), found {} s",
+                    "non-uniform time column: expected t = {:.6} s (the step is {} s elsewhere), found {} s",
                     w[0].0 + median,
+                    crate::quantity::sig(median),
                     w[1].0
                 ),
             ));
