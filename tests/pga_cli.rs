@@ -181,7 +181,10 @@ fn run_and_pga_read_a_csv_without_units_given_units() {
     let out = dir.join("out");
     // Without --units: refused, saying how to name them.
     let err = stderr_line(&run_column(&out, &["--motion", csv]));
-    assert!(err.contains("unknown units") && err.contains("pass units"), "{err}");
+    assert!(
+        err.contains("unknown units") && err.contains("pass units"),
+        "{err}"
+    );
     // --units cm/s2: a peak of 1 cm/s² (exact: the factor 0.01 applied to the sample 1.0).
     let o = run_column(&out, &["--motion", csv, "--units", "cm/s2"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -210,9 +213,18 @@ fn run_pga_takes_explicit_units_and_refuses_bare_numbers() {
         ("392gal", 3.92),
     ] {
         let o = run_column(&out, &["--motion", &pulse, "--pga", text]);
-        assert!(o.status.success(), "{text}: {}", String::from_utf8_lossy(&o.stderr));
-        let got = read(&out.join("summary.json"))["pga"].as_f64().expect("pga");
-        assert!((got / expect - 1.0).abs() < 1e-12, "{text}: {got} vs {expect}");
+        assert!(
+            o.status.success(),
+            "{text}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let got = read(&out.join("summary.json"))["pga"]
+            .as_f64()
+            .expect("pga");
+        assert!(
+            (got / expect - 1.0).abs() < 1e-12,
+            "{text}: {got} vs {expect}"
+        );
     }
     // A bare number: refused, suggesting both readings.
     let err = stderr_line(&run_column(&out, &["--motion", &pulse, "--pga", "0.4"]));
@@ -220,7 +232,10 @@ fn run_pga_takes_explicit_units_and_refuses_bare_numbers() {
         err.contains("--pga \"0.4\"") && err.contains("0.4g") && err.contains("0.4m/s2"),
         "{err}"
     );
-    let err = stderr_line(&run_column(&out, &["--motion", &pulse, "--pga", "4 furlongs"]));
+    let err = stderr_line(&run_column(
+        &out,
+        &["--motion", &pulse, "--pga", "4 furlongs"],
+    ));
     assert!(err.contains("unknown units \"furlongs\""), "{err}");
     let err = stderr_line(&run_column(&out, &["--motion", &pulse, "--pga", "-1g"]));
     assert!(err.contains("≥ 0"), "{err}");

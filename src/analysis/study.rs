@@ -878,7 +878,11 @@ pub fn run_study(opts: &StudyOptions) -> Result<StudyResult, String> {
                     value: ev.value,
                     wall_time_s: ev.wall,
                     steps: ev.steps,
-                    open_close_iterations_mean: ev.summary.diagnostics.open_close_iterations_mean.unwrap_or(0.0),
+                    open_close_iterations_mean: ev
+                        .summary
+                        .diagnostics
+                        .open_close_iterations_mean
+                        .unwrap_or(0.0),
                     time_step_cuts: ev.summary.diagnostics.time_step_cuts,
                     note: ev.note,
                     setting,

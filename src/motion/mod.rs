@@ -17,9 +17,9 @@ pub mod options;
 mod process;
 mod text;
 pub use intensity::{
-    cumulative_arias, intensity_units, log_periods, mean_period, oscillator_peak, report, report_with,
-    response_spectrum, significant_duration, spectrum_svg, IntensityMeasures, ReportParams,
-    Spectrum,
+    cumulative_arias, intensity_units, log_periods, mean_period, oscillator_peak, report,
+    report_with, response_spectrum, significant_duration, spectrum_svg, IntensityMeasures,
+    ReportParams, Spectrum,
 };
 pub use json::{from_json, from_json_with};
 pub use options::{

@@ -10,11 +10,15 @@ use super::{GroundMotion, LoadParams, Units};
 /// Why an amplitude text was refused. The caller prefixes the option or field it came from.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum AccelerationError {
-    #[error("{number} has no units: write {number}g or {number}m/s2 (cm/s2 and gal are accepted too)")]
+    #[error(
+        "{number} has no units: write {number}g or {number}m/s2 (cm/s2 and gal are accepted too)"
+    )]
     MissingUnits { number: String },
     #[error("unknown units {units:?} in {text:?}; expected g, m/s2 (m/s², m/s^2), cm/s2 or gal")]
     UnknownUnits { text: String, units: String },
-    #[error("{text:?} is not an acceleration: expected a number with units, such as 0.4g or 4m/s2")]
+    #[error(
+        "{text:?} is not an acceleration: expected a number with units, such as 0.4g or 4m/s2"
+    )]
     NotANumber { text: String },
     #[error("{text:?}: must be a finite number ≥ 0")]
     OutOfRange { text: String },

@@ -79,7 +79,8 @@ impl Histories {
             let id = triple[0]
                 .strip_suffix(names[1])
                 .ok_or_else(|| format!("histories.csv line 1: column {:?}", triple[0]))?;
-            if triple[1] != format!("{id}{}", names[2]) || triple[2] != format!("{id}{}", names[3]) {
+            if triple[1] != format!("{id}{}", names[2]) || triple[2] != format!("{id}{}", names[3])
+            {
                 return Err(format!(
                     "histories.csv line 1: columns of block {id:?} out of order"
                 ));
@@ -166,7 +167,8 @@ mod tests {
                        0,0,0,0,0,0,0\n\
                        0.01,1e-3,-2e-4,0.5,3,4,-0.25\n";
     /// The same file as recorded before units were added (format version 1).
-    const CSV_V1: &str = "time,col.x,col.y,col.rotation,top.block.x,top.block.y,top.block.rotation\n\
+    const CSV_V1: &str =
+        "time,col.x,col.y,col.rotation,top.block.x,top.block.y,top.block.rotation\n\
                           0,0,0,0,0,0,0\n\
                           0.01,1e-3,-2e-4,0.5,3,4,-0.25\n";
 

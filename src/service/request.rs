@@ -810,6 +810,49 @@ mod tests {
         let mut bad = body.clone();
         bad["range"]["max"] = json!(0.05);
         assert_eq!(pointer_of(parse_pga(&bad, &l)), "/range/max");
+        // Strings carry their own units (the range's `units` applies to numbers only): the same
+        // request written as strings gives the same amplitudes, exactly.
+        let mut text = body.clone();
+        text["range"] = json!({"min": "0.1g", "max": "9.80665m/s2"});
+        text["tolerance"] = json!("0.01 G");
+        let JobInput::PgaSearch { request: r2, .. } = parse_pga(&text, &l).expect("valid").input
+        else {
+            panic!("kind")
+        };
+        assert_eq!(
+            (r2.min, r2.max, r2.tolerance),
+            (request.min, request.max, request.tolerance)
+        );
+        // A string without units is refused, naming the field and both readings.
+        for (field, pointer) in [("min", "/range/min"), ("max", "/range/max")] {
+            let mut bad = text.clone();
+            bad["range"][field] = json!("0.5");
+            let e = parse_pga(&bad, &l).expect_err("bare string");
+            assert_eq!(e.pointer.as_deref(), Some(pointer));
+            assert!(
+                e.detail.contains("0.5g") && e.detail.contains("0.5m/s2"),
+                "{}",
+                e.detail
+            );
+        }
+        let mut bad = text.clone();
+        bad["tolerance"] = json!("0.01");
+        assert_eq!(pointer_of(parse_pga(&bad, &l)), "/tolerance");
+        let mut bad = text.clone();
+        bad["range"]["min"] = json!("1 furlong");
+        assert_eq!(pointer_of(parse_pga(&bad, &l)), "/range/min");
+        // The motion's target PGA takes the same forms; a bare string is refused there too.
+        let scaled = |t: Value| {
+            json!({"scene": scene(), "motion": {"horizontal": {"pulse": {"amplitude": 1, "period": 0.5, "units": "m/s2"}},
+                   "scale": {"target_pga": t}}})
+        };
+        let p = parse_run(&scaled(json!("0.5g")), &l).expect("valid");
+        assert_eq!(p.motion_summary["pga"].as_f64(), Some(0.5 * 9.80665));
+        let p = parse_run(&scaled(json!(2.5)), &l).expect("valid, m/s2 by default");
+        assert_eq!(p.motion_summary["pga"].as_f64(), Some(2.5));
+        let e = parse_run(&scaled(json!("0.5")), &l).expect_err("bare string");
+        assert!(e.detail.contains("has no units"), "{}", e.detail);
+        assert_eq!(e.pointer.as_deref(), Some("/motion/scale/target_pga"));
         let mut bad = body;
         bad["criterion"] = json!(["toppled:col", "rotation:col:x"]);
         assert_eq!(pointer_of(parse_pga(&bad, &l)), "/criterion/1");

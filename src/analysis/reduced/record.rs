@@ -2,8 +2,8 @@
 //! outputs as a DDA run (summary, histories, trajectory) through `analysis::run`'s writers.
 use super::{Modes, Phase, Reduced, ReducedParams, SingleBlock, Violation};
 use crate::analysis::run::{
-    duration, failure_mode, reported_control, round_time, summary_units, BlockSummary,
-    Diagnostics, FailureParams, Ran, RunError, RunOptions, RunOutcome, Summary, Tracker, Writers,
+    duration, failure_mode, reported_control, round_time, summary_units, BlockSummary, Diagnostics,
+    FailureParams, Ran, RunError, RunOptions, RunOutcome, Summary, Tracker, Writers,
     RUN_OUTPUTS_FORMAT,
 };
 use crate::motion::GroundMotion;
