@@ -518,6 +518,8 @@ pub fn inspect_motion(
         ));
     }
     out["scale"] = json!(gm.scale);
+    out["units"]["scale"] = json!("1");
+    out["units"]["series"] = json!({"time": "s", "acceleration": "m/s2"});
     out["series"] = json!({
         "time": series["time"],
         "acceleration": series["acceleration"],
