@@ -182,7 +182,7 @@ fn run_and_pga_read_a_csv_without_units_given_units() {
     // Without --units: refused, saying how to name them.
     let err = stderr_line(&run_column(&out, &["--motion", csv]));
     assert!(
-        err.contains("unknown units") && err.contains("pass units"),
+        err.contains("unknown units") && err.contains("--units g|m/s2|cm/s2"),
         "{err}"
     );
     // --units cm/s2: a peak of 1 cm/s² (exact: the factor 0.01 applied to the sample 1.0).

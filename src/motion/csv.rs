@@ -68,7 +68,7 @@ pub fn parse(origin: &str, content: &str, units: Option<Units>) -> Result<RawRec
             return Err(MotionError::new(
                 origin,
                 None,
-                "unknown units: name them in the header (e.g. `time_s,accel_g`), a `# units: g` comment, or pass units",
+                "unknown units: name them in the header (e.g. `time_s,accel_g`), a `# units: g` comment, or pass them (`--units g|m/s2|cm/s2` on the command line, `\"units\"` in JSON)",
             ))
         }
     };
