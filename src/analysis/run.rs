@@ -629,14 +629,18 @@ fn header(
     metadata.insert("motion_provenance".into(), motion.provenance.clone());
     metadata.insert("motion_scale".into(), format!("{}", motion.scale));
     metadata.insert("pga_m_s2".into(), format!("{}", motion.pga()));
+    // The controls that run (as summary.json reports them), and the springs only when the
+    // penalty solver uses them.
     metadata.insert(
         "solver".into(),
-        serde_json::to_string(&scene.control).unwrap_or_default(),
+        reported_control(scene, Ran::Engine).to_string(),
     );
-    metadata.insert(
-        "penalty_stiffness".into(),
-        format!("{}", sim.springs.normal),
-    );
+    if scene.control.contact_solver != ContactSolver::Dual {
+        metadata.insert(
+            "penalty_stiffness".into(),
+            format!("{}", sim.springs.normal),
+        );
+    }
     metadata.insert("code_version".into(), env!("CARGO_PKG_VERSION").into());
     Ok(RecordHeader {
         block_ids: scene.blocks.iter().map(|b| b.id.clone()).collect(),

@@ -162,7 +162,7 @@ fn header(
     metadata.insert("pga_m_s2".into(), format!("{}", motion.pga()));
     metadata.insert(
         "solver".into(),
-        serde_json::to_string(&scene.control).unwrap_or_default(),
+        reported_control(scene, Ran::Reduced).to_string(),
     );
     metadata.insert("model".into(), model.into());
     metadata.insert("code_version".into(), env!("CARGO_PKG_VERSION").into());
