@@ -155,15 +155,29 @@ def check(path, frames, csv_path):
         with open(csv_path, newline="") as f:
             rows = list(csv.reader(f))
         header, rows = rows[0], rows[1:]
+        # Header version 2 (summary.json "format": "ashlar.run/2") names units:
+        # time_s, <id>.x_m, <id>.y_m, <id>.rotation_rad; version 1 had time, <id>.x, ...
+        units = {"x": "m", "y": "m", "rotation": "rad"}
+        v2 = header[:1] == ["time_s"]
+        if not v2 and header[:1] != ["time"]:
+            fail(f"{csv_path}: unexpected first column {header[:1]}")
+        fields = []
+        for col in header[1:]:
+            block, field = col.rsplit(".", 1)
+            if v2:
+                field, _, unit = field.rpartition("_")
+                if units.get(field) != unit:
+                    fail(f"{csv_path}: column {col}: expected the unit {units.get(field)}")
+            fields.append((col, block, field))
         if len(rows) != len(blocks):
             fail(f"{csv_path}: {len(rows)} rows, /ashlar/blocks has {len(blocks)} messages")
         for row, msg in zip(rows, blocks):
             by_id = {b["id"]: b for b in msg["blocks"]}
-            if float(row[0]) != msg["time"]:
+            # The CSV's time is rounded to the nanosecond (the log-time resolution).
+            if abs(float(row[0]) - msg["time"]) > (1e-9 if v2 else 0.0):
                 fail(f"{csv_path}: time {row[0]} != {msg['time']}")
                 break
-            for col, cell in zip(header[1:], row[1:]):
-                block, field = col.rsplit(".", 1)
+            for (col, block, field), cell in zip(fields, row[1:]):
                 if block not in by_id or float(cell) != by_id[block][field]:
                     fail(f"{csv_path}: {col} = {cell} at t = {row[0]} differs from /ashlar/blocks")
                     break

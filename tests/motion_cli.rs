@@ -1,6 +1,7 @@
 //! `ashlar motion RECORD [--svg FILE]`: the JSON has exactly the docs/format.md §3 fields (plus the
 //! documented extensions) and the SVG is written.
-use ashlar::motion::command::{parse_pga, report_json, MotionArgs};
+use ashlar::motion::command::{report_json, MotionArgs};
+use ashlar::motion::RecordArgs;
 use std::path::PathBuf;
 
 fn args(record: &str) -> MotionArgs {
@@ -11,12 +12,10 @@ fn args(record: &str) -> MotionArgs {
         ))
         .join(record),
         svg: None,
-        units: None,
+        record_options: RecordArgs::default(),
         highpass: None,
         order: 4,
         baseline: "none".into(),
-        scale: None,
-        pga: None,
         damping: 0.05,
     }
 }
@@ -67,14 +66,32 @@ fn json_fields_and_svg() {
 
 #[test]
 fn options_and_errors() {
-    assert!((parse_pga("0.3g").expect("g") - 0.3 * 9.80665).abs() < 1e-12);
-    assert_eq!(parse_pga("2.5").expect("m/s2"), 2.5);
-    assert!(parse_pga("fast").is_err());
     let mut a = recorded("kobe-1995-nishi-akashi-000.csv");
-    a.pga = Some("0.5g".into());
+    a.record_options.pga = Some("0.5g".into());
     let json: serde_json::Value =
         serde_json::from_str(&report_json(&a).expect("report")).expect("json");
     assert!((json["pga"].as_f64().expect("pga") - 0.5 * 9.80665).abs() < 1e-9);
+    // Units of every numeric field; the PGA also in g (1e-12: one division).
+    assert_eq!(json["units"]["pga"], "m/s2");
+    assert_eq!(json["units"]["arias_intensity"], "m/s");
+    assert_eq!(json["units"]["spectrum"]["periods"], "s");
+    assert!((json["pga_g"].as_f64().expect("pga_g") - 0.5).abs() < 1e-12);
+    // Bare numbers are refused (0.5 g or 0.5 m/s²?), naming the option and both readings.
+    let mut a = recorded("kobe-1995-nishi-akashi-000.csv");
+    a.record_options.pga = Some("0.5".into());
+    let e = report_json(&a).expect_err("bare --pga");
+    assert!(
+        e.starts_with("--pga \"0.5\"") && e.contains("0.5g") && e.contains("0.5m/s2"),
+        "{e}"
+    );
+    let mut a = recorded("kobe-1995-nishi-akashi-000.csv");
+    a.record_options.units.units = Some("furlongs".into());
+    assert!(report_json(&a).expect_err("units").starts_with("--units"));
+    // `--units` reads a CSV that names none; it must agree with one that does.
+    let mut a = args("semicolon_units_comment.csv");
+    a.record_options.units.units = Some("g".into());
+    let e = report_json(&a).expect_err("conflict");
+    assert!(e.contains("units conflict"), "{e}");
     let mut a = args("synthetic.v1");
     a.highpass = Some(0.5);
     a.baseline = "linear".into();

@@ -301,7 +301,7 @@ fn hundred_jobs_three_workers_one_killed() {
         .expect("GET");
         assert_eq!(status, 200, "{csv}");
         assert!(
-            csv.starts_with("time,column.x,column.y,column.rotation"),
+            csv.starts_with("time_s,column.x_m,column.y_m,column.rotation_rad"),
             "{csv:.200}"
         );
     }

@@ -141,7 +141,7 @@ fn verify_full_runs_a_job_end_to_end_encrypted() {
     )
     .expect("GET histories");
     assert_eq!(status, 200, "{csv:.300}");
-    assert!(csv.starts_with("time,column.x"), "{csv:.200}");
+    assert!(csv.starts_with("time_s,column.x_m"), "{csv:.200}");
 
     // Every session the two processes hold on this database is encrypted, and there are some
     // (pool + LISTEN connections of both processes).

@@ -24,18 +24,18 @@ fn header_and_rows_follow_format_md() {
     let mut lines = text.lines();
     assert_eq!(
         lines.next(),
-        Some("time,column.x,column.y,column.rotation,slider.x,slider.y,slider.rotation")
+        Some("time_s,column.x_m,column.y_m,column.rotation_rad,slider.x_m,slider.y_m,slider.rotation_rad")
     );
     let rows: Vec<&str> = lines.collect();
     assert_eq!(rows.len() as u64, run.frame_count());
     assert!(text.ends_with('\n'));
     // Every value parses back to the frame's f64 bit for bit (exact: shortest round-trip
-    // formatting loses nothing).
+    // formatting loses nothing); the time is the frame's rounded to the nanosecond.
     for (k, row) in rows.iter().enumerate() {
         let f = run.frame(k as u64);
         let cells: Vec<f64> = row.split(',').map(|c| c.parse().expect("number")).collect();
         let want = [
-            f.time,
+            ashlar::record::histories::round_time(f.time),
             f.blocks[1].x,
             f.blocks[1].y,
             f.blocks[1].rotation,
@@ -60,10 +60,10 @@ fn history_blocks_choose_the_columns_and_their_order() {
     let header = text.lines().next().expect("header");
     assert_eq!(
         header,
-        "time,slider_2.x,slider_2.y,slider_2.rotation,column.x,column.y,column.rotation"
+        "time_s,slider_2.x_m,slider_2.y_m,slider_2.rotation_rad,column.x_m,column.y_m,column.rotation_rad"
     );
     let text = csv_of(&run, Some(vec![]), 2);
-    assert_eq!(text, "time\n0\n0.01\n");
+    assert_eq!(text, "time_s\n0\n0.01\n");
 }
 
 #[test]

@@ -239,9 +239,17 @@ fn blocks_channel_equals_histories_csv() {
     assert_eq!(rows.len(), blocks.len());
     assert_eq!(cols.len(), 1 + 3 * header.history_blocks.len());
     for (row, msg) in rows.iter().zip(&blocks) {
-        assert_eq!(row[0].to_bits(), raw_numbers(&msg.raw, "time")[0].to_bits());
+        // The CSV's time is the message's rounded to the nanosecond (its log-time resolution).
+        let t = raw_numbers(&msg.raw, "time")[0];
+        assert_eq!(
+            row[0].to_bits(),
+            ashlar::record::histories::round_time(t).to_bits()
+        );
         for (j, col) in cols.iter().enumerate().skip(1) {
-            let (id, field) = col.rsplit_once('.').expect("id.field");
+            let (id, field_unit) = col.rsplit_once('.').expect("id.field_unit");
+            let (field, unit) = field_unit.rsplit_once('_').expect("field_unit");
+            let want = if field == "rotation" { "rad" } else { "m" };
+            assert_eq!(unit, want, "{col}");
             let index = msg.json["blocks"]
                 .as_array()
                 .expect("blocks")

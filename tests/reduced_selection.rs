@@ -156,7 +156,7 @@ fn reduced_run_writes_the_same_outputs_as_dda() {
     let csv = std::fs::read_to_string(dir.join("histories.csv")).expect("histories");
     let lines: Vec<&str> = csv.lines().collect();
     assert!(
-        lines[0].starts_with("time,column.x,column.y,column.rotation"),
+        lines[0].starts_with("time_s,column.x_m,column.y_m,column.rotation_rad"),
         "{}",
         lines[0]
     );

@@ -254,7 +254,7 @@ fn artifacts_round_trip_through_s3() {
         "histories served from S3 differ from the local ones"
     );
     assert!(
-        b_csv.starts_with(b"time,column.x"),
+        b_csv.starts_with(b"time_s,column.x_m"),
         "{}",
         String::from_utf8_lossy(&b_csv[..b_csv.len().min(200)])
     );

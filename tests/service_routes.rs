@@ -95,7 +95,7 @@ async fn a_job_runs_and_its_outputs_are_served() {
     let (header, cols) = csv_columns(&file);
     assert_eq!(
         header,
-        vec!["time", "column.x", "column.y", "column.rotation"]
+        vec!["time_s", "column.x_m", "column.y_m", "column.rotation_rad"]
     );
     let h = call(&app, get(&format!("{uri}/histories"))).await;
     assert_eq!(h.status, 200);

@@ -154,12 +154,13 @@ async fn inspect_agrees_with_ashlar_motion_on_a_real_record() {
         &report_json(&MotionArgs {
             record: path,
             svg: None,
-            units: None,
+            record_options: ashlar::motion::RecordArgs {
+                scale: Some(1.5),
+                ..Default::default()
+            },
             highpass: None,
             order: 4,
             baseline: "none".into(),
-            scale: Some(1.5),
-            pga: None,
             damping: 0.05,
         })
         .expect("ashlar motion"),

@@ -30,7 +30,8 @@ fn setup(dir: &Path) {
     std::fs::write(dir.join("column.json"), scene.to_string()).expect("scene");
     std::fs::copy("examples/half-sine-pulse.json", dir.join("pulse.json")).expect("record");
     // Amplitudes from 1 to 9 m/s²: small ones leave the column standing, large ones topple it.
-    let lines: Vec<String> = [1.0, 9.0, 3.0]
+    // Written in each accepted form: a bare JSON number (m/s²) and strings with units.
+    let lines: Vec<String> = [json!(1.0), json!("9m/s2"), json!("300gal")]
         .iter()
         .map(|a| {
             json!({"scene": "column.json", "record": "pulse.json", "amplitude": a, "criterion": "toppled:column"})
@@ -158,6 +159,27 @@ fn lines_then_collect() {
     );
     assert!(
         !ok && err.contains("line 1") && err.contains("amplitude"),
+        "{err}"
+    );
+    // A string amplitude without units is refused (0.3 g or 0.3 m/s²?).
+    std::fs::write(
+        &bad,
+        "{\"scene\": \"column.json\", \"amplitude\": \"0.3\"}\n",
+    )
+    .expect("write");
+    let (ok, _, err) = ashlar(
+        &[
+            "sweep",
+            bad.to_str().expect("utf8"),
+            "--index",
+            "0",
+            "--out",
+            out_s,
+        ],
+        &[],
+    );
+    assert!(
+        !ok && err.contains("line 1") && err.contains("0.3 has no units"),
         "{err}"
     );
     std::fs::remove_dir_all(dir).ok();

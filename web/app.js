@@ -806,7 +806,7 @@ function renderDownloads(j) {
   const mcap = new URL(j.links.trajectory, location.href).href;
   const fox = `https://app.foxglove.dev/?ds=remote-file&ds.url=${encodeURIComponent(mcap)}`;
   $("downloads").replaceChildren(
-    el("li", {}, el("a", { href: `${j.links.histories}?format=csv`, download: `histories-${j.id.slice(0, 8)}.csv`, id: "dl-csv", text: "Histories (CSV)" }), " — time, x, y, rotation of every free block"),
+    el("li", {}, el("a", { href: `${j.links.histories}?format=csv`, download: `histories-${j.id.slice(0, 8)}.csv`, id: "dl-csv", text: "Histories (CSV)" }), " — time (s), x, y (m), rotation (rad) of every free block"),
     el("li", {}, el("a", { href: j.links.trajectory, download: `trajectory-${j.id.slice(0, 8)}.mcap`, id: "dl-mcap", text: "Trajectory (MCAP)" }), " — blocks, ground motion and outlines over time"),
     el("li", {}, el("a", { href: fox, target: "_blank", rel: "noopener", id: "dl-foxglove", text: "Open the trajectory in Foxglove" }), " — needs this server to be reachable from your browser (Foxglove fetches the file)"),
     el("li", {}, el("a", { href: j.links.self, id: "dl-job", text: "Job and summary (JSON)" })));

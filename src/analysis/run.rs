@@ -5,6 +5,7 @@ use crate::analysis::reduced::{
 };
 use crate::contact::{ContactState, Mobility};
 use crate::motion::GroundMotion;
+pub use crate::record::histories::round_time;
 use crate::record::histories::HistoryWriter;
 use crate::record::mcap::{McapParams, McapRecorder};
 use crate::record::{
@@ -38,12 +39,17 @@ pub struct BlockSummary {
 /// Solver diagnostics reported with every run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 pub struct Diagnostics {
-    /// N/m, the value used (resolved when "auto").
-    pub penalty_stiffness: f64,
+    /// N/m, the value used (resolved when "auto"); absent when no penalty springs ran (a
+    /// reduced model, or the dual contact solver).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub penalty_stiffness: Option<f64>,
     pub time_step_cuts: u64,
     /// m, deepest penetration seen after a converged step.
     pub max_penetration: f64,
-    pub open_close_iterations_mean: f64,
+    /// Open–close iterations per step; absent when the open–close iteration did not run (a
+    /// reduced model, or the dual contact solver).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub open_close_iterations_mean: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min_time_step: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -64,10 +70,19 @@ pub struct Diagnostics {
     pub dual_loose_residual: Option<f64>,
 }
 
-/// `summary.json` (docs/format.md §3).
+/// The layout of a run's outputs, `summary.json`'s `format`: version 2 added the `units`
+/// objects and the unit suffixes of the `histories.csv` header (`time_s`, `<id>.x_m`, ...).
+/// A summary without `format` is version 1 (header `time,<id>.x,<id>.y,<id>.rotation`).
+pub const RUN_OUTPUTS_FORMAT: &str = "ashlar.run/2";
+
+/// `summary.json` (docs/format.md §3; units in docs/outputs.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
+    /// [`RUN_OUTPUTS_FORMAT`]; empty when read from a version-1 summary.
+    #[serde(default)]
+    pub format: String,
     pub completed: bool,
+    /// s, rounded to the nanosecond (the accumulated steps carry float noise below that).
     pub simulated_time: f64,
     pub steps: u64,
     pub wall_time_s: f64,
@@ -80,9 +95,101 @@ pub struct Summary {
     pub model_reason: String,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped_reason: Option<String>,
-    /// The controls actually used.
+    /// The controls that ran ([`reported_control`]).
     #[serde(default)]
     pub control: serde_json::Value,
+    /// The unit of every numeric field, mirroring the summary's nesting ([`summary_units`]).
+    #[serde(default)]
+    pub units: serde_json::Value,
+}
+
+/// The `units` object of `summary.json`: each numeric field's unit, nested as the summary is
+/// ("1" for a ratio, "count" for a number of events). `pga` is the horizontal peak applied.
+pub fn summary_units() -> serde_json::Value {
+    serde_json::json!({
+        "simulated_time": "s",
+        "steps": "count",
+        "wall_time_s": "s",
+        "pga": "m/s2",
+        "blocks": {
+            "max_displacement": "m",
+            "final_displacement": "m",
+            "max_rotation": "rad",
+            "final_rotation": "rad",
+            "sliding_distance": "m",
+        },
+        "diagnostics": {
+            "penalty_stiffness": "N/m",
+            "time_step_cuts": "count",
+            "max_penetration": "m",
+            "open_close_iterations_mean": "1",
+            "min_time_step": "s",
+            "max_time_step": "s",
+            "restitution": "1",
+            "impacts": "count",
+            "dual_loose_solves": "count",
+            "dual_loose_residual": "m",
+        },
+        "control": {
+            "duration": "s",
+            "time_step": "s",
+            "max_displacement_ratio": "1",
+            "penalty_stiffness": "N/m",
+            "dynamic_factor": "1",
+            "kinetic_damping_rate": "1/s",
+            "output_interval": "s",
+            "max_steps": "count",
+            "dual_tolerance": "1",
+            "dual_stall_acceptance": "1",
+        },
+    })
+}
+
+/// What ran, for [`reported_control`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ran {
+    /// The full DDA engine.
+    Engine,
+    /// A reduced (rigid rocking/sliding) model.
+    Reduced,
+}
+
+/// The controls a run reports: those that ran. The scene's `control.block_model` is only the
+/// default for blocks that do not name their own, so the reported `block_model` is the one the
+/// free blocks used (`"mixed"` when they differ); the dual solver has no penalty springs, the
+/// penalty solver no dual tolerances; a reduced model treats its block as rigid and uses none
+/// of the engine's controls (only `duration`, `output_interval` and `model`).
+pub fn reported_control(scene: &Scene, ran: Ran) -> serde_json::Value {
+    let mut v = serde_json::to_value(&scene.control).unwrap_or_default();
+    let Some(obj) = v.as_object_mut() else {
+        return v;
+    };
+    match ran {
+        Ran::Reduced => {
+            obj.retain(|k, _| matches!(k.as_str(), "duration" | "output_interval" | "model"));
+            obj.insert("block_model".into(), "rigid".into());
+        }
+        Ran::Engine => {
+            let mut models = scene.blocks.iter().filter_map(|b| match b.kind {
+                crate::scene::BlockKind::Free(m) => Some(m),
+                _ => None,
+            });
+            let first = models.next();
+            let name = match first {
+                Some(m) if models.all(|x| x == m) => serde_json::to_value(m).unwrap_or_default(),
+                Some(_) => "mixed".into(),
+                None => serde_json::to_value(scene.control.block_model).unwrap_or_default(),
+            };
+            obj.insert("block_model".into(), name);
+            if scene.control.contact_solver == ContactSolver::Dual {
+                obj.remove("penalty_stiffness");
+            } else {
+                obj.remove("dual_tolerance");
+                obj.remove("dual_stall_acceptance");
+            }
+        }
+    }
+    v
 }
 
 /// Hooks a caller (CLI, service worker, PGA search) passes to a run.
@@ -522,14 +629,18 @@ fn header(
     metadata.insert("motion_provenance".into(), motion.provenance.clone());
     metadata.insert("motion_scale".into(), format!("{}", motion.scale));
     metadata.insert("pga_m_s2".into(), format!("{}", motion.pga()));
+    // The controls that run (as summary.json reports them), and the springs only when the
+    // penalty solver uses them.
     metadata.insert(
         "solver".into(),
-        serde_json::to_string(&scene.control).unwrap_or_default(),
+        reported_control(scene, Ran::Engine).to_string(),
     );
-    metadata.insert(
-        "penalty_stiffness".into(),
-        format!("{}", sim.springs.normal),
-    );
+    if scene.control.contact_solver != ContactSolver::Dual {
+        metadata.insert(
+            "penalty_stiffness".into(),
+            format!("{}", sim.springs.normal),
+        );
+    }
     metadata.insert("code_version".into(), env!("CARGO_PKG_VERSION").into());
     Ok(RecordHeader {
         block_ids: scene.blocks.iter().map(|b| b.id.clone()).collect(),
@@ -652,22 +763,23 @@ fn summarize(
     let st = &sim.stats;
     let dual = sim.scene.control.contact_solver == ContactSolver::Dual;
     Summary {
+        format: RUN_OUTPUTS_FORMAT.into(),
         completed: stopped_reason.is_none() && sim.time >= duration - 1e-9,
-        simulated_time: sim.time,
+        simulated_time: round_time(sim.time),
         steps: st.steps,
         wall_time_s: wall,
         pga: motion.pga(),
         failure_mode: failure_mode(&blocks, failure).into(),
         blocks,
         diagnostics: Diagnostics {
-            penalty_stiffness: sim.springs.normal,
+            penalty_stiffness: (!dual).then_some(sim.springs.normal),
             time_step_cuts: st.time_step_cuts,
             max_penetration: st.max_penetration,
-            open_close_iterations_mean: if st.steps > 0 {
+            open_close_iterations_mean: (!dual).then_some(if st.steps > 0 {
                 st.open_close_iterations as f64 / st.steps as f64
             } else {
                 0.0
-            },
+            }),
             min_time_step: (st.steps > 0).then_some(st.min_dt),
             max_time_step: (st.steps > 0).then_some(st.max_dt),
             dual_loose_solves: dual.then_some(st.dual_loose_solves),
@@ -677,6 +789,7 @@ fn summarize(
         model,
         model_reason,
         stopped_reason,
-        control: serde_json::to_value(&sim.scene.control).unwrap_or_default(),
+        control: reported_control(&sim.scene, Ran::Engine),
+        units: summary_units(),
     }
 }

@@ -165,6 +165,8 @@ pub struct StudyResult {
     /// coefficient that makes the reduced model best match a DDA run over 2 s (through the
     /// impacts), per integrator.
     pub restitution: Vec<RestitutionFit>,
+    /// The unit of every numeric field ([`point_units`]).
+    pub units: serde_json::Value,
 }
 
 /// One restitution figure.
@@ -264,6 +266,39 @@ pub struct SceneInfo {
     pub description: String,
     pub metric: String,
     pub reference: String,
+    /// Unit of the scene's points' `value`: m, rad or m/s2.
+    pub value_unit: String,
+}
+
+impl Metric {
+    /// Unit of the measured quantity (`Point::value`).
+    fn value_unit(&self) -> &'static str {
+        match self {
+            Metric::FinalAlong { .. } | Metric::HistoryX { .. } | Metric::Finest { .. } => "m",
+            Metric::Rotation { .. } => "rad",
+            Metric::Overturning { .. } => "m/s2",
+        }
+    }
+}
+
+/// The `units` object of `points.json`: each numeric field of a point (`value` in its scene's
+/// `value_unit`); "1" marks a ratio.
+fn point_units() -> serde_json::Value {
+    serde_json::json!({
+        "setting": {
+            "time_step": "s",
+            "penalty_stiffness": "N/m",
+            "max_displacement_ratio": "1",
+            "reduced_rtol": "1",
+        },
+        "error": "1",
+        "value": "scenes[].value_unit",
+        "wall_time_s": "s",
+        "steps": "count",
+        "open_close_iterations_mean": "1",
+        "time_step_cuts": "count",
+        "restitution": { "coefficient": "1", "rms_misfit": "rad" },
+    })
 }
 
 /// What a run is measured by.
@@ -851,6 +886,7 @@ pub fn run_study(opts: &StudyOptions) -> Result<StudyResult, String> {
             description: bench.description.clone(),
             metric: bench.metric_text.clone(),
             reference: bench.reference_text.clone(),
+            value_unit: bench.metric.value_unit().into(),
         });
         let reference_frames = match &bench.metric {
             Metric::Finest {
@@ -888,7 +924,11 @@ pub fn run_study(opts: &StudyOptions) -> Result<StudyResult, String> {
                     value: ev.value,
                     wall_time_s: ev.wall,
                     steps: ev.steps,
-                    open_close_iterations_mean: ev.summary.diagnostics.open_close_iterations_mean,
+                    open_close_iterations_mean: ev
+                        .summary
+                        .diagnostics
+                        .open_close_iterations_mean
+                        .unwrap_or(0.0),
                     time_step_cuts: ev.summary.diagnostics.time_step_cuts,
                     note: ev.note,
                     setting,
@@ -939,6 +979,7 @@ pub fn run_study(opts: &StudyOptions) -> Result<StudyResult, String> {
         scenes,
         points,
         restitution,
+        units: point_units(),
     })
 }
 

@@ -2,7 +2,7 @@
 use crate::analysis::fragility::Method;
 use crate::analysis::pga::{fragility_svg, search, search_records, Combine, Criterion, PgaRequest};
 use crate::analysis::run::{run as run_scene, RunOptions};
-use crate::motion::{self, GroundMotion, STANDARD_GRAVITY};
+use crate::motion::{self, parse_acceleration, GroundMotion, RecordArgs, UnitsArg};
 use crate::scene::{parse_scene, Scene};
 use std::path::{Path, PathBuf};
 
@@ -16,12 +16,10 @@ pub struct RunArgs {
     /// Vertical record (same formats; its first component is used).
     #[arg(long)]
     pub vertical: Option<PathBuf>,
-    /// Scale the record to this PGA: m/s², or with a g suffix (0.3g).
-    #[arg(long, conflicts_with = "scale")]
-    pub pga: Option<String>,
-    /// Multiply the record by this factor.
-    #[arg(long)]
-    pub scale: Option<f64>,
+    /// `--units`, `--pga`, `--scale`: the record options shared with `pga` and `motion`
+    /// (`--units` applies to the vertical record too).
+    #[command(flatten)]
+    pub record_options: RecordArgs,
     /// Output directory.
     #[arg(long, default_value = "ashlar-out")]
     pub out: PathBuf,
@@ -56,15 +54,19 @@ pub struct PgaArgs {
     /// How several criteria combine: `all` must be met, or `any` one of them.
     #[arg(long, default_value = "all")]
     pub combine: String,
-    /// Lower end of the amplitude range (m/s² or 0.1g).
+    /// `--units` of the records (those that do not name them), shared with `run` and `motion`.
+    /// (No `--pga`/`--scale`: the search sets the amplitude itself.)
+    #[command(flatten)]
+    pub units: UnitsArg,
+    /// Lower end of the amplitude range, with units (0.05g, 0.5m/s2, 50gal).
     #[arg(long, default_value = "0.05g")]
     pub min: String,
-    /// Upper end of the amplitude range (m/s² or 2g).
+    /// Upper end of the amplitude range, with units (2g, 20m/s2).
     #[arg(long, default_value = "2g")]
     pub max: String,
-    /// Bracket width to stop at, m/s².
-    #[arg(long, default_value_t = 0.01)]
-    pub tolerance: f64,
+    /// Bracket width to stop at, with units (0.01m/s2, 0.001g, 1gal).
+    #[arg(long, default_value = "0.01m/s2")]
+    pub tolerance: String,
     /// Coarse scan points before bisection.
     #[arg(long, default_value_t = 8)]
     pub scan_points: usize,
@@ -149,21 +151,9 @@ fn record_name(p: &Path) -> String {
         .unwrap_or_else(|| p.display().to_string())
 }
 
-/// Parse an acceleration given in m/s² or with a `g` suffix.
-pub fn parse_acceleration(text: &str) -> Result<f64, String> {
-    let t = text.trim();
-    let (num, k) = match t.strip_suffix('g') {
-        Some(n) => (n, STANDARD_GRAVITY),
-        None => (t, 1.0),
-    };
-    num.trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite() && *v >= 0.0)
-        .map(|v| v * k)
-        .ok_or_else(|| {
-            format!("{text:?} is not an acceleration (m/s², or with a g suffix such as 0.3g)")
-        })
+/// `--NAME TEXT` as an acceleration with units, in m/s².
+fn acceleration_option(name: &str, text: &str) -> Result<f64, String> {
+    parse_acceleration(text).map_err(|e| format!("--{name} {text:?}: {e}"))
 }
 
 /// `--model NAME` as the scene's `control.model`.
@@ -181,23 +171,18 @@ fn load_scene(path: &Path) -> Result<Scene, String> {
 }
 
 fn load_motion(args: &RunArgs) -> Result<GroundMotion, String> {
+    let opts = &args.record_options;
+    opts.validate().map_err(|e| e.to_string())?;
+    let params = opts.units.load_params().map_err(|e| e.to_string())?;
     let mut gm = match &args.motion {
-        Some(p) => motion::load_path(p).map_err(|e| e.to_string())?,
+        Some(p) => motion::load_path_with(p, &params).map_err(|e| e.to_string())?,
         None => GroundMotion::none(),
     };
     if let Some(v) = &args.vertical {
-        let vm = motion::load_path(v).map_err(|e| e.to_string())?;
+        let vm = motion::load_path_with(v, &params).map_err(|e| e.to_string())?;
         gm.vertical = vm.horizontal;
     }
-    if let Some(p) = &args.pga {
-        gm = gm.scaled_to_pga(parse_acceleration(p)?);
-    } else if let Some(f) = args.scale {
-        if !f.is_finite() {
-            return Err(format!("--scale {f}: must be a finite number"));
-        }
-        gm = gm.scaled(f);
-    }
-    Ok(gm)
+    opts.apply(gm).map_err(|e| e.to_string())
 }
 
 pub fn run(args: &RunArgs) -> Result<(), String> {
@@ -235,20 +220,21 @@ pub fn pga(args: &PgaArgs) -> Result<(), String> {
     let req = PgaRequest {
         criteria,
         combine: Combine::parse(&args.combine).map_err(|e| format!("--{e}"))?,
-        min: parse_acceleration(&args.min)?,
-        max: parse_acceleration(&args.max)?,
-        tolerance: args.tolerance,
+        min: acceleration_option("min", &args.min)?,
+        max: acceleration_option("max", &args.max)?,
+        tolerance: acceleration_option("tolerance", &args.tolerance)?,
         scan_points: args.scan_points,
     };
     let method = Method::parse(&args.fit).map_err(|e| format!("--fit: {e}"))?;
     let mut scene = load_scene(&args.scene)?;
     apply_model(&mut scene, args.model.as_deref())?;
+    let params = args.units.load_params().map_err(|e| e.to_string())?;
     let (paths, several) = record_paths(&args.motion)?;
     let mut records = Vec::new();
     for p in &paths {
         records.push((
             record_name(p),
-            motion::load_path(p).map_err(|e| e.to_string())?,
+            motion::load_path_with(p, &params).map_err(|e| e.to_string())?,
         ));
     }
     std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;

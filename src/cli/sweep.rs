@@ -3,10 +3,9 @@
 //! gathers the lines into `report.json`: per scene, record and criterion, the runs and the
 //! threshold bracket in the shape of the PGA search's `result.json` (docs/format.md §3).
 //! Thin: parsing and files here, the runs in `analysis`.
-use super::run::parse_acceleration;
 use crate::analysis::pga::{met_by_summary, Criterion, PgaResult, PgaRun};
 use crate::analysis::run::{run as run_scene, RunOptions, Summary};
-use crate::motion::{self, GroundMotion};
+use crate::motion::{self, parse_acceleration, GroundMotion};
 use crate::scene::parse_scene;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -16,9 +15,10 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, clap::Args)]
 #[command(group(clap::ArgGroup::new("mode").required(true).args(["manifest", "collect"])))]
 pub struct SweepArgs {
-    /// The manifest: JSON lines `{"scene": PATH, "record": PATH, "amplitude": 2.5 | "0.3g",
+    /// The manifest: JSON lines `{"scene": PATH, "record": PATH, "amplitude": "0.3g",
     /// "criterion": "toppled:BLOCK"}` (paths relative to the manifest; record, amplitude and
-    /// criterion optional).
+    /// criterion optional). The amplitude is a PGA with units ("0.3g", "2.5m/s2", "250gal"),
+    /// or a bare JSON number in m/s².
     pub manifest: Option<PathBuf>,
     /// Line to run, from 0. Default: $SLURM_ARRAY_TASK_ID, else $JOB_COMPLETION_INDEX
     /// (Kubernetes indexed jobs), else $ASHLAR_SWEEP_INDEX.
@@ -70,6 +70,9 @@ pub struct LineResult {
     pub failed: Option<bool>,
     pub failure_mode: String,
     pub label: Option<String>,
+    /// Unit of each numeric field: `{"pga": "m/s2"}`.
+    #[serde(default)]
+    pub units: Value,
 }
 
 pub fn run(args: &SweepArgs) -> Result<(), String> {
@@ -161,7 +164,7 @@ fn run_line(args: &SweepArgs, manifest: &Path) -> Result<(), String> {
                 .as_f64()
                 .filter(|a| a.is_finite() && *a >= 0.0)
                 .ok_or_else(|| {
-                    format!("{at}: amplitude must be a number ≥ 0 (m/s²) or a string like \"0.3g\"")
+                    format!("{at}: amplitude must be a number ≥ 0 (m/s²) or a string with units like \"0.3g\"")
                 })?;
             gm = gm.scaled_to_pga(a);
         }
@@ -171,7 +174,7 @@ fn run_line(args: &SweepArgs, manifest: &Path) -> Result<(), String> {
         }
         Some(_) => {
             return Err(format!(
-                "{at}: amplitude must be a number (m/s²) or a string like \"0.3g\""
+                "{at}: amplitude must be a number (m/s²) or a string with units like \"0.3g\""
             ))
         }
     }
@@ -213,6 +216,7 @@ fn run_line(args: &SweepArgs, manifest: &Path) -> Result<(), String> {
         failed: (!criteria.is_empty()).then(|| met_by_summary(&criteria, &outcome.summary)),
         failure_mode: outcome.summary.failure_mode.clone(),
         label: line.label.clone(),
+        units: serde_json::json!({ "pga": "m/s2" }),
     };
     let json = serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?;
     std::fs::write(tmp.join("line.json"), format!("{json}\n"))

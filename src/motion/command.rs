@@ -3,7 +3,7 @@
 //! to `run`.
 use super::{
     load_path_with, report_with, spectrum_svg, Baseline, HighPass, LoadParams, ProcessParams,
-    ReportParams, Units, STANDARD_GRAVITY,
+    RecordArgs, ReportParams,
 };
 use std::path::PathBuf;
 
@@ -15,9 +15,9 @@ pub struct MotionArgs {
     /// Also write the 5 %-damped response spectrum as SVG to this file.
     #[arg(long, value_name = "FILE")]
     pub svg: Option<PathBuf>,
-    /// Units of a CSV record that does not name them: g, m/s2, cm/s2 (gal).
-    #[arg(long)]
-    pub units: Option<String>,
+    /// `--units`, `--pga`, `--scale`: the record options shared with `run` and `pga`.
+    #[command(flatten)]
+    pub record_options: RecordArgs,
     /// High-pass the record (raw records only): zero-phase Butterworth corner in Hz.
     #[arg(long, value_name = "HZ")]
     pub highpass: Option<f64>,
@@ -27,12 +27,6 @@ pub struct MotionArgs {
     /// Baseline correction of the integrated displacement: none or linear.
     #[arg(long, default_value = "none")]
     pub baseline: String,
-    /// Multiply the record by this factor.
-    #[arg(long, conflicts_with = "pga")]
-    pub scale: Option<f64>,
-    /// Scale the record to this PGA: m/s², or g with a `g` suffix (`0.3g`).
-    #[arg(long)]
-    pub pga: Option<String>,
     /// Damping ratio of the response spectrum.
     #[arg(long, default_value_t = 0.05)]
     pub damping: f64,
@@ -47,13 +41,8 @@ pub fn run(args: &MotionArgs) -> Result<(), String> {
 
 /// Everything `run` does but printing; returns the JSON text.
 pub fn report_json(args: &MotionArgs) -> Result<String, String> {
-    let units = match &args.units {
-        None => None,
-        Some(u) => Some(
-            Units::parse(u)
-                .ok_or_else(|| format!("--units {u:?}: expected g, m/s2 or cm/s2 (gal)"))?,
-        ),
-    };
+    let opts = &args.record_options;
+    opts.validate().map_err(|e| e.to_string())?;
     let baseline = match args.baseline.as_str() {
         "none" => Baseline::None,
         "linear" => Baseline::Linear,
@@ -64,19 +53,11 @@ pub fn report_json(args: &MotionArgs) -> Result<String, String> {
         order: args.order,
     });
     let params = LoadParams {
-        units,
+        units: opts.units.units().map_err(|e| e.to_string())?,
         process: ProcessParams { highpass, baseline },
     };
-    let mut gm = load_path_with(&args.record, &params).map_err(|e| e.to_string())?;
-    if let Some(f) = args.scale {
-        if !f.is_finite() {
-            return Err(format!("--scale {f}: must be a finite number"));
-        }
-        gm = gm.scaled(f);
-    }
-    if let Some(p) = &args.pga {
-        gm = gm.scaled_to_pga(parse_pga(p)?);
-    }
+    let gm = load_path_with(&args.record, &params).map_err(|e| e.to_string())?;
+    let gm = opts.apply(gm).map_err(|e| e.to_string())?;
     if !(0.0..1.0).contains(&args.damping) {
         return Err(format!("--damping {}: must be in [0, 1)", args.damping));
     }
@@ -92,19 +73,4 @@ pub fn report_json(args: &MotionArgs) -> Result<String, String> {
             .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
     }
     serde_json::to_string_pretty(&im).map_err(|e| e.to_string())
-}
-
-/// `2.5` (m/s²) or `0.3g`.
-pub fn parse_pga(text: &str) -> Result<f64, String> {
-    let t = text.trim();
-    let (num, k) = match t.strip_suffix(['g', 'G']) {
-        Some(n) => (n, STANDARD_GRAVITY),
-        None => (t.strip_suffix("m/s2").unwrap_or(t), 1.0),
-    };
-    match num.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v * k),
-        _ => Err(format!(
-            "--pga {text:?}: expected a non-negative number in m/s² or with a g suffix (0.3g)"
-        )),
-    }
 }

@@ -68,7 +68,7 @@ pub fn parse(origin: &str, content: &str, units: Option<Units>) -> Result<RawRec
             return Err(MotionError::new(
                 origin,
                 None,
-                "unknown units: name them in the header (e.g. `time_s,accel_g`), a `# units: g` comment, or pass units",
+                "unknown units: name them in the header (e.g. `time_s,accel_g`), a `# units: g` comment, or pass them (`--units g|m/s2|cm/s2` on the command line, `\"units\"` in JSON)",
             ))
         }
     };
@@ -171,8 +171,9 @@ fn uniform_step(origin: &str, times: &[(f64, usize)]) -> Result<f64, MotionError
                 origin,
                 Some(w[1].1),
                 format!(
-                    "non-uniform time column: expected t = {:.6} s (the step is {median} s elsewhere), found {} s",
+                    "non-uniform time column: expected t = {:.6} s (the step is {} s elsewhere), found {} s",
                     w[0].0 + median,
+                    crate::quantity::sig(median),
                     w[1].0
                 ),
             ));

@@ -57,6 +57,9 @@ pub struct IntensityMeasures {
     pub pga: f64,
     /// PGA in the record's original units (after scaling).
     pub pga_original_units: f64,
+    /// PGA in g (standard gravity, 9.80665 m/s²), whatever the record's units.
+    #[serde(default)]
+    pub pga_g: f64,
     /// m/s.
     pub pgv: f64,
     /// m.
@@ -72,6 +75,30 @@ pub struct IntensityMeasures {
     pub spectrum: Spectrum,
     /// Where the record came from (file, format, processing).
     pub provenance: String,
+    /// The unit of every numeric field, by field name (`spectrum` nested): see
+    /// [`intensity_units`].
+    #[serde(default)]
+    pub units: serde_json::Value,
+}
+
+/// The `units` object of the intensity measures: each numeric field's unit ("1" for a ratio,
+/// "count" for a number of samples); `pga_original_units` is in the record's own units.
+pub fn intensity_units(original: Units) -> serde_json::Value {
+    serde_json::json!({
+        "npts": "count",
+        "dt": "s",
+        "duration": "s",
+        "pga": "m/s2",
+        "pga_original_units": original.name(),
+        "pga_g": "g",
+        "pgv": "m/s",
+        "pgd": "m",
+        "arias_intensity": "m/s",
+        "significant_duration_5_95": "s",
+        "cav": "m/s",
+        "mean_period": "s",
+        "spectrum": { "damping": "1", "periods": "s", "psa": "m/s2" },
+    })
 }
 
 /// Intensity measures with the default parameters.
@@ -94,6 +121,7 @@ pub fn report_with(gm: &GroundMotion, p: &ReportParams) -> IntensityMeasures {
         original_units: gm.meta.original_units,
         pga,
         pga_original_units: pga / gm.meta.original_units.to_si(),
+        pga_g: pga / STANDARD_GRAVITY,
         pgv: peak(&v),
         pgd: peak(&d),
         arias_intensity: arias.last().copied().unwrap_or(0.0),
@@ -109,6 +137,7 @@ pub fn report_with(gm: &GroundMotion, p: &ReportParams) -> IntensityMeasures {
             psa,
         },
         provenance: gm.provenance.clone(),
+        units: intensity_units(gm.meta.original_units),
     }
 }
 

@@ -51,14 +51,18 @@ pub fn from_json_with(
             .map_err(|e| MotionError::new("motion.scale", None, e.to_string()))?;
         match (scale.factor, scale.target_pga) {
             (Some(f), None) if f.is_finite() => gm.scale = f,
-            (None, Some(x)) if x.is_finite() && x >= 0.0 => {
-                gm = gm.scaled_to_pga(x * scale.units.unwrap_or(Units::MetresPerSecond2).to_si())
+            (None, Some(x)) => {
+                let units = scale.units.unwrap_or(Units::MetresPerSecond2);
+                let target = x
+                    .to_si(units)
+                    .map_err(|e| MotionError::new("motion.scale.target_pga", None, e.to_string()))?;
+                gm = gm.scaled_to_pga(target)
             }
             _ => {
                 return Err(MotionError::new(
                     "motion.scale",
                     None,
-                    "give exactly one finite \"factor\" or a non-negative \"target_pga\"",
+                    "give exactly one finite \"factor\" or a non-negative \"target_pga\" (a number in \"units\", m/s2 by default, or a string with units such as \"0.4g\")",
                 ))
             }
         }
@@ -90,7 +94,9 @@ pub const MAX_PGA: f64 = 1e6;
 #[serde(deny_unknown_fields)]
 struct ScaleSpec {
     factor: Option<f64>,
-    target_pga: Option<f64>,
+    /// A number in `units` (m/s² by default) or a string with its own units ("0.4g").
+    target_pga: Option<super::Amplitude>,
+    /// Units of a numeric `target_pga`.
     units: Option<Units>,
 }
 

@@ -13,14 +13,18 @@ mod csv;
 mod esm;
 mod intensity;
 mod json;
+pub mod options;
 mod process;
 mod text;
 pub use intensity::{
-    cumulative_arias, log_periods, mean_period, oscillator_peak, report, report_with,
-    response_spectrum, significant_duration, spectrum_svg, IntensityMeasures, ReportParams,
-    Spectrum,
+    cumulative_arias, intensity_units, log_periods, mean_period, oscillator_peak, report,
+    report_with, response_spectrum, significant_duration, spectrum_svg, IntensityMeasures,
+    ReportParams, Spectrum,
 };
 pub use json::{from_json, from_json_with};
+pub use options::{
+    parse_acceleration, AccelerationError, Amplitude, RecordArgs, RecordOptionError, UnitsArg,
+};
 pub use process::{
     highpass_gain, highpass_zero_phase, remove_linear_drift, Baseline, HighPass, ProcessParams,
 };

@@ -92,7 +92,7 @@ impl ProcessParams {
                     return Err(MotionError::new(
                         origin,
                         None,
-                        format!("high-pass corner {} Hz must be below the Nyquist frequency {nyquist} Hz", hp.corner_hz),
+                        format!("high-pass corner {} Hz must be below the Nyquist frequency {} Hz", hp.corner_hz, crate::quantity::sig(nyquist)),
                     ));
                 }
                 highpass_zero_phase(&accel, dt, hp.corner_hz, hp.order)

@@ -6,10 +6,31 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// Streams `time,<id>.x,<id>.y,<id>.rotation,...` for the header's `history_blocks`, in that
-/// order. Values are centroid displacements (m) and rotations (rad, counter-clockwise positive)
-/// written with Rust's shortest round-trip formatting, so parsing a cell gives back the exact
-/// `f64`. Each row is flushed to the sink, so memory stays constant and a reader sees every
+/// The header line of `histories.csv` (no newline): `time_s`, then `<id>.x_m,<id>.y_m,
+/// <id>.rotation_rad` per block. The unit suffixes are format version 2 (`summary.json`
+/// `"format": "ashlar.run/2"`); version 1 wrote `time,<id>.x,<id>.y,<id>.rotation`.
+pub fn header_line<'a>(ids: impl IntoIterator<Item = &'a str>) -> String {
+    let mut line = String::from("time_s");
+    for id in ids {
+        line.push_str(&format!(",{id}.x_m,{id}.y_m,{id}.rotation_rad"));
+    }
+    line
+}
+
+/// Time as written to outputs, s: rounded to the nanosecond (the MCAP log-time resolution), so
+/// that 3000 steps of 1 ms read 3 and not 2.9999999999999925.
+pub fn round_time(t: f64) -> f64 {
+    if t.is_finite() && t.abs() < 1e9 {
+        (t * 1e9).round() / 1e9
+    } else {
+        t
+    }
+}
+
+/// Streams [`header_line`] for the header's `history_blocks`, in that order. Values are
+/// the frame time (s, [`round_time`]), centroid displacements (m) and rotations (rad,
+/// counter-clockwise positive) written with Rust's shortest round-trip formatting, so parsing
+/// a cell gives back the exact `f64`. Each row is flushed to the sink, so memory stays constant and a reader sees every
 /// finished frame.
 pub struct HistoryWriter<W: Write> {
     sink: W,
@@ -39,11 +60,12 @@ impl<W: Write> HistoryWriter<W> {
     ) -> Result<Self, RecordError> {
         let path = name.into();
         check_header(header).map_err(|m| RecordError::invalid(&path, m))?;
-        let mut line = String::from("time");
-        for &i in &header.history_blocks {
-            let id = &header.block_ids[i];
-            line.push_str(&format!(",{id}.x,{id}.y,{id}.rotation"));
-        }
+        let mut line = header_line(
+            header
+                .history_blocks
+                .iter()
+                .map(|&i| header.block_ids[i].as_str()),
+        );
         line.push('\n');
         let mut writer = HistoryWriter {
             sink,
@@ -62,7 +84,7 @@ impl<W: Write> HistoryWriter<W> {
         check_frame(&self.header, frame, self.rows, self.last_time, false)
             .map_err(|m| RecordError::invalid(&self.path, m))?;
         self.line.clear();
-        push_f64(&mut self.line, frame.time);
+        push_f64(&mut self.line, round_time(frame.time));
         for &i in &self.header.history_blocks {
             let b = &frame.blocks[i];
             for v in [b.x, b.y, b.rotation] {

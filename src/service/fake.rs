@@ -10,7 +10,7 @@
 use super::request::JobInput;
 use super::worker::{JobRunner, RunHooks, RunnerOutcome};
 use crate::analysis::pga::{PgaResult, PgaRun};
-use crate::analysis::run::{BlockSummary, Diagnostics, Summary};
+use crate::analysis::run::{summary_units, BlockSummary, Diagnostics, Summary, RUN_OUTPUTS_FORMAT};
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::Duration;
@@ -95,10 +95,7 @@ fn fake_run(
         .free_blocks()
         .map(|i| scene.blocks[i].id.as_str())
         .collect();
-    let mut csv = String::from("time");
-    for id in &free {
-        csv.push_str(&format!(",{id}.x,{id}.y,{id}.rotation"));
-    }
+    let mut csv = crate::record::histories::header_line(free.iter().copied());
     csv.push('\n');
     let mut max_d: f64 = 0.0;
     let mut last = 0.0;
@@ -128,6 +125,7 @@ fn fake_run(
     let traj: Vec<u8> = (0..FAKE_TRAJECTORY_LEN).map(|k| (k % 251) as u8).collect();
     std::fs::write(hooks.out_dir.join("trajectory.mcap"), traj).map_err(|e| e.to_string())?;
     let summary = Summary {
+        format: RUN_OUTPUTS_FORMAT.into(),
         completed: !cancelled,
         simulated_time: done as f64 * dt,
         steps: done as u64,
@@ -151,6 +149,7 @@ fn fake_run(
         model_reason: "service test double".into(),
         stopped_reason: cancelled.then(|| "cancelled".to_string()),
         control: serde_json::Value::Null,
+        units: summary_units(),
     };
     let value = serde_json::to_value(&summary).map_err(|e| e.to_string())?;
     std::fs::write(hooks.out_dir.join("summary.json"), value.to_string())

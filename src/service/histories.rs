@@ -1,7 +1,8 @@
 //! Displacement histories of a finished job: read `histories.csv` (header
-//! `time,<id>.x,<id>.y,<id>.rotation,...`, m and rad) and serve it as JSON
-//! `{"time": [...], "blocks": {"id": {"x": [...], "y": [...], "rotation": [...]}}}` or as CSV,
-//! optionally restricted to some blocks.
+//! `time_s,<id>.x_m,<id>.y_m,<id>.rotation_rad,...`, or the version-1 header
+//! `time,<id>.x,<id>.y,<id>.rotation` of jobs recorded before units were added) and serve it as
+//! JSON `{"time": [...], "blocks": {"id": {"x": [...], "y": [...], "rotation": [...]}},
+//! "units": {...}}` or as CSV (always the current header), optionally restricted to some blocks.
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -26,7 +27,28 @@ pub struct Histories {
 struct JsonForm<'a> {
     time: &'a [f64],
     blocks: BTreeMap<&'a str, &'a BlockHistory>,
+    units: Units,
 }
+
+/// The `units` object of the JSON form.
+#[derive(Serialize)]
+struct Units {
+    time: &'static str,
+    x: &'static str,
+    y: &'static str,
+    rotation: &'static str,
+}
+
+const UNITS: Units = Units {
+    time: "s",
+    x: "m",
+    y: "m",
+    rotation: "rad",
+};
+
+/// Column name suffixes of the two header versions: (time, x, y, rotation).
+const HEADER_V2: [&str; 4] = ["time_s", ".x_m", ".y_m", ".rotation_rad"];
+const HEADER_V1: [&str; 4] = ["time", ".x", ".y", ".rotation"];
 
 impl Histories {
     /// Parse `histories.csv`. Errors name the line (the file is ours, so an error is a bug or
@@ -38,7 +60,16 @@ impl Histories {
             .filter(|(_, l)| !l.trim().is_empty());
         let (_, header) = lines.next().ok_or("histories.csv is empty")?;
         let cols: Vec<&str> = header.split(',').map(str::trim).collect();
-        if cols.first() != Some(&"time") || (cols.len() - 1) % 3 != 0 {
+        let names = match cols.first() {
+            Some(&t) if t == HEADER_V2[0] => HEADER_V2,
+            Some(&t) if t == HEADER_V1[0] => HEADER_V1,
+            _ => {
+                return Err(format!(
+                    "histories.csv line 1: unexpected header {header:?}"
+                ))
+            }
+        };
+        if (cols.len() - 1) % 3 != 0 {
             return Err(format!(
                 "histories.csv line 1: unexpected header {header:?}"
             ));
@@ -46,9 +77,10 @@ impl Histories {
         let mut blocks = Vec::new();
         for triple in cols[1..].chunks(3) {
             let id = triple[0]
-                .strip_suffix(".x")
+                .strip_suffix(names[1])
                 .ok_or_else(|| format!("histories.csv line 1: column {:?}", triple[0]))?;
-            if triple[1] != format!("{id}.y") || triple[2] != format!("{id}.rotation") {
+            if triple[1] != format!("{id}{}", names[2]) || triple[2] != format!("{id}{}", names[3])
+            {
                 return Err(format!(
                     "histories.csv line 1: columns of block {id:?} out of order"
                 ));
@@ -106,16 +138,15 @@ impl Histories {
         let form = JsonForm {
             time: &self.time,
             blocks: self.blocks.iter().map(|(id, h)| (id.as_str(), h)).collect(),
+            units: UNITS,
         };
         serde_json::to_value(form).unwrap_or_default()
     }
 
-    /// Same columns as `histories.csv`; values printed with Rust's shortest round-trip form.
+    /// Same columns as `histories.csv` (the current header, whatever version was read);
+    /// values printed with Rust's shortest round-trip form.
     pub fn to_csv(&self) -> String {
-        let mut out = String::from("time");
-        for (id, _) in &self.blocks {
-            out.push_str(&format!(",{id}.x,{id}.y,{id}.rotation"));
-        }
+        let mut out = crate::record::histories::header_line(self.block_ids());
         out.push('\n');
         for (i, t) in self.time.iter().enumerate() {
             out.push_str(&t.to_string());
@@ -132,9 +163,23 @@ impl Histories {
 mod tests {
     use super::*;
 
-    const CSV: &str = "time,col.x,col.y,col.rotation,top.block.x,top.block.y,top.block.rotation\n\
+    const CSV: &str = "time_s,col.x_m,col.y_m,col.rotation_rad,top.block.x_m,top.block.y_m,top.block.rotation_rad\n\
                        0,0,0,0,0,0,0\n\
                        0.01,1e-3,-2e-4,0.5,3,4,-0.25\n";
+    /// The same file as recorded before units were added (format version 1).
+    const CSV_V1: &str =
+        "time,col.x,col.y,col.rotation,top.block.x,top.block.y,top.block.rotation\n\
+                          0,0,0,0,0,0,0\n\
+                          0.01,1e-3,-2e-4,0.5,3,4,-0.25\n";
+
+    #[test]
+    fn version_1_files_still_read() {
+        let v1 = Histories::parse_csv(CSV_V1).expect("v1");
+        assert_eq!(v1, Histories::parse_csv(CSV).expect("v2"));
+        assert_eq!(v1.to_csv().lines().next(), CSV.lines().next());
+        let mixed = "time_s,a.x,a.y,a.rotation\n0,0,0,0\n";
+        assert!(Histories::parse_csv(mixed).is_err());
+    }
 
     #[test]
     fn parses_filters_and_round_trips() {
@@ -150,6 +195,7 @@ mod tests {
             only.to_json()["blocks"]["top.block"]["x"],
             serde_json::json!([0.0, 3.0])
         );
+        assert_eq!(only.to_json()["units"]["rotation"], "rad");
         assert!(only.to_json()["blocks"].get("col").is_none());
         assert_eq!(h.select(&["nope".into()]), Err("nope".to_string()));
     }
@@ -157,7 +203,8 @@ mod tests {
     #[test]
     fn damaged_files_name_the_line() {
         assert!(Histories::parse_csv("").is_err());
-        let e = Histories::parse_csv("time,a.x,a.y,a.rotation\n0,1,2\n").expect_err("short row");
+        let e = Histories::parse_csv("time_s,a.x_m,a.y_m,a.rotation_rad\n0,1,2\n")
+            .expect_err("short row");
         assert!(e.contains("line 2"), "{e}");
         let e = Histories::parse_csv("time,a.x,a.y\n").expect_err("bad header");
         assert!(e.contains("line 1"), "{e}");

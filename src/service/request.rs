@@ -4,7 +4,7 @@
 use super::problem::{dotted_to_pointer, ApiError};
 use crate::analysis::fragility::Method;
 use crate::analysis::pga::{Combine, Criterion, PgaRequest};
-use crate::motion::{GroundMotion, Signal, Units};
+use crate::motion::{Amplitude, GroundMotion, Signal, Units};
 use crate::scene::Scene;
 use serde::Deserialize;
 use serde_json::Value;
@@ -159,8 +159,10 @@ enum CriterionSpec {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RangeSpec {
-    min: f64,
-    max: f64,
+    /// A number in `units`, or a string with its own units ("0.05g").
+    min: Amplitude,
+    max: Amplitude,
+    /// Units of numeric `min`, `max` and `tolerance` (m/s² by default).
     #[serde(default = "default_units")]
     units: Units,
 }
@@ -184,8 +186,9 @@ struct PgaBody {
     #[serde(default)]
     fit: Option<String>,
     range: RangeSpec,
+    /// A number in `range.units`, or a string with its own units ("0.01g").
     #[serde(default)]
-    tolerance: Option<f64>,
+    tolerance: Option<Amplitude>,
     #[serde(default)]
     scan_points: Option<usize>,
 }
@@ -446,8 +449,9 @@ fn scene_and_motion(
         return Err(ApiError::limit_exceeded(
             "/scene/control/output_interval",
             format!(
-                "/scene/control/output_interval: {duration} s recorded every {} s is {frames:.0} frames, over the server's \
+                "/scene/control/output_interval: {} s recorded every {} s is {frames:.0} frames, over the server's \
                  limit of {} (ashlar serve --max-total-steps)",
+                crate::quantity::sig(duration),
                 scene.control.output_interval, limits.max_total_steps
             ),
         ));
@@ -457,8 +461,9 @@ fn scene_and_motion(
         return Err(ApiError::limit_exceeded(
             "/scene/control/duration",
             format!(
-                "/scene/control/duration: {duration} s at a time step of {} s is {steps:.0} steps, over the server's limit of {} \
+                "/scene/control/duration: {} s at a time step of {} s is {steps:.0} steps, over the server's limit of {} \
                  (ashlar serve --max-total-steps); shorten the duration or lengthen control.time_step",
+                crate::quantity::sig(duration),
                 scene.control.time_step, limits.max_total_steps
             ),
         ));
@@ -599,26 +604,33 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
         }
         criteria.push(c);
     }
-    let k = b.range.units.to_si();
-    let (min, max) = (b.range.min, b.range.max);
-    if !(min.is_finite() && min >= 0.0) {
-        return Err(ApiError::invalid_field(
-            "/range/min",
-            format!("/range/min: must be a finite number ≥ 0, got {min}"),
-        ));
-    }
+    // Amplitudes in m/s² from here on.
+    let units = b.range.units;
+    let amplitude = |a: &Amplitude, p: &str| {
+        a.to_si(units)
+            .map_err(|e| ApiError::invalid_field(p, format!("{p}: {e}")))
+    };
+    let min = amplitude(&b.range.min, "/range/min")?;
+    let max = amplitude(&b.range.max, "/range/max")?;
     if !(max.is_finite() && max > min) {
         return Err(ApiError::invalid_field(
             "/range/max",
-            format!("/range/max: must be finite and > range.min, got {max}"),
+            format!(
+                "/range/max: must be finite and > range.min, got {} m/s² ≤ {} m/s²",
+                crate::quantity::sig(max),
+                crate::quantity::sig(min)
+            ),
         ));
     }
     // Default resolution: 1 % of the searched range.
-    let tolerance = b.tolerance.unwrap_or((max - min) / 100.0);
+    let tolerance = match &b.tolerance {
+        Some(t) => amplitude(t, "/tolerance")?,
+        None => (max - min) / 100.0,
+    };
     if !(tolerance.is_finite() && tolerance > 0.0) {
         return Err(ApiError::invalid_field(
             "/tolerance",
-            format!("/tolerance: must be a finite number > 0, got {tolerance}"),
+            "/tolerance: must be a finite amplitude > 0",
         ));
     }
     let scan_points = b.scan_points.unwrap_or(DEFAULT_SCAN_POINTS);
@@ -634,9 +646,9 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
     let request = PgaRequest {
         criteria,
         combine,
-        min: min * k,
-        max: max * k,
-        tolerance: tolerance * k,
+        min,
+        max,
+        tolerance,
         scan_points,
     };
     let mut motion_summary = motion_summary(&motion);
@@ -798,6 +810,49 @@ mod tests {
         let mut bad = body.clone();
         bad["range"]["max"] = json!(0.05);
         assert_eq!(pointer_of(parse_pga(&bad, &l)), "/range/max");
+        // Strings carry their own units (the range's `units` applies to numbers only): the same
+        // request written as strings gives the same amplitudes, exactly.
+        let mut text = body.clone();
+        text["range"] = json!({"min": "0.1g", "max": "9.80665m/s2"});
+        text["tolerance"] = json!("0.01 G");
+        let JobInput::PgaSearch { request: r2, .. } = parse_pga(&text, &l).expect("valid").input
+        else {
+            panic!("kind")
+        };
+        assert_eq!(
+            (r2.min, r2.max, r2.tolerance),
+            (request.min, request.max, request.tolerance)
+        );
+        // A string without units is refused, naming the field and both readings.
+        for (field, pointer) in [("min", "/range/min"), ("max", "/range/max")] {
+            let mut bad = text.clone();
+            bad["range"][field] = json!("0.5");
+            let e = parse_pga(&bad, &l).expect_err("bare string");
+            assert_eq!(e.pointer.as_deref(), Some(pointer));
+            assert!(
+                e.detail.contains("0.5g") && e.detail.contains("0.5m/s2"),
+                "{}",
+                e.detail
+            );
+        }
+        let mut bad = text.clone();
+        bad["tolerance"] = json!("0.01");
+        assert_eq!(pointer_of(parse_pga(&bad, &l)), "/tolerance");
+        let mut bad = text.clone();
+        bad["range"]["min"] = json!("1 furlong");
+        assert_eq!(pointer_of(parse_pga(&bad, &l)), "/range/min");
+        // The motion's target PGA takes the same forms; a bare string is refused there too.
+        let scaled = |t: Value| {
+            json!({"scene": scene(), "motion": {"horizontal": {"pulse": {"amplitude": 1, "period": 0.5, "units": "m/s2"}},
+                   "scale": {"target_pga": t}}})
+        };
+        let p = parse_run(&scaled(json!("0.5g")), &l).expect("valid");
+        assert_eq!(p.motion_summary["pga"].as_f64(), Some(0.5 * 9.80665));
+        let p = parse_run(&scaled(json!(2.5)), &l).expect("valid, m/s2 by default");
+        assert_eq!(p.motion_summary["pga"].as_f64(), Some(2.5));
+        let e = parse_run(&scaled(json!("0.5")), &l).expect_err("bare string");
+        assert!(e.detail.contains("has no units"), "{}", e.detail);
+        assert_eq!(e.pointer.as_deref(), Some("/motion/scale/target_pga"));
         let mut bad = body;
         bad["criterion"] = json!(["toppled:col", "rotation:col:x"]);
         assert_eq!(pointer_of(parse_pga(&bad, &l)), "/criterion/1");

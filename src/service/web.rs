@@ -480,7 +480,7 @@ pub fn inspect_motion(
                 "/horizontal",
                 format!(
                     "/horizontal: {n:.0} samples at a step of {} s need {work:.1e} oscillator steps for the spectrum, over the server's budget of {:.0e}",
-                    s.dt,
+                    crate::quantity::sig(s.dt),
                     WebParams::default().inspect_budget
                 ),
             ));
@@ -518,6 +518,8 @@ pub fn inspect_motion(
         ));
     }
     out["scale"] = json!(gm.scale);
+    out["units"]["scale"] = json!("1");
+    out["units"]["series"] = json!({"time": "s", "acceleration": "m/s2"});
     out["series"] = json!({
         "time": series["time"],
         "acceleration": series["acceleration"],

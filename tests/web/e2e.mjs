@@ -261,7 +261,7 @@ try {
   await check("downloads: histories CSV, trajectory MCAP, Foxglove link", async () => {
     const csvHref = await page.getAttribute("#dl-csv", "href");
     const csv = await page.evaluate(async (u) => (await fetch(u)).text(), csvHref);
-    assert(csv.startsWith("time,column.x,column.y,column.rotation"), csv.slice(0, 80));
+    assert(csv.startsWith("time_s,column.x_m,column.y_m,column.rotation_rad"), csv.slice(0, 80));
     const mcapHref = await page.getAttribute("#dl-mcap", "href");
     const magic = await page.evaluate(async (u) => Array.from(new Uint8Array(await (await fetch(u)).arrayBuffer()).slice(0, 8)), mcapHref);
     assert(String.fromCharCode(...magic.slice(1, 5)) === "MCAP" && magic[0] === 0x89, `magic ${magic}`);

@@ -2,8 +2,9 @@
 //! outputs as a DDA run (summary, histories, trajectory) through `analysis::run`'s writers.
 use super::{Modes, Phase, Reduced, ReducedParams, SingleBlock, Violation};
 use crate::analysis::run::{
-    duration, failure_mode, BlockSummary, Diagnostics, FailureParams, RunError, RunOptions,
-    RunOutcome, Summary, Tracker, Writers,
+    duration, failure_mode, reported_control, round_time, summary_units, BlockSummary, Diagnostics,
+    FailureParams, Ran, RunError, RunOptions, RunOutcome, Summary, Tracker, Writers,
+    RUN_OUTPUTS_FORMAT,
 };
 use crate::motion::GroundMotion;
 use crate::record::{
@@ -161,7 +162,7 @@ fn header(
     metadata.insert("pga_m_s2".into(), format!("{}", motion.pga()));
     metadata.insert(
         "solver".into(),
-        serde_json::to_string(&scene.control).unwrap_or_default(),
+        reported_control(scene, Ran::Reduced).to_string(),
     );
     metadata.insert("model".into(), model.into());
     metadata.insert("code_version".into(), env!("CARGO_PKG_VERSION").into());
@@ -306,18 +307,17 @@ pub fn run(
     let st = &m.stats;
     let restitution = super::rocking::restitution(&m.block, 0, params.restitution);
     let summary = Summary {
+        format: RUN_OUTPUTS_FORMAT.into(),
         completed: stopped_reason.is_none() && m.time >= duration - 1e-9,
-        simulated_time: m.time,
+        simulated_time: round_time(m.time),
         steps: st.steps,
         wall_time_s: wall.elapsed().as_secs_f64(),
         pga: motion.pga(),
         failure_mode: failure_mode(&blocks, &failure).into(),
         blocks,
         diagnostics: Diagnostics {
-            penalty_stiffness: 0.0,
             time_step_cuts: st.rejected_steps,
             max_penetration: 0.0,
-            open_close_iterations_mean: 0.0,
             min_time_step: (st.steps > 0).then_some(st.min_dt),
             max_time_step: (st.steps > 0).then_some(st.max_dt),
             restitution: (model == "rocking").then_some(restitution),
@@ -327,7 +327,8 @@ pub fn run(
         model: model.into(),
         model_reason: why,
         stopped_reason,
-        control: serde_json::to_value(&scene.control).unwrap_or_default(),
+        control: reported_control(scene, Ran::Reduced),
+        units: summary_units(),
     };
     if let Some(dir) = opts.out_dir {
         let text =
