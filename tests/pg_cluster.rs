@@ -138,7 +138,11 @@ fn submit(addr: &str, body: &Value) -> String {
 /// Job k: the column under a pulse whose amplitude grows with k (2.00 … 6.95 m/s²), so every
 /// job has its own result and a mix-up would show. (200 + 5k)/100 prints and parses exactly.
 fn job_body(k: usize, duration: f64) -> Value {
-    json!({"scene": column_scene(duration), "motion": pulse((200 + 5 * k) as f64 / 100.0)})
+    // `"model": "dda"`: real-engine jobs (the default `auto` would run the reduced rocking
+    // model on this single column).
+    let mut scene = column_scene(duration);
+    scene["control"]["model"] = json!("dda");
+    json!({"scene": scene, "motion": pulse((200 + 5 * k) as f64 / 100.0)})
 }
 
 /// Summary without the wall time (a measurement of the machine, not a result).
@@ -882,6 +886,8 @@ fn fan_out_contract_sqlite_and_postgres() {
 fn rigid_column(duration: f64) -> Value {
     let mut s = column_scene(duration);
     s["control"]["block_model"] = json!("rigid");
+    // The full engine, as in the other real-engine tests here.
+    s["control"]["model"] = json!("dda");
     s
 }
 

@@ -34,6 +34,8 @@ fn pga(motion: &str, out: &Path, extra: &[&str]) -> std::process::Output {
         .arg("pga")
         .arg(scene())
         .args(["--motion", motion, "--criterion", "toppled:column"])
+        // The full engine: the default `auto` would run the reduced rocking model on the column.
+        .args(["--model", "dda"])
         .args([
             "--min",
             "2",
