@@ -37,6 +37,7 @@
 //!   once its energy above rest is below 90 % of what lifting its centroid over the corner
 //!   takes (m g (R − h)): the engine's integrator only dissipates after the excitation ends
 //!   (tests/invariants.rs), so it can no longer topple.
+//!
 //! The lowest overturning amplitude is then bisected to 0.4 % of Housner's.
 mod common;
 use ashlar::analysis::reference::{housner_rocking, HousnerColumn};
