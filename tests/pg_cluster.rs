@@ -19,6 +19,7 @@ use ashlar::service::{Service, ServiceConfig};
 use postgres::NoTls;
 use serde_json::{json, Value};
 use service_support::*;
+use std::io::Write as _;
 use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -29,7 +30,10 @@ fn base_url(test: &str) -> Option<String> {
     match std::env::var("ASHLAR_TEST_DATABASE_URL") {
         Ok(u) if !u.is_empty() => Some(u),
         _ => {
-            eprintln!(
+            // Straight to the process's stderr, not through `eprintln!`, which the test harness
+            // captures: a plain `cargo test` shows the skip beside the test's "ok".
+            let _ = writeln!(
+                std::io::stderr(),
                 "SKIPPED {test}: ASHLAR_TEST_DATABASE_URL is not set (run tests/pg/run.sh to test the PostgreSQL store)"
             );
             None

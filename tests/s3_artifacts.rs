@@ -18,6 +18,7 @@ use serde_json::{json, Value};
 use service_support::*;
 use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
+use std::io::Write as _;
 use std::io::{BufRead, Read, Write};
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
@@ -43,7 +44,12 @@ fn s3(test: &str) -> Option<S3> {
             python,
         }),
         _ => {
-            eprintln!("SKIPPED {test}: no S3 server (run tests/s3/run.sh)");
+            // Straight to the process's stderr, not through `eprintln!`, which the test harness
+            // captures: a plain `cargo test` shows the skip beside the test's "ok".
+            let _ = writeln!(
+                std::io::stderr(),
+                "SKIPPED {test}: no S3 server (run tests/s3/run.sh)"
+            );
             None
         }
     }
