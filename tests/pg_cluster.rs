@@ -19,6 +19,7 @@ use ashlar::service::{Service, ServiceConfig};
 use postgres::NoTls;
 use serde_json::{json, Value};
 use service_support::*;
+use std::io::Write as _;
 use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -29,7 +30,10 @@ fn base_url(test: &str) -> Option<String> {
     match std::env::var("ASHLAR_TEST_DATABASE_URL") {
         Ok(u) if !u.is_empty() => Some(u),
         _ => {
-            eprintln!(
+            // Straight to the process's stderr, not through `eprintln!`, which the test harness
+            // captures: a plain `cargo test` shows the skip beside the test's "ok".
+            let _ = writeln!(
+                std::io::stderr(),
                 "SKIPPED {test}: ASHLAR_TEST_DATABASE_URL is not set (run tests/pg/run.sh to test the PostgreSQL store)"
             );
             None
@@ -138,7 +142,11 @@ fn submit(addr: &str, body: &Value) -> String {
 /// Job k: the column under a pulse whose amplitude grows with k (2.00 … 6.95 m/s²), so every
 /// job has its own result and a mix-up would show. (200 + 5k)/100 prints and parses exactly.
 fn job_body(k: usize, duration: f64) -> Value {
-    json!({"scene": column_scene(duration), "motion": pulse((200 + 5 * k) as f64 / 100.0)})
+    // `"model": "dda"`: real-engine jobs (the default `auto` would run the reduced rocking
+    // model on this single column).
+    let mut scene = column_scene(duration);
+    scene["control"]["model"] = json!("dda");
+    json!({"scene": scene, "motion": pulse((200 + 5 * k) as f64 / 100.0)})
 }
 
 /// Summary without the wall time (a measurement of the machine, not a result).
@@ -882,6 +890,8 @@ fn fan_out_contract_sqlite_and_postgres() {
 fn rigid_column(duration: f64) -> Value {
     let mut s = column_scene(duration);
     s["control"]["block_model"] = json!("rigid");
+    // The full engine, as in the other real-engine tests here.
+    s["control"]["model"] = json!("dda");
     s
 }
 

@@ -24,6 +24,7 @@ mod service_support;
 use ashlar::service::pg_tls;
 use serde_json::{json, Value};
 use service_support::*;
+use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::Command;
 use std::time::Duration;
@@ -44,7 +45,10 @@ fn env(test: &str) -> Option<Env> {
             certs: PathBuf::from(certs),
         }),
         _ => {
-            eprintln!(
+            // Straight to the process's stderr, not through `eprintln!`, which the test harness
+            // captures: a plain `cargo test` shows the skip beside the test's "ok".
+            let _ = writeln!(
+                std::io::stderr(),
                 "SKIPPED {test}: ASHLAR_TEST_TLS_PORT/ASHLAR_TEST_TLS_CERTS are not set (run tests/pg/tls.sh)"
             );
             None

@@ -41,6 +41,8 @@ fn pga_in(motion: &str, out: &Path, range: [&str; 3], extra: &[&str]) -> std::pr
         .arg("pga")
         .arg(scene())
         .args(["--motion", motion, "--criterion", "toppled:column"])
+        // The full engine: the default `auto` would run the reduced rocking model on the column.
+        .args(["--model", "dda"])
         .args([
             "--min",
             range[0],

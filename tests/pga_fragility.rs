@@ -221,7 +221,11 @@ fn column() -> ashlar::scene::Scene {
         { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
         { "id": "column", "material": "stone", "block_model": "rigid", "vertices": [[-0.2, 0.0], [0.2, 0.0], [0.2, 1.2], [-0.2, 1.2]] },
     ]);
-    parse(&scene_json(blocks, 75.0, json!({ "duration": 3.0 })))
+    parse(&scene_json(
+        blocks,
+        75.0,
+        json!({ "duration": 3.0, "model": "dda" }),
+    ))
 }
 
 fn half_sine(period: f64) -> GroundMotion {

@@ -43,7 +43,12 @@ fn s3(test: &str) -> Option<S3> {
             python,
         }),
         _ => {
-            eprintln!("SKIPPED {test}: no S3 server (run tests/s3/run.sh)");
+            // Straight to the process's stderr, not through `eprintln!`, which the test harness
+            // captures: a plain `cargo test` shows the skip beside the test's "ok".
+            let _ = writeln!(
+                std::io::stderr(),
+                "SKIPPED {test}: no S3 server (run tests/s3/run.sh)"
+            );
             None
         }
     }

@@ -23,7 +23,11 @@ const JOBS: usize = 20;
 fn job_body(k: usize, duration: f64) -> Value {
     // (200 + 5k) / 100 is the double nearest the short decimal, so the JSON text is short and
     // parses back exactly (see `uninterrupted`).
-    json!({"scene": column_scene(duration), "motion": pulse((200 + 5 * k) as f64 / 100.0)})
+    // `"model": "dda"`: the full engine, which this test is about (the default `auto` would
+    // run the reduced rocking model on this single column).
+    let mut scene = column_scene(duration);
+    scene["control"]["model"] = json!("dda");
+    json!({"scene": scene, "motion": pulse((200 + 5 * k) as f64 / 100.0)})
 }
 
 fn get_json(addr: &str, path: &str) -> Value {

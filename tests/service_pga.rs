@@ -26,6 +26,8 @@ fn start(tag: &str) -> (Service, axum::Router, std::path::PathBuf) {
 fn rigid_column(duration: f64) -> Value {
     let mut s = column_scene(duration);
     s["control"]["block_model"] = json!("rigid");
+    // The full engine (the default `auto` would run the reduced rocking model on one column).
+    s["control"]["model"] = json!("dda");
     s
 }
 
@@ -240,6 +242,46 @@ async fn bad_multi_record_requests_name_the_field() {
         p["detail"].as_str().unwrap_or("").contains("motions"),
         "{p}"
     );
+    svc.shutdown(Duration::ZERO);
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// The scene's default model through the service, as a user's job runs it: a single column
+/// with no `control.model` runs `auto`, which picks the reduced rocking model; the same job
+/// with `"model": "dda"` (what the engine tests above send) runs the full engine. The summary's
+/// `model` says which ran.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_default_model_is_auto_and_the_summary_says_which_ran() {
+    let (svc, app, dir) = start("default-model");
+    let mut ran = Vec::new();
+    for model in [None, Some("dda")] {
+        let mut scene = column_scene(0.2);
+        if let Some(m) = model {
+            scene["control"]["model"] = json!(m);
+        }
+        let body = json!({ "scene": scene, "motion": pulse(2.0) });
+        let r = call(&app, post_json("/v1/jobs", &body)).await;
+        assert_eq!(r.status, 202, "{}", r.text());
+        let id = r.json()["id"].as_str().expect("id").to_string();
+        let j = wait_for(
+            &app,
+            &format!("/v1/jobs/{id}"),
+            Duration::from_secs(120),
+            is_terminal,
+        )
+        .await;
+        assert_eq!(j["status"], "succeeded", "{j}");
+        ran.push((
+            j["summary"]["model"].as_str().unwrap_or("").to_string(),
+            j["summary"]["model_reason"]
+                .as_str()
+                .unwrap_or("")
+                .to_string(),
+        ));
+    }
+    assert_eq!(ran[0].0, "rocking", "default: {}", ran[0].1);
+    assert!(ran[0].1.contains("\"auto\""), "{}", ran[0].1);
+    assert_eq!(ran[1].0, "dda", "forced: {}", ran[1].1);
     svc.shutdown(Duration::ZERO);
     std::fs::remove_dir_all(dir).ok();
 }

@@ -27,6 +27,8 @@ fn setup(dir: &Path) {
     let mut scene: Value =
         serde_json::from_str(include_str!("../examples/column.json")).expect("scene");
     scene["control"]["duration"] = json!(2.0);
+    // The full engine: the default `auto` would run the reduced rocking model on this column.
+    scene["control"]["model"] = json!("dda");
     std::fs::write(dir.join("column.json"), scene.to_string()).expect("scene");
     std::fs::copy("examples/half-sine-pulse.json", dir.join("pulse.json")).expect("record");
     // Amplitudes from 1 to 9 m/s²: small ones leave the column standing, large ones topple it.
@@ -85,6 +87,7 @@ fn lines_then_collect() {
             &std::fs::read_to_string(d.join("summary.json")).expect("summary"),
         )
         .expect("json");
+        assert_eq!(summary["model"], "dda", "line {k} ran the full engine");
         let toppled = summary["blocks"]
             .as_array()
             .expect("blocks")

@@ -312,6 +312,24 @@ impl Simulation {
         self.solver.sparse_counts()
     }
 
+    /// The linear system the last linear solve of [`Simulation::step`] solved, read-only, for
+    /// verification (tests/invariants.rs checks its symmetry and that the step's increments
+    /// solve it). With the penalty contact solver: block terms + the contact springs of the
+    /// converged open–close iteration (the step's last solve; integration does not touch it).
+    /// With the dual solver: the block terms its flexibilities come from (no springs).
+    /// Off-diagonal blocks are stored once per coupled pair: `off[p]` is K_ab for
+    /// `pairs[p] = (a, b)`, a < b, and the solvers read K_ba as K_abᵀ.
+    pub fn solved_system(&self) -> &BlockSystem {
+        &self.system
+    }
+
+    /// The increments of the step's last solve (global unknowns in `dofs` order, 6 a block:
+    /// u0, v0, r0, εx, εy, γxy): with the penalty solver, the solution of
+    /// [`Simulation::solved_system`].
+    pub fn solved_increments(&self) -> &[f64] {
+        &self.x
+    }
+
     /// Contact search distance, m: Shi's search factor × the largest step displacement. One
     /// definition for detection, the dual solver and the penetration check.
     pub fn search_distance(&self) -> f64 {

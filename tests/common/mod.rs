@@ -151,3 +151,56 @@ pub fn aligned_stack(columns: usize, rows: usize) -> Scene {
         json!([{ "block": format!("b{}_{}", rows - 1, columns / 2), "velocity": [0.0, -1.0] }]);
     parse(&v)
 }
+
+/// Deepest penetration of any block's vertex inside any other block, m, measured geometrically
+/// from the blocks' current vertices and edges (independently of the engine's own contact
+/// statistics): for every pair whose bounding boxes overlap, the distance from each vertex of
+/// one block that lies inside the other (crossing-number test) to that block's nearest edge.
+pub fn geometric_penetration(sim: &Simulation) -> f64 {
+    use nalgebra::Vector2;
+    fn depth_inside(p: Vector2<f64>, poly: &[Vector2<f64>]) -> f64 {
+        let n = poly.len();
+        let mut inside = false;
+        let mut nearest = f64::INFINITY;
+        for i in 0..n {
+            let (a, b) = (poly[i], poly[(i + 1) % n]);
+            if (a.y > p.y) != (b.y > p.y) {
+                let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+                if x > p.x {
+                    inside = !inside;
+                }
+            }
+            let ab = b - a;
+            let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
+            nearest = nearest.min((a + t * ab - p).norm());
+        }
+        if inside {
+            nearest
+        } else {
+            0.0
+        }
+    }
+    let bounds = |v: &[Vector2<f64>]| {
+        v.iter().fold(
+            (
+                Vector2::repeat(f64::INFINITY),
+                Vector2::repeat(f64::NEG_INFINITY),
+            ),
+            |(lo, hi), p| (lo.inf(p), hi.sup(p)),
+        )
+    };
+    let boxes: Vec<_> = sim.geoms.iter().map(|g| bounds(&g.vertices)).collect();
+    let mut worst = 0.0f64;
+    for (a, ga) in sim.geoms.iter().enumerate() {
+        for (b, gb) in sim.geoms.iter().enumerate() {
+            let ((la, ha), (lb, hb)) = (boxes[a], boxes[b]);
+            if a == b || la.x > hb.x || lb.x > ha.x || la.y > hb.y || lb.y > ha.y {
+                continue;
+            }
+            for p in &ga.vertices {
+                worst = worst.max(depth_inside(*p, &gb.vertices));
+            }
+        }
+    }
+    worst
+}

@@ -23,7 +23,8 @@ done
 if ! "$VENV/bin/schemathesis" --version 2>/dev/null | grep -q "$SCHEMATHESIS_VERSION"; then
     rm -rf "$VENV"
     "$PYTHON" -m venv "$VENV"
-    "$VENV/bin/pip" install --quiet --disable-pip-version-check "schemathesis==$SCHEMATHESIS_VERSION"
+    "$VENV/bin/pip" install --quiet --disable-pip-version-check "schemathesis==$SCHEMATHESIS_VERSION" \
+        || { echo "contract: FAILED: schemathesis $SCHEMATHESIS_VERSION could not be installed from the Python package index; the HTTP contract was NOT tested" >&2; exit 1; }
 fi
 
 cargo build --locked --quiet --bin ashlar
@@ -47,6 +48,46 @@ for _ in $(seq 1 200); do
     sleep 0.05
 done
 [ -n "$ADDR" ] || { echo "contract: the server did not report its address" >&2; exit 1; }
+
+# Positive contract: known-valid requests are accepted. Every bundled example scene (GET
+# /v1/examples, what the web page offers) with every bundled motion is submitted as a job and
+# must be answered 202; every bundled motion must be inspectable (200). schemathesis alone
+# accepts 422 for generated bodies (the schema cannot say what makes a scene valid), so without
+# this a server refusing every valid scene would pass.
+"$VENV/bin/python" - "$ADDR" <<'EOF_POSITIVE' || { echo "contract: a known-valid request was refused (see above)" >&2; tail -n 20 "$WORK/server.log" >&2; exit 1; }
+import json, sys, urllib.error, urllib.request
+addr = sys.argv[1]
+def call(method, path, body=None):
+    data = None if body is None else json.dumps(body).encode()
+    req = urllib.request.Request(addr + path, data=data, method=method,
+                                 headers={"content-type": "application/json"})
+    try:
+        with urllib.request.urlopen(req, timeout=30) as r:
+            return r.status, r.read().decode()
+    except urllib.error.HTTPError as e:
+        return e.code, e.read().decode()
+status, text = call("GET", "/v1/examples")
+assert status == 200, f"GET /v1/examples: {status} {text}"
+items = json.loads(text)["examples"]
+get = lambda e: json.loads(call("GET", e["url"])[1])
+scenes = [(e["name"], get(e)) for e in items if e["kind"] == "scene"]
+motions = [(e["name"], get(e)) for e in items if e["kind"] == "motion"]
+assert scenes and motions, f"no bundled scenes or motions: {items}"
+failed = []
+for mname, motion in motions:
+    status, text = call("POST", "/v1/motions/inspect", motion)
+    print(f"contract: POST /v1/motions/inspect {mname}: {status}")
+    if status != 200:
+        failed.append(f"inspect {mname}: {status} {text[:300]}")
+    for sname, scene in scenes:
+        status, text = call("POST", "/v1/jobs", {"scene": scene, "motion": motion})
+        print(f"contract: POST /v1/jobs {sname} + {mname}: {status}")
+        if status != 202:
+            failed.append(f"job {sname} + {mname}: {status} {text[:300]}")
+for f in failed:
+    print("contract: REFUSED a valid request:", f, file=sys.stderr)
+sys.exit(1 if failed else 0)
+EOF_POSITIVE
 
 set +e
 # Run from the temporary directory: schemathesis keeps a cache (.schemathesis/) in its working

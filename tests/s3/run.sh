@@ -2,8 +2,10 @@
 # S3 artifacts (tests/s3_artifacts.rs, built with `--features s3`) against a local
 # S3-compatible server: moto's server from the Python package index, in a virtual environment
 # under the target directory, on a free loopback port. Its boto3 is the test's independent S3
-# client. Skips (exit 0, with a loud message) only when moto cannot be installed because the
-# package index is unreachable; any other failure, or a skipped test, fails.
+# client. Outside CI it skips (exit 0, with a loud message) only when moto cannot be installed
+# because the package index is unreachable; under CI (`CI=true`, as .ci/run sets) that is a
+# failure too: a CI run that could not test S3 must not pass. Any other failure, or a skipped
+# test, fails.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 ROOT=$PWD
@@ -16,7 +18,11 @@ if ! "$VENV/bin/python" -c "import moto, boto3, sys; sys.exit(moto.__version__ !
     python3 -m venv "$VENV"
     if ! "$VENV/bin/pip" install --quiet --disable-pip-version-check "moto[server]==$MOTO_VERSION"; then
         if ! "$VENV/bin/pip" index versions moto >/dev/null 2>&1; then
-            echo "SKIPPED tests/s3/run.sh: the Python package index is unreachable, so no S3 server (moto) could be installed; S3 artifacts were NOT tested" >&2
+            if [ "${CI:-}" = true ]; then
+                echo "tests/s3/run.sh: FAILED under CI: the Python package index is unreachable, so no S3 server (moto) could be installed; S3 artifacts were NOT tested" >&2
+                exit 1
+            fi
+            echo "SKIPPED tests/s3/run.sh: the Python package index is unreachable, so no S3 server (moto) could be installed; S3 artifacts were NOT tested (CI=true makes this a failure)" >&2
             exit 0
         fi
         echo "tests/s3/run.sh: installing moto[server]==$MOTO_VERSION failed" >&2
