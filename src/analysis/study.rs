@@ -1770,9 +1770,11 @@ mod tests {
             description: String::new(),
             metric: String::new(),
             reference: String::new(),
+            value_unit: String::new(),
         };
         StudyResult {
             quick: true,
+            units: point_units(),
             scenes: vec![info("rocking"), info("wall")],
             points: vec![
                 mk(

@@ -741,8 +741,7 @@ mod tests {
             cycles: 2.0,
             phase: 0.0,
         });
-        let long =
-            "data/ground-motions/friuli-1976-tolmezzo-000.at2 (at2: Friuli, \
+        let long = "data/ground-motions/friuli-1976-tolmezzo-000.at2 (at2: Friuli, \
                     Italy, Tolmezzo, FRIULI/A-TMZ000 PEER NGA STRONG MOTION DATABASE RECORD)";
         let unbroken = "W".repeat(400);
         for provenance in ["pulse", long, &unbroken] {
