@@ -105,14 +105,16 @@ pub fn run(args: &WorkerArgs) -> Result<(), String> {
     };
     let workers = config.workers.workers;
     let svc = service::Service::start(config, runner)?;
-    // One line on stdout that scripts (and the tests) wait for.
-    println!("ashlar worker: running {workers} job(s) at a time");
-    tracing::info!(workers, "worker started");
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
         .map_err(|e| format!("starting the signal runtime: {e}"))?;
-    runtime.block_on(service::wait_for_signal());
+    // Caught from here on: a SIGTERM right after the line below must stop gracefully.
+    let signals = runtime.block_on(async { service::ShutdownSignals::register() });
+    // One line on stdout that scripts (and the tests) wait for.
+    println!("ashlar worker: running {workers} job(s) at a time");
+    tracing::info!(workers, "worker started");
+    runtime.block_on(signals.wait());
     tracing::info!(
         "stopping: no new claims; running jobs get {} s",
         args.shutdown_grace

@@ -296,6 +296,7 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
         .map_err(|e| format!("--addr {}: {e}", args.addr))?;
     let service = Service::start(config, runner)?;
     let state = service.state();
+    let signals = runtime.block_on(async { ShutdownSignals::register() });
     // One line on stdout that scripts (and the tests) read to find the port.
     println!("ashlar serve: listening on http://{local}");
     tracing::info!(%local, workers = state.core.params.workers, data = %args.data.display(), "listening");
@@ -303,7 +304,7 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
         let shutdown_state = state.clone();
         axum::serve(listener, app(state))
             .with_graceful_shutdown(async move {
-                wait_for_signal().await;
+                signals.wait().await;
                 tracing::info!(
                     "shutting down: no new jobs; running jobs get {} s",
                     args.shutdown_grace
@@ -330,26 +331,58 @@ pub fn lease_params(secs: f64) -> Result<pg_store::LeaseParams, String> {
     )))
 }
 
-/// Resolves on SIGINT or SIGTERM.
-pub async fn wait_for_signal() {
-    let ctrl_c = async {
-        if tokio::signal::ctrl_c().await.is_err() {
-            std::future::pending::<()>().await;
-        }
-    };
+/// SIGINT and SIGTERM, caught from the moment they are registered. Register them before telling
+/// anyone the server is up: a supervisor (or a test) that sends SIGTERM right after the
+/// "listening" line would otherwise kill the process with the default action, skipping the
+/// graceful shutdown that requeues running jobs.
+#[derive(Debug)]
+pub struct ShutdownSignals {
     #[cfg(unix)]
-    let term = async {
-        match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
-            Ok(mut s) => {
-                s.recv().await;
-            }
-            Err(_) => std::future::pending::<()>().await,
+    signals: Vec<tokio::signal::unix::Signal>,
+}
+
+impl ShutdownSignals {
+    /// Installs the handlers now; must run inside a Tokio runtime (e.g. in `block_on`).
+    pub fn register() -> Self {
+        #[cfg(unix)]
+        {
+            use tokio::signal::unix::{signal, SignalKind};
+            let signals = [SignalKind::interrupt(), SignalKind::terminate()]
+                .into_iter()
+                .filter_map(|kind| match signal(kind) {
+                    Ok(s) => Some(s),
+                    Err(e) => {
+                        tracing::warn!("cannot catch signal {kind:?}: {e}");
+                        None
+                    }
+                })
+                .collect();
+            ShutdownSignals { signals }
         }
-    };
-    #[cfg(not(unix))]
-    let term = std::future::pending::<()>();
-    tokio::select! {
-        _ = ctrl_c => {},
-        _ = term => {},
+        #[cfg(not(unix))]
+        ShutdownSignals {}
+    }
+
+    /// Resolves on the first of the registered signals.
+    pub async fn wait(self) {
+        #[cfg(unix)]
+        {
+            let waits = self.signals.into_iter().map(|mut s| {
+                Box::pin(async move {
+                    s.recv().await;
+                })
+            });
+            let waits: Vec<_> = waits.collect();
+            if waits.is_empty() {
+                std::future::pending::<()>().await;
+            }
+            futures_util::future::select_all(waits).await;
+        }
+        #[cfg(not(unix))]
+        {
+            if tokio::signal::ctrl_c().await.is_err() {
+                std::future::pending::<()>().await;
+            }
+        }
     }
 }
