@@ -75,7 +75,7 @@ pub struct Diagnostics {
 /// A summary without `format` is version 1 (header `time,<id>.x,<id>.y,<id>.rotation`).
 pub const RUN_OUTPUTS_FORMAT: &str = "ashlar.run/2";
 
-/// `summary.json` (docs/format.md §3; units in docs/outputs.md).
+/// `summary.json` (docs/format.md §3, with the unit of every field).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
     /// [`RUN_OUTPUTS_FORMAT`]; empty when read from a version-1 summary.
