@@ -3,6 +3,7 @@
 use crate::analysis::reduced::{
     self, record::ReducedError, Modes, ReducedParams, Restitution, SingleBlock,
 };
+use crate::analysis::run_end::{self, RecordTruncated, RunEndParams, RunEvent, SettleWatch};
 use crate::contact::{ContactState, Mobility};
 use crate::motion::GroundMotion;
 use crate::record::histories::HistoryWriter;
@@ -62,6 +63,9 @@ pub struct Diagnostics {
     /// solve (0 when none was accepted).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dual_loose_residual: Option<f64>,
+    /// The run's duration stopped before the end of the record (docs/run-end.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub record_truncated: Option<RecordTruncated>,
 }
 
 /// `summary.json` (FORMAT.md §3).
@@ -83,6 +87,13 @@ pub struct Summary {
     /// The controls actually used.
     #[serde(default)]
     pub control: serde_json::Value,
+    /// Every free block was at rest (or had left the scene) at the end: the outcome cannot
+    /// change any more (docs/run-end.md).
+    #[serde(default)]
+    pub settled: bool,
+    /// Blocks retired during the run (docs/run-end.md).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub events: Vec<RunEvent>,
 }
 
 /// Hooks a caller (CLI, service worker, PGA search) passes to a run.
@@ -107,6 +118,8 @@ pub struct RunOptions<'a> {
     pub on_frame: Option<&'a (dyn Fn(&Frame) + Sync)>,
     /// Knobs of the reduced models (defaults when `None`).
     pub reduced_params: Option<ReducedParams>,
+    /// Knobs of the end of the run: settling, continuation cap (defaults when `None`).
+    pub run_end: Option<RunEndParams>,
 }
 
 /// How a run can fail (the message names where).
@@ -424,6 +437,13 @@ fn run_dda(
     let duration = duration(scene, motion)?;
     let params = opts.sim_params.unwrap_or_default();
     let failure = FailureParams::default();
+    let end = opts.run_end.unwrap_or_default();
+    // The run goes on after `duration` while the structure moves, up to the cap.
+    let cap = duration + end.max_extension;
+    let floor = run_end::retirement_floor(scene);
+    let mut events = Vec::new();
+    let mut watch = SettleWatch::default();
+    let mut settled = false;
     let mut sim = Simulation::new(scene, motion, params);
     let header = header(&sim, motion, opts)?;
     let mut writers = Writers::open(opts.out_dir, &header, opts.no_trajectory)?;
@@ -434,7 +454,7 @@ fn run_dda(
     let mut stopped_reason = None;
     let mut cancelled = false;
     let mut failure_msg = None;
-    while sim.time < duration - 1e-12 {
+    while sim.time < cap - 1e-12 {
         if opts.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             cancelled = true;
             stopped_reason = Some("cancelled".to_string());
@@ -447,7 +467,11 @@ fn run_dda(
             ));
             break;
         }
-        let next_frame = ((frame_index + 1) as f64 * interval).min(duration);
+        let next_frame = ((frame_index + 1) as f64 * interval).min(if sim.time < duration {
+            duration
+        } else {
+            cap
+        });
         if let Err(e) = sim.step(next_frame - sim.time) {
             failure_msg = Some(e.to_string());
             break;
@@ -456,10 +480,15 @@ fn run_dda(
             failure_msg = Some(format!("non-finite state at t = {:.6} s in block {:?}; reduce the time step or the penalty stiffness", sim.time, scene.blocks[b].id));
             break;
         }
+        events.extend(run_end::retire_fallen(&mut sim, floor));
         tracker.update(&sim);
+        settled = watch.update(sim.time, run_end::all_quiet(&sim, &end), end.settle_window);
         if sim.time >= next_frame - 1e-9 * interval {
             frame_index += 1;
             writers.emit(&frame(&sim, &failure), opts, Some(sim.time / duration))?;
+            if settled && sim.time >= duration - 1e-9 {
+                break;
+            }
         }
         if opts.stop_when.is_some_and(|f| f(&tracker)) {
             stopped_reason = Some("decided".to_string());
@@ -470,7 +499,7 @@ fn run_dda(
     if let Some(msg) = failure_msg {
         return Err(RunError::Simulation(msg));
     }
-    let summary = summarize(
+    let mut summary = summarize(
         &sim,
         &tracker,
         motion,
@@ -481,6 +510,7 @@ fn run_dda(
         model_reason,
         duration,
     );
+    end_summary(&mut summary, settled, events, duration, motion);
     if let Some(dir) = opts.out_dir {
         let text =
             serde_json::to_string_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;
@@ -597,6 +627,28 @@ fn frame(sim: &Simulation, failure: &FailureParams) -> Frame {
     }
 }
 
+/// The end of the run in its summary: settled, the verdict of a structure still moving,
+/// retirement events (retired blocks fell off the structure: they count as toppled), a
+/// truncated record.
+pub(crate) fn end_summary(
+    summary: &mut Summary,
+    settled: bool,
+    events: Vec<RunEvent>,
+    duration: f64,
+    motion: &GroundMotion,
+) {
+    for e in &events {
+        if let Some(b) = summary.blocks.iter_mut().find(|b| b.id == e.block) {
+            b.toppled = true;
+        }
+    }
+    let mode = failure_mode(&summary.blocks, &FailureParams::default());
+    summary.failure_mode = run_end::verdict(mode, settled).into();
+    summary.settled = settled;
+    summary.events = events;
+    summary.diagnostics.record_truncated = run_end::truncation(duration, motion);
+}
+
 /// Classify the outcome from the per-block results.
 pub fn failure_mode(blocks: &[BlockSummary], failure: &FailureParams) -> &'static str {
     let n = blocks.len().max(1) as f64;
@@ -678,5 +730,7 @@ fn summarize(
         model_reason,
         stopped_reason,
         control: serde_json::to_value(&sim.scene.control).unwrap_or_default(),
+        settled: false,
+        events: Vec::new(),
     }
 }

@@ -151,6 +151,8 @@ fn fake_run(
         model_reason: "service test double".into(),
         stopped_reason: cancelled.then(|| "cancelled".to_string()),
         control: serde_json::Value::Null,
+        settled: !cancelled,
+        events: Vec::new(),
     };
     let value = serde_json::to_value(&summary).map_err(|e| e.to_string())?;
     std::fs::write(hooks.out_dir.join("summary.json"), value.to_string())

@@ -2,8 +2,8 @@
 //! outputs as a DDA run (summary, histories, trajectory) through `analysis::run`'s writers.
 use super::{Modes, Phase, Reduced, ReducedParams, SingleBlock, Violation};
 use crate::analysis::run::{
-    duration, failure_mode, BlockSummary, Diagnostics, FailureParams, RunError, RunOptions,
-    RunOutcome, Summary, Tracker, Writers,
+    duration, end_summary, failure_mode, BlockSummary, Diagnostics, FailureParams, RunError,
+    RunOptions, RunOutcome, Summary, Tracker, Writers,
 };
 use crate::motion::GroundMotion;
 use crate::record::{
@@ -211,6 +211,13 @@ fn model_name(m: &Reduced) -> &'static str {
     }
 }
 
+/// Has the block settled? At rest, or lying on another face: exact states of the model, which
+/// no longer change once the ground is still (the energy bound of the full engine,
+/// `RunEndParams::settle_energy_ratio`, is for a model that has no such states).
+fn settled(m: &Reduced) -> bool {
+    matches!(m.phase, Phase::Rest | Phase::Fallen { .. })
+}
+
 /// Run the reduced model of `scene` (already qualified as `block`) under `motion`. `reason`
 /// is the start of `model_reason`; the run appends what happened.
 pub fn run(
@@ -225,6 +232,8 @@ pub fn run(
     let wall = Instant::now();
     let duration = duration(scene, motion)?;
     let failure = FailureParams::default();
+    // The run goes on after `duration` while the block moves, up to the cap.
+    let cap = duration + opts.run_end.unwrap_or_default().max_extension;
     let mut m = Reduced::new(block, motion, params, modes);
     let provisional = match modes {
         Modes::Rocking => "rocking",
@@ -248,13 +257,17 @@ pub fn run(
     writers.emit(&frame(scene, &m, &now, &failure), opts, None)?;
     let mut stopped_reason = None;
     let mut cancelled = false;
-    while m.time < duration - 1e-12 {
+    while m.time < cap - 1e-12 {
         if opts.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             cancelled = true;
             stopped_reason = Some("cancelled".to_string());
             break;
         }
-        let next = ((frame_index + 1) as f64 * interval).min(duration);
+        let next = ((frame_index + 1) as f64 * interval).min(if m.time < duration {
+            duration
+        } else {
+            cap
+        });
         if let Err(v) = m.advance(next) {
             writers.finish()?;
             return Err(ReducedError::Violation(v));
@@ -269,6 +282,9 @@ pub fn run(
         )?;
         if opts.stop_when.is_some_and(|f| f(&tr)) {
             stopped_reason = Some("decided".to_string());
+            break;
+        }
+        if settled(&m) && m.time >= duration - 1e-9 {
             break;
         }
     }
@@ -328,7 +344,11 @@ pub fn run(
         model_reason: why,
         stopped_reason,
         control: serde_json::to_value(&scene.control).unwrap_or_default(),
+        settled: false,
+        events: Vec::new(),
     };
+    let mut summary = summary;
+    end_summary(&mut summary, settled(&m), Vec::new(), duration, motion);
     if let Some(dir) = opts.out_dir {
         let text =
             serde_json::to_string_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;
