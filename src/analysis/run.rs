@@ -262,11 +262,21 @@ pub fn choose_model(scene: &Scene, params: &ReducedParams) -> Result<ModelPlan, 
     let describe = |b: &SingleBlock, modes: Modes| {
         let e = reduced::rocking::restitution(b, 0, params.restitution);
         let (a0, a1) = (b.slenderness(0), b.slenderness(1));
+        let raw = reduced::rocking::housner_ratio(b, 0);
+        let impact = if params.restitution == Restitution::Housner && raw < 0.0 {
+            format!(
+                "{law} does not apply to a block this squat (it gives {raw:.4} < 0: the angular momentum about the landing corner would turn the block back into its base, so it does not rock onto that corner): an impact ends the rocking, e = 0"
+            )
+        } else {
+            format!(
+                "{law}, e = {e:.4} (1 − 1.5 sin²α = {:.4} for a rectangle)",
+                1.0 - 1.5 * a0.sin().powi(2)
+            )
+        };
         let rock = format!(
-            "Housner's rocking equation (slenderness α = {:.2}°/{:.2}°) with {law}, e = {e:.4} (1 − 1.5 sin²α = {:.4} for a rectangle)",
+            "Housner's rocking equation (slenderness α = {:.2}°/{:.2}°) with {impact}",
             a0.to_degrees(),
             a1.to_degrees(),
-            1.0 - 1.5 * a0.sin().powi(2)
         );
         let slide = format!(
             "rigid-plastic Newmark sliding (μ = tan φ = {:.4}, contact slope {:.2}°)",
@@ -283,12 +293,15 @@ pub fn choose_model(scene: &Scene, params: &ReducedParams) -> Result<ModelPlan, 
         ModelChoice::Dda => Ok(ModelPlan::Dda(
             "control.model is \"dda\": the full DDA engine".into(),
         )),
-        ModelChoice::Auto => match reduced::qualify(scene, params) {
+        ModelChoice::Auto => match reduced::qualify(scene, params)
+            .and_then(|b| reduced::represented(scene).map(|()| b))
+        {
             Ok(b) => {
                 let reason = format!(
-                    "control.model is \"auto\" and the scene is one rigid block on a {} base: {}",
+                    "control.model is \"auto\" and the scene is one rigid block on a {} base: {}{}",
                     if b.driven { "driven" } else { "fixed" },
-                    describe(&b, Modes::Auto)
+                    describe(&b, Modes::Auto),
+                    reduced::engine_controls_note(scene)
                 );
                 Ok(ModelPlan::Reduced {
                     block: Box::new(b),
@@ -306,12 +319,18 @@ pub fn choose_model(scene: &Scene, params: &ReducedParams) -> Result<ModelPlan, 
             } else {
                 ("sliding", Modes::Sliding)
             };
-            let b = reduced::qualify(scene, params).map_err(|why| {
+            let b = reduced::qualify(scene, params)
+                .and_then(|b| reduced::represented(scene).map(|()| b))
+                .map_err(|why| {
                 RunError::Invalid(format!(
                     "control.model: the scene does not qualify for the reduced \"{name}\" model: {why}"
                 ))
             })?;
-            let reason = format!("control.model is \"{name}\": {}", describe(&b, modes));
+            let reason = format!(
+                "control.model is \"{name}\": {}{}",
+                describe(&b, modes),
+                reduced::engine_controls_note(scene)
+            );
             Ok(ModelPlan::Reduced {
                 block: Box::new(b),
                 modes,

@@ -263,6 +263,13 @@ pub fn run(
             stopped_reason = Some("cancelled".to_string());
             break;
         }
+        if m.stats.steps >= scene.control.max_steps {
+            stopped_reason = Some(format!(
+                "step budget of {} steps reached (control.max_steps)",
+                scene.control.max_steps
+            ));
+            break;
+        }
         let next = ((frame_index + 1) as f64 * interval).min(if m.time < duration {
             duration
         } else {
