@@ -83,7 +83,11 @@ fn a_dynamic_factor_sends_auto_to_the_engine() {
     let auto = run_to_t(&scene, ModelChoice::Auto).expect("auto");
     let dda = run_to_t(&scene, ModelChoice::Dda).expect("dda");
     assert_eq!(auto.model, "dda", "{}", auto.model_reason);
-    assert!(auto.model_reason.contains("dynamic_factor"), "{}", auto.model_reason);
+    assert!(
+        auto.model_reason.contains("dynamic_factor"),
+        "{}",
+        auto.model_reason
+    );
     assert_eq!(
         auto.blocks[0].final_displacement,
         dda.blocks[0].final_displacement
@@ -96,7 +100,8 @@ fn a_dynamic_factor_sends_auto_to_the_engine() {
 
 #[test]
 fn the_engine_numerical_controls_are_reported_as_not_applying() {
-    let scene = pushed_block(json!({ "duration": T, "time_step": 1e-4, "integrator": "trapezoidal" }));
+    let scene =
+        pushed_block(json!({ "duration": T, "time_step": 1e-4, "integrator": "trapezoidal" }));
     let s = run_to_t(&scene, ModelChoice::Auto).expect("run");
     assert_eq!(s.model, "sliding");
     assert!(

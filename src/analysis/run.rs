@@ -486,7 +486,7 @@ fn run_dda(
             ));
             break;
         }
-        let next_frame = ((frame_index + 1) as f64 * interval).min(if sim.time < duration {
+        let next_frame = ((frame_index + 1) as f64 * interval).min(if sim.time < duration - 1e-9 {
             duration
         } else {
             cap

@@ -52,8 +52,8 @@ pub struct RunEvent {
     pub time: f64,
     /// The block's id.
     pub block: String,
-    /// `"retired"`: the block fell more than the scene's height below its lowest fixed or
-    /// driven block and was frozen there (it left the structure).
+    /// `"retired"`: the block's centroid fell more than the scene's height below its lowest
+    /// fixed or driven block; it was frozen there (it left the structure).
     pub kind: String,
 }
 
@@ -130,7 +130,7 @@ pub fn retirement_floor(scene: &Scene) -> Option<f64> {
         .then_some(lowest_support - (top - bottom))
 }
 
-/// Full engine: retire the free blocks that are wholly below `floor`; returns the events.
+/// Full engine: retire the free blocks whose centroid is below `floor`; returns the events.
 pub fn retire_fallen(sim: &mut Simulation, floor: Option<f64>) -> Vec<RunEvent> {
     let Some(floor) = floor else {
         return Vec::new();
@@ -140,7 +140,7 @@ pub fn retire_fallen(sim: &mut Simulation, floor: Option<f64>) -> Vec<RunEvent> 
         if sim.mobility[b] != Mobility::Free || sim.retired[b] {
             continue;
         }
-        if sim.geoms[b].bounds().1.y < floor {
+        if sim.geoms[b].centroid.y < floor {
             sim.retire(b);
             events.push(RunEvent {
                 time: sim.time,

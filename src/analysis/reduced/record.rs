@@ -270,7 +270,7 @@ pub fn run(
             ));
             break;
         }
-        let next = ((frame_index + 1) as f64 * interval).min(if m.time < duration {
+        let next = ((frame_index + 1) as f64 * interval).min(if m.time < duration - 1e-9 {
             duration
         } else {
             cap
