@@ -458,7 +458,7 @@ fn run_dda(
     let failure = FailureParams::default();
     let end = opts.run_end.unwrap_or_default();
     // The run goes on after `duration` while the structure moves, up to the cap.
-    let cap = duration + end.max_extension;
+    let cap = run_end::cap(duration, motion, &end);
     let floor = run_end::retirement_floor(scene);
     let mut events = Vec::new();
     let mut watch = SettleWatch::default();

@@ -75,6 +75,26 @@ pub fn truncation(duration: f64, motion: &GroundMotion) -> Option<RecordTruncate
     })
 }
 
+/// Latest simulated time of a run of `duration` (s): the continuation after `duration` runs
+/// only when the ground is still by then (the record has ended, or there is no shaking). A
+/// run whose duration cuts the record (reported as truncated) or that runs under an endless
+/// signal stops at its duration: going on would go on shaking it past the window the user
+/// chose.
+pub fn cap(duration: f64, motion: &GroundMotion, params: &RunEndParams) -> f64 {
+    let still = match motion.duration() {
+        Some(record) => record <= duration + 1e-9,
+        None => {
+            matches!(motion.horizontal, crate::motion::Signal::Zero)
+                && matches!(motion.vertical, crate::motion::Signal::Zero)
+        }
+    };
+    if still {
+        duration + params.max_extension
+    } else {
+        duration
+    }
+}
+
 /// The verdict of a run: [`super::run::failure_mode`], except that a structure still moving
 /// at the end is "undecided" rather than "stable" (it might still fall).
 pub fn verdict(mode: &'static str, settled: bool) -> &'static str {

@@ -233,7 +233,7 @@ pub fn run(
     let duration = duration(scene, motion)?;
     let failure = FailureParams::default();
     // The run goes on after `duration` while the block moves, up to the cap.
-    let cap = duration + opts.run_end.unwrap_or_default().max_extension;
+    let cap = crate::analysis::run_end::cap(duration, motion, &opts.run_end.unwrap_or_default());
     let mut m = Reduced::new(block, motion, params, modes);
     let provisional = match modes {
         Modes::Rocking => "rocking",
