@@ -72,9 +72,12 @@ fn history_through_impacts_matches_housner_rk4() {
         !fell && impact.is_some(),
         "the reference must rock and land"
     );
-    let (theta, summary) = rotations("rocking", 5.0, 2.0);
+    let (mut theta, summary) = rotations("rocking", 5.0, 2.0);
     assert_eq!(summary.model, "rocking");
-    assert_eq!(theta.len(), reference.len());
+    // The run goes on after its 2 s until the column is at rest (docs/run-end.md): compare the
+    // frames up to 2 s, the reference's span.
+    assert!(theta.len() >= reference.len());
+    theta.truncate(reference.len());
     let peak = reference.iter().fold(0.0f64, |m, t| m.max(t.abs()));
     let worst = theta
         .iter()

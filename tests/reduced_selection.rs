@@ -140,8 +140,13 @@ fn cohesive_joint_and_gap_disqualify() {
 #[test]
 fn reduced_run_writes_the_same_outputs_as_dda() {
     let dir = std::env::temp_dir().join(format!("ashlar-reduced-out-{}", std::process::id()));
+    // Frames up to the duration only (no continuation after it; docs/run-end.md).
     let opts = RunOptions {
         out_dir: Some(&dir),
+        run_end: Some(ashlar::analysis::run_end::RunEndParams {
+            max_extension: 0.0,
+            ..Default::default()
+        }),
         ..Default::default()
     };
     let s = run(
@@ -304,7 +309,8 @@ fn cli_model_flag_overrides_the_default() {
         std::process::Command::new(env!("CARGO_BIN_EXE_ashlar"))
             .arg("run")
             .arg(root.join("examples/column.json"))
-            .args(["--no-trajectory", "--out"])
+            // No record: the example sets no duration (docs/run-end.md).
+            .args(["--duration", "1", "--no-trajectory", "--out"])
             .arg(&out)
             .args(extra)
             .output()

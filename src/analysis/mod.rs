@@ -5,4 +5,5 @@ pub mod pga;
 pub mod reduced;
 pub mod reference;
 pub mod run;
+pub mod run_end;
 pub mod study;

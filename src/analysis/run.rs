@@ -3,6 +3,7 @@
 use crate::analysis::reduced::{
     self, record::ReducedError, Modes, ReducedParams, Restitution, SingleBlock,
 };
+use crate::analysis::run_end::{self, RecordTruncated, RunEndParams, RunEvent, SettleWatch};
 use crate::contact::{ContactState, Mobility};
 use crate::motion::GroundMotion;
 pub use crate::record::histories::round_time;
@@ -68,6 +69,9 @@ pub struct Diagnostics {
     /// solve (0 when none was accepted).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dual_loose_residual: Option<f64>,
+    /// The run's duration stopped before the end of the record (docs/run-end.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub record_truncated: Option<RecordTruncated>,
 }
 
 /// The layout of a run's outputs, `summary.json`'s `format`: version 2 added the `units`
@@ -101,6 +105,13 @@ pub struct Summary {
     /// The unit of every numeric field, mirroring the summary's nesting ([`summary_units`]).
     #[serde(default)]
     pub units: serde_json::Value,
+    /// Every free block was at rest (or had left the scene) at the end: the outcome cannot
+    /// change any more (docs/run-end.md).
+    #[serde(default)]
+    pub settled: bool,
+    /// Blocks retired during the run (docs/run-end.md).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub events: Vec<RunEvent>,
 }
 
 /// The `units` object of `summary.json`: each numeric field's unit, nested as the summary is
@@ -129,7 +140,9 @@ pub fn summary_units() -> serde_json::Value {
             "impacts": "count",
             "dual_loose_solves": "count",
             "dual_loose_residual": "m",
+            "record_truncated": { "record_duration": "s", "run_duration": "s" },
         },
+        "events": { "time": "s" },
         "control": {
             "duration": "s",
             "time_step": "s",
@@ -214,6 +227,8 @@ pub struct RunOptions<'a> {
     pub on_frame: Option<&'a (dyn Fn(&Frame) + Sync)>,
     /// Knobs of the reduced models (defaults when `None`).
     pub reduced_params: Option<ReducedParams>,
+    /// Knobs of the end of the run: settling, continuation cap (defaults when `None`).
+    pub run_end: Option<RunEndParams>,
 }
 
 /// How a run can fail (the message names where).
@@ -356,11 +371,21 @@ pub fn choose_model(scene: &Scene, params: &ReducedParams) -> Result<ModelPlan, 
     let describe = |b: &SingleBlock, modes: Modes| {
         let e = reduced::rocking::restitution(b, 0, params.restitution);
         let (a0, a1) = (b.slenderness(0), b.slenderness(1));
+        let raw = reduced::rocking::housner_ratio(b, 0);
+        let impact = if params.restitution == Restitution::Housner && raw < 0.0 {
+            format!(
+                "{law} does not apply to a block this squat (it gives {raw:.4} < 0: the angular momentum about the landing corner would turn the block back into its base, so it does not rock onto that corner): an impact ends the rocking, e = 0"
+            )
+        } else {
+            format!(
+                "{law}, e = {e:.4} (1 − 1.5 sin²α = {:.4} for a rectangle)",
+                1.0 - 1.5 * a0.sin().powi(2)
+            )
+        };
         let rock = format!(
-            "Housner's rocking equation (slenderness α = {:.2}°/{:.2}°) with {law}, e = {e:.4} (1 − 1.5 sin²α = {:.4} for a rectangle)",
+            "Housner's rocking equation (slenderness α = {:.2}°/{:.2}°) with {impact}",
             a0.to_degrees(),
             a1.to_degrees(),
-            1.0 - 1.5 * a0.sin().powi(2)
         );
         let slide = format!(
             "rigid-plastic Newmark sliding (μ = tan φ = {:.4}, contact slope {:.2}°)",
@@ -377,12 +402,15 @@ pub fn choose_model(scene: &Scene, params: &ReducedParams) -> Result<ModelPlan, 
         ModelChoice::Dda => Ok(ModelPlan::Dda(
             "control.model is \"dda\": the full DDA engine".into(),
         )),
-        ModelChoice::Auto => match reduced::qualify(scene, params) {
+        ModelChoice::Auto => match reduced::qualify(scene, params)
+            .and_then(|b| reduced::represented(scene).map(|()| b))
+        {
             Ok(b) => {
                 let reason = format!(
-                    "control.model is \"auto\" and the scene is one rigid block on a {} base: {}",
+                    "control.model is \"auto\" and the scene is one rigid block on a {} base: {}{}",
                     if b.driven { "driven" } else { "fixed" },
-                    describe(&b, Modes::Auto)
+                    describe(&b, Modes::Auto),
+                    reduced::engine_controls_note(scene)
                 );
                 Ok(ModelPlan::Reduced {
                     block: Box::new(b),
@@ -400,12 +428,18 @@ pub fn choose_model(scene: &Scene, params: &ReducedParams) -> Result<ModelPlan, 
             } else {
                 ("sliding", Modes::Sliding)
             };
-            let b = reduced::qualify(scene, params).map_err(|why| {
+            let b = reduced::qualify(scene, params)
+                .and_then(|b| reduced::represented(scene).map(|()| b))
+                .map_err(|why| {
                 RunError::Invalid(format!(
                     "control.model: the scene does not qualify for the reduced \"{name}\" model: {why}"
                 ))
             })?;
-            let reason = format!("control.model is \"{name}\": {}", describe(&b, modes));
+            let reason = format!(
+                "control.model is \"{name}\": {}{}",
+                describe(&b, modes),
+                reduced::engine_controls_note(scene)
+            );
             Ok(ModelPlan::Reduced {
                 block: Box::new(b),
                 modes,
@@ -531,6 +565,13 @@ fn run_dda(
     let duration = duration(scene, motion)?;
     let params = opts.sim_params.unwrap_or_default();
     let failure = FailureParams::default();
+    let end = opts.run_end.unwrap_or_default();
+    // The run goes on after `duration` while the structure moves, up to the cap.
+    let cap = run_end::cap(duration, motion, &end);
+    let floor = run_end::retirement_floor(scene);
+    let mut events = Vec::new();
+    let mut watch = SettleWatch::default();
+    let mut settled = false;
     let mut sim = Simulation::new(scene, motion, params);
     let header = header(&sim, motion, opts)?;
     let mut writers = Writers::open(opts.out_dir, &header, opts.no_trajectory)?;
@@ -541,7 +582,7 @@ fn run_dda(
     let mut stopped_reason = None;
     let mut cancelled = false;
     let mut failure_msg = None;
-    while sim.time < duration - 1e-12 {
+    while sim.time < cap - 1e-12 {
         if opts.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             cancelled = true;
             stopped_reason = Some("cancelled".to_string());
@@ -554,7 +595,11 @@ fn run_dda(
             ));
             break;
         }
-        let next_frame = ((frame_index + 1) as f64 * interval).min(duration);
+        let next_frame = ((frame_index + 1) as f64 * interval).min(if sim.time < duration - 1e-9 {
+            duration
+        } else {
+            cap
+        });
         if let Err(e) = sim.step(next_frame - sim.time) {
             failure_msg = Some(e.to_string());
             break;
@@ -563,10 +608,15 @@ fn run_dda(
             failure_msg = Some(format!("non-finite state at t = {:.6} s in block {:?}; reduce the time step or the penalty stiffness", sim.time, scene.blocks[b].id));
             break;
         }
+        events.extend(run_end::retire_fallen(&mut sim, floor));
         tracker.update(&sim);
+        settled = watch.update(sim.time, run_end::all_quiet(&sim, &end), end.settle_window);
         if sim.time >= next_frame - 1e-9 * interval {
             frame_index += 1;
             writers.emit(&frame(&sim, &failure), opts, Some(sim.time / duration))?;
+            if settled && sim.time >= duration - 1e-9 {
+                break;
+            }
         }
         if opts.stop_when.is_some_and(|f| f(&tracker)) {
             stopped_reason = Some("decided".to_string());
@@ -577,7 +627,7 @@ fn run_dda(
     if let Some(msg) = failure_msg {
         return Err(RunError::Simulation(msg));
     }
-    let summary = summarize(
+    let mut summary = summarize(
         &sim,
         &tracker,
         motion,
@@ -588,6 +638,7 @@ fn run_dda(
         model_reason,
         duration,
     );
+    end_summary(&mut summary, settled, events, duration, motion);
     if let Some(dir) = opts.out_dir {
         let text =
             serde_json::to_string_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;
@@ -708,6 +759,28 @@ fn frame(sim: &Simulation, failure: &FailureParams) -> Frame {
     }
 }
 
+/// The end of the run in its summary: settled, the verdict of a structure still moving,
+/// retirement events (retired blocks fell off the structure: they count as toppled), a
+/// truncated record.
+pub(crate) fn end_summary(
+    summary: &mut Summary,
+    settled: bool,
+    events: Vec<RunEvent>,
+    duration: f64,
+    motion: &GroundMotion,
+) {
+    for e in &events {
+        if let Some(b) = summary.blocks.iter_mut().find(|b| b.id == e.block) {
+            b.toppled = true;
+        }
+    }
+    let mode = failure_mode(&summary.blocks, &FailureParams::default());
+    summary.failure_mode = run_end::verdict(mode, settled).into();
+    summary.settled = settled;
+    summary.events = events;
+    summary.diagnostics.record_truncated = run_end::truncation(duration, motion);
+}
+
 /// Classify the outcome from the per-block results.
 pub fn failure_mode(blocks: &[BlockSummary], failure: &FailureParams) -> &'static str {
     let n = blocks.len().max(1) as f64;
@@ -791,5 +864,7 @@ fn summarize(
         stopped_reason,
         control: reported_control(&sim.scene, Ran::Engine),
         units: summary_units(),
+        settled: false,
+        events: Vec::new(),
     }
 }

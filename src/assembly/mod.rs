@@ -190,6 +190,11 @@ impl BlockSystem {
         }
     }
 
+    /// Remove the loads of free block `f` (a retired block: with no velocity it then stays put).
+    pub fn clear_block_load(&mut self, f: usize) {
+        self.base_rhs[f] = Vec6::zeros();
+    }
+
     /// Start an open–close iteration from the block terms, with an empty off-diagonal part.
     pub fn reset_to_blocks(&mut self) {
         self.diag.clone_from(&self.base_diag);

@@ -36,6 +36,10 @@ pub struct RunArgs {
     /// `rocking` or `sliding`.
     #[arg(long)]
     pub model: Option<String>,
+    /// Run duration in seconds (overrides the scene's control.duration; default: the record's
+    /// length + 2 s). The run then goes on while the structure moves (docs/run-end.md).
+    #[arg(long)]
+    pub duration: Option<f64>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -81,6 +85,10 @@ pub struct PgaArgs {
     /// `rocking` or `sliding`.
     #[arg(long)]
     pub model: Option<String>,
+    /// Run duration in seconds (overrides the scene's control.duration; default: the record's
+    /// length + 2 s). The run then goes on while the structure moves (docs/run-end.md).
+    #[arg(long)]
+    pub duration: Option<f64>,
 }
 
 /// Record file extensions picked from a directory.
@@ -165,6 +173,31 @@ fn apply_model(scene: &mut Scene, model: Option<&str>) -> Result<(), String> {
     Ok(())
 }
 
+/// `--duration SECONDS` as the scene's `control.duration`.
+fn apply_duration(scene: &mut Scene, duration: Option<f64>) -> Result<(), String> {
+    if let Some(d) = duration {
+        if !(d.is_finite() && d > 0.0) {
+            return Err(format!(
+                "--duration {d}: must be a positive number of seconds"
+            ));
+        }
+        scene.control.duration = Some(d);
+    }
+    Ok(())
+}
+
+/// Warn on stderr when the run's duration cuts the record short (the summary says it too).
+fn warn_truncation(scene: &Scene, gm: &GroundMotion) {
+    if let Some(d) = scene.control.duration {
+        if let Some(t) = crate::analysis::run_end::truncation(d, gm) {
+            eprintln!(
+                "ashlar: warning: the run's duration ({:.3} s, control.duration) stops before the end of the record ({:.3} s): the rest of the record is not applied; remove control.duration or pass --duration",
+                t.run_duration, t.record_duration
+            );
+        }
+    }
+}
+
 fn load_scene(path: &Path) -> Result<Scene, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     parse_scene(&text).map_err(|e| format!("{}: {e}", path.display()))
@@ -188,6 +221,7 @@ fn load_motion(args: &RunArgs) -> Result<GroundMotion, String> {
 pub fn run(args: &RunArgs) -> Result<(), String> {
     let mut scene = load_scene(&args.scene)?;
     apply_model(&mut scene, args.model.as_deref())?;
+    apply_duration(&mut scene, args.duration)?;
     if let Some(i) = args.output_interval {
         if !(i.is_finite() && i > 0.0) {
             return Err(format!(
@@ -197,6 +231,7 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
         scene.control.output_interval = i;
     }
     let gm = load_motion(args)?;
+    warn_truncation(&scene, &gm);
     let opts = RunOptions {
         out_dir: Some(&args.out),
         no_trajectory: args.no_trajectory,
@@ -228,14 +263,14 @@ pub fn pga(args: &PgaArgs) -> Result<(), String> {
     let method = Method::parse(&args.fit).map_err(|e| format!("--fit: {e}"))?;
     let mut scene = load_scene(&args.scene)?;
     apply_model(&mut scene, args.model.as_deref())?;
+    apply_duration(&mut scene, args.duration)?;
     let params = args.units.load_params().map_err(|e| e.to_string())?;
     let (paths, several) = record_paths(&args.motion)?;
     let mut records = Vec::new();
     for p in &paths {
-        records.push((
-            record_name(p),
-            motion::load_path_with(p, &params).map_err(|e| e.to_string())?,
-        ));
+        let gm = motion::load_path_with(p, &params).map_err(|e| e.to_string())?;
+        warn_truncation(&scene, &gm);
+        records.push((record_name(p), gm));
     }
     std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
     let write = |name: &str, text: &str| {

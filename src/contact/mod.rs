@@ -211,6 +211,12 @@ impl ContactSet {
         true
     }
 
+    /// Make the next [`ContactSet::detect`] a full detection (the set of blocks that may touch
+    /// changed: a block was retired).
+    pub fn force_detection(&mut self) {
+        self.snapshot.clear();
+    }
+
     /// No vertex moved more than the reuse limit since the last full detection at this search
     /// distance.
     fn unchanged_since_snapshot(&self, geoms: &[BlockGeometry], search: f64) -> bool {

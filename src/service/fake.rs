@@ -150,6 +150,8 @@ fn fake_run(
         stopped_reason: cancelled.then(|| "cancelled".to_string()),
         control: serde_json::Value::Null,
         units: summary_units(),
+        settled: !cancelled,
+        events: Vec::new(),
     };
     let value = serde_json::to_value(&summary).map_err(|e| e.to_string())?;
     std::fs::write(hooks.out_dir.join("summary.json"), value.to_string())

@@ -18,7 +18,7 @@ use crate::scene::{BlockKind, BlockModel, ContactSolver, Control, Excitation, Sc
 use crate::solve::dual::{DualInput, DualOutcome, DualSolver};
 use crate::solve::open_close::{self, OpenClose};
 use crate::solve::{LinearSolver, SolveError};
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Vector3};
 use std::time::{Duration, Instant};
 
 /// A typed failure of the engine, with where and what to change.
@@ -185,6 +185,8 @@ pub struct Simulation {
     pub thickness: Vec<f64>,
     pub stats: Stats,
     pub profile: StepProfile,
+    /// Per block: retired (left the scene, frozen where it was; see [`Simulation::retire`]).
+    pub retired: Vec<bool>,
 }
 
 impl std::fmt::Debug for Simulation {
@@ -303,6 +305,7 @@ impl Simulation {
                 ..Default::default()
             },
             profile: StepProfile::default(),
+            retired: vec![false; scene.blocks.len()],
             params,
         }
     }
@@ -393,9 +396,23 @@ impl Simulation {
         let search = self.search_distance();
         let scene = &self.scene;
         let first = self.stats.steps == 0;
+        // A retired block touches nothing: it is hidden from the broad phase as an immobile
+        // block among immobile ones, and the only free blocks it could meet have left too.
+        let hidden;
+        let mobility = if self.retired.iter().any(|&r| r) {
+            hidden = self
+                .mobility
+                .iter()
+                .zip(&self.retired)
+                .map(|(&m, &r)| if r { Mobility::Fixed } else { m })
+                .collect::<Vec<_>>();
+            &hidden
+        } else {
+            &self.mobility
+        };
         let rebuilt = self.contacts.detect(
             &self.geoms,
-            &self.mobility,
+            mobility,
             search,
             &self.params.contact,
             first,
@@ -465,6 +482,11 @@ impl Simulation {
             self.newmark,
             dt,
         );
+        for (f, &b) in self.dofs.block_of.iter().enumerate() {
+            if self.retired[b] {
+                self.system.clear_block_load(f);
+            }
+        }
         self.profile.assemble += t.elapsed();
     }
 
@@ -813,6 +835,22 @@ impl Simulation {
             }
             None => [0.0; 3],
         }
+    }
+
+    /// Retire free block `b`: it left the scene (fell far below it), so it is frozen where it
+    /// is — no velocity, no load, no contacts — and costs the step control nothing from now
+    /// on. Its unknowns stay in the system (solved to zero) so the numbering does not change.
+    pub fn retire(&mut self, b: usize) {
+        let Some(f) = self.dofs.free_index[b] else {
+            return;
+        };
+        self.retired[b] = true;
+        let st = &mut self.states[f];
+        st.vel = Vec6::zeros();
+        st.acc = Vec6::zeros();
+        st.stress = Vector3::zeros();
+        // Its contacts are dropped by the next detection, which must not be skipped.
+        self.contacts.force_detection();
     }
 
     /// True if any state value is not finite (checked by callers after each step).

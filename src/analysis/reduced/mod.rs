@@ -21,6 +21,7 @@ pub use qualify::{qualify, SingleBlock};
 pub use rocking::Restitution;
 
 use crate::motion::GroundMotion;
+use crate::scene::Scene;
 use nalgebra::Vector2;
 use ode::{State, Tolerance};
 
@@ -64,6 +65,70 @@ impl Default for ReducedParams {
             contact_tolerance: 1e-6,
             rigid_strain: 1e-4,
         }
+    }
+}
+
+/// Does the reduced model honour every control of `scene` that changes the physics? The
+/// controls (`scene::Control`) divide into
+/// - physics: `kinetic_damping_rate` (velocities decay at that rate: viscous damping) and
+///   `dynamic_factor` < 1 (velocities cut at every step: damping that depends on the step).
+///   Neither is in the reduced models, so a scene setting them runs the full engine
+///   (`auto`) or is refused (`rocking`, `sliding`); `Err` says which and why.
+/// - run length and budget: `duration`, `output_interval`, `max_steps`: honoured by both.
+/// - the full engine's numerical controls (`time_step`, `adaptive_time_step`,
+///   `max_displacement_ratio`, `penalty_stiffness`, `integrator`, `contact_solver`,
+///   `dual_tolerance`, `dual_stall_acceptance`): how the engine approximates the rigid-block
+///   equations the reduced models solve to their own tolerance ([`ReducedParams::tolerance`]);
+///   they do not apply, and `model_reason` says so when the scene sets them
+///   ([`engine_controls_note`]).
+/// - `block_model`: a deformable block stands for a rigid one only when stiff enough
+///   ([`ReducedParams::rigid_strain`], checked by [`qualify`]).
+pub fn represented(scene: &Scene) -> Result<(), String> {
+    let c = &scene.control;
+    let mut why = Vec::new();
+    if c.kinetic_damping_rate != 0.0 {
+        why.push(format!(
+            "control.kinetic_damping_rate = {} 1/s damps every velocity, which the reduced models do not",
+            c.kinetic_damping_rate
+        ));
+    }
+    if c.dynamic_factor != 1.0 {
+        why.push(format!(
+            "control.dynamic_factor = {} carries only part of the velocity from step to step (a damping that depends on the step), which the reduced models do not",
+            c.dynamic_factor
+        ));
+    }
+    if why.is_empty() {
+        Ok(())
+    } else {
+        Err(why.join("; "))
+    }
+}
+
+/// The full engine's numerical controls the scene sets, which a reduced run does not use: a
+/// note for `model_reason` (empty when the scene sets none).
+pub fn engine_controls_note(scene: &Scene) -> String {
+    let c = &scene.spec.control;
+    let set: Vec<&str> = [
+        ("time_step", c.time_step.is_some()),
+        ("adaptive_time_step", c.adaptive_time_step.is_some()),
+        ("max_displacement_ratio", c.max_displacement_ratio.is_some()),
+        ("penalty_stiffness", c.penalty_stiffness.is_some()),
+        ("integrator", c.integrator.is_some()),
+        ("contact_solver", c.contact_solver.is_some()),
+        ("dual_tolerance", c.dual_tolerance.is_some()),
+        ("dual_stall_acceptance", c.dual_stall_acceptance.is_some()),
+    ]
+    .into_iter()
+    .filter_map(|(name, given)| given.then_some(name))
+    .collect();
+    if set.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; the full engine's numerical controls the scene sets ({}) do not apply: the reduced model solves the same rigid-block equations to its own tolerance",
+            set.join(", ")
+        )
     }
 }
 

@@ -2,8 +2,8 @@
 //! outputs as a DDA run (summary, histories, trajectory) through `analysis::run`'s writers.
 use super::{Modes, Phase, Reduced, ReducedParams, SingleBlock, Violation};
 use crate::analysis::run::{
-    duration, failure_mode, reported_control, round_time, summary_units, BlockSummary, Diagnostics,
-    FailureParams, Ran, RunError, RunOptions, RunOutcome, Summary, Tracker, Writers,
+    duration, end_summary, failure_mode, reported_control, round_time, summary_units, BlockSummary,
+    Diagnostics, FailureParams, Ran, RunError, RunOptions, RunOutcome, Summary, Tracker, Writers,
     RUN_OUTPUTS_FORMAT,
 };
 use crate::motion::GroundMotion;
@@ -212,6 +212,13 @@ fn model_name(m: &Reduced) -> &'static str {
     }
 }
 
+/// Has the block settled? At rest, or lying on another face: exact states of the model, which
+/// no longer change once the ground is still (the energy bound of the full engine,
+/// `RunEndParams::settle_energy_ratio`, is for a model that has no such states).
+fn settled(m: &Reduced) -> bool {
+    matches!(m.phase, Phase::Rest | Phase::Fallen { .. })
+}
+
 /// Run the reduced model of `scene` (already qualified as `block`) under `motion`. `reason`
 /// is the start of `model_reason`; the run appends what happened.
 pub fn run(
@@ -226,6 +233,8 @@ pub fn run(
     let wall = Instant::now();
     let duration = duration(scene, motion)?;
     let failure = FailureParams::default();
+    // The run goes on after `duration` while the block moves, up to the cap.
+    let cap = crate::analysis::run_end::cap(duration, motion, &opts.run_end.unwrap_or_default());
     let mut m = Reduced::new(block, motion, params, modes);
     let provisional = match modes {
         Modes::Rocking => "rocking",
@@ -249,13 +258,24 @@ pub fn run(
     writers.emit(&frame(scene, &m, &now, &failure), opts, None)?;
     let mut stopped_reason = None;
     let mut cancelled = false;
-    while m.time < duration - 1e-12 {
+    while m.time < cap - 1e-12 {
         if opts.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             cancelled = true;
             stopped_reason = Some("cancelled".to_string());
             break;
         }
-        let next = ((frame_index + 1) as f64 * interval).min(duration);
+        if m.stats.steps >= scene.control.max_steps {
+            stopped_reason = Some(format!(
+                "step budget of {} steps reached (control.max_steps)",
+                scene.control.max_steps
+            ));
+            break;
+        }
+        let next = ((frame_index + 1) as f64 * interval).min(if m.time < duration - 1e-9 {
+            duration
+        } else {
+            cap
+        });
         if let Err(v) = m.advance(next) {
             writers.finish()?;
             return Err(ReducedError::Violation(v));
@@ -270,6 +290,9 @@ pub fn run(
         )?;
         if opts.stop_when.is_some_and(|f| f(&tr)) {
             stopped_reason = Some("decided".to_string());
+            break;
+        }
+        if settled(&m) && m.time >= duration - 1e-9 {
             break;
         }
     }
@@ -329,7 +352,11 @@ pub fn run(
         stopped_reason,
         control: reported_control(scene, Ran::Reduced),
         units: summary_units(),
+        settled: false,
+        events: Vec::new(),
     };
+    let mut summary = summary;
+    end_summary(&mut summary, settled(&m), Vec::new(), duration, motion);
     if let Some(dir) = opts.out_dir {
         let text =
             serde_json::to_string_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;

@@ -14,7 +14,10 @@ use nalgebra::Vector2;
 pub enum Restitution {
     /// Conservation of angular momentum about the new pivot (Housner 1963): for a block of any
     /// convex shape e = (I_c + m r₀·r₁)/(I_c + m|r₁|²), which for a rectangle is
-    /// 1 − 1.5 sin²α (α: the slenderness angle).
+    /// 1 − 1.5 sin²α (α: the slenderness angle). For a squat block (a rectangle with
+    /// α > 54.7°) the formula is negative: the momentum about the landing corner would turn
+    /// the block back into the base, i.e. it does not rock onto that corner at all, and the
+    /// impact ends the rocking (e = 0, see [`housner_ratio`]).
     Housner,
     /// A given ratio of angular velocities after/before impact.
     Coefficient(f64),
@@ -67,11 +70,16 @@ pub fn reaction(b: &SingleBlock, k: usize, th: f64, w: f64, a: Vector2<f64>) -> 
 pub fn restitution(b: &SingleBlock, k: usize, law: Restitution) -> f64 {
     match law {
         Restitution::Coefficient(e) => e,
-        Restitution::Housner => {
-            let (r0, r1) = (b.arm(k), b.arm(1 - k));
-            (b.inertia + b.mass * r0.dot(&r1)) / (b.inertia + b.mass * r1.norm_squared())
-        }
+        Restitution::Housner => housner_ratio(b, k).max(0.0),
     }
+}
+
+/// The ratio of Housner's angular-momentum law before the physical limit:
+/// (I_c + m r₀·r₁)/(I_c + m|r₁|²), negative for squat blocks (the law does not apply to them:
+/// the impact ends the rocking).
+pub fn housner_ratio(b: &SingleBlock, k: usize) -> f64 {
+    let (r0, r1) = (b.arm(k), b.arm(1 - k));
+    (b.inertia + b.mass * r0.dot(&r1)) / (b.inertia + b.mass * r1.norm_squared())
 }
 
 /// Local position of the centroid on pivot `k` at θ, with the block slid by `slip` along t.
@@ -143,6 +151,16 @@ mod tests {
         let alpha = (0.2f64 / 0.6).atan();
         let e = restitution(&b, 0, Restitution::Housner);
         assert!((e - (1.0 - 1.5 * alpha.sin().powi(2))).abs() < 1e-12, "{e}");
+    }
+
+    #[test]
+    fn squat_blocks_stop_at_the_impact() {
+        // 1 − 1.5 sin²α < 0 for α > 54.7° (here α = atan 2 = 63.4°): the impact is plastic.
+        let b = rectangle(0.6, 0.3);
+        let alpha = 2f64.atan();
+        assert!((housner_ratio(&b, 0) - (1.0 - 1.5 * alpha.sin().powi(2))).abs() < 1e-12);
+        assert!(housner_ratio(&b, 0) < 0.0);
+        assert_eq!(restitution(&b, 0, Restitution::Housner), 0.0);
     }
 
     #[test]
