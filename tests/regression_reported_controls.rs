@@ -5,6 +5,7 @@
 //! distinguish a dual-solver run; `simulated_time` read 2.9999999999999925. Each check below is
 //! exact: these are reported settings and a rounding to the nanosecond, not computed physics.
 use ashlar::analysis::run::{run, RunOptions};
+use ashlar::analysis::run_end::RunEndParams;
 use ashlar::motion::from_json;
 use ashlar::scene::parse_scene;
 use serde_json::{json, Value};
@@ -12,23 +13,28 @@ use serde_json::{json, Value};
 fn column(control: Value) -> Value {
     let mut v: Value =
         serde_json::from_str(include_str!("../examples/column.json")).expect("scene json");
+    v["control"]["duration"] = json!(3.0);
     for (k, x) in control.as_object().expect("object") {
         v["control"][k] = x.clone();
     }
     v
 }
 
-/// The run's summary as written to summary.json.
+/// The run's summary as written to summary.json. The scene's duration is fixed at 3 s and the
+/// settling continuation is off, so that the run ends at exactly 3000 × 1 ms of accumulated
+/// steps (the rounding under test), not at whatever time the column settles.
 fn summary(scene: &Value) -> Value {
     let scene = parse_scene(&scene.to_string()).expect("valid scene");
     let motion: Value =
         serde_json::from_str(include_str!("../examples/half-sine-pulse.json")).expect("json");
-    let out = run(
-        &scene,
-        &from_json(&motion).expect("motion"),
-        &RunOptions::default(),
-    )
-    .expect("run");
+    let opts = RunOptions {
+        run_end: Some(RunEndParams {
+            max_extension: 0.0,
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let out = run(&scene, &from_json(&motion).expect("motion"), &opts).expect("run");
     serde_json::to_value(&out.summary).expect("serialize")
 }
 
