@@ -175,7 +175,7 @@ pub struct ControlSpec {
     /// Extension: the dual solver's stopping tolerance, a fraction of the smallest free
     /// block's half size. Skipped when unset, like the next one: the spec is written into
     /// every recording's metadata, whose bytes must not change for scenes without them
-    /// (tests/record_golden_run.rs).
+    /// (tests/record/record_golden_run.rs).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dual_tolerance: Option<f64>,
     /// Extension: the multiple of `dual_tolerance` up to which a stalled dual solve is taken.

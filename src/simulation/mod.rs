@@ -316,7 +316,7 @@ impl Simulation {
     }
 
     /// The linear system the last linear solve of [`Simulation::step`] solved, read-only, for
-    /// verification (tests/invariants.rs checks its symmetry and that the step's increments
+    /// verification (tests/engine/invariants.rs checks its symmetry and that the step's increments
     /// solve it). With the penalty contact solver: block terms + the contact springs of the
     /// converged open–close iteration (the step's last solve; integration does not touch it).
     /// With the dual solver: the block terms its flexibilities come from (no springs).
@@ -699,7 +699,7 @@ impl Simulation {
 
     /// A closed contact deeper than `max_penetration_ratio` of the thinner block after a
     /// converged step (issue 8: a soft penalty used to complete silently with blocks sunk
-    /// into each other, see tests/regression_soft_penalty.rs).
+    /// into each other, see tests/regression/regression_soft_penalty.rs).
     fn too_soft(&self, dt: f64) -> Option<SimError> {
         let ratio = self.params.max_penetration_ratio;
         let search = self.search_distance();

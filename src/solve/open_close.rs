@@ -23,7 +23,7 @@ pub struct OpenCloseParams {
     /// force exceeds the Coulomb limit by this fraction, a sliding one re-sticks when its slip
     /// reverses by this fraction of the elastic shear displacement at the limit. Without it a
     /// contact exactly at the limit flips on round-off and the loop never settles (see
-    /// tests/regression_contact_chatter.rs). 1e-6 is far below any physical resolution.
+    /// tests/regression/regression_contact_chatter.rs). 1e-6 is far below any physical resolution.
     pub hysteresis: f64,
     /// Iterations of plain friction fixed-point updates before relaxing them (3: enough for
     /// the common, contracting case to converge unrelaxed).

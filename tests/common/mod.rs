@@ -20,7 +20,7 @@ pub fn scene_json(blocks: Value, friction_deg: f64, control: Value) -> Value {
 }
 
 /// The contact solver the physics suites run with: `ASHLAR_CONTACT_SOLVER=dual cargo test
-/// --test incline …` runs the same benchmarks, against the same references and tolerances, with
+/// --test engine incline:: …` runs the same benchmarks, against the same references and tolerances, with
 /// the dual (penalty-free) solver. Unset: the scene's own choice (default penalty).
 pub fn solver_under_test() -> Option<String> {
     std::env::var("ASHLAR_CONTACT_SOLVER").ok()

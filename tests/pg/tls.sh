@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# TLS to PostgreSQL (tests/pg_tls.rs): a throwaway cluster (server.sh) switched to `ssl = on`
+# TLS to PostgreSQL (tests/service/pg_tls.rs): a throwaway cluster (server.sh) switched to `ssl = on`
 # with a certificate from a CA made here by `openssl`, and a pg_hba.conf that accepts TCP
 # clients over TLS only (`hostssl`). Fails if the tests were skipped.
 set -euo pipefail
@@ -74,7 +74,7 @@ export ASHLAR_TEST_TLS_PORT="$PORT"
 export ASHLAR_TEST_TLS_CERTS="$CERTS"
 LOG="$TMP/tls-test.log"
 set +e
-cargo test --locked --test pg_tls -- --test-threads=2 --nocapture "$@" 2>&1 | tee "$LOG"
+cargo test --locked --test service pg_tls:: -- --test-threads=2 --nocapture "$@" 2>&1 | tee "$LOG"
 status=${PIPESTATUS[0]}
 set -e
 if grep -q "SKIPPED" "$LOG"; then

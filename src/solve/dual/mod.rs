@@ -65,7 +65,7 @@ pub struct DualParams {
     /// Products with W allowed to the MPRGP minimisation ([`mprgp`]) before the
     /// projection–contraction iteration takes over from its forces (0: the
     /// projection–contraction iteration alone, as in the seed). 5000: the warm-started solves
-    /// that converge take hundreds (small stacks and walls, `tests/dual_mprgp.rs`) to ~8000
+    /// that converge take hundreds (small stacks and walls, `tests/engine/dual_mprgp.rs`) to ~8000
     /// (the 1700-block pile); on the pile a budget of 20 000 ran its first 5 steps slower
     /// than 5000 (more time spent on solves that end in a time-step cut anyway).
     pub max_cg_iterations: usize,

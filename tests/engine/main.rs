@@ -1,0 +1,24 @@
+//! The engine against its references: the published benchmarks (incline, Newmark sliding, foundation, rocking, failure modes, single contacts), the dual solver, invariants, extremes and the solver shortcuts.
+//!
+//! One test binary for these modules (one per former file): a binary per file cost
+//! ~35 MB of disk and a link each. Run one with `cargo test --test engine NAME::`.
+
+#[path = "../common/mod.rs"]
+mod common;
+mod damping;
+mod dual_mprgp;
+mod dual_seed;
+mod dual_stall;
+mod dual_stiff_limit;
+mod extremes;
+mod failure_modes;
+mod foundation;
+mod incline;
+mod invariants;
+mod multiblock_references;
+mod rocking;
+mod rocking_impacts;
+mod single_contact;
+mod sliding_newmark;
+mod solver_reuse;
+mod stacked_column;

@@ -1,0 +1,14 @@
+//! The HTTP service, its durability, the PostgreSQL cluster mode and TLS.
+//!
+//! One test binary for these modules (one per former file): a binary per file cost
+//! ~35 MB of disk and a link each. Run one with `cargo test --test service NAME::`.
+
+mod pg_cluster;
+mod pg_tls;
+mod service_durability;
+mod service_openapi;
+mod service_pga;
+mod service_routes;
+#[path = "../service_support/mod.rs"]
+mod service_support;
+mod service_web;
