@@ -779,6 +779,11 @@ pub(crate) fn end_summary(
     summary.settled = settled;
     summary.events = events;
     summary.diagnostics.record_truncated = run_end::truncation(duration, motion);
+    // The duration that ran (the scene's, or the record's length + 2 s when it sets none),
+    // not the scene's unset `null`: the reported controls are those that ran.
+    if let Some(control) = summary.control.as_object_mut() {
+        control.insert("duration".into(), round_time(duration).into());
+    }
 }
 
 /// Classify the outcome from the per-block results.

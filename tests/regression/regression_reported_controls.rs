@@ -55,6 +55,19 @@ fn the_reduced_model_reports_a_rigid_block_and_no_engine_controls() {
     assert_eq!(s["units"]["pga"], "m/s2");
 }
 
+/// A scene without a duration runs for the record's length + 2 s (the half-sine pulse: 0.5 s
+/// long, so 2.5 s): that is the duration reported, not the scene's unset `null`.
+#[test]
+fn the_duration_reported_is_the_one_that_ran() {
+    let mut scene = column(json!({}));
+    scene["control"]
+        .as_object_mut()
+        .expect("control")
+        .remove("duration");
+    let s = summary(&scene);
+    assert_eq!(s["control"]["duration"], json!(2.5));
+}
+
 #[test]
 fn the_engine_reports_the_block_model_the_blocks_used() {
     let s = summary(&column(json!({"model": "dda"})));
