@@ -152,44 +152,37 @@ pub fn aligned_stack(columns: usize, rows: usize) -> Scene {
     parse(&v)
 }
 
+/// Depth of `p` inside the polygon `poly` (either orientation, convex or not), m: the distance
+/// to its nearest edge if inside (crossing-number test), 0 outside.
+pub fn depth_inside(p: nalgebra::Vector2<f64>, poly: &[nalgebra::Vector2<f64>]) -> f64 {
+    let n = poly.len();
+    let mut inside = false;
+    let mut nearest = f64::INFINITY;
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        if (a.y > p.y) != (b.y > p.y) {
+            let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+            if x > p.x {
+                inside = !inside;
+            }
+        }
+        let ab = b - a;
+        let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
+        nearest = nearest.min((a + t * ab - p).norm());
+    }
+    if inside {
+        nearest
+    } else {
+        0.0
+    }
+}
+
 /// Deepest penetration of any block's vertex inside any other block, m, measured geometrically
 /// from the blocks' current vertices and edges (independently of the engine's own contact
 /// statistics): for every pair whose bounding boxes overlap, the distance from each vertex of
-/// one block that lies inside the other (crossing-number test) to that block's nearest edge.
+/// one block that lies inside the other to that block's nearest edge ([`depth_inside`]).
 pub fn geometric_penetration(sim: &Simulation) -> f64 {
-    use nalgebra::Vector2;
-    fn depth_inside(p: Vector2<f64>, poly: &[Vector2<f64>]) -> f64 {
-        let n = poly.len();
-        let mut inside = false;
-        let mut nearest = f64::INFINITY;
-        for i in 0..n {
-            let (a, b) = (poly[i], poly[(i + 1) % n]);
-            if (a.y > p.y) != (b.y > p.y) {
-                let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
-                if x > p.x {
-                    inside = !inside;
-                }
-            }
-            let ab = b - a;
-            let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
-            nearest = nearest.min((a + t * ab - p).norm());
-        }
-        if inside {
-            nearest
-        } else {
-            0.0
-        }
-    }
-    let bounds = |v: &[Vector2<f64>]| {
-        v.iter().fold(
-            (
-                Vector2::repeat(f64::INFINITY),
-                Vector2::repeat(f64::NEG_INFINITY),
-            ),
-            |(lo, hi), p| (lo.inf(p), hi.sup(p)),
-        )
-    };
-    let boxes: Vec<_> = sim.geoms.iter().map(|g| bounds(&g.vertices)).collect();
+    let boxes: Vec<_> = sim.geoms.iter().map(|g| g.bounds()).collect();
     let mut worst = 0.0f64;
     for (a, ga) in sim.geoms.iter().enumerate() {
         for (b, gb) in sim.geoms.iter().enumerate() {

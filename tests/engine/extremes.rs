@@ -147,30 +147,9 @@ fn parse(v: &Value) -> Scene {
 // ---------------------------------------------------------------------------------------------
 // Independent penetration measure
 
-/// Depth of `p` inside the convex or concave polygon `poly` (counter-clockwise): the distance to
-/// the nearest edge if inside, 0 outside (crossing-number test).
-fn depth_inside(p: Vector2<f64>, poly: &[Vector2<f64>]) -> f64 {
-    let n = poly.len();
-    let mut inside = false;
-    let mut nearest = f64::INFINITY;
-    for i in 0..n {
-        let (a, b) = (poly[i], poly[(i + 1) % n]);
-        if (a.y > p.y) != (b.y > p.y) {
-            let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
-            if x > p.x {
-                inside = !inside;
-            }
-        }
-        let ab = b - a;
-        let t = ((p - a).dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
-        nearest = nearest.min((a + t * ab - p).norm());
-    }
-    if inside {
-        nearest
-    } else {
-        0.0
-    }
-}
+// The depth of a vertex inside a polygon: `common::depth_inside`, shared with the invariant
+// tests.
+use crate::common::depth_inside;
 
 /// 4·area / perimeter, m.
 fn dims(v: &[Vector2<f64>]) -> f64 {
