@@ -402,9 +402,7 @@ pub fn choose_model(scene: &Scene, params: &ReducedParams) -> Result<ModelPlan, 
         ModelChoice::Dda => Ok(ModelPlan::Dda(
             "control.model is \"dda\": the full DDA engine".into(),
         )),
-        ModelChoice::Auto => match reduced::qualify(scene, params)
-            .and_then(|b| reduced::represented(scene).map(|()| b))
-        {
+        ModelChoice::Auto => match reduced::qualify(scene, params) {
             Ok(b) => {
                 let reason = format!(
                     "control.model is \"auto\" and the scene is one rigid block on a {} base: {}{}",
@@ -428,9 +426,7 @@ pub fn choose_model(scene: &Scene, params: &ReducedParams) -> Result<ModelPlan, 
             } else {
                 ("sliding", Modes::Sliding)
             };
-            let b = reduced::qualify(scene, params)
-                .and_then(|b| reduced::represented(scene).map(|()| b))
-                .map_err(|why| {
+            let b = reduced::qualify(scene, params).map_err(|why| {
                 RunError::Invalid(format!(
                     "control.model: the scene does not qualify for the reduced \"{name}\" model: {why}"
                 ))

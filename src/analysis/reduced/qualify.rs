@@ -69,7 +69,8 @@ fn cross(a: Vector2<f64>, b: Vector2<f64>) -> f64 {
     a.x * b.y - a.y * b.x
 }
 
-/// The single-block description of `scene`, or why the scene is not one.
+/// The single-block description of `scene`, or why the scene is not one (its geometry, or a
+/// control the reduced models do not represent: [`super::represented`]).
 pub fn qualify(scene: &Scene, params: &ReducedParams) -> Result<SingleBlock, String> {
     let free: Vec<usize> = scene.free_blocks().collect();
     if free.len() != 1 {
@@ -183,6 +184,8 @@ pub fn qualify(scene: &Scene, params: &ReducedParams) -> Result<SingleBlock, Str
         ));
     }
     let density = scene.materials[fb.material].density;
+    // The geometry qualifies; the controls must be ones the reduced models represent too.
+    super::represented(scene)?;
     Ok(SingleBlock {
         free: f,
         base: b,

@@ -329,7 +329,7 @@ pub fn run(
     }];
     let st = &m.stats;
     let restitution = super::rocking::restitution(&m.block, 0, params.restitution);
-    let summary = Summary {
+    let mut summary = Summary {
         format: RUN_OUTPUTS_FORMAT.into(),
         completed: stopped_reason.is_none() && m.time >= duration - 1e-9,
         simulated_time: round_time(m.time),
@@ -355,7 +355,6 @@ pub fn run(
         settled: false,
         events: Vec::new(),
     };
-    let mut summary = summary;
     end_summary(&mut summary, settled(&m), Vec::new(), duration, motion);
     if let Some(dir) = opts.out_dir {
         let text =
