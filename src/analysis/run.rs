@@ -591,11 +591,8 @@ fn run_dda(
             ));
             break;
         }
-        let next_frame = ((frame_index + 1) as f64 * interval).min(if sim.time < duration - 1e-9 {
-            duration
-        } else {
-            cap
-        });
+        let next_frame =
+            ((frame_index + 1) as f64 * interval).min(run_end::horizon(sim.time, duration, cap));
         if let Err(e) = sim.step(next_frame - sim.time) {
             failure_msg = Some(e.to_string());
             break;
@@ -610,7 +607,7 @@ fn run_dda(
         if sim.time >= next_frame - 1e-9 * interval {
             frame_index += 1;
             writers.emit(&frame(&sim, &failure), opts, Some(sim.time / duration))?;
-            if settled && sim.time >= duration - 1e-9 {
+            if run_end::may_end(sim.time, duration, settled) {
                 break;
             }
         }

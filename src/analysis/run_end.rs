@@ -96,6 +96,21 @@ pub fn cap(duration: f64, motion: &GroundMotion, params: &RunEndParams) -> f64 {
     }
 }
 
+/// s, the latest time the next output frame may reach: the duration until the run has reached
+/// it (frames land exactly on it), then the continuation's `cap`.
+pub fn horizon(time: f64, duration: f64, cap: f64) -> f64 {
+    if time < duration - 1e-9 {
+        duration
+    } else {
+        cap
+    }
+}
+
+/// The run may end here: it has reached its duration and the structure has settled.
+pub fn may_end(time: f64, duration: f64, settled: bool) -> bool {
+    settled && time >= duration - 1e-9
+}
+
 /// The verdict of a run: [`super::run::failure_mode`], except that a structure still moving
 /// at the end is "undecided" rather than "stable" (it might still fall).
 pub fn verdict(mode: &'static str, settled: bool) -> &'static str {

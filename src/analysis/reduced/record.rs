@@ -6,6 +6,7 @@ use crate::analysis::run::{
     Diagnostics, FailureParams, Ran, RunError, RunOptions, RunOutcome, Summary, Tracker, Writers,
     RUN_OUTPUTS_FORMAT,
 };
+use crate::analysis::run_end;
 use crate::motion::GroundMotion;
 use crate::record::{
     BlockFrame, BlockMotionState, Frame, FrameBlockKind, GroundFrame, RecordHeader,
@@ -234,7 +235,7 @@ pub fn run(
     let duration = duration(scene, motion)?;
     let failure = FailureParams::default();
     // The run goes on after `duration` while the block moves, up to the cap.
-    let cap = crate::analysis::run_end::cap(duration, motion, &opts.run_end.unwrap_or_default());
+    let cap = run_end::cap(duration, motion, &opts.run_end.unwrap_or_default());
     let mut m = Reduced::new(block, motion, params, modes);
     let provisional = match modes {
         Modes::Rocking => "rocking",
@@ -271,11 +272,8 @@ pub fn run(
             ));
             break;
         }
-        let next = ((frame_index + 1) as f64 * interval).min(if m.time < duration - 1e-9 {
-            duration
-        } else {
-            cap
-        });
+        let next =
+            ((frame_index + 1) as f64 * interval).min(run_end::horizon(m.time, duration, cap));
         if let Err(v) = m.advance(next) {
             writers.finish()?;
             return Err(ReducedError::Violation(v));
@@ -292,7 +290,7 @@ pub fn run(
             stopped_reason = Some("decided".to_string());
             break;
         }
-        if settled(&m) && m.time >= duration - 1e-9 {
+        if run_end::may_end(m.time, duration, settled(&m)) {
             break;
         }
     }
