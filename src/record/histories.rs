@@ -10,12 +10,17 @@ use std::path::{Path, PathBuf};
 /// <id>.rotation_rad` per block. The unit suffixes are format version 2 (`summary.json`
 /// `"format": "ashlar.run/2"`); version 1 wrote `time,<id>.x,<id>.y,<id>.rotation`.
 pub fn header_line<'a>(ids: impl IntoIterator<Item = &'a str>) -> String {
-    let mut line = String::from("time_s");
+    let [time, x, y, rotation] = HEADER_COLUMNS;
+    let mut line = String::from(time);
     for id in ids {
-        line.push_str(&format!(",{id}.x_m,{id}.y_m,{id}.rotation_rad"));
+        line.push_str(&format!(",{id}{x},{id}{y},{id}{rotation}"));
     }
     line
 }
+
+/// The time column's name and the suffixes of each block's columns (x, y, rotation) in the
+/// current header: written by [`header_line`], read back by the service.
+pub const HEADER_COLUMNS: [&str; 4] = ["time_s", ".x_m", ".y_m", ".rotation_rad"];
 
 /// Time as written to outputs, s: rounded to the nanosecond (the MCAP log-time resolution), so
 /// that 3000 steps of 1 ms read 3 and not 2.9999999999999925.

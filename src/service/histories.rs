@@ -47,7 +47,7 @@ const UNITS: Units = Units {
 };
 
 /// Column name suffixes of the two header versions: (time, x, y, rotation).
-const HEADER_V2: [&str; 4] = ["time_s", ".x_m", ".y_m", ".rotation_rad"];
+const HEADER_V2: [&str; 4] = crate::record::histories::HEADER_COLUMNS;
 const HEADER_V1: [&str; 4] = ["time", ".x", ".y", ".rotation"];
 
 impl Histories {
