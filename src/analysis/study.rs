@@ -1137,7 +1137,7 @@ pub fn write_outputs(result: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>, S
     let p = dir.join("points.json");
     io(&p, &(json + "\n"))?;
     written.push(p);
-    let mut csv = String::from("scene,sweep,label,model_ran,integrator,block_model,contact_solver,time_step,penalty_stiffness,max_displacement_ratio,reduced_rtol,error,wall_time_s,steps,open_close_iterations_mean,time_step_cuts,note\n");
+    let mut csv = String::from("scene,sweep,label,model_ran,integrator,block_model,contact_solver,time_step_s,penalty_stiffness_N_per_m,max_displacement_ratio,reduced_rtol,error,wall_time_s,steps,open_close_iterations_mean,time_step_cuts,note\n");
     for p in &result.points {
         let s = &p.setting;
         csv += &format!(
