@@ -9,6 +9,7 @@
 //! Units: D in m and rad (strains dimensionless), forces in N (per metre of thickness), moments
 //! in N·m. Newmark: `D = Δ·v0 + Δ²[(½−β)·a0 + β·a1]`, `v1 = v0 + Δ[(1−γ)·a0 + γ·a1]`.
 pub mod contact_springs;
+pub mod restitution;
 
 use crate::geometry::{BlockGeometry, Mat6, Vec6};
 use crate::scene::{Integrator, Material, PlaneKind};

@@ -181,4 +181,54 @@ pub struct ControlSpec {
     /// Extension: the multiple of `dual_tolerance` up to which a stalled dual solve is taken.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dual_stall_acceptance: Option<f64>,
+    /// Restitution of impacts: `"housner"` or a coefficient in [0, 1] (docs/format.md §
+    /// controls). Skipped when unset, like the two above.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub restitution: Option<RestitutionSpec>,
+}
+
+/// `control.restitution` as written: a number (validated into [0, 1] by `validate`) or the
+/// keyword `"housner"`. Deserialized by hand so that a wrong string or type says what is
+/// expected instead of serde's "did not match any variant".
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RestitutionSpec {
+    Housner,
+    Coefficient(f64),
+}
+
+impl Serialize for RestitutionSpec {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            RestitutionSpec::Housner => s.serialize_str("housner"),
+            RestitutionSpec::Coefficient(e) => s.serialize_f64(*e),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for RestitutionSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = RestitutionSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a coefficient of restitution in [0, 1] or \"housner\"")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Self::Value, E> {
+                Ok(RestitutionSpec::Coefficient(v))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Self::Value, E> {
+                Ok(RestitutionSpec::Coefficient(v as f64))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Self::Value, E> {
+                Ok(RestitutionSpec::Coefficient(v as f64))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Self::Value, E> {
+                match v {
+                    "housner" => Ok(RestitutionSpec::Housner),
+                    _ => Err(E::invalid_value(serde::de::Unexpected::Str(v), &self)),
+                }
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
 }

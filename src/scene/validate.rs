@@ -412,6 +412,23 @@ fn control(c: &ControlSpec) -> Result<Control, SceneError> {
         out.max_steps = n;
     }
     dual_knobs(c, &mut out)?;
+    if let Some(r) = c.restitution {
+        out.restitution = match r {
+            RestitutionSpec::Housner => Restitution::Housner,
+            RestitutionSpec::Coefficient(e) => {
+                finite("control.restitution", e)?;
+                if !(0.0..=1.0).contains(&e) {
+                    return err(
+                        "control.restitution",
+                        format!(
+                            "must be a coefficient of restitution in [0, 1] or \"housner\", got {e}"
+                        ),
+                    );
+                }
+                Restitution::Coefficient(e)
+            }
+        };
+    }
     Ok(out)
 }
 

@@ -9,12 +9,13 @@ pub use energy::Energy;
 pub use params::{resolve_penalty, SimParams};
 
 use crate::assembly::contact_springs::{JointLaw, Prescribed, SpringParams};
+use crate::assembly::restitution::{apply_impacts, ImpactInput};
 use crate::assembly::{elasticity, BlockState, BlockSystem, BodyLoads, Dofs, Newmark};
 use crate::contact::{Contact, ContactSet, ContactState, Mobility};
 use crate::geometry::{displacement_matrix, BlockGeometry, Vec6};
 use crate::integrate;
 use crate::motion::GroundMotion;
-use crate::scene::{BlockKind, BlockModel, ContactSolver, Control, Excitation, Scene};
+use crate::scene::{BlockKind, BlockModel, ContactSolver, Control, Excitation, Restitution, Scene};
 use crate::solve::dual::{DualInput, DualOutcome, DualSolver};
 use crate::solve::open_close::{self, OpenClose};
 use crate::solve::{LinearSolver, SolveError};
@@ -146,6 +147,8 @@ pub struct Stats {
     pub max_penetration: f64,
     pub min_dt: f64,
     pub max_dt: f64,
+    /// Contacts that closed under Newton's impact law (`control.restitution` a number).
+    pub impacts: u64,
 }
 
 /// The engine state of one scene under one ground motion.
@@ -351,8 +354,11 @@ impl Simulation {
         self.detect_contacts();
         let t1 = Instant::now();
         self.profile.detect += t1 - t0;
-        self.start_states.clone_from(&self.states);
         let mut dt = self.dt.min(max_dt);
+        if let Restitution::Coefficient(e) = self.scene.control.restitution {
+            self.impacts(e, dt);
+        }
+        self.start_states.clone_from(&self.states);
         let mut cuts = 0u32;
         loop {
             self.assemble(dt);
@@ -447,6 +453,36 @@ impl Simulation {
         self.system.set_pattern(pairs);
         self.system
             .bind_contacts(&self.dofs, &self.contacts.contacts);
+    }
+
+    /// Newton's impact law at the contacts that close within the step (`control.restitution`
+    /// a number): the step then starts from the velocities after the impact.
+    fn impacts(&mut self, e: f64, dt: f64) {
+        let immobile: Vec<[f64; 3]> = (0..self.scene.blocks.len())
+            .map(|b| match self.dofs.free_index[b] {
+                Some(_) => [0.0; 3],
+                None => self.block_velocity(b),
+            })
+            .collect();
+        let friction: Vec<f64> = self.laws.iter().map(|l| l.tan_phi).collect();
+        let input = ImpactInput {
+            dofs: &self.dofs,
+            geoms: &self.geoms,
+            densities: &self.densities,
+            immobile_velocity: &immobile,
+            friction: &friction,
+            retired: &self.retired,
+            restitution: e,
+            dt,
+            gravity: self.scene.gravity,
+        };
+        let n = apply_impacts(
+            &input,
+            &self.contacts.contacts,
+            &mut self.states,
+            &self.params.impact,
+        );
+        self.stats.impacts += n as u64;
     }
 
     /// Kinetic damping, loads at the step end, prescribed motion, block terms.

@@ -1,4 +1,5 @@
 //! Engine tuning knobs and the automatic penalty stiffness.
+use crate::assembly::restitution::ImpactParams;
 use crate::contact::ContactParams;
 use crate::scene::{Penalty, Scene};
 use crate::solve::dual::DualParams;
@@ -13,6 +14,8 @@ pub struct SimParams {
     pub solver: SolverParams,
     /// The dual (penalty-free) contact solver, used when `control.contact_solver = "dual"`.
     pub dual: DualParams,
+    /// Newton's impact law, used when `control.restitution` is a number.
+    pub impact: ImpactParams,
     /// Shear spring stiffness as a fraction of the normal one: Shi's code uses 1/2.5.
     pub shear_ratio: f64,
     /// Cuts of one step before giving up: 0.3¹² ≈ 5e-7, so a 1 ms step can shrink to ~0.5 ns.
@@ -46,6 +49,7 @@ impl Default for SimParams {
             open_close: OpenCloseParams::default(),
             solver: SolverParams::default(),
             dual: DualParams::default(),
+            impact: ImpactParams::default(),
             shear_ratio: 0.4,
             max_cuts: 12,
             cut_factor: 0.3,
