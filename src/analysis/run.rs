@@ -154,6 +154,7 @@ pub fn summary_units() -> serde_json::Value {
             "max_steps": "count",
             "dual_tolerance": "1",
             "dual_stall_acceptance": "1",
+            "restitution": "1",
         },
     })
 }
@@ -171,7 +172,7 @@ pub enum Ran {
 /// default for blocks that do not name their own, so the reported `block_model` is the one the
 /// free blocks used (`"mixed"` when they differ); the dual solver has no penalty springs, the
 /// penalty solver no dual tolerances; a reduced model treats its block as rigid and uses none
-/// of the engine's controls (only `duration`, `output_interval` and `model`).
+/// of the engine's controls (only `duration`, `output_interval`, `model` and `restitution`).
 pub fn reported_control(scene: &Scene, ran: Ran) -> serde_json::Value {
     let mut v = serde_json::to_value(&scene.control).unwrap_or_default();
     let Some(obj) = v.as_object_mut() else {
@@ -179,7 +180,12 @@ pub fn reported_control(scene: &Scene, ran: Ran) -> serde_json::Value {
     };
     match ran {
         Ran::Reduced => {
-            obj.retain(|k, _| matches!(k.as_str(), "duration" | "output_interval" | "model"));
+            obj.retain(|k, _| {
+                matches!(
+                    k.as_str(),
+                    "duration" | "output_interval" | "model" | "restitution"
+                )
+            });
             obj.insert("block_model".into(), "rigid".into());
         }
         Ran::Engine => {

@@ -83,7 +83,10 @@ impl Default for ReducedParams {
 ///   ([`engine_controls_note`]).
 /// - `block_model`: a deformable block stands for a rigid one only when stiff enough
 ///   ([`ReducedParams::rigid_strain`], checked by [`qualify`]).
+/// - `restitution`: `"housner"` and 0 are the rocking model's Housner law; a coefficient
+///   above 0 makes a landing corner bounce, which the reduced models do not represent.
 pub fn represented(scene: &Scene) -> Result<(), String> {
+    use crate::scene::Restitution;
     let c = &scene.control;
     let mut why = Vec::new();
     if c.kinetic_damping_rate != 0.0 {
@@ -97,6 +100,16 @@ pub fn represented(scene: &Scene) -> Result<(), String> {
             "control.dynamic_factor = {} carries only part of the velocity from step to step (a damping that depends on the step), which the reduced models do not",
             c.dynamic_factor
         ));
+    }
+    if let Restitution::Coefficient(e) = c.restitution {
+        // e = 0 is Housner's law (an impact without bounce or slip, angular momentum about the
+        // landing corner conserved), which the rocking model uses; with e > 0 the landing corner
+        // bounces and the block leaves pure rocking (tests/engine/restitution.rs).
+        if e > 0.0 {
+            why.push(format!(
+                "control.restitution = {e} makes a landing corner bounce off the base (Newton's law at the contact; for a rectangle ω⁺/ω⁻ = 1 − 1.5 (1 + e) sin²α, then free flight), which the reduced rocking model (pure rocking with Housner's impact, e = 0) does not represent"
+            ));
+        }
     }
     if why.is_empty() {
         Ok(())
