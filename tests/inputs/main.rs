@@ -10,3 +10,4 @@ mod motion_formats;
 mod motion_fuzz;
 mod motion_golden;
 mod scene_fuzz;
+mod scene_restitution;
