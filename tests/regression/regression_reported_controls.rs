@@ -45,7 +45,10 @@ fn the_reduced_model_reports_a_rigid_block_and_no_engine_controls() {
     assert_eq!(s["format"], "ashlar.run/2");
     assert_eq!(
         s["control"],
-        json!({"block_model": "rigid", "duration": 3.0, "model": "auto", "output_interval": 0.01})
+        // `restitution` is honoured by the reduced models (`"housner"`, 0) or sends the scene
+        // to the engine, so it is reported with what ran.
+        json!({"block_model": "rigid", "duration": 3.0, "model": "auto", "output_interval": 0.01,
+               "restitution": "housner"})
     );
     let d = s["diagnostics"].as_object().expect("diagnostics");
     assert!(!d.contains_key("penalty_stiffness"), "{d:?}");
