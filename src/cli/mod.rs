@@ -1,6 +1,8 @@
 //! Command line: a thin layer that parses arguments and calls `analysis` / `service`.
+mod criteria;
 mod run;
 mod scene;
+mod site;
 mod study;
 mod sweep;
 mod worker;
@@ -37,6 +39,8 @@ pub enum Command {
     Sweep(sweep::SweepArgs),
     /// Print a parametric structure's scene JSON (`ashlar scene NAME --set KEY=VALUE`, `--list`).
     Scene(scene::SceneArgs),
+    /// The PGA interval consistent with several observations at one site (docs/observations.md).
+    Site(site::SiteArgs),
 }
 
 /// Run the CLI; errors go to stderr as one clear line.
@@ -51,6 +55,7 @@ pub fn main() -> ExitCode {
         Command::Worker(args) => worker::run(&args),
         Command::Sweep(args) => sweep::run(&args),
         Command::Scene(args) => scene::run(&args),
+        Command::Site(args) => site::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
