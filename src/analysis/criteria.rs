@@ -324,16 +324,17 @@ mod tests {
 
     #[test]
     fn bad_criteria_name_the_field() {
-        let e = Damage::parse(r#"{"kind":"drop","block":"key","meters":1}"#).unwrap_err();
+        let e = Damage::parse(r#"{"kind":"drop","block":"key","meters":1}"#)
+            .expect_err("must be refused");
         assert!(e.to_string().contains("meters"), "{e}");
-        let e = Damage::parse(r#"{"kind":"tilted","block":"key"}"#).unwrap_err();
+        let e = Damage::parse(r#"{"kind":"tilted","block":"key"}"#).expect_err("must be refused");
         assert!(e.to_string().contains("tilted"), "{e}");
         let (_, scene) = crate::scene::templates::build("drum-column", &Default::default())
             .unwrap_or_else(|e| panic!("{e}"));
         let d = parse(
             r#"{"kind":"any","of":[{"kind":"drop","block":"drum1","metres":0.1},{"kind":"fallen","blocks":["abacus","foundation"]}]}"#,
         );
-        let e = d.check(&scene).unwrap_err();
+        let e = d.check(&scene).expect_err("must be refused");
         assert_eq!(
             e.to_string(),
             "criterion of[1].blocks[1]: no free block with id \"foundation\""
@@ -341,7 +342,7 @@ mod tests {
         let d = parse(r#"{"kind":"displaced_fraction","metres":0.01,"fraction":1.5}"#);
         assert!(d
             .check(&scene)
-            .unwrap_err()
+            .expect_err("must be refused")
             .to_string()
             .contains("fraction"));
         parse(r#"{"kind":"relative_sliding","blocks":["drum2","drum1"],"metres":0.03}"#)

@@ -214,7 +214,7 @@ mod tests {
         );
         g.insert("shape".to_string(), Value::from("pointed"));
         g.insert("voussoirs".to_string(), Value::from(15));
-        let e = build("arch", &g).unwrap_err();
+        let e = build("arch", &g).expect_err("must be refused");
         assert_eq!(e.parameter(), Some("voussoirs"));
         g.insert("voussoirs".to_string(), Value::from(16));
         build("arch", &g).unwrap_or_else(|e| panic!("{e}"));

@@ -406,16 +406,18 @@ mod tests {
 
     #[test]
     fn out_of_range_and_unknown_values_name_the_parameter() {
-        let e = build("arch", &given(&[("thickness_ratio", 0.9.into())])).unwrap_err();
+        let e =
+            build("arch", &given(&[("thickness_ratio", 0.9.into())])).expect_err("must be refused");
         assert_eq!(e.parameter(), Some("thickness_ratio"), "{e}");
         assert!(e.to_string().contains("must be in"), "{e}");
-        let e = build("drum-column", &given(&[("drums", "7.5".into())])).unwrap_err();
+        let e =
+            build("drum-column", &given(&[("drums", "7.5".into())])).expect_err("must be refused");
         assert_eq!(e.parameter(), Some("drums"), "{e}");
-        let e = build("drum-column", &given(&[("drumz", 7.into())])).unwrap_err();
+        let e = build("drum-column", &given(&[("drumz", 7.into())])).expect_err("must be refused");
         assert_eq!(e.parameter(), Some("drumz"), "{e}");
-        let e = build("arch", &given(&[("shape", "gothic".into())])).unwrap_err();
+        let e = build("arch", &given(&[("shape", "gothic".into())])).expect_err("must be refused");
         assert!(e.to_string().contains("semicircular, pointed"), "{e}");
-        let e = build("temple", &BTreeMap::new()).unwrap_err();
+        let e = build("temple", &BTreeMap::new()).expect_err("must be refused");
         assert!(matches!(e, TemplateError::UnknownTemplate { .. }), "{e}");
     }
 
