@@ -1,6 +1,8 @@
 //! Analysis: drives the simulation for a user question (a run, failure modes, PGA searches).
 //! Sits on top of `simulation`, `motion` and `record`; the service and CLI call in here.
+pub mod criteria;
 pub mod fragility;
+pub mod observations;
 pub mod pga;
 pub mod reduced;
 pub mod reference;

@@ -17,10 +17,24 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Criterion {
-    Toppled { block: String },
-    Displacement { block: String, metres: f64 },
-    Rotation { block: String, degrees: f64 },
-    Not { inner: Box<Criterion> },
+    Toppled {
+        block: String,
+    },
+    Displacement {
+        block: String,
+        metres: f64,
+    },
+    Rotation {
+        block: String,
+        degrees: f64,
+    },
+    Not {
+        inner: Box<Criterion>,
+    },
+    /// A damage criterion of `criteria` (its JSON form on the command line).
+    Damage {
+        damage: super::criteria::Damage,
+    },
 }
 
 /// Rotation (rad) past which a toppling block is counted as fallen before the run ends: at
@@ -30,6 +44,10 @@ const FALLEN_ROTATION: f64 = std::f64::consts::FRAC_PI_3;
 impl Criterion {
     /// Parse the command-line / API form.
     pub fn parse(text: &str) -> Result<Self, String> {
+        if text.trim_start().starts_with('{') {
+            let damage = super::criteria::Damage::parse(text).map_err(|e| e.to_string())?;
+            return Ok(Criterion::Damage { damage });
+        }
         if let Some(rest) = text.strip_prefix("not:") {
             return Ok(Criterion::Not {
                 inner: Box::new(Criterion::parse(rest)?),
@@ -59,6 +77,7 @@ impl Criterion {
             Criterion::Displacement { block, metres } => format!("displacement:{block}:{metres}"),
             Criterion::Rotation { block, degrees } => format!("rotation:{block}:{degrees}"),
             Criterion::Not { inner } => format!("not:{}", inner.text()),
+            Criterion::Damage { damage } => damage.text(),
         }
     }
 
@@ -69,11 +88,30 @@ impl Criterion {
             | Criterion::Displacement { block, .. }
             | Criterion::Rotation { block, .. } => block,
             Criterion::Not { inner } => inner.block(),
+            Criterion::Damage { damage } => damage.blocks().first().copied().unwrap_or_default(),
+        }
+    }
+
+    /// Every block the criterion names (checked to be free blocks of the scene).
+    pub fn blocks(&self) -> Vec<&str> {
+        match self {
+            Criterion::Damage { damage } => damage.blocks(),
+            other => vec![other.block()],
         }
     }
 
     /// Is the criterion met by the run's final state?
     fn met(&self, tr: &Tracker) -> bool {
+        // A damage criterion reads every block it names (or all), not one block.
+        match self {
+            Criterion::Damage { damage } => {
+                return damage.met(&super::criteria::FinalState::from_tracker(tr))
+            }
+            Criterion::Not { inner } if matches!(**inner, Criterion::Damage { .. }) => {
+                return !inner.met(tr)
+            }
+            _ => {}
+        }
         let Some(k) = tr.index_of(self.block()) else {
             return false;
         };
@@ -87,6 +125,8 @@ impl Criterion {
                 tr.final_rotation[k].abs() >= degrees.to_radians()
             }
             Criterion::Not { inner } => !inner.met(tr),
+            // Answered above.
+            Criterion::Damage { .. } => false,
         }
     }
 
@@ -202,15 +242,21 @@ fn validate(scene: &Scene, motion: &GroundMotion, req: &PgaRequest) -> Result<()
         ));
     }
     for c in &req.criteria {
-        let id = c.block();
-        if scene
-            .block_index(id)
-            .is_none_or(|b| !matches!(scene.blocks[b].kind, crate::scene::BlockKind::Free(_)))
-        {
-            return Err(RunError::Invalid(format!(
-                "criterion {:?}: no free block with id {id:?}",
-                c.text()
-            )));
+        if let Criterion::Damage { damage } = c {
+            damage
+                .check(scene)
+                .map_err(|e| RunError::Invalid(e.to_string()))?;
+        }
+        for id in c.blocks() {
+            if scene
+                .block_index(id)
+                .is_none_or(|b| !matches!(scene.blocks[b].kind, crate::scene::BlockKind::Free(_)))
+            {
+                return Err(RunError::Invalid(format!(
+                    "criterion {:?}: no free block with id {id:?}",
+                    c.text()
+                )));
+            }
         }
     }
     if !(req.min.is_finite() && req.max.is_finite() && req.min >= 0.0 && req.max > req.min) {

@@ -1,5 +1,8 @@
 //! Command line: a thin layer that parses arguments and calls `analysis` / `service`.
+mod criteria;
 mod run;
+mod scene;
+mod site;
 mod study;
 mod sweep;
 mod worker;
@@ -34,6 +37,10 @@ pub enum Command {
     Worker(worker::WorkerArgs),
     /// Batch systems: run line N of a manifest (`--index N`), or gather results (`--collect DIR`).
     Sweep(sweep::SweepArgs),
+    /// Print a parametric structure's scene JSON (`ashlar scene NAME --set KEY=VALUE`, `--list`).
+    Scene(scene::SceneArgs),
+    /// The PGA interval consistent with several observations at one site (docs/observations.md).
+    Site(site::SiteArgs),
 }
 
 /// Run the CLI; errors go to stderr as one clear line.
@@ -47,6 +54,8 @@ pub fn main() -> ExitCode {
         Command::Study(args) => study::run(&args),
         Command::Worker(args) => worker::run(&args),
         Command::Sweep(args) => sweep::run(&args),
+        Command::Scene(args) => scene::run(&args),
+        Command::Site(args) => site::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -40,6 +40,10 @@ pub struct RunArgs {
     /// length + 2 s). The run then goes on while the structure moves (docs/run-end.md).
     #[arg(long)]
     pub duration: Option<f64>,
+    /// Damage criteria to evaluate on the run's final state (the `pga` forms, or the JSON of
+    /// docs/format.md §3 "Damage criteria"); verdicts go to OUT/criteria.json and stderr.
+    #[arg(long)]
+    pub criterion: Vec<String>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -153,14 +157,14 @@ pub fn record_paths(spec: &str) -> Result<(Vec<PathBuf>, bool), String> {
 }
 
 /// A record's name in results: its file name.
-fn record_name(p: &Path) -> String {
+pub(super) fn record_name(p: &Path) -> String {
     p.file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| p.display().to_string())
 }
 
 /// `--NAME TEXT` as an acceleration with units, in m/s².
-fn acceleration_option(name: &str, text: &str) -> Result<f64, String> {
+pub(super) fn acceleration_option(name: &str, text: &str) -> Result<f64, String> {
     parse_acceleration(text).map_err(|e| format!("--{name} {text:?}: {e}"))
 }
 
@@ -198,7 +202,7 @@ fn warn_truncation(scene: &Scene, gm: &GroundMotion) {
     }
 }
 
-fn load_scene(path: &Path) -> Result<Scene, String> {
+pub(super) fn load_scene(path: &Path) -> Result<Scene, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
     parse_scene(&text).map_err(|e| format!("{}: {e}", path.display()))
 }
@@ -238,7 +242,9 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
         history_blocks: args.blocks.clone(),
         ..Default::default()
     };
+    let criteria = super::criteria::parse_for(&scene, &args.criterion)?;
     let outcome = run_scene(&scene, &gm, &opts).map_err(|e| e.to_string())?;
+    super::criteria::report(&criteria, &outcome.summary, &args.out)?;
     println!(
         "{}",
         serde_json::to_string_pretty(&outcome.summary).map_err(|e| e.to_string())?

@@ -6,6 +6,7 @@
 pub mod generate;
 mod plane;
 pub mod spec;
+pub mod templates;
 mod validate;
 
 pub use plane::{inside_depth, polygon_signed_area, segments_cross};

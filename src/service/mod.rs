@@ -13,6 +13,7 @@ pub mod problem;
 pub mod request;
 pub mod routes;
 pub mod store;
+pub mod templates;
 pub mod web;
 pub mod worker;
 

@@ -70,6 +70,12 @@ pub fn route_table() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
         (Method::POST, "/v1/motions/inspect", post(web::inspect)),
         (Method::GET, "/v1/examples", get(web::list_examples)),
         (Method::GET, "/v1/examples/{name}", get(web::get_example)),
+        (Method::GET, "/v1/templates", get(super::templates::list)),
+        (
+            Method::POST,
+            "/v1/templates/{name}",
+            post(super::templates::build),
+        ),
     ]
 }
 

@@ -15,4 +15,6 @@ mod reduced_rocking;
 mod reduced_selection;
 mod reduced_sliding;
 mod run_end;
+mod site_observations;
 mod sweep_cli;
+mod templates_cli;

@@ -70,6 +70,9 @@ fn met_in(c: &Criterion, s: &Summary) -> bool {
         }
         Criterion::Rotation { degrees, .. } => b.final_rotation.abs() >= degrees.to_radians(),
         Criterion::Not { inner } => !met_in(inner, s),
+        Criterion::Damage { damage } => {
+            damage.met(&ashlar::analysis::criteria::FinalState::from_summary(s))
+        }
     }
 }
 

@@ -23,3 +23,4 @@ mod single_contact;
 mod sliding_newmark;
 mod solver_reuse;
 mod stacked_column;
+mod templates;

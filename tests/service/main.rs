@@ -11,4 +11,5 @@ mod service_pga;
 mod service_routes;
 #[path = "../service_support/mod.rs"]
 mod service_support;
+mod service_templates;
 mod service_web;

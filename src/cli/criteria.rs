@@ -1,0 +1,58 @@
+//! `ashlar run --criterion`: evaluate damage criteria (`analysis::criteria`, or the `pga`
+//! forms) on a finished run's summary; verdicts to OUT/criteria.json and one line each on
+//! standard error (standard output keeps the summary alone).
+use crate::analysis::criteria::{Damage, FinalState};
+use crate::analysis::pga::{met_by_summary, Criterion};
+use crate::analysis::run::Summary;
+use crate::scene::{BlockKind, Scene};
+use std::path::Path;
+
+/// Parse the criteria and check them against the scene before anything runs.
+pub fn parse_for(scene: &Scene, texts: &[String]) -> Result<Vec<Criterion>, String> {
+    let mut out = Vec::new();
+    for t in texts {
+        let c = Criterion::parse(t).map_err(|e| format!("--criterion: {e}"))?;
+        if let Criterion::Damage { damage } = &c {
+            damage
+                .check(scene)
+                .map_err(|e| format!("--criterion: {e}"))?;
+        }
+        for id in c.blocks() {
+            let free = scene
+                .block_index(id)
+                .is_some_and(|b| matches!(scene.blocks[b].kind, BlockKind::Free(_)));
+            if !free {
+                return Err(format!("--criterion {t:?}: no free block with id {id:?}"));
+            }
+        }
+        out.push(c);
+    }
+    Ok(out)
+}
+
+/// Evaluate and report; nothing when no criterion was given.
+pub fn report(criteria: &[Criterion], summary: &Summary, out: &Path) -> Result<(), String> {
+    if criteria.is_empty() {
+        return Ok(());
+    }
+    let state = FinalState::from_summary(summary);
+    let verdicts: Vec<serde_json::Value> = criteria
+        .iter()
+        .map(|c| {
+            let met = match c {
+                Criterion::Damage { damage } => Damage::met(damage, &state),
+                other => met_by_summary(std::slice::from_ref(other), summary),
+            };
+            eprintln!(
+                "criterion {}: {}",
+                c.text(),
+                if met { "met" } else { "not met" }
+            );
+            serde_json::json!({ "criterion": c.text(), "met": met })
+        })
+        .collect();
+    let text = serde_json::to_string_pretty(&verdicts).map_err(|e| e.to_string())?;
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let path = out.join("criteria.json");
+    std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))
+}

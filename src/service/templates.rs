@@ -1,0 +1,101 @@
+//! `GET /v1/templates` and `POST /v1/templates/{name}`: the parametric structures of
+//! `scene::templates` over HTTP (issue 24). Thin: parameters in, scene JSON out; building a
+//! template is cheap (no simulation), so it runs on the request's task.
+use super::problem::ApiError;
+use super::request::json_body;
+use super::routes::AppState;
+use crate::scene::templates::{self, TemplateError};
+use axum::body::Bytes;
+use axum::extract::rejection::{BytesRejection, PathRejection};
+use axum::extract::{Path, State};
+use axum::http::{header, HeaderMap, StatusCode};
+use axum::response::{IntoResponse, Response};
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+
+/// `GET /v1/templates`: `{"templates": [{name, description, parameters: [{name, units,
+/// description, default, min, max, choices?}]}]}`.
+pub async fn list() -> Response {
+    axum::Json(json!({ "templates": templates::list() })).into_response()
+}
+
+/// `POST /v1/templates/{name}` with an optional body `{"parameters": {KEY: VALUE}}` → 200 and
+/// the scene (`ashlar.scene/1`), ready to be sent as a job's `scene`. 404 for an unknown
+/// template (`parameter: "name"`); 422 for a bad parameter (`pointer: /parameters/KEY`).
+pub async fn build(
+    State(s): State<AppState>,
+    name: Result<Path<String>, PathRejection>,
+    headers: HeaderMap,
+    body: Result<Bytes, BytesRejection>,
+) -> Result<Response, ApiError> {
+    let Path(name) = name.map_err(|e| ApiError::invalid_parameter("name", e.body_text()))?;
+    let template =
+        templates::find(&name).map_err(|e| ApiError::not_found_parameter("name", e.to_string()))?;
+    let bytes = body.map_err(|e| {
+        if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
+            ApiError::payload_too_large(s.core.limits.max_body_bytes)
+        } else {
+            ApiError::malformed_json(e.body_text()).with_pointer("")
+        }
+    })?;
+    let given = if bytes.iter().all(|b| b.is_ascii_whitespace()) {
+        BTreeMap::new()
+    } else {
+        check_json(&headers)?;
+        parameters(&json_body(&bytes)?)?
+    };
+    let (spec, _) = template.build(&given).map_err(|e| match &e {
+        TemplateError::Invalid { .. } => ApiError::internal(e),
+        _ => {
+            let key = e
+                .parameter()
+                .unwrap_or_default()
+                .replace('~', "~0")
+                .replace('/', "~1");
+            ApiError::invalid_field(format!("/parameters/{key}"), e.to_string())
+        }
+    })?;
+    Ok(axum::Json(spec).into_response())
+}
+
+/// `{"parameters": {...}}` (the only member; absent: every default).
+fn parameters(body: &Value) -> Result<BTreeMap<String, Value>, ApiError> {
+    let obj = body.as_object().ok_or_else(|| {
+        ApiError::invalid_field("", "expected a JSON object {\"parameters\": {...}}")
+    })?;
+    if let Some(k) = obj.keys().find(|k| *k != "parameters") {
+        return Err(ApiError::invalid_field(
+            format!("/{k}"),
+            format!("unknown field `{k}`, expected `parameters`"),
+        ));
+    }
+    match obj.get("parameters") {
+        None | Some(Value::Null) => Ok(BTreeMap::new()),
+        Some(Value::Object(m)) => Ok(m.iter().map(|(k, v)| (k.clone(), v.clone())).collect()),
+        Some(other) => Err(ApiError::invalid_field(
+            "/parameters",
+            format!("expected an object of parameter values, got {other}"),
+        )),
+    }
+}
+
+/// A body, when there is one, is JSON.
+fn check_json(headers: &HeaderMap) -> Result<(), ApiError> {
+    let ct = headers
+        .get(header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .unwrap_or("");
+    let essence = ct
+        .split(';')
+        .next()
+        .unwrap_or("")
+        .trim()
+        .to_ascii_lowercase();
+    if essence == "application/json"
+        || (essence.starts_with("application/") && essence.ends_with("+json"))
+    {
+        Ok(())
+    } else {
+        Err(ApiError::unsupported_media_type(ct))
+    }
+}
