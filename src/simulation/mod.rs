@@ -119,7 +119,7 @@ enum Refusal {
     /// impact.
     Impact { contact: usize, factor: f64 },
     /// The step's estimated local error exceeds the bound of `SimParams::local_error_ratio`.
-    LocalError { block: usize, factor: f64 },
+    LocalError { factor: f64 },
 }
 
 impl Refusal {
@@ -672,12 +672,12 @@ impl Simulation {
                 }
             }
         }
-        if let Some((block, e)) = self.local_error(dt) {
+        if let Some((_, e)) = self.local_error(dt) {
             let tol = self.local_error_tolerance();
             let floor = self.params.min_error_step_ratio * self.scene.control.time_step;
             if e > 2.0 * tol && dt > floor {
                 let factor = (tol / e).sqrt().max(floor / dt);
-                keep(Refusal::LocalError { block, factor }, factor);
+                keep(Refusal::LocalError { factor }, factor);
             }
         }
         worst

@@ -86,7 +86,7 @@ impl Default for SimParams {
             impact_approach_ratio: None,
             // Off: free rocking between impacts is integrated to within 1 % at the default
             // 1 ms (rocking-history benchmark); on Friuli bounds of 1e-4 and 3e-5 rad a step
-            // (+20–120 % steps) did not bring the answers closer to the converged run.
+            // (+16–116 % steps) did not bring the answers closer to the converged run.
             max_rotation_step: None,
             // Off: measured on the impact histories (tests/engine/rocking_impacts.rs) at 1e-6 it
             // resolves the penalty contact's impact over several short steps, where the springs
