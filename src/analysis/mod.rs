@@ -9,3 +9,4 @@ pub mod reference;
 pub mod run;
 pub mod run_end;
 pub mod study;
+pub mod study_records;

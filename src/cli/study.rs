@@ -32,6 +32,11 @@ pub struct StudyArgs {
     /// Print each point as it is measured.
     #[arg(long, short)]
     pub verbose: bool,
+    /// Run the records study instead (issue 20 §2: two columns under every record in
+    /// --ground-motions at 0.3–1.0 g, the engine at its defaults against Housner and against
+    /// the engine at Δt = 1e-4 s) and write its Markdown table to this file.
+    #[arg(long)]
+    pub records: Option<PathBuf>,
 }
 
 pub fn run(args: &StudyArgs) -> Result<(), String> {
@@ -52,6 +57,14 @@ pub fn run(args: &StudyArgs) -> Result<(), String> {
              --ground-motions PATH/TO/ashlar/{GROUND_MOTIONS_DIR})",
             args.ground_motions.display()
         ));
+    }
+    if let Some(path) = &args.records {
+        return crate::analysis::study_records::run_cli(
+            &args.ground_motions,
+            path,
+            args.quick,
+            args.verbose,
+        );
     }
     let opts = StudyOptions {
         quick: args.quick,

@@ -6,7 +6,7 @@ mod energy;
 mod params;
 
 pub use energy::Energy;
-pub use params::{resolve_penalty, SimParams};
+pub use params::{resolve_penalty, SimParams, IMPACT_APPROACH_RATIO};
 
 use crate::assembly::contact_springs::{JointLaw, Prescribed, SpringParams};
 use crate::assembly::restitution::{apply_impacts, ImpactInput};
@@ -115,6 +115,30 @@ enum Refusal {
     Moved { block: usize, by: f64 },
     /// This contact deepened beyond what the time step resolves.
     Overshot(usize),
+    /// This contact closed within the step after a longer approach than
+    /// `SimParams::impact_approach_ratio` allows: the step is cut by `factor` to locate the
+    /// impact.
+    Impact { contact: usize, factor: f64 },
+    /// The step's estimated local error exceeds the bound of `SimParams::local_error_ratio`.
+    LocalError { factor: f64 },
+}
+
+impl Refusal {
+    /// Factor applied to Δt for the next attempt: the step-control refusals aim at their bound
+    /// (with a 10 % margin), never cutting deeper than `cut`; the others cut by `cut`.
+    fn factor(self, cut: f64) -> f64 {
+        match self {
+            Refusal::Impact { factor, .. } | Refusal::LocalError { factor, .. } => {
+                (0.9 * factor).clamp(cut, 0.9)
+            }
+            _ => cut,
+        }
+    }
+
+    /// A bound of the step's accuracy, not of its validity.
+    fn is_accuracy(self) -> bool {
+        matches!(self, Refusal::Impact { .. } | Refusal::LocalError { .. })
+    }
 }
 
 /// Wall time spent in each stage (accumulated over steps).
@@ -354,7 +378,7 @@ impl Simulation {
         self.detect_contacts();
         let t1 = Instant::now();
         self.profile.detect += t1 - t0;
-        let mut dt = self.dt.min(max_dt);
+        let mut dt = self.dt.min(max_dt).min(self.rotation_bound());
         if let Restitution::Coefficient(e) = self.scene.control.restitution {
             self.impacts(e, dt);
         }
@@ -365,18 +389,22 @@ impl Simulation {
             let t2 = Instant::now();
             let refusal = match self.scene.control.contact_solver {
                 ContactSolver::Penalty => match self.open_close()? {
-                    OpenClose::Converged { .. } => self.check_step(),
+                    OpenClose::Converged { .. } => self.check_step(dt),
                     OpenClose::NotConverged { contact, .. } => Some(Refusal::Unconverged(contact)),
                 },
                 ContactSolver::Dual => match self.dual_solve()? {
                     DualOutcome {
                         converged: true, ..
-                    } => self.check_step(),
+                    } => self.check_step(dt),
                     DualOutcome { worst, .. } => Some(Refusal::Unconverged(worst)),
                 },
             };
             self.profile.solve += t2.elapsed();
             let Some(refusal) = refusal else { break };
+            // An accuracy bound never fails a run: out of cuts, the step is taken as it is.
+            if refusal.is_accuracy() && cuts >= self.params.max_cuts {
+                break;
+            }
             cuts += 1;
             self.stats.time_step_cuts += 1;
             // Cutting below min_dt means the step cannot be resolved: fail with a diagnostic
@@ -384,16 +412,21 @@ impl Simulation {
             if cuts > self.params.max_cuts || dt * self.params.cut_factor < self.params.min_dt {
                 return Err(self.refused(cuts, dt, refusal));
             }
-            dt *= self.params.cut_factor;
+            dt *= refusal.factor(self.params.cut_factor);
             self.states.clone_from(&self.start_states);
         }
         if let Some(e) = self.too_soft(dt) {
             return Err(e);
         }
+        let error = if self.scene.control.adaptive_time_step {
+            self.local_error(dt).map(|(_, e)| e)
+        } else {
+            None
+        };
         let t3 = Instant::now();
         self.integrate(dt);
         self.profile.integrate += t3.elapsed();
-        self.finish_step(dt, cuts);
+        self.finish_step(dt, cuts, error);
         Ok(dt)
     }
 
@@ -602,7 +635,7 @@ impl Simulation {
 
     /// After convergence: is the step within the displacement limit and the penetration
     /// tolerance? Returns why not, if not.
-    fn check_step(&self) -> Option<Refusal> {
+    fn check_step(&self, dt: f64) -> Option<Refusal> {
         if self.scene.control.adaptive_time_step {
             let limit = self.max_step_displacement();
             for f in 0..self.dofs.block_of.len() {
@@ -624,7 +657,105 @@ impl Simulation {
                 return Some(Refusal::Overshot(k));
             }
         }
+        if self.scene.control.adaptive_time_step {
+            return self.step_control(dt);
+        }
         None
+    }
+
+    /// The longest step that turns no free block by more than `SimParams::max_rotation_step`
+    /// at its current angular velocity (adaptive runs only; infinite without the bound).
+    fn rotation_bound(&self) -> f64 {
+        let Some(limit) = self.params.max_rotation_step else {
+            return f64::INFINITY;
+        };
+        if !self.scene.control.adaptive_time_step {
+            return f64::INFINITY;
+        }
+        let w = self
+            .states
+            .iter()
+            .map(|s| s.vel[2].abs())
+            .fold(0.0, f64::max);
+        (limit / w).max(10.0 * self.params.min_dt)
+    }
+
+    /// The accuracy bounds of the adaptive step (impact location, rotation per step): the
+    /// worst violation, if any, as a refusal with the factor that meets its bound. Never
+    /// below `min_dt` × 10 (a step this short is no longer an accuracy question).
+    fn step_control(&self, dt: f64) -> Option<Refusal> {
+        let floor = 10.0 * self.params.min_dt;
+        let mut worst: Option<Refusal> = None;
+        let mut keep = |r: Refusal, f: f64| {
+            let better = match worst {
+                Some(Refusal::Impact { factor, .. } | Refusal::LocalError { factor, .. }) => {
+                    f < factor
+                }
+                _ => true,
+            };
+            if f < 1.0 && dt * f.max(self.params.cut_factor) > floor && better {
+                worst = Some(r);
+            }
+        };
+        if let Some(ratio) = self.params.impact_approach_ratio {
+            let limit = ratio * self.smallest_free_block;
+            for (k, c) in self.contacts.contacts.iter().enumerate() {
+                // Open at the step start, closed at its end: the contact closed within the step.
+                let approach = c.g0 - c.gap;
+                if c.g0 > 0.0 && c.state.is_closed() && approach > limit {
+                    let factor = limit / approach;
+                    keep(Refusal::Impact { contact: k, factor }, factor);
+                }
+            }
+        }
+        if let Some((_, e)) = self.local_error(dt) {
+            let tol = self.local_error_tolerance();
+            let floor = self.params.min_error_step_ratio * self.scene.control.time_step;
+            if e > 2.0 * tol && dt > floor {
+                let factor = (tol / e).sqrt().max(floor / dt);
+                keep(Refusal::LocalError { factor }, factor);
+            }
+        }
+        worst
+    }
+
+    /// The local error bound, m (infinite when the control is off).
+    fn local_error_tolerance(&self) -> f64 {
+        self.params
+            .local_error_ratio
+            .map_or(f64::INFINITY, |r| r * self.smallest_free_block)
+    }
+
+    /// The step's estimated local displacement error, m, and the block where it is largest:
+    /// |β − 1/6|·Δt²·|a₁ − a₀| at the worst vertex, a₁ from the solved increments (the same
+    /// Newmark rule as `integrate::update_motion`), a₀ the step-start acceleration. `None`
+    /// when the control is off.
+    fn local_error(&self, dt: f64) -> Option<(usize, f64)> {
+        self.params.local_error_ratio?;
+        let nm = self.newmark;
+        let c = (nm.beta - 1.0 / 6.0).abs() * dt * dt;
+        let mut worst = (0, 0.0f64);
+        for f in 0..self.dofs.block_of.len() {
+            let b = self.dofs.block_of[f];
+            if self.retired[b] {
+                continue;
+            }
+            let d = self.block_increment(f);
+            let st = &self.states[f];
+            let a1 = (d - st.vel * dt - st.acc * (dt * dt * (0.5 - nm.beta))) / (nm.beta * dt * dt);
+            let da = a1 - st.acc;
+            let g = &self.geoms[b];
+            let e = g
+                .vertices
+                .iter()
+                .map(|p| (displacement_matrix(*p, g.centroid) * da).norm())
+                .fold(0.0, f64::max)
+                * c;
+            if e > worst.1 {
+                worst = (b, e);
+            }
+        }
+        Some(worst)
     }
 
     fn block_increment(&self, f: usize) -> Vec6 {
@@ -679,7 +810,7 @@ impl Simulation {
     }
 
     /// Contact bookkeeping and time-step control after an accepted step.
-    fn finish_step(&mut self, dt: f64, cuts: u32) {
+    fn finish_step(&mut self, dt: f64, cuts: u32, error: Option<f64>) {
         let shear = self.springs.shear;
         for (c, law) in self.contacts.contacts.iter_mut().zip(&self.laws) {
             match c.state {
@@ -708,6 +839,15 @@ impl Simulation {
             self.dt = dt;
         } else if self.scene.control.adaptive_time_step || self.dt < self.scene.control.time_step {
             self.dt = (self.dt * self.params.growth).min(self.scene.control.time_step);
+        }
+        if let Some(e) = error {
+            // The next step from the estimate (local error ∝ Δt²), never below the floor.
+            let tol = self.local_error_tolerance();
+            let floor = self.params.min_error_step_ratio * self.scene.control.time_step;
+            if e > 0.0 {
+                let sized = (0.9 * dt * (tol / e).sqrt()).max(floor);
+                self.dt = self.dt.min(sized);
+            }
         }
     }
 
@@ -814,7 +954,8 @@ impl Simulation {
                 }
             }
             Refusal::Unconverged(k) => k,
-            Refusal::Overshot(k) => Some(k),
+            Refusal::Overshot(k) | Refusal::Impact { contact: k, .. } => Some(k),
+            Refusal::LocalError { .. } => None,
         };
         let (a, b) = match contact.and_then(|k| self.contacts.contacts.get(k)) {
             Some(c) => (

@@ -40,7 +40,32 @@ pub struct SimParams {
     /// overlap is visible in any drawing and the vertex–edge linearisation (vertex near its
     /// edge) degrades; the seeds' deliberately soft single-contact tests peak at ~2.5 %.
     pub max_penetration_ratio: f64,
+    /// Impact location (adaptive runs only; off by default): the longest approach of a vertex onto an edge in
+    /// the step where their contact closes, as a fraction of the smallest free block's half
+    /// size; a longer one cuts the step (to this approach, at most by `cut_factor`). `None`:
+    /// no impact location. See [`IMPACT_APPROACH_RATIO`].
+    pub impact_approach_ratio: Option<f64>,
+    /// Largest rotation increment of a free block in one step, rad (adaptive runs only): the
+    /// step is shortened to it at the block's angular velocity. `None`: no bound.
+    pub max_rotation_step: Option<f64>,
+    /// Local error control (adaptive runs only): the Newmark step's local displacement error,
+    /// estimated as |β − 1/6|·Δt²·|a₁ − a₀| at the vertices (Zienkiewicz & Xie 1991), is kept
+    /// within this fraction of the smallest free block's half size; a step beyond twice the
+    /// bound is redone shorter, and the next step is sized from the estimate. `None`: off.
+    pub local_error_ratio: Option<f64>,
+    /// The shortest step the local error control may ask for, as a fraction of
+    /// `control.time_step` (it bounds the control's cost; impact location and the validity
+    /// cuts may go shorter).
+    pub min_error_step_ratio: f64,
 }
+
+/// A starting value for [`SimParams::impact_approach_ratio`] (off by default, see
+/// [`SimParams::default`]). DDA's step ends with v₁ = 2d/Δt − v₀, so the velocity a closing
+/// contact leaves depends on where within the step it closed: a vertex approaching at v that
+/// closes a fraction τ into the step leaves with a normal velocity (2τ − 1)·v. Bounding the
+/// approach of the closing step bounds the impact's timing error to approach / v; 1e-4 of the
+/// half size is 63 µm for a 0.4 × 1.2 m column (a 0.4 m/s corner then closes in 0.16 ms).
+pub const IMPACT_APPROACH_RATIO: f64 = 1e-4;
 
 impl Default for SimParams {
     fn default() -> Self {
@@ -58,6 +83,24 @@ impl Default for SimParams {
             min_dt: 1e-9,
             gap_tolerance_ratio: 1e-10,
             max_penetration_ratio: 0.05,
+            // Off: measured on Friuli (docs/accuracy-vs-speed.md, "Records"), locating impacts to
+            // approaches of 3e-6…3e-4 of the half size changed the squat column's peak by −12 …
+            // +12 % without converging; the impact's outcome is set by the spring contact after
+            // closure, not by where in the step it closed.
+            impact_approach_ratio: None,
+            // Off: free rocking between impacts is integrated to within 1 % at the default
+            // 1 ms (rocking-history benchmark); on Friuli bounds of 1e-4 and 3e-5 rad a step
+            // (+16–116 % steps) did not bring the answers closer to the converged run.
+            max_rotation_step: None,
+            // Off: measured on the impact histories (tests/engine/rocking_impacts.rs) at 1e-6 it
+            // resolves the penalty contact's impact over several short steps, where the springs
+            // give energy back: five-impact history 11.4 % → 20.1 % of peak, stocky restitution
+            // −5.3 % → +2.7 %; on the records' well-conditioned points it moves the answer
+            // towards the engine at Δt = 1e-4 s, which is itself 4–13 % off Housner there
+            // (docs/accuracy-vs-speed.md, "Records"). Worth turning on once the impact law is
+            // the user's restitution rather than the springs' (issue 20 §6).
+            local_error_ratio: None,
+            min_error_step_ratio: 0.05,
         }
     }
 }

@@ -16,6 +16,7 @@ mod foundation;
 mod incline;
 mod invariants;
 mod multiblock_references;
+mod records_housner;
 mod restitution;
 mod rocking;
 mod rocking_impacts;

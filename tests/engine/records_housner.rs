@@ -1,0 +1,95 @@
+//! The full engine (`"model": "dda"`) at its default numerical controls against Housner's
+//! equation on real records (issue 20 §2): the 0.4 × 1.2 m and the slender 0.25 × 1.5 m column
+//! of `analysis::study_records` (φ = 75°, nothing slides; the scenes' default deformable block)
+//! under the repository's records (data/ground-motions) scaled to a PGA. Housner:
+//! `analysis::reference::housner_rocking` (RK4 at 1e-5 s, no code shared with the engine).
+//!
+//! Criteria (the issue's): the same stand/fall verdict as Housner wherever Housner's verdict
+//! holds at ±3 % of the PGA (checked here, three reference runs), and the peak rotation within
+//! 5 % where the column survives with more than 0.02 rad. A column counts as fallen past 1 rad
+//! in both (`study_records::FALLEN`). The 5 % tolerance is the issue's figure for peak rotations
+//! through impacts; the regression bound is 5× the error measured when the test was written,
+//! or the tolerance where that is smaller (said at each point).
+//!
+//! Found when this file was written (the ignored test says its numbers): the default misses
+//! the 5 % at Friuli 0.5 g (+36.8 %) and 0.9 g (−14.6 %) on the 0.4 × 1.2 m column; no step
+//! control measured fixes both without breaking the impact references (docs/accuracy-vs-speed.md,
+//! "Records").
+use ashlar::analysis::study_records::{self as sr, RecordColumn, COLUMNS};
+use ashlar::simulation::SimParams;
+use serde_json::json;
+use std::path::PathBuf;
+
+fn records_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/ground-motions")
+}
+
+/// The engine at its defaults against Housner at one point; returns the peak error relative
+/// to Housner's peak (0 where the column falls).
+fn check_point(col: &RecordColumn, record: &str, pga: f64, regression: f64) -> f64 {
+    let dir = records_dir();
+    let (housner, robust) = sr::robust_verdict(col, &dir, record, pga).expect("reference");
+    let m = sr::load_record(&dir, record, pga).expect("record");
+    let run = sr::engine(
+        col,
+        &m,
+        sr::run_length(&m),
+        &json!({}),
+        SimParams::default(),
+    )
+    .expect("scene");
+    assert!(run.failed.is_none(), "engine failed: {:?}", run.failed);
+    let e = &run.response;
+    let err = if housner.fallen || e.fallen {
+        0.0
+    } else {
+        e.peak / housner.peak - 1.0
+    };
+    eprintln!(
+        "{} {record} {pga} g: Housner {:?} (verdict robust at ±3 %: {robust}), engine {:?}, peak error {:+.2} %, {} steps",
+        col.name,
+        housner,
+        e,
+        100.0 * err,
+        run.steps
+    );
+    assert!(
+        robust,
+        "the point was chosen where Housner's verdict is robust"
+    );
+    assert_eq!(e.fallen, housner.fallen, "verdict differs from Housner's");
+    if !housner.fallen && housner.peak > 0.02 {
+        assert!(err.abs() <= 0.05, "peak off Housner's by {err}");
+        assert!(
+            err.abs() <= regression,
+            "peak error {err} beyond the regression bound {regression} (find what changed)"
+        );
+    }
+    err
+}
+
+/// Measured −0.86 % (0.6 g) and −2.98 % (0.8 g): 5× exceeds the tolerance, which binds.
+#[test]
+fn squat_column_friuli_survives_within_5pct() {
+    check_point(&COLUMNS[0], "friuli-1976-tolmezzo-000.at2", 0.6, 0.05);
+    check_point(&COLUMNS[0], "friuli-1976-tolmezzo-000.at2", 0.8, 0.05);
+}
+
+/// Northridge at 0.5 g topples the 0.4 × 1.2 m column (Housner's verdict the same at ±3 %).
+#[test]
+fn squat_column_northridge_falls_like_housner() {
+    check_point(&COLUMNS[0], "northridge-1994-mulholland-009.at2", 0.5, 0.05);
+}
+
+/// The slender column under Friuli at 0.3 g: measured −1.94 % (tolerance binds).
+#[test]
+fn slender_column_friuli_within_5pct() {
+    check_point(&COLUMNS[1], "friuli-1976-tolmezzo-000.at2", 0.3, 0.05);
+}
+
+#[test]
+#[ignore = "engine at its defaults misses Housner's peak on the 0.4 × 1.2 m column under Friuli: measured +36.8 % at 0.5 g (Housner 0.0404 rad, engine 0.0553, engine at Δt = 1e-4 s 0.0438) and −14.6 % at 0.9 g (0.1274, 0.1088, 0.1077) against 5 %; see docs/accuracy-vs-speed.md, Records"]
+fn squat_column_friuli_misses_at_half_and_nine_tenths_g() {
+    check_point(&COLUMNS[0], "friuli-1976-tolmezzo-000.at2", 0.5, 0.05);
+    check_point(&COLUMNS[0], "friuli-1976-tolmezzo-000.at2", 0.9, 0.05);
+}
