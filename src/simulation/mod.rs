@@ -185,6 +185,11 @@ pub struct Simulation {
     pub thickness: Vec<f64>,
     pub stats: Stats,
     pub profile: StepProfile,
+    /// Why the open–close loop iterated (diagnostics).
+    pub changes: open_close::ChangeCounts,
+    /// Step attempts refused, by reason: [contact solve not converged, a block moved beyond
+    /// the step limit, a contact overshot]; each led to a time-step cut or the run's end.
+    pub refusals: [u64; 3],
     /// Per block: retired (left the scene, frozen where it was; see [`Simulation::retire`]).
     pub retired: Vec<bool>,
 }
@@ -305,6 +310,8 @@ impl Simulation {
                 ..Default::default()
             },
             profile: StepProfile::default(),
+            changes: Default::default(),
+            refusals: [0; 3],
             retired: vec![false; scene.blocks.len()],
             params,
         }
@@ -371,6 +378,11 @@ impl Simulation {
             };
             self.profile.solve += t2.elapsed();
             let Some(refusal) = refusal else { break };
+            self.refusals[match refusal {
+                Refusal::Unconverged(_) => 0,
+                Refusal::Moved { .. } => 1,
+                Refusal::Overshot(_) => 2,
+            }] += 1;
             cuts += 1;
             self.stats.time_step_cuts += 1;
             // Cutting below min_dt means the step cannot be resolved: fail with a diagnostic
@@ -501,6 +513,7 @@ impl Simulation {
             &mut self.solver,
             &mut self.x,
             &self.params.open_close,
+            &mut self.changes,
         );
         match r {
             Ok(o) => {
