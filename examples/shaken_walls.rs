@@ -66,8 +66,10 @@ fn compare_with_reference(
     gm: &GroundMotion,
     start: f64,
 ) {
-    let mut params = SimParams::default();
-    params.open_close = ashlar::solve::open_close::OpenCloseParams::legacy();
+    let mut params = SimParams {
+        open_close: ashlar::solve::open_close::OpenCloseParams::legacy(),
+        ..Default::default()
+    };
     params.open_close.max_iterations = 200;
     let mut scene = scene.clone();
     scene.control.time_step = 1e-4;
