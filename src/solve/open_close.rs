@@ -384,7 +384,7 @@ fn update_state(
             ),
             _ => (6, c.start_normal_force),
         };
-        if force <= floor && !release_moved {
+        if params.force_tolerance > 0.0 && force <= floor && !release_moved {
             // Taken, but too small to need another solve.
             return false;
         }
