@@ -117,6 +117,10 @@ pub struct Contact {
     /// For sliding contacts: elastic shear displacement kept in the shear spring (m), so that
     /// re-sticking starts from the Coulomb force rather than from zero.
     pub slide_offset: f64,
+    /// The last friction fixed-point update within the current open–close loop: the normal
+    /// force the friction used, and the one the solve then gave (N); for the secant step
+    /// (`OpenCloseParams::secant_friction`).
+    pub friction_secant: Option<(f64, f64)>,
     /// State changes within the current open–close loop (cycle detection).
     pub flips: u32,
     /// Normal force carried into the step, N: its share of the stored acceleration a₀ that the
@@ -287,6 +291,7 @@ fn new_contact(cand: &Candidate) -> Contact {
         gap: cand.gap,
         slip: 0.0,
         slide_offset: 0.0,
+        friction_secant: None,
         flips: 0,
         start_normal_force: 0.0,
         release_factor: 1.0,

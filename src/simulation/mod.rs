@@ -212,6 +212,12 @@ pub struct Simulation {
     pub thickness: Vec<f64>,
     pub stats: Stats,
     pub profile: StepProfile,
+    /// Why the open–close loop iterated (diagnostics).
+    pub changes: open_close::ChangeCounts,
+    /// Step attempts refused, by reason: [contact solve not converged, a block moved beyond
+    /// the step limit, a contact overshot, a step-control bound (impact location or local
+    /// error)]; each led to a time-step cut or the run's end.
+    pub refusals: [u64; 4],
     /// Per block: retired (left the scene, frozen where it was; see [`Simulation::retire`]).
     pub retired: Vec<bool>,
 }
@@ -332,6 +338,8 @@ impl Simulation {
                 ..Default::default()
             },
             profile: StepProfile::default(),
+            changes: Default::default(),
+            refusals: [0; 4],
             retired: vec![false; scene.blocks.len()],
             params,
         }
@@ -401,6 +409,12 @@ impl Simulation {
             };
             self.profile.solve += t2.elapsed();
             let Some(refusal) = refusal else { break };
+            self.refusals[match refusal {
+                Refusal::Unconverged(_) => 0,
+                Refusal::Moved { .. } => 1,
+                Refusal::Overshot(_) => 2,
+                Refusal::Impact { .. } | Refusal::LocalError { .. } => 3,
+            }] += 1;
             // An accuracy bound never fails a run: out of cuts, the step is taken as it is.
             if refusal.is_accuracy() && cuts >= self.params.max_cuts {
                 break;
@@ -570,6 +584,7 @@ impl Simulation {
             &mut self.solver,
             &mut self.x,
             &self.params.open_close,
+            &mut self.changes,
         );
         match r {
             Ok(o) => {

@@ -1,0 +1,236 @@
+//! Shaken masonry benchmark and contact-solve diagnostics (docs/contact-solve.md): running-bond
+//! walls of 0.6 × 0.3 m rigid stones (`scene::generate::running_bond_wall`, 35° dry joints) on a
+//! fixed foundation, at rest, under a base sine of 1 m/s² at 1 Hz, and under the Northridge
+//! (Mulholland 009) record of `data/ground-motions/` scaled to a PGA of 0.3 g and started 0.2 s
+//! before its peak (so a short run sees the strong motion). Δt = 1 ms with the default
+//! (adaptive) time-step control. Prints one Markdown row per wall and motion: s/step, linear
+//! solves a step, Δt cuts, the deepest penetration; `--diag` adds why the open–close loop
+//! iterated (`ChangeCounts`), why steps were refused and the time per stage.
+//!
+//! `cargo run --release --example shaken_walls -- [--sizes 100,400,1600] [--steps 300]
+//!  [--motions rest,sine,record] [--diag] [--tight] [--block-model rigid|deformable]`
+//!
+//! `--tight`: the reference configuration of docs/contact-solve.md (Δt = 1e-4 s, the open–close
+//! loop run to convergence with the previous defaults of `OpenCloseParams::legacy`).
+use ashlar::motion::{self, GroundMotion, Signal};
+use ashlar::scene::generate::{running_bond_wall, WallParams};
+use ashlar::scene::{validate, BlockModel};
+use ashlar::simulation::{SimParams, Simulation};
+use ashlar::solve::open_close::CHANGE_KINDS;
+use std::path::Path;
+use std::time::Instant;
+
+fn arg(name: &str) -> Option<String> {
+    let args: Vec<String> = std::env::args().collect();
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1).cloned())
+}
+
+/// Courses and whole blocks a course of a wall of about `n` stones: √n × √n, as
+/// `examples/engine_scaling.rs` (100 → 105 stones, 400 → 410, 1600 → 1620, 6400 → 6440).
+fn layout(n: usize) -> (usize, usize) {
+    let side = ((n as f64).sqrt().round() as usize).max(2);
+    (side, side)
+}
+
+fn record() -> GroundMotion {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("data/ground-motions/northridge-1994-mulholland-009.at2");
+    motion::load_path(&path)
+        .expect("the repository's Northridge record")
+        .scaled_to_pga(0.3 * motion::STANDARD_GRAVITY)
+}
+
+/// Time of the record's peak horizontal acceleration, s.
+fn peak_time(gm: &GroundMotion) -> f64 {
+    let (mut best, mut at) = (0.0, 0.0);
+    let mut t = 0.0;
+    while t < gm.duration().unwrap_or(0.0) {
+        let a = gm.acceleration(t)[0].abs();
+        if a > best {
+            best = a;
+            at = t;
+        }
+        t += 1e-3;
+    }
+    at
+}
+
+/// Runs the tight reference (Δt = 1e-4 s fixed, the previous open–close loop run to
+/// convergence) over the same simulated time as `sim` and prints the largest difference of a
+/// stone's position (any vertex, m) and the deepest penetration of both.
+fn compare_with_reference(
+    sim: &Simulation,
+    scene: &ashlar::scene::Scene,
+    gm: &GroundMotion,
+    start: f64,
+) {
+    let mut params = SimParams {
+        open_close: ashlar::solve::open_close::OpenCloseParams::legacy(),
+        ..Default::default()
+    };
+    params.open_close.max_iterations = 200;
+    let mut scene = scene.clone();
+    scene.control.time_step = 1e-4;
+    scene.control.adaptive_time_step = false;
+    let mut reference = Simulation::new(&scene, gm, params);
+    reference.time = start;
+    while reference.time < sim.time - 1e-12 {
+        let left = sim.time - reference.time;
+        if let Err(e) = reference.step(left) {
+            eprintln!("  reference stopped at t = {:.4} s: {e}", reference.time);
+            return;
+        }
+    }
+    let mut worst: f64 = 0.0;
+    let mut moved: f64 = 0.0;
+    for (b, (g, r)) in sim.geoms.iter().zip(&reference.geoms).enumerate() {
+        let s0 = &scene.blocks[b].vertices;
+        for ((v, w), v0) in g.vertices.iter().zip(&r.vertices).zip(s0) {
+            worst = worst.max((v - w).norm());
+            moved = moved.max((w - v0).norm());
+        }
+    }
+    println!(
+        "  reference (Δt 1e-4 s, {} steps, {:.2} iterations/step): largest vertex difference {:.3e} m; largest vertex displacement in the reference {:.3e} m; max penetration {:.2e} m (reference) vs {:.2e} m",
+        reference.stats.steps,
+        reference.stats.open_close_iterations as f64 / reference.stats.steps as f64,
+        worst,
+        moved,
+        reference.stats.max_penetration,
+        sim.stats.max_penetration
+    );
+}
+
+fn main() {
+    let sizes: Vec<usize> = arg("--sizes")
+        .unwrap_or_else(|| "100,400,1600".into())
+        .split(',')
+        .map(|s| s.trim().parse().expect("--sizes: stone counts"))
+        .collect();
+    let steps: usize = arg("--steps")
+        .map(|s| s.parse().expect("--steps"))
+        .unwrap_or(300);
+    let motions = arg("--motions").unwrap_or_else(|| "rest,sine,record".into());
+    let diag = std::env::args().any(|a| a == "--diag");
+    let tight = std::env::args().any(|a| a == "--tight");
+    let model = match arg("--block-model").as_deref() {
+        Some("deformable") => BlockModel::Deformable,
+        _ => BlockModel::Rigid,
+    };
+    let rec = record();
+    let rec_start = (peak_time(&rec) - 0.2).max(0.0);
+    println!(
+        "| stones | motion | steps | s/step | linear solves/step | open–close iterations/step | Δt cuts | min Δt (s) | max penetration (m) |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for &n in &sizes {
+        let (courses, per) = layout(n);
+        for m in motions.split(',') {
+            let mut spec = running_bond_wall(&WallParams {
+                courses,
+                blocks_per_course: per,
+                block_model: model,
+                ..Default::default()
+            });
+            spec.control.time_step = Some(if tight { 1e-4 } else { 1e-3 });
+            let scene = validate(&spec).expect("wall");
+            let (gm, start) = match m {
+                "rest" => (GroundMotion::none(), 0.0),
+                "sine" => (
+                    GroundMotion::horizontal(Signal::Sine {
+                        amplitude: 1.0,
+                        frequency: 1.0,
+                    }),
+                    0.0,
+                ),
+                "record" => (rec.clone(), rec_start),
+                other => panic!("--motions: unknown {other:?} (rest, sine, record)"),
+            };
+            let mut params = SimParams::default();
+            if std::env::args().any(|a| a == "--legacy") {
+                params.open_close = ashlar::solve::open_close::OpenCloseParams::legacy();
+            }
+            if std::env::args().any(|a| a == "--no-secant") {
+                params.open_close.secant_friction = false;
+            }
+            if let Some(v) = arg("--force-tol") {
+                params.open_close.force_tolerance = v.parse().expect("--force-tol");
+            }
+            if let Some(v) = arg("--max-flips") {
+                params.open_close.max_flips = v.parse().expect("--max-flips");
+            }
+            if let Some(v) = arg("--relax-after") {
+                params.open_close.relax_after = v.parse().expect("--relax-after");
+            }
+            if let Some(v) = arg("--friction-tol") {
+                params.open_close.friction_tolerance = v.parse().expect("--friction-tol");
+            }
+            if tight {
+                params.open_close = ashlar::solve::open_close::OpenCloseParams::legacy();
+                params.open_close.max_iterations = 200;
+            }
+            let mut sim = Simulation::new(&scene, &gm, params);
+            sim.time = start;
+            let t = Instant::now();
+            let mut done = 0;
+            for _ in 0..steps {
+                if let Err(e) = sim.step(f64::INFINITY) {
+                    eprintln!("  {n} {m}: stopped after {done} steps: {e}");
+                    break;
+                }
+                done += 1;
+            }
+            let wall = t.elapsed().as_secs_f64();
+            if std::env::args().any(|a| a == "--reference") {
+                compare_with_reference(&sim, &scene, &gm, start);
+            }
+            let c = sim.solver_counts();
+            let solves = sim.stats.open_close_iterations as f64;
+            println!(
+                "| {} | {} | {} | {:.3e} | {:.2} | {:.2} | {} | {:.1e} | {:.2e} |",
+                scene.blocks.len() - 1,
+                m,
+                done,
+                wall / done.max(1) as f64,
+                solves / done.max(1) as f64,
+                sim.stats.open_close_iterations as f64 / done.max(1) as f64,
+                sim.stats.time_step_cuts,
+                sim.stats.min_dt,
+                sim.stats.max_penetration
+            );
+            if diag {
+                eprintln!(
+                    "  {} stones, {m}: contacts {}, factorizations {}, reuse CG iterations {}, detections {}",
+                    scene.blocks.len() - 1,
+                    sim.contacts.contacts.len(),
+                    c.numeric,
+                    c.reuse_iterations,
+                    sim.contacts.detections
+                );
+                let p = sim.profile;
+                eprintln!(
+                    "  time: detect {:.3} s, assemble {:.3} s, solve {:.3} s, integrate {:.3} s",
+                    p.detect.as_secs_f64(),
+                    p.assemble.as_secs_f64(),
+                    p.solve.as_secs_f64(),
+                    p.integrate.as_secs_f64()
+                );
+                eprintln!(
+                    "  refusals: unconverged {}, moved too far {}, overshot {}",
+                    sim.refusals[0], sim.refusals[1], sim.refusals[2]
+                );
+                let ch = sim.changes;
+                for (k, name) in CHANGE_KINDS.iter().enumerate() {
+                    eprintln!(
+                        "  {name:>22}: bed {:>7} head {:>7}",
+                        ch.by_kind[k][0], ch.by_kind[k][1]
+                    );
+                }
+                eprintln!("  changes by iteration: {:?}", ch.by_iteration);
+                eprintln!("  changes by force decade (1e-3.. N): {:?}", ch.by_force);
+            }
+        }
+    }
+}
