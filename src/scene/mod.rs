@@ -4,11 +4,9 @@
 //! Conventions fixed here for the whole engine: SI units, y up, gravity along −y,
 //! polygons stored counter-clockwise, rotations counter-clockwise positive (radians).
 pub mod generate;
-mod plane;
 pub mod spec;
 mod validate;
 
-pub use plane::{inside_depth, polygon_signed_area, segments_cross};
 pub use spec::*;
 pub use validate::validate;
 
