@@ -139,12 +139,14 @@ impl MotionSpec {
             } else {
                 format!("motion.{path}")
             };
-            // serde names an unknown member in its message only: name it in the origin too.
+            // Name an unknown member in the origin too, when serde's path stops above it.
             if let Some(name) = message
                 .strip_prefix("unknown field `")
                 .and_then(|r| r.split('`').next())
             {
-                origin = format!("{origin}.{name}");
+                if !origin.ends_with(&format!(".{name}")) {
+                    origin = format!("{origin}.{name}");
+                }
             }
             MotionError::new(origin, None, message)
         })?;
