@@ -1,8 +1,8 @@
 //! Engine throughput (criterion). Run: `cargo bench --bench engine`.
 //! - `rocking_column_1000_steps`: one rigid column rocking on a plinth under a 5 m/s² half-sine
-//!   pulse (the issue asks ≥ 200,000 steps/s on one core: 1000 steps in ≤ 5 ms).
+//!   pulse (the target, docs/speed.md: ≥ 200,000 steps/s on one core: 1000 steps in ≤ 5 ms).
 //! - `wall_400_blocks_1000_steps`: a 20-course running-bond wall (410 blocks) at Δt = 1 ms
-//!   under gravity (the issue asks < 1 s); the same with the engine's shortcuts off (contact
+//!   under gravity (the target, docs/speed.md: < 1 s); the same with the engine's shortcuts off (contact
 //!   detection skipped while nothing moves, the last factorization reused as a preconditioner).
 //!   The shaken wall is measured by `examples/wall_probe.rs` (a criterion run would take minutes).
 use ashlar::motion::{GroundMotion, Signal};

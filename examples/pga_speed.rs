@@ -1,4 +1,4 @@
-//! Speed of the PGA search (issue 6): the rocking column (0.2 × 0.6 m half-sizes, half-sine pulse
+//! Speed of the PGA search (docs/pga.md): the rocking column (0.2 × 0.6 m half-sizes, half-sine pulse
 //! of period 1 s, 3 s simulated) searched over 2–10 m/s² to a tolerance of 0.01 m/s² with the
 //! default 8 scan points. Prints, from one run of this program:
 //! - the wall time of one full run (no early stop, at 5.6 m/s², just below the threshold);

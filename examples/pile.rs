@@ -1,4 +1,4 @@
-//! The dual form's speed case (after seed 003 §7, Figs. 11–12: a projectile penetrating a pile
+//! The dual form's speed case (after Zheng et al. 2016, §7, Figs. 11–12: a projectile penetrating a pile
 //! of 1689 blocks with up to 11,000 contacts, mostly vertex–vertex, frictionless, 280
 //! adaptive steps): times the same 280 steps with the penalty solver and the dual solver in
 //! one run and prints both.
@@ -7,8 +7,8 @@
 //! (so four corners meet at every grid node: vertex–vertex contacts everywhere) in a fixed
 //! U-shaped container, plus a pointed projectile (a pentagon 0.4 m wide, 1 m tall, twice as
 //! dense) just above the pile moving down at `SPEED`. Stone: 2500 kg/m³, E = 10 GPa,
-//! ν = 0.2; all joints frictionless and cohesionless (as the seed's); g = 9.81 m/s²; adaptive
-//! Δt ≤ 1 ms with the seed's displacement ratio 0.003.
+//! ν = 0.2; all joints frictionless and cohesionless (as Zheng et al.'s); g = 9.81 m/s²; adaptive
+//! Δt ≤ 1 ms with Zheng et al.'s displacement ratio 0.003.
 //!
 //! Run: `cargo run --release --example pile` (`-- --help` lists the options; add `-- --write pile.json` to save the scene,
 //! `-- --steps N` to change the step count, `-- --only dual|penalty` to time one solver, `-- --trace` to print per-step work counts, `-- --cg-budget N` to
@@ -16,7 +16,7 @@
 //! iteration alone), `-- --dual-tolerance X` to stop its iterations at X × the smallest
 //! block's half size instead of the default 1e-9, `-- --proportioning G` for MPRGP's
 //! proportioning constant Γ instead of 1, `-- --block-model rigid` for 3 unknowns a block
-//! instead of the seed's 6, `-- --stall-acceptance A` to accept a stalled dual solve whose
+//! instead of Zheng et al.'s 6, `-- --stall-acceptance A` to accept a stalled dual solve whose
 //! violation is within A × its tolerance instead of cutting the step). The scene written by
 //! `--write` carries the last two as `control.dual_tolerance` and
 //! `control.dual_stall_acceptance`, so `ashlar run pile.json` runs the dual solver as this does.
@@ -39,7 +39,7 @@ fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Value {
 }
 
 /// The pile scene as JSON (`ashlar.scene/1`) for the given contact solver and block model
-/// (`"deformable"`, 6 unknowns a block as in the seed's DDA, or `"rigid"`, 3).
+/// (`"deformable"`, 6 unknowns a block as in Zheng et al.'s DDA, or `"rigid"`, 3).
 pub fn pile_scene(solver: &str, block_model: &str) -> Value {
     let width = COLUMNS as f64 * W;
     let height = ROWS as f64 * H;
@@ -169,7 +169,7 @@ fn time_run(solver: &str, cli: &Cli) -> Result<(f64, Simulation), String> {
 /// Command line (`cargo run --release --example pile -- --help`).
 #[derive(Parser)]
 #[command(
-    about = "Times the seed's 1700-block pile with the penalty and the dual contact solver in one run"
+    about = "Times Zheng et al.'s 1700-block pile with the penalty and the dual contact solver in one run"
 )]
 struct Cli {
     /// Steps to run with each solver.
@@ -181,7 +181,7 @@ struct Cli {
     /// Print one line of work counters per step.
     #[arg(long)]
     trace: bool,
-    /// `deformable` (6 unknowns a block, as the seed's DDA) or `rigid` (3).
+    /// `deformable` (6 unknowns a block, as Zheng et al.'s DDA) or `rigid` (3).
     #[arg(long, default_value = "deformable", value_parser = ["deformable", "rigid"])]
     block_model: String,
     /// Also write the scene (`ashlar.scene/1`, dual solver, with the dual options given) to this file.

@@ -1,4 +1,4 @@
-//! S3 artifacts (issue 10), built only with `--features s3`. Needs the S3-compatible server
+//! S3 artifacts (docs/cluster.md), built only with `--features s3`. Needs the S3-compatible server
 //! `tests/s3/run.sh` starts (moto, from the Python package index) and the variables it sets:
 //! `ASHLAR_TEST_S3_ENDPOINT`, `ASHLAR_TEST_S3_BUCKET` (created), `ASHLAR_TEST_S3_PYTHON` (a
 //! Python with boto3, the independent S3 client) and `AWS_ACCESS_KEY_ID`/`AWS_SECRET_ACCESS_KEY`/

@@ -71,10 +71,30 @@ pub struct Fragility {
     pub units: String,
 }
 
-/// Why no curve could be fitted.
+/// Why no curve could be fitted, by cause.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("fragility fit: {0}")]
-pub struct FitError(pub String);
+pub enum FitError {
+    /// Record `record` (0-based) has capacity bounds that are not 0 < above ≤ at_most (m/s²).
+    #[error("fragility fit: record {record}: capacity bounds {above:?}..{at_most:?} are not 0 < above ≤ at_most")]
+    Bounds {
+        record: usize,
+        above: Option<f64>,
+        at_most: Option<f64>,
+    },
+    /// The interval likelihood has no maximum: too few records, or none failed / none stood.
+    #[error("fragility fit: {records} records, {failing} failing within the range and {safe} safe somewhere in it: need at least two records, one that failed and one that stood at some amplitude (widen the range)")]
+    TooFewRecords {
+        records: usize,
+        failing: usize,
+        safe: usize,
+    },
+    /// A run at a PGA (m/s²) that is not > 0 cannot enter a lognormal fit.
+    #[error("fragility fit: a run at PGA {pga} cannot enter a lognormal fit (PGA must be > 0)")]
+    NonPositivePga { pga: f64 },
+    /// The binary likelihood needs both outcomes among the runs.
+    #[error("fragility fit: {runs} runs, {failed} failed: need both outcomes (widen the range)")]
+    OneOutcome { runs: usize, failed: usize },
+}
 
 /// Tuning of the maximum-likelihood search. Each default says why.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -318,19 +338,21 @@ pub fn fit_interval(
             || !ok(c.at_most)
             || matches!((c.above, c.at_most), (Some(a), Some(b)) if b < a)
         {
-            return Err(FitError(format!(
-                "record {i}: capacity bounds {:?}..{:?} are not 0 < above ≤ at_most",
-                c.above, c.at_most
-            )));
+            return Err(FitError::Bounds {
+                record: i,
+                above: c.above,
+                at_most: c.at_most,
+            });
         }
     }
     let failing = caps.iter().filter(|c| c.at_most.is_some()).count();
     let safe = caps.iter().filter(|c| c.above.is_some()).count();
     if caps.len() < 2 || failing == 0 || safe == 0 {
-        return Err(FitError(format!(
-            "{} records, {failing} failing within the range and {safe} safe somewhere in it: need at least two records, one that failed and one that stood at some amplitude (widen the range)",
-            caps.len()
-        )));
+        return Err(FitError::TooFewRecords {
+            records: caps.len(),
+            failing,
+            safe,
+        });
     }
     let reps = caps.iter().filter_map(|c| match (c.above, c.at_most) {
         (Some(a), Some(b)) => Some((a * b).sqrt()),
@@ -357,17 +379,14 @@ pub fn fit_binary(points: Vec<Point>, p: &FitParams) -> Result<Fragility, FitErr
         .iter()
         .find(|pt| !(pt.pga.is_finite() && pt.pga > 0.0))
     {
-        return Err(FitError(format!(
-            "a run at PGA {} cannot enter a lognormal fit (PGA must be > 0)",
-            bad.pga
-        )));
+        return Err(FitError::NonPositivePga { pga: bad.pga });
     }
     let fails = points.iter().filter(|pt| pt.failed).count();
     if fails == 0 || fails == points.len() {
-        return Err(FitError(format!(
-            "{} runs, {fails} failed: need both outcomes (widen the range)",
-            points.len()
-        )));
+        return Err(FitError::OneOutcome {
+            runs: points.len(),
+            failed: fails,
+        });
     }
     let start = start_of(points.iter().map(|pt| pt.pga), p);
     let (mu, beta, nll) = minimise(|m, b| nll_binary(&points, m, b), start, (0.1, 0.2), p);

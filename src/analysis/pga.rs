@@ -615,8 +615,11 @@ pub fn record_error(name: &str, e: RunError) -> RunError {
     match e {
         RunError::Invalid(m) if m == "cancelled" => RunError::Invalid(m),
         RunError::Invalid(m) => RunError::Invalid(format!("record {name:?}: {m}")),
-        RunError::Simulation(m) => RunError::Simulation(format!("record {name:?}: {m}")),
-        RunError::Io(m) => RunError::Io(m),
+        RunError::Simulation(source) => RunError::RecordSimulation {
+            record: name.into(),
+            source,
+        },
+        other => other,
     }
 }
 

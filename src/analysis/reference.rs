@@ -1,4 +1,4 @@
-//! Independent semi-analytic references of seed 000 §3, integrated by fixed steps: Housner's
+//! Independent semi-analytic references of Yagoda-Biran & Hatzor 2015, §3 (docs/verification.md, References), integrated by fixed steps: Housner's
 //! rocking column, the rigid-plastic (Newmark) block on an incline, and the block on a shaking
 //! foundation (Eq. 17). Used by `ashlar study` and by the physics tests that hold the engine
 //! and the reduced models to them.
@@ -24,7 +24,7 @@ pub struct HousnerColumn {
 }
 
 impl HousnerColumn {
-    /// Seed 000 §3.3's column (b = 0.2 m, h = 0.6 m, g = 9.81 m/s²) at an RK4 step of 1e-5 s.
+    /// The rocking column of Yagoda-Biran & Hatzor 2015, §3.3 (b = 0.2 m, h = 0.6 m, g = 9.81 m/s²) at an RK4 step of 1e-5 s.
     pub const SEED_000: Self = Self {
         b: 0.2,
         h: 0.6,
@@ -124,7 +124,7 @@ pub fn housner_rocking(
     s
 }
 
-/// Seed 000 §3.3's ground motion: ü_g = A sin 2πt for 0 ≤ t ≤ 0.5 s (one half-sine of a 1 s
+/// The ground motion of Yagoda-Biran & Hatzor 2015, §3.3: ü_g = A sin 2πt for 0 ≤ t ≤ 0.5 s (one half-sine of a 1 s
 /// period), then 0; A in m/s².
 pub fn half_sine_pulse(a: f64) -> impl Fn(f64) -> f64 {
     move |t| {
@@ -173,7 +173,7 @@ pub fn housner_history(
 
 /// Down-slope displacement (m) relative to the ground of a rigid-plastic block on an incline
 /// at `alpha` (rad; down-slope towards +x) with friction angle `phi` (rad), under the
-/// horizontal ground acceleration `ground(t)` (seed 000 Eq. 10, Newmark's sliding block).
+/// horizontal ground acceleration `ground(t)` (Yagoda-Biran & Hatzor 2015, Eq. 10, Newmark's sliding block).
 ///
 /// Per unit mass the drive along the slope is g sin α − ü_g cos α (the inertial load is
 /// −ü_g) and the normal pressure max(0, g cos α + ü_g sin α). Semi-implicit fixed steps of
@@ -215,7 +215,7 @@ pub fn newmark_incline(
 /// Relative speed below which the block and the foundation move together, m/s.
 const STUCK_SPEED: f64 = 1e-12;
 
-/// Seed 000 Eq. 17: displacement x₂ (m) of a block resting with friction coefficient `mu` on
+/// Yagoda-Biran & Hatzor 2015, Eq. 17: displacement x₂ (m) of a block resting with friction coefficient `mu` on
 /// a foundation that moves as d₁ = A(1 − cos ωt), ω = 2πf, from rest.
 ///
 /// Fixed steps of `dt`: while stuck the block follows the foundation as long as the
@@ -272,7 +272,7 @@ mod tests {
     const G: f64 = 9.81;
 
     /// Under gravity alone the incline has the closed form d = ½g(sin α − cos α tan φ)t²
-    /// (seed 000 Eq. 14); the semi-implicit steps with the trapezoidal position update
+    /// (Yagoda-Biran & Hatzor 2015, Eq. 14); the semi-implicit steps with the trapezoidal position update
     /// integrate a constant acceleration exactly, so only round-off remains (1e-9 relative).
     #[test]
     fn incline_under_gravity_is_the_closed_form() {
@@ -327,5 +327,46 @@ mod tests {
             let d1 = a * (1.0 - (w * t).cos());
             assert!((x2 - d1).abs() < 1e-12, "t {t}: {x2} vs {d1}");
         }
+    }
+}
+
+/// First motion from rest of a rigid rectangular block on a fixed incline under gravity and a
+/// constant horizontal load (Yeung 1991; Yagoda-Biran and Hatzor 2013), as the chart of
+/// [`first_motion_chart`] classifies it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FirstMotion {
+    Stable,
+    Sliding,
+    Toppling,
+    SlidingToppling,
+}
+
+/// Yeung's toppling criterion: the friction coefficient tan φ the down-slope corner needs to
+/// stick at the onset of toppling, f(ψ, δ) = [(4t² + 1)T + 3t] / [(t² + 4) + 3tT] with
+/// t = tan δ, T = tan ψ (dimensionless; angles in rad). Derived, and checked against the
+/// slipping-pivot analysis, in tests/engine/failure_modes.rs.
+pub fn yeung_f(psi: f64, delta: f64) -> f64 {
+    let (t, tt) = (delta.tan(), psi.tan());
+    ((4.0 * t * t + 1.0) * tt + 3.0 * t) / ((t * t + 4.0) + 3.0 * t * tt)
+}
+
+/// The failure-mode chart (angles in rad): `psi` is the angle of the effective gravity (weight
+/// plus the horizontal inertial load) from the slope normal, `delta` = atan(width / height) the
+/// block's slenderness, `phi` the joint's friction angle. Stable inside the base and the
+/// friction cone; toppling where ψ > δ and the pivot sticks (tan φ ≥ [`yeung_f`]); sliding
+/// where φ < ψ and φ < δ; sliding and toppling otherwise.
+pub fn first_motion_chart(psi: f64, delta: f64, phi: f64) -> FirstMotion {
+    if psi < delta {
+        if psi < phi {
+            FirstMotion::Stable
+        } else {
+            FirstMotion::Sliding
+        }
+    } else if phi.tan() >= yeung_f(psi, delta) {
+        FirstMotion::Toppling
+    } else if phi < delta {
+        FirstMotion::Sliding
+    } else {
+        FirstMotion::SlidingToppling
     }
 }

@@ -9,13 +9,14 @@ use crate::motion::GroundMotion;
 pub use crate::record::histories::round_time;
 use crate::record::histories::HistoryWriter;
 use crate::record::mcap::{McapParams, McapRecorder};
+use crate::record::RecordError;
 use crate::record::{
     BlockFrame, BlockMotionState, Frame, FrameBlockKind, GroundFrame, RecordHeader,
 };
 use crate::scene::{ContactSolver, ModelChoice, Scene};
-use crate::simulation::{SimParams, Simulation};
+use crate::simulation::{SimError, SimParams, Simulation};
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -237,15 +238,47 @@ pub struct RunOptions<'a> {
     pub run_end: Option<RunEndParams>,
 }
 
-/// How a run can fail (the message names where).
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+/// How a run can fail, by cause; each message names where (docs/architecture.md, "Errors").
+#[derive(Debug, thiserror::Error)]
 pub enum RunError {
+    /// The inputs cannot run as given; the message names the field (a missing duration, an
+    /// unknown history block, a PGA request out of range).
     #[error("{0}")]
     Invalid(String),
+    /// `control.model` forces a reduced model (`"rocking"`, `"sliding"`) that cannot represent
+    /// the scene; `why` says what disqualifies it.
+    #[error("control.model: the scene does not qualify for the reduced {model:?} model: {why}")]
+    ModelNotApplicable { model: &'static str, why: String },
+    /// The engine stopped with a typed diagnostic saying when, where and what to change.
     #[error("simulation failed: {0}")]
-    Simulation(String),
+    Simulation(#[from] SimError),
+    /// The engine stopped on one record of a multi-record PGA search.
+    #[error("simulation failed: record {record:?}: {source}")]
+    RecordSimulation {
+        record: String,
+        #[source]
+        source: SimError,
+    },
+    /// Writing a record file (`histories.csv`, `trajectory.mcap`) failed.
     #[error("writing outputs: {0}")]
-    Io(String),
+    Record(#[from] RecordError),
+    /// Creating the output directory or writing `summary.json` in it failed.
+    #[error("writing outputs: {}: {source}", dir.display())]
+    Output {
+        dir: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+impl RunError {
+    /// A failure to create `dir` or write into it.
+    pub(crate) fn output(dir: &Path, source: std::io::Error) -> Self {
+        RunError::Output {
+            dir: dir.to_path_buf(),
+            source,
+        }
+    }
 }
 
 /// Outcome of a run that was not an error.
@@ -432,11 +465,8 @@ pub fn choose_model(scene: &Scene, params: &ReducedParams) -> Result<ModelPlan, 
             } else {
                 ("sliding", Modes::Sliding)
             };
-            let b = reduced::qualify(scene, params).map_err(|why| {
-                RunError::Invalid(format!(
-                    "control.model: the scene does not qualify for the reduced \"{name}\" model: {why}"
-                ))
-            })?;
+            let b = reduced::qualify(scene, params)
+                .map_err(|why| RunError::ModelNotApplicable { model: name, why })?;
             let reason = format!(
                 "control.model is \"{name}\": {}{}",
                 describe(&b, modes),
@@ -468,31 +498,26 @@ impl Writers {
                 mcap: None,
             });
         };
-        std::fs::create_dir_all(dir)
-            .map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
-        let histories = Some(
-            HistoryWriter::create(&dir.join("histories.csv"), header)
-                .map_err(|e| RunError::Io(e.to_string()))?,
-        );
+        std::fs::create_dir_all(dir).map_err(|e| RunError::output(dir, e))?;
+        let histories = Some(HistoryWriter::create(&dir.join("histories.csv"), header)?);
         let mcap = if no_trajectory {
             None
         } else {
-            Some(
-                McapRecorder::create(&dir.join("trajectory.mcap"), header, &McapParams::default())
-                    .map_err(|e| RunError::Io(e.to_string()))?,
-            )
+            Some(McapRecorder::create(
+                &dir.join("trajectory.mcap"),
+                header,
+                &McapParams::default(),
+            )?)
         };
         Ok(Self { histories, mcap })
     }
 
     pub(crate) fn write(&mut self, frame: &Frame) -> Result<(), RunError> {
         if let Some(h) = &mut self.histories {
-            h.write_frame(frame)
-                .map_err(|e| RunError::Io(e.to_string()))?;
+            h.write_frame(frame)?;
         }
         if let Some(m) = &mut self.mcap {
-            m.write_frame(frame)
-                .map_err(|e| RunError::Io(e.to_string()))?;
+            m.write_frame(frame)?;
         }
         Ok(())
     }
@@ -517,10 +542,10 @@ impl Writers {
 
     pub(crate) fn finish(self) -> Result<(), RunError> {
         if let Some(h) = self.histories {
-            h.finish().map_err(|e| RunError::Io(e.to_string()))?;
+            h.finish()?;
         }
         if let Some(m) = self.mcap {
-            m.finish().map_err(|e| RunError::Io(e.to_string()))?;
+            m.finish()?;
         }
         Ok(())
     }
@@ -583,7 +608,7 @@ fn run_dda(
     writers.emit(&frame(&sim, &failure), opts, None)?;
     let mut stopped_reason = None;
     let mut cancelled = false;
-    let mut failure_msg = None;
+    let mut sim_error = None;
     while sim.time < cap - 1e-12 {
         if opts.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             cancelled = true;
@@ -600,11 +625,7 @@ fn run_dda(
         let next_frame =
             ((frame_index + 1) as f64 * interval).min(run_end::horizon(sim.time, duration, cap));
         if let Err(e) = sim.step(next_frame - sim.time) {
-            failure_msg = Some(e.to_string());
-            break;
-        }
-        if let Some(b) = sim.first_non_finite_block() {
-            failure_msg = Some(format!("non-finite state at t = {:.6} s in block {:?}; reduce the time step or the penalty stiffness", sim.time, scene.blocks[b].id));
+            sim_error = Some(e);
             break;
         }
         events.extend(run_end::retire_fallen(&mut sim, floor));
@@ -623,8 +644,8 @@ fn run_dda(
         }
     }
     writers.finish()?;
-    if let Some(msg) = failure_msg {
-        return Err(RunError::Simulation(msg));
+    if let Some(e) = sim_error {
+        return Err(RunError::Simulation(e));
     }
     let mut summary = summarize(
         &sim,
@@ -639,12 +660,16 @@ fn run_dda(
     );
     end_summary(&mut summary, settled, events, duration, motion);
     if let Some(dir) = opts.out_dir {
-        let text =
-            serde_json::to_string_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;
-        std::fs::write(dir.join("summary.json"), text + "\n")
-            .map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
+        write_summary(dir, &summary)?;
     }
     Ok(RunOutcome { summary, cancelled })
+}
+
+/// Write `summary.json` into `dir` (pretty JSON and a final newline).
+pub(crate) fn write_summary(dir: &Path, summary: &Summary) -> Result<(), RunError> {
+    let text = serde_json::to_string_pretty(summary)
+        .map_err(|e| RunError::output(dir, std::io::Error::other(e)))?;
+    std::fs::write(dir.join("summary.json"), text + "\n").map_err(|e| RunError::output(dir, e))
 }
 
 fn header(

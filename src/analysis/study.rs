@@ -5,7 +5,7 @@
 //!
 //! References (each independent of the engine and of the reduced models): closed forms for
 //! the incline under gravity; fixed-step rigid-plastic integrations (Δt = 1e-5 s) for the
-//! incline under a sine and the shaking foundation (seed 000 Eq. 17); Housner's equation by
+//! incline under a sine and the shaking foundation (Yagoda-Biran & Hatzor 2015, Eq. 17); Housner's equation by
 //! fixed-step RK4 (Δt = 1e-5 s) for the rocking column; for the masonry wall, which has no
 //! closed form, a DDA run at the finest setting of the sweep.
 use super::reduced::ode::Tolerance;
@@ -358,7 +358,7 @@ fn incline_blocks(alpha_deg: f64) -> (Value, [f64; 2]) {
     (blocks, d)
 }
 
-/// Housner's rocking of seed 000's column under its half-sine pulse of amplitude `a` (RK4 at
+/// Housner's rocking of Yagoda-Biran & Hatzor's (2015) column under its half-sine pulse of amplitude `a` (RK4 at
 /// 1e-5 s): (t, θ) every `every` s, overturned by `t_end`, first impact.
 fn housner(a: f64, t_end: f64, every: f64) -> (Vec<(f64, f64)>, bool, Option<f64>) {
     let col = reference::HousnerColumn::SEED_000;
@@ -419,7 +419,7 @@ pub fn wall_record(ground_motions: &Path) -> Result<GroundMotion, String> {
 fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
     let every: f64 = 0.01;
     let mut out = Vec::new();
-    // 1. Incline under gravity (seed 000 Eq. 14).
+    // 1. Incline under gravity (Yagoda-Biran & Hatzor 2015, Eq. 14).
     let (alpha, phi, t_end) = (28.0f64, 20.0f64, 1.0);
     let (blocks, d) = incline_blocks(alpha);
     let exact = 0.5
@@ -434,11 +434,11 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
         motion: GroundMotion::none(),
         duration: t_end,
         metric: Metric::FinalAlong { dir: d, exact },
-        reference_text: format!("closed form d = ½g(sin α − cos α tan φ)t² = {exact:.6} m (seed 000 Eq. 14)"),
+        reference_text: format!("closed form d = ½g(sin α − cos α tan φ)t² = {exact:.6} m (Yagoda-Biran & Hatzor 2015, Eq. 14)"),
         metric_text: "relative error of the final down-slope displacement".into(),
         reducible: true,
     });
-    // 2. Incline under a horizontal sine (seed 000 Eq. 10).
+    // 2. Incline under a horizontal sine (Yagoda-Biran & Hatzor 2015, Eq. 10).
     let (alpha, phi, a, f, t_end) = (20.0f64, 30.0f64, 4.0, 1.0, 4.0);
     let (blocks, d) = incline_blocks(alpha);
     let sine = |t: f64| a * (2.0 * PI * f * t).sin();
@@ -455,7 +455,7 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
         metric_text: "relative error of the final down-slope displacement".into(),
         reducible: true,
     });
-    // 3. Shaking foundation (seed 000 Eq. 17), driven block.
+    // 3. Shaking foundation (Yagoda-Biran & Hatzor 2015, Eq. 17), driven block.
     let (a, f, mu, t_end) = (0.2f64, 2.0f64, 0.6f64, if opts.quick { 2.0 } else { 5.0 });
     let w = 2.0 * PI * f;
     let mut scene = material_scene(
@@ -480,11 +480,11 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
         metric: Metric::HistoryX {
             reference: reference::foundation_eq17(a, f, mu, G, t_end, REF_DT, (every / REF_DT).round() as usize),
         },
-        reference_text: "seed 000 Eq. 17 integrated at a fixed step of 1e-5 s".into(),
+        reference_text: "Yagoda-Biran & Hatzor 2015, Eq. 17 integrated at a fixed step of 1e-5 s".into(),
         metric_text: "largest |x − x_ref| over the run relative to the largest |x_ref|".into(),
         reducible: true,
     });
-    // 4. Rocking column, history until the first impact (seed 000 §3.3).
+    // 4. Rocking column, history until the first impact (Yagoda-Biran & Hatzor 2015, §3.3).
     let (reference, _, impact) = housner(5.0, 2.0, every);
     let until = impact.unwrap_or(2.0) - 0.01;
     out.push(Bench {
@@ -990,7 +990,7 @@ pub fn run_study(opts: &StudyOptions) -> Result<StudyResult, String> {
 }
 
 /// The target of the defaults: what a user gets without setting any control must be within
-/// 1 % of an independent reference on every benchmark (the accuracy target, the one the
+/// 1 % of an independent reference on every benchmark (docs/accuracy-vs-speed.md's accuracy target, the one the
 /// report's Decisions and docs/accuracy-vs-speed.md measure the defaults against).
 pub const DEFAULTS_TARGET: f64 = 0.01;
 

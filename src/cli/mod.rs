@@ -1,5 +1,6 @@
 //! Command line: a thin layer that parses arguments and calls `analysis` / `service`.
 mod criteria;
+pub mod motion;
 mod run;
 mod scene;
 mod site;
@@ -28,7 +29,7 @@ pub enum Command {
     /// Search the PGA threshold at which a damage criterion is met.
     Pga(run::PgaArgs),
     /// Print a record's intensity measures as JSON.
-    Motion(crate::motion::command::MotionArgs),
+    Motion(motion::MotionArgs),
     /// Serve the HTTP API.
     Serve(crate::service::ServeArgs),
     /// Measure accuracy against speed over the benchmark scenes (docs/accuracy-vs-speed.md).
@@ -49,7 +50,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run::run(&args),
         Command::Pga(args) => run::pga(&args),
-        Command::Motion(args) => crate::motion::command::run(&args),
+        Command::Motion(args) => motion::run(&args).map_err(|e| e.to_string()),
         Command::Serve(args) => crate::service::serve_cli(args),
         Command::Study(args) => study::run(&args),
         Command::Worker(args) => worker::run(&args),

@@ -1,8 +1,7 @@
 //! Narrow phase for one block pair: vertex–edge candidates with Shi's entrance (angle)
 //! criterion; vertex–vertex situations are resolved to the edge the vertex can enter.
 use super::ContactParams;
-use crate::geometry::BlockGeometry;
-use crate::scene::inside_depth;
+use crate::geometry::{inside_depth, BlockGeometry};
 
 /// A vertex of `vertex_block` near edge `edge` of `edge_block`.
 #[derive(Debug, Clone, Copy)]

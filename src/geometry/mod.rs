@@ -3,9 +3,11 @@
 //!
 //! Units: m, m², m⁴. Polygons are counter-clockwise; second moments are about the centroid.
 mod mass;
+pub mod plane;
 
 pub use mass::{polygon_moments, Moments};
 use nalgebra::{Matrix2x6, SMatrix, Vector2};
+pub use plane::{inside_depth, polygon_signed_area, segments_cross, segments_touch};
 
 /// 6×6 block matrix (u0, v0, r0, εx, εy, γxy).
 pub type Mat6 = SMatrix<f64, 6, 6>;

@@ -7,7 +7,6 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 mod at2;
-pub mod command;
 mod cosmos;
 mod csv;
 mod esm;
@@ -21,7 +20,9 @@ pub use intensity::{
     report_with, response_spectrum, significant_duration, spectrum_svg, IntensityMeasures,
     ReportParams, Spectrum,
 };
-pub use json::{from_json, from_json_with};
+pub use json::{
+    from_json, from_json_with, ComponentSpec, MotionSpec, PulseSpec, ScaleSpec, SineSpec,
+};
 pub use options::{
     parse_acceleration, AccelerationError, Amplitude, RecordArgs, RecordOptionError, UnitsArg,
 };

@@ -4,12 +4,10 @@
 //! Conventions fixed here for the whole engine: SI units, y up, gravity along −y,
 //! polygons stored counter-clockwise, rotations counter-clockwise positive (radians).
 pub mod generate;
-mod plane;
 pub mod spec;
 pub mod templates;
 mod validate;
 
-pub use plane::{inside_depth, polygon_signed_area, segments_cross};
 pub use spec::*;
 pub use validate::validate;
 

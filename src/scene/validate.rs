@@ -1,6 +1,6 @@
 //! Turn a [`SceneSpec`] into a [`Scene`], rejecting anything the engine cannot run faithfully.
-use super::plane::{inside_depth, polygon_signed_area, segments_cross, segments_touch};
 use super::*;
+use crate::geometry::{inside_depth, polygon_signed_area, segments_cross, segments_touch};
 use std::collections::HashMap;
 
 /// Joint index per block pair (lower index first).

@@ -1,7 +1,12 @@
-//! Errors of the HTTP layer as RFC 9457 problem details (`application/problem+json`). Every
-//! failure a client can cause names what was wrong: `pointer` (a JSON pointer into the request
-//! body) or `parameter` (a path or query parameter). Internal failures are logged with their
-//! cause and reported to the client without it.
+//! Errors of the HTTP layer as RFC 9457 problem details (`application/problem+json`): the edge
+//! where the core's typed errors become a problem type per cause (`invalid-scene` from
+//! `SceneError`, `invalid-motion` from `MotionError`, `model-not-applicable` from `RunError`;
+//! docs/architecture.md). Every failure a client can cause names what was wrong: `pointer` (a
+//! JSON pointer into the request body) or `parameter` (a path or query parameter). Internal
+//! failures are logged with their cause and reported to the client without it.
+use crate::analysis::run::RunError;
+use crate::motion::MotionError;
+use crate::scene::SceneError;
 use axum::http::{header, HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Response};
 use serde::Serialize;
@@ -93,6 +98,58 @@ impl ApiError {
             detail,
         )
         .with_parameter(name)
+    }
+
+    /// The scene reader refused the scene ([`SceneError`]); `pointer` names the field.
+    pub fn scene(pointer: impl Into<String>, e: &SceneError) -> Self {
+        let pointer = pointer.into();
+        Self::new(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "invalid-scene",
+            "Scene is invalid",
+            format!("{pointer}: {}", e.message),
+        )
+        .with_pointer(pointer)
+    }
+
+    /// The ground-motion reader refused the motion ([`MotionError`]): `pointer` names the
+    /// member, the detail also the line of an embedded record.
+    pub fn motion(pointer: impl Into<String>, e: &MotionError) -> Self {
+        let pointer = pointer.into();
+        let line = e
+            .line
+            .map(|l| format!(" (line {l} of the record)"))
+            .unwrap_or_default();
+        let shown = if pointer.is_empty() {
+            "(body)"
+        } else {
+            pointer.as_str()
+        };
+        Self::new(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "invalid-motion",
+            "Ground motion is invalid",
+            format!("{shown}{line}: {}", e.message),
+        )
+        .with_pointer(pointer)
+    }
+
+    /// `choose_model` refused the scene: [`RunError::ModelNotApplicable`] (a forced reduced
+    /// model that cannot represent it) is `model-not-applicable`; any other cause is a bug of
+    /// the caller, reported as `internal`.
+    pub fn model(e: &RunError) -> Self {
+        if !matches!(e, RunError::ModelNotApplicable { .. }) {
+            return Self::internal(e);
+        }
+        let e = e.to_string();
+        let why = e.strip_prefix("control.model: ").unwrap_or(&e);
+        Self::new(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            "model-not-applicable",
+            "The scene's model cannot represent it",
+            format!("/scene/control/model: {why}"),
+        )
+        .with_pointer("/scene/control/model")
     }
 
     /// A configured limit is exceeded by a field of the body (blocks, record length, steps).
@@ -242,6 +299,22 @@ impl IntoResponse for ApiError {
         }
         resp
     }
+}
+
+/// serde names missing and unknown fields in its message, not in the path: point at them.
+pub(crate) fn point_at_named_field(pointer: String, msg: &str) -> String {
+    for marker in ["missing field `", "unknown field `"] {
+        if let Some(name) = msg
+            .strip_prefix(marker)
+            .and_then(|rest| rest.split('`').next())
+        {
+            let escaped = name.replace('~', "~0").replace('/', "~1");
+            if !pointer.ends_with(&format!("/{escaped}")) {
+                return format!("{pointer}/{escaped}");
+            }
+        }
+    }
+    pointer
 }
 
 /// Turn a scene-style dotted path (`blocks[2].vertices[0]`, `materials.stone.density`) into a

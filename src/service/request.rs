@@ -1,7 +1,7 @@
 //! Request bodies of the service: JSON text → validated [`JobInput`], with the server's limits
 //! applied. Used twice with the same rules: by the routes when a job is submitted (errors become
 //! 400/413/422 problems naming the field) and by a worker when it starts the stored job.
-use super::problem::{dotted_to_pointer, ApiError};
+use super::problem::{dotted_to_pointer, point_at_named_field, ApiError};
 use crate::analysis::fragility::Method;
 use crate::analysis::pga::{Combine, Criterion, PgaRequest};
 use crate::motion::{Amplitude, GroundMotion, Signal, Units};
@@ -108,22 +108,6 @@ pub fn json_body(bytes: &[u8]) -> Result<Value, ApiError> {
         ))
         .with_pointer("")
     })
-}
-
-/// serde names missing and unknown fields in its message, not in the path: point at them.
-fn point_at_named_field(pointer: String, msg: &str) -> String {
-    for marker in ["missing field `", "unknown field `"] {
-        if let Some(name) = msg
-            .strip_prefix(marker)
-            .and_then(|rest| rest.split('`').next())
-        {
-            let escaped = name.replace('~', "~0").replace('/', "~1");
-            if !pointer.ends_with(&format!("/{escaped}")) {
-                return format!("{pointer}/{escaped}");
-            }
-        }
-    }
-    pointer
 }
 
 /// Deserialize a typed body part, turning serde's message into a problem naming the field.
@@ -282,9 +266,8 @@ fn parse_records(
     Ok((scene, records))
 }
 
-/// Shape checks the scene and motion readers leave out: a motion component must not mix forms
-/// or carry unknown keys (the reader picks the first form it recognises and would silently
-/// ignore the rest), and a `base_acceleration` excitation takes no other field.
+/// Shape checks before any work: a `base_acceleration` excitation takes no other field (the
+/// scene reader leaves that out), and the motion reads as a [`crate::motion::MotionSpec`].
 fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), ApiError> {
     if let Some(ex) = scene.get("excitation").and_then(Value::as_object) {
         let allowed: &[&str] = match ex.get("type").and_then(Value::as_str) {
@@ -299,41 +282,14 @@ fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), ApiError> {
             ));
         }
     }
-    if let Some(scale) = motion
-        .and_then(|m| m.get("scale"))
-        .and_then(Value::as_object)
-    {
-        if let Some((k, _)) = scale.iter().find(|(_, v)| v.is_null()) {
-            let p = format!("/motion/scale/{k}");
-            return Err(ApiError::invalid_field(
-                p.clone(),
-                format!("{p}: must not be null (leave it out instead)"),
-            ));
-        }
-    }
-    for name in ["horizontal", "vertical"] {
-        let Some(c) = motion.and_then(|m| m.get(name)).and_then(Value::as_object) else {
-            continue;
-        };
-        let forms: [&[&str]; 4] = [
-            &["pulse"],
-            &["sine"],
-            &["samples", "dt", "units"],
-            &["format", "content", "units"],
-        ];
-        let Some(form) = forms.iter().find(|f| c.contains_key(f[0])) else {
-            continue;
-        };
-        if let Some(k) = c.keys().find(|k| !form.contains(&k.as_str())) {
-            let p = format!("/motion/{name}/{k}");
-            return Err(ApiError::invalid_field(
-                p.clone(),
-                format!(
-                    "{p}: unknown field for a {:?} component (allowed: {})",
-                    form[0],
-                    form.join(", ")
-                ),
-            ));
+    // The motion's shape is its type: members of another form, nulls and `processing` (a
+    // command-line extension) are refused by reading it as a `MotionSpec`.
+    if let Some(m) = motion.filter(|m| !m.is_null()) {
+        let spec = crate::motion::MotionSpec::from_value(m).map_err(|e| motion_problem(&e))?;
+        for (name, c) in spec.components() {
+            if let Some(e) = c.processing_refused(&format!("motion.{name}")) {
+                return Err(motion_problem(&e));
+            }
         }
     }
     Ok(())
@@ -386,6 +342,15 @@ fn check_sizes(scene: &Value, motion: Option<&Value>, limits: &Limits) -> Result
     Ok(())
 }
 
+/// A motion error as a problem pointing into the body (`motion.horizontal.dt` →
+/// `/motion/horizontal/dt`).
+fn motion_problem(e: &crate::motion::MotionError) -> ApiError {
+    ApiError::motion(
+        point_at_named_field(dotted_to_pointer("", &e.origin), &e.message),
+        e,
+    )
+}
+
 fn scene_and_motion(
     scene: &Value,
     motion: Option<&Value>,
@@ -403,27 +368,14 @@ fn scene_and_motion(
     }
     let mut scene = crate::scene::scene_from_value(scene).map_err(|e| {
         let p = point_at_named_field(dotted_to_pointer("/scene", &e.path), &e.message);
-        ApiError::invalid_field(p.clone(), format!("{p}: {}", e.message))
+        ApiError::scene(p, &e)
     })?;
     // A forced reduced model the scene cannot take is refused now, not failed later by a worker.
-    crate::analysis::run::choose_model(&scene, &Default::default()).map_err(|e| {
-        let e = e.to_string();
-        let why = e.strip_prefix("control.model: ").unwrap_or(&e);
-        ApiError::invalid_field(
-            "/scene/control/model",
-            format!("/scene/control/model: {why}"),
-        )
-    })?;
+    crate::analysis::run::choose_model(&scene, &Default::default())
+        .map_err(|e| ApiError::model(&e))?;
     let motion = match motion {
         None | Some(Value::Null) => GroundMotion::none(),
-        Some(v) => crate::motion::from_json(v).map_err(|e| {
-            let p = point_at_named_field(dotted_to_pointer("", &e.origin), &e.message);
-            let line = e
-                .line
-                .map(|l| format!(" (line {l} of the record)"))
-                .unwrap_or_default();
-            ApiError::invalid_field(p.clone(), format!("{p}{line}: {}", e.message))
-        })?,
+        Some(v) => crate::motion::from_json(v).map_err(|e| motion_problem(&e))?,
     };
     let samples = signal_samples(&motion.horizontal) + signal_samples(&motion.vertical);
     if samples > limits.max_record_samples {

@@ -61,7 +61,7 @@ pub fn route_table() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
         ),
         (Method::GET, "/healthz", get(healthz)),
         (Method::GET, "/openapi.yaml", get(openapi)),
-        // The web page (issue 11) and the endpoints it needs: src/service/web.rs.
+        // The web page (docs/web.md) and the endpoints it needs: src/service/web.rs.
         (Method::GET, "/", get(web::index)),
         (Method::GET, "/assets/{name}", get(web::asset)),
         (Method::GET, "/v1/jobs", get(web::list_jobs)),

@@ -1,4 +1,4 @@
-//! The browser page (`GET /`, issue 11) and the JSON endpoints it needs beyond the job API:
+//! The browser page (`GET /`, docs/web.md) and the JSON endpoints it needs beyond the job API:
 //! record inspection before submitting, the list of recent jobs, a job's geometry and ground
 //! motion for the animation and plots, and the bundled examples. Sits beside `routes` at the
 //! top of the flow; the page itself is plain HTML/CSS/JS under `web/`, embedded in the binary.
@@ -356,54 +356,6 @@ fn motion_pointer(origin: &str, message: &str, body: &Value) -> String {
     p
 }
 
-/// What the motion parser lets pass but docs/format.md §2 (and `openapi.yaml`) does not: members of
-/// a component that belong to another form (`{"pulse": …, "dt": 1}`), and nulls where a value
-/// or nothing is expected. The job routes refuse the same (`request::check_shapes`).
-fn check_motion_shape(body: &Value) -> Result<(), ApiError> {
-    let refuse =
-        |p: String, what: &str| Err(ApiError::invalid_field(p.clone(), format!("{p}: {what}")));
-    if let Some(scale) = body.get("scale").and_then(Value::as_object) {
-        if let Some((k, _)) = scale.iter().find(|(_, v)| v.is_null()) {
-            return refuse(
-                format!("/scale/{k}"),
-                "must not be null (leave it out instead)",
-            );
-        }
-    }
-    for name in ["horizontal", "vertical"] {
-        let Some(c) = body.get(name).and_then(Value::as_object) else {
-            continue;
-        };
-        let forms: [&[&str]; 4] = [
-            &["pulse"],
-            &["sine"],
-            &["samples", "dt", "units"],
-            &["format", "content", "units"],
-        ];
-        let Some(form) = forms.iter().find(|f| c.contains_key(f[0])) else {
-            continue;
-        };
-        if let Some(k) = c.keys().find(|k| !form.contains(&k.as_str())) {
-            return refuse(
-                format!("/{name}/{k}"),
-                format!(
-                    "unknown field for a {:?} component (allowed: {})",
-                    form[0],
-                    form.join(", ")
-                )
-                .as_str(),
-            );
-        }
-        if let Some((k, _)) = c.iter().find(|(_, v)| v.is_null()) {
-            return refuse(
-                format!("/{name}/{k}"),
-                "must not be null (leave it out instead)",
-            );
-        }
-    }
-    Ok(())
-}
-
 fn evaluated_samples(sig: &Signal, p: &ReportParams) -> f64 {
     match sig {
         Signal::Zero => 0.0,
@@ -437,16 +389,18 @@ pub fn inspect_motion(
             "the body must be a ground motion object {\"horizontal\": …, \"vertical\": …, \"scale\": …} (docs/format.md §2)",
         ));
     }
-    check_motion_shape(body)?;
-    let gm = crate::motion::from_json(body).map_err(|e| {
-        let p = motion_pointer(&e.origin, &e.message, body);
-        let line = e
-            .line
-            .map(|l| format!(" (line {l} of the record)"))
-            .unwrap_or_default();
-        let shown = if p.is_empty() { "(body)" } else { p.as_str() };
-        ApiError::invalid_field(p.clone(), format!("{shown}{line}: {}", e.message))
-    })?;
+    // Read as a `MotionSpec` (unknown members, members of another form and nulls refused),
+    // without the command-line extension `processing`.
+    let problem = |e: crate::motion::MotionError| {
+        ApiError::motion(motion_pointer(&e.origin, &e.message, body), &e)
+    };
+    let spec = crate::motion::MotionSpec::from_value(body).map_err(problem)?;
+    for (name, c) in spec.components() {
+        if let Some(e) = c.processing_refused(&format!("motion.{name}")) {
+            return Err(problem(e));
+        }
+    }
+    let gm = spec.build(&Default::default()).map_err(problem)?;
     if matches!(gm.horizontal, Signal::Zero) {
         return Err(ApiError::invalid_field(
             "/horizontal",

@@ -67,6 +67,8 @@ pub enum SimError {
         limit: f64,
         block: String,
     },
+    /// A step left a block's position, rotation or velocity NaN or infinite (checked at the
+    /// end of every `step`); `time` is the step's end, s.
     #[error("non-finite state at t = {time:.6} s in block {block:?}; reduce the time step or the penalty stiffness")]
     NonFinite { time: f64, block: String },
     #[error("penetration of {depth:.3e} m at t = {time:.6} s between blocks {block_a:?} and {block_b:?} could not be reduced by cutting the time step; raise the penalty stiffness")]
@@ -441,6 +443,14 @@ impl Simulation {
         self.integrate(dt);
         self.profile.integrate += t3.elapsed();
         self.finish_step(dt, cuts, error);
+        // A NaN or infinity never leaves an accepted step: it would poison every later step
+        // and every recorded frame.
+        if let Some(b) = self.first_non_finite_block() {
+            return Err(SimError::NonFinite {
+                time: self.time,
+                block: self.scene.blocks[b].id.clone(),
+            });
+        }
         Ok(dt)
     }
 
@@ -889,7 +899,7 @@ impl Simulation {
     }
 
     /// A closed contact deeper than `max_penetration_ratio` of the thinner block after a
-    /// converged step (issue 8: a soft penalty used to complete silently with blocks sunk
+    /// converged step (docs/stability.md: a soft penalty used to complete silently with blocks sunk
     /// into each other, see tests/regression/regression_soft_penalty.rs).
     fn too_soft(&self, dt: f64) -> Option<SimError> {
         let ratio = self.params.max_penetration_ratio;
@@ -1045,7 +1055,8 @@ impl Simulation {
         self.contacts.force_detection();
     }
 
-    /// True if any state value is not finite (checked by callers after each step).
+    /// The first block whose position, rotation or velocity is not finite (`step` fails with
+    /// [`SimError::NonFinite`] naming it).
     pub fn first_non_finite_block(&self) -> Option<usize> {
         for (b, g) in self.geoms.iter().enumerate() {
             if !g.centroid.x.is_finite() || !g.centroid.y.is_finite() || !g.rotation.is_finite() {

@@ -1,7 +1,7 @@
-//! `ashlar pga` over several records (issue 6): a directory, a comma-separated list and a
+//! `ashlar pga` over several records (docs/pga.md): a directory, a comma-separated list and a
 //! `.list` file all run the per-record searches and write result.json, fragility.json and
 //! fragility.svg; bad input exits non-zero with one message naming what was wrong.
-//! The record options shared by `run`, `pga` and `motion` (issue 19): `--units` for a CSV
+//! The record options shared by `run`, `pga` and `motion` (docs/format.md, "Record options"): `--units` for a CSV
 //! record without units, amplitudes with explicit units, bare numbers refused.
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};

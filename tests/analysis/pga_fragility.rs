@@ -1,4 +1,4 @@
-//! Fragility fitting (issue 6): the maximum-likelihood lognormal fit checked against
+//! Fragility fitting (docs/pga.md): the maximum-likelihood lognormal fit checked against
 //! (a) the closed form for exact capacities: θ = exp(mean ln c), β = population standard
 //!     deviation of ln c (tolerance 1e-6 relative: the optimiser stops at a 1e-10 simplex);
 //! (b) synthetic capacities drawn (seeded) from a known lognormal, bracketed as a search would

@@ -1,4 +1,4 @@
-//! Overturning amplitude against pulse frequency (issue 6): full one-cycle sine pulses
+//! Overturning amplitude against pulse frequency (docs/pga.md): full one-cycle sine pulses
 //! a(t) = A sin(2πft), 0 ≤ t ≤ 1/f, at f = 0.5, 1, 2 and 4 Hz, for two rigid columns on a fixed
 //! base (half-width × half-height 0.2 × 0.6 m and the more slender 0.1 × 0.8 m).
 //!
@@ -16,7 +16,7 @@
 //! 14 g tan α, so the threshold jumps. The test checks the reference's mode at each case, and
 //! that the engine overturns in the same mode at its failing amplitude.
 //!
-//! Tolerance: the engine's lowest overturning amplitude within 3 % of Housner's (the issue's
+//! Tolerance: the engine's lowest overturning amplitude within 3 % of Housner's (docs/verification.md's
 //! bound), searched over [0.5, 1.5] × the reference. Every overturning interval the scan meets
 //! is reported; islands (overturning intervals below the main overturning region, the one that
 //! reaches 1.5 × Housner) are printed.

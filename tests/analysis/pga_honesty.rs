@@ -1,4 +1,4 @@
-//! Bracket honesty (issue 6): for several scenes and criteria under two shared real records
+//! Bracket honesty (docs/pga.md): for several scenes and criteria under two shared real records
 //! (Friuli 1976 Tolmezzo and Kobe 1995 Nishi-Akashi, each windowed to its strong phase, 9 s),
 //! a full `analysis::run::run` (no early stop, the path `ashlar run` takes) at `safe_pga`
 //! does not meet the criterion, and at `failing_pga` it does. The verdict is recomputed here

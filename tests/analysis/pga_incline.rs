@@ -1,4 +1,4 @@
-//! PGA search with a displacement criterion (issue 6): a rigid block on a 20° incline (friction
+//! PGA search with a displacement criterion (docs/pga.md): a rigid block on a 20° incline (friction
 //! angle 30°) under a steady horizontal sine of 1 Hz for 3 s; criterion
 //! `displacement:block:0.05` (residual centroid displacement ≥ 5 cm).
 //!
@@ -8,7 +8,7 @@
 //! and a direct bisection on its final displacement to 1e-5 relative.
 //!
 //! Tolerance: the engine's threshold (midpoint of a 0.01 m/s² bracket) within 2 % of the
-//! reference threshold (the issue's bound). The bracket must also be honest: a full run (no
+//! reference threshold (docs/verification.md's bound). The bracket must also be honest: a full run (no
 //! early stop) at `safe_pga` moves the block less than 5 cm, at `failing_pga` at least 5 cm.
 use crate::common;
 use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};

@@ -1,5 +1,5 @@
-//! PGA threshold search (issue 6): for the rocking column under the half-sine pulse of the
-//! engine issue, the bracket must contain Housner's overturning amplitude, 5.64 m/s² (its
+//! PGA threshold search (docs/pga.md): for the rocking column under the half-sine pulse of the
+//! engine's verification (docs/verification.md), the bracket must contain Housner's overturning amplitude, 5.64 m/s² (its
 //! independent RK4 value is checked in tests/engine/rocking.rs), within 2 %; and the bracket must be
 //! honest: a run at `safe_pga` does not meet the criterion, a run at `failing_pga` does.
 //! Checked for the full engine (`"model": "dda"`) and for the scene's default model (`"auto"`,
@@ -28,7 +28,7 @@ fn column() -> ashlar::scene::Scene {
     column_with(Some("dda"))
 }
 
-/// The half-sine pulse of the engine issue at unit amplitude (the search rescales it).
+/// The half-sine pulse of Yagoda-Biran & Hatzor 2015, §3.3, at unit amplitude (the search rescales it).
 fn unit_pulse() -> GroundMotion {
     GroundMotion::horizontal(Signal::Pulse {
         amplitude: 1.0,

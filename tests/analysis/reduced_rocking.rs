@@ -1,5 +1,5 @@
 //! The reduced rocking model (`"model": "rocking"`, `analysis::reduced`) against two
-//! independent methods on the rocking column of seed 000 §3.3 (b = 0.2 m, h = 0.6 m, half-sine
+//! independent methods on the rocking column of Yagoda-Biran & Hatzor 2015, §3.3 (b = 0.2 m, h = 0.6 m, half-sine
 //! pulse a(t) = A sin 2πt for 0 ≤ t ≤ 0.5 s):
 //! 1. Housner's equation integrated by fixed-step RK4 (Δt = 1e-5 s) with Housner's
 //!    restitution e = 1 − 1.5 sin²α (`ashlar::analysis::reference`, written independently of

@@ -2,12 +2,13 @@
 //! first-motion check of the reduced models.
 //!
 //! The first-motion check is verified against the analytic chart of a block on an incline
-//! under a constant horizontal load (Yeung 1991; derived in tests/engine/failure_modes.rs and written
-//! again here): stable, sliding, toppling (Yeung's dynamic criterion, pivot sticking), and
+//! under a constant horizontal load (Yeung 1991; derived in tests/engine/failure_modes.rs, drawn by
+//! `analysis::reference::first_motion_chart`): stable, sliding, toppling (Yeung's dynamic criterion, pivot sticking), and
 //! sliding-and-toppling, which no reduced model represents, so `auto` must hand it to the full
 //! engine. Binary agreement in every case, each case ≥ 3° from every chart boundary.
 use crate::common;
 use ashlar::analysis::reduced::{qualify, Modes, Reduced, ReducedParams};
+use ashlar::analysis::reference::{first_motion_chart as chart, FirstMotion as Mode};
 use ashlar::analysis::run::{run, RunOptions};
 use ashlar::motion::{GroundMotion, Sampled, Signal};
 use ashlar::scene::generate::{running_bond_wall, WallParams};
@@ -178,35 +179,6 @@ fn reduced_run_writes_the_same_outputs_as_dda() {
 }
 
 // ---- First motion against Yeung's chart ----
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Mode {
-    Stable,
-    Sliding,
-    Toppling,
-    SlidingToppling,
-}
-
-fn yeung_f(psi: f64, delta: f64) -> f64 {
-    let (t, tt) = (delta.tan(), psi.tan());
-    ((4.0 * t * t + 1.0) * tt + 3.0 * t) / ((t * t + 4.0) + 3.0 * t * tt)
-}
-
-fn chart(psi: f64, delta: f64, phi: f64) -> Mode {
-    if psi < delta {
-        if psi < phi {
-            Mode::Stable
-        } else {
-            Mode::Sliding
-        }
-    } else if phi.tan() >= yeung_f(psi, delta) {
-        Mode::Toppling
-    } else if phi < delta {
-        Mode::Sliding
-    } else {
-        Mode::SlidingToppling
-    }
-}
 
 /// (α, k, δ, φ) in degrees / g; the reduced models' verdict on the first motion.
 fn reduced_first_motion(alpha: f64, k: f64, delta: f64, phi: f64) -> Result<Mode, String> {

@@ -1,19 +1,19 @@
 //! The reduced sliding model (`"model": "sliding"`: rigid-plastic Newmark integration with
 //! Coulomb friction in the contact's frame) against independent references:
-//! 1. Incline under gravity, closed form d = ½g(sin α − cos α tan φ)t² (seed 000 Eq. 14):
+//! 1. Incline under gravity, closed form d = ½g(sin α − cos α tan φ)t² (Yagoda-Biran & Hatzor 2015, Eq. 14):
 //!    within 1e-6 relative — the model integrates a constant acceleration, so only the ODE
 //!    tolerance (1e-10) and the onset location contribute.
-//! 2. Incline under a horizontal sine (seed 000 Eq. 10), against the fixed-step (1e-5 s)
+//! 2. Incline under a horizontal sine (Yagoda-Biran & Hatzor 2015, Eq. 10), against the fixed-step (1e-5 s)
 //!    semi-implicit rigid-plastic integration of `ashlar::analysis::reference` (as in
 //!    tests/engine/sliding_newmark.rs):
 //!    within 0.1 % — that reference's own first-order stick/slip timing error (≤ 1e-5 s per
-//!    transition, a few transitions a cycle) is ~1e-4 of the displacement; the DDA
+//!    transition, a few transitions a cycle) is ~1e-4 of the displacement; docs/verification.md's DDA
 //!    bound is 2 %.
-//! 3. Shaking foundation (driven block, seed 000 Eq. 17 integrated at 1e-6 s): largest
+//! 3. Shaking foundation (driven block, Yagoda-Biran & Hatzor 2015, Eq. 17 integrated at 1e-6 s): largest
 //!    deviation within 0.1 % of the peak. The reference's explicit stick/slip switching makes
 //!    a velocity error of up to Δt·Aω² at each reversal (first order): at 1e-5 s the 5 Hz case
 //!    deviated by 0.36 %, at 1e-6 s by 0.041 % (measured), so 1e-6 s is used.
-//! 4. The full DDA engine on the sine case: within 2 % (the bound for DDA).
+//! 4. The full DDA engine on the sine case: within 2 % (docs/verification.md's bound for DDA).
 use crate::common;
 use ashlar::analysis::reference::{foundation_eq17, newmark_incline};
 use ashlar::analysis::run::{run, RunOptions, Summary};

@@ -132,7 +132,7 @@ fn run_column(model: ModelChoice, end: Option<RunEndParams>) -> (Summary, f64) {
 fn a_column_left_past_its_tipping_angle_ends_toppled_as_housner_says() {
     let alpha = (B / H).atan();
     let (th_ref, toppled_ref) = housner(PERIOD, 20.0);
-    // The case is the one of the issue: at the end of the burst the column is past its tipping
+    // The case is the one reported (docs/run-end.md): at the end of the burst the column is past its tipping
     // angle but below the 30° of "toppled"; Housner says it falls.
     assert!(
         th_ref.abs() > alpha && th_ref.abs() < 30f64.to_radians(),

@@ -125,7 +125,7 @@ pub fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Value {
 
 /// `columns × rows` aligned 0.4 × 0.2 m blocks in a fixed U, frictionless, under
 /// `contact_solver: "dual"` at Δt = 1 ms, with the top middle block thrown down at 1 m/s: four
-/// corners meet at every interior node (the redundant vertex–vertex contacts of the seed's
+/// corners meet at every interior node (the redundant vertex–vertex contacts of Zheng et al.'s
 /// pile).
 pub fn aligned_stack(columns: usize, rows: usize) -> Scene {
     let (w, h) = (0.4, 0.2);

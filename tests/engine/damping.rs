@@ -1,9 +1,9 @@
-//! Kinetic damping without time-step coupling (issue 8, seed 000 §5.1.3): a free block under
+//! Kinetic damping without time-step coupling (docs/stability.md; Yagoda-Biran & Hatzor 2015, §5.1.3): a free block under
 //! gravity (a mass under constant force) for 1 s at Δt = 1e-3, 1e-4, 1e-5 s.
 //! - `dynamic_factor` = 0.97 (3 % of the velocity removed per step) removes far more motion at
-//!   small steps: the displacements must differ by more than 50 % (the issue's figure).
+//!   small steps: the displacements must differ by more than 50 % (docs/verification.md's figure).
 //! - `kinetic_damping_rate` = 30 1/s (the same 3 % per 1 ms, as a rate) must give the same
-//!   answer at every step, within 1 % (the issue's bound), and agree with the closed form
+//!   answer at every step, within 1 % (docs/verification.md's bound), and agree with the closed form
 //!   x(t) = (g/r)·(t − (1 − e^(−rt))/r) within 1 %.
 use crate::common;
 use ashlar::motion::GroundMotion;

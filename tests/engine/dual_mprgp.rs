@@ -1,13 +1,13 @@
 //! The dual solver's two iterations agree: the MPRGP minimisation (conjugate gradients on the
-//! free contact forces, `src/solve/dual/mprgp.rs`) and the seed's projection–contraction
+//! free contact forces, `src/solve/dual/mprgp.rs`) and Zheng et al.'s projection–contraction
 //! compatibility iteration (`src/solve/dual/iterate.rs`, run alone with
 //! `max_cg_iterations = 0`) solve the same quasi-variational inequality to the same stopping
 //! test, so the same scene must move the same way under either. The projection–contraction
-//! iteration is the reference here: it is the seed's algorithm, and its own accuracy is
+//! iteration is the reference here: it is Zheng et al.'s algorithm, and its own accuracy is
 //! checked against closed forms in `dual_seed.rs` and the engine benchmarks.
 //!
 //! Scenes: a frictionless stack of aligned blocks (four corners meet at every interior node:
-//! the redundant vertex–vertex contacts of the seed's pile) hit from above, and a dry-stone
+//! the redundant vertex–vertex contacts of Zheng et al.'s pile) hit from above, and a dry-stone
 //! running-bond wall with friction shaken at its base (the friction rounds of the QVI).
 //!
 //! Tolerance: each solve leaves at most the stopping tolerance ε = 1e-9 × the smallest block's

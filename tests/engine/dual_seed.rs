@@ -1,4 +1,4 @@
-//! The dual form of DDA (`contact_solver: "dual"`) on the seed's own tests (seed 003 §7):
+//! The dual form of DDA (`contact_solver: "dual"`) on the paper's own tests (Zheng et al. 2016, §7):
 //! two equal blocks colliding on a frictionless table, a block sliding on a 30° ramp at
 //! Δt = 0.01 s, and Bao and Zhao's four-block system. References are written here: momentum
 //! conservation and the velocity exchange of the DDA integrator for equal masses; the
@@ -38,7 +38,7 @@ fn two_blocks(v0: f64, gap: f64, solver: &str) -> Scene {
 /// Equal masses meeting at a step boundary: the DDA integrator (Newmark β = ½, γ = 1) with an
 /// exact non-penetration condition exchanges the velocities exactly (the contact impulse
 /// m·v0/Δ·Δ over one step gives v_A = 2d_A/Δ − v0 = 0, v_B = v0), as the seed reports
-/// (1.7e-5 and 0.49998 m/s). Tolerances: the 1e-4 m/s on the speeds, 1e-9 relative on
+/// (1.7e-5 and 0.49998 m/s). Tolerances: docs/verification.md's 1e-4 m/s on the speeds, 1e-9 relative on
 /// the momentum (internal forces cancel exactly; only round-off remains).
 #[test]
 fn two_equal_blocks_exchange_velocities_on_a_frictionless_table() {
@@ -83,7 +83,7 @@ fn two_equal_blocks_exchange_velocities_on_a_frictionless_table() {
 }
 
 /// Seed Fig. 7–8: a block on a 30° ramp with a 20° friction angle at Δt = 0.01 s, 300 steps.
-/// Reference d(t) = ½ g (sin α − cos α tan φ) t². Tolerance 0.5 % (the bound) from
+/// Reference d(t) = ½ g (sin α − cos α tan φ) t². Tolerance 0.5 % (docs/verification.md's bound) from
 /// t = 0.1 s on. The penalty method runs at the same Δt with a stiff spring (penetration held
 /// small) for contrast; its error is printed, not asserted.
 fn ramp_error(solver: &str, penalty: Option<f64>) -> (f64, f64) {
@@ -122,7 +122,7 @@ fn block_on_30_degree_ramp_at_a_hundredth_of_a_second() {
     assert!(dual < 0.005, "dual relative error {dual}");
 }
 
-/// Bao and Zhao's vertex–vertex example (seed 003 Figs. 9–10), reduced to its contact: the
+/// Bao and Zhao's vertex–vertex example (Zheng et al. 2016, Figs. 9–10), reduced to its contact: the
 /// bottom-left vertex of block A (1 m square, free) sits exactly on the top-right corner of
 /// block C (1 m square, fixed on a fixed table), gravity neglected, a load with Fx:Fy = −4:−3 on
 /// A, friction angle 15°, ρ = 2300 kg/m³, E = 10 GPa, static analysis (dynamic factor 0),
@@ -181,7 +181,7 @@ fn bao_zhao_vertex_moves_along_the_top_edge() {
 /// its DDA took A's vertex down C's side, its DDA-d along C's top. Check: the vertex moved more
 /// than 1e-4 m along one of C's two edges and stayed outside the other one within 1e-6 m (the
 /// springs' penetration F/k is ~2e-7 m here: A's weight-like load 2.3e4 N at k = 1e11 N/m).
-/// This engine's penalty solver goes down the side, as the seed's DDA did (printed).
+/// This engine's penalty solver goes down the side, as Zheng et al.'s DDA did (printed).
 #[test]
 fn bao_zhao_penalty_ends_in_one_of_the_seeds_two_solutions() {
     let [x, y] = bao_zhao("penalty");

@@ -5,7 +5,7 @@
 //! tolerance is taken, counted and bounded.
 //!
 //! Scene: a frictionless stack of aligned blocks in a fixed U (four corners at every interior
-//! node, as in the seed's pile) with the top middle block thrown down at 1 m/s. The solver is
+//! node, as in Zheng et al.'s pile) with the top middle block thrown down at 1 m/s. The solver is
 //! starved on purpose (the projection–contraction iteration alone, capped at 0 or 1000
 //! iterations a solve) so that stalls are certain; the reference is the same scene with the default budget, every
 //! solve converged to the tolerance.

@@ -1,4 +1,4 @@
-//! Numerical stability at the extremes (issue 8). Every knob is swept one at a time, then in hard
+//! Numerical stability at the extremes (docs/stability.md). Every knob is swept one at a time, then in hard
 //! combinations, and every case must end in one of two asserted ways:
 //!
 //! - **completed**: the run reached its end time (or its step budget) with
@@ -1102,7 +1102,8 @@ fn run_entry_point_budget_summary_and_diagnostic() {
     };
     let scene = parse(&stack(&soft));
     match run(&scene, &motion(&soft), &RunOptions::default()) {
-        Err(RunError::Simulation(m)) => {
+        Err(RunError::Simulation(e)) => {
+            let m = e.to_string();
             println!("| run entry point, penalty 1e4 N/m | error: {m} | – | – | – | – | – |");
             assert_useful_diagnostic("run entry point", &m);
         }

@@ -1,4 +1,4 @@
-//! Failure-mode chart of a block on an incline (seed 000 §3.2; Yeung 1991; Yagoda-Biran and
+//! Failure-mode chart of a block on an incline (Yagoda-Biran & Hatzor 2015, §3.2; Yeung 1991; Yagoda-Biran and
 //! Hatzor 2013): the *first motion* of a rigid rectangular block — stable, sliding, toppling, or
 //! sliding and toppling — under gravity and a horizontal pseudo-static force, compared with the
 //! analytic chart derived below, case by case. Tolerance: agreement in every case (binary; the
@@ -52,6 +52,7 @@
 //! every moving case reaches `DECIDE` in well under `T_MAX` (slowest onset 0.34 m/s² at a 2°
 //! margin → 1 mm in < 0.1 s).
 use crate::common;
+use ashlar::analysis::reference::{first_motion_chart as chart, yeung_f, FirstMotion as Mode};
 use ashlar::motion::{GroundMotion, Sampled, Signal};
 use common::*;
 use serde_json::json;
@@ -63,38 +64,6 @@ const T_MAX: f64 = 0.4;
 const L: f64 = 0.6;
 /// Margin kept from every boundary, degrees.
 const MARGIN: f64 = 2.0;
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Mode {
-    Stable,
-    Sliding,
-    Toppling,
-    SlidingToppling,
-}
-
-/// Yeung's toppling criterion: the friction coefficient needed for the down-slope corner to
-/// stick at the onset of toppling (angles in rad).
-fn yeung_f(psi: f64, delta: f64) -> f64 {
-    let (t, tt) = (delta.tan(), psi.tan());
-    ((4.0 * t * t + 1.0) * tt + 3.0 * t) / ((t * t + 4.0) + 3.0 * t * tt)
-}
-
-/// The analytic chart (angles in rad).
-fn chart(psi: f64, delta: f64, phi: f64) -> Mode {
-    if psi < delta {
-        if psi < phi {
-            Mode::Stable
-        } else {
-            Mode::Sliding
-        }
-    } else if phi.tan() >= yeung_f(psi, delta) {
-        Mode::Toppling
-    } else if phi < delta {
-        Mode::Sliding
-    } else {
-        Mode::SlidingToppling
-    }
-}
 
 /// The mode if it is the same everywhere within ±`MARGIN` of (ψ, δ, φ) (checked on a 5×5×5
 /// lattice; the boundaries are smooth and monotone, so this keeps the case ≥ 2° from them).

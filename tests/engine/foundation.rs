@@ -1,7 +1,7 @@
-//! Block on a shaking foundation (seed 000 §3.4, §4.5.3, Eqs. 11–13, 16–17) as a 2D model with
+//! Block on a shaking foundation (Yagoda-Biran & Hatzor 2015, §3.4, §4.5.3, Eqs. 11–13, 16–17) as a 2D model with
 //! `driven_block`: the foundation (16 m long, so the block never reaches its ends) follows d1(t) = A(1 − cos 2πft) exactly; a flat block
 //! (2 m × 0.1 m) on top responds through friction μ. Reference: the semi-analytic rules of
-//! Eq. 17 integrated with Δt = 1e-5 s (`ashlar::analysis::reference`). Tolerance: the 3 %, measured as the largest
+//! Eq. 17 integrated with Δt = 1e-5 s (`ashlar::analysis::reference`). Tolerance: docs/verification.md's 3 %, measured as the largest
 //! |d2_DDA − d2_ref| over the run relative to the largest |d2_ref| (a pointwise relative error is
 //! undefined where the displacement crosses zero).
 use crate::common;
@@ -24,7 +24,7 @@ fn dda(a: f64, f: f64, mu: f64, t_end: f64, every: f64) -> Vec<(f64, f64)> {
         { "id": "foundation", "material": "stone", "vertices": [[-8.0, -0.5], [8.0, -0.5], [8.0, 0.0], [-8.0, 0.0]] },
         { "id": "block", "material": "stone", "block_model": "rigid", "vertices": [[-1.0, 0.0], [1.0, 0.0], [1.0, 0.1], [-1.0, 0.1]] },
     ]);
-    // The seed's Table 2 parameters: ρ = 2250 kg/m³, E = 17 GPa, ν = 0.22, g0 = 1e9 N/m,
+    // Yagoda-Biran & Hatzor's Table 2 parameters: ρ = 2250 kg/m³, E = 17 GPa, ν = 0.22, g0 = 1e9 N/m,
     // g1 = 1e-4 s, g2 = 0.001. (At Δt = 1e-3 s the 3 Hz case drifts 3.2 % ahead: the DDA
     // integrator's first-order velocity update; see docs/accuracy-vs-speed.md.)
     let mut v = scene_json(

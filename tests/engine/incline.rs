@@ -1,6 +1,6 @@
-//! Block sliding on an incline under gravity (seed 000 §3.1.2, §4.1.1–4.1.2, Eqs. 14–15).
+//! Block sliding on an incline under gravity (Yagoda-Biran & Hatzor 2015, §3.1.2, §4.1.1–4.1.2, Eqs. 14–15).
 //! Reference: d(t) = ½ g (sin α − cos α tan φ) t² + v0 t, written here independently.
-//! Tolerance: 1 % relative error from t = 0.2 s on (the bound; the published 2D-DDA
+//! Tolerance: 1 % relative error from t = 0.2 s on (docs/verification.md's bound; the published 2D-DDA
 //! reached 8 % at φ = 25°). Each test also has a regression bound at ~7.5× the largest error
 //! measured today over its cases with either contact solver (`cargo test --test engine incline:: --
 //! --nocapture`, and with `ASHLAR_CONTACT_SOLVER=dual`), so that a drift is caught long before
@@ -36,12 +36,15 @@ fn check(alpha: f64, phi: f64, v0: f64, t_end: f64, from: f64) -> f64 {
     worst
 }
 
-/// The tolerance, and the regression bound `regression` (see the module text).
+/// docs/verification.md's tolerance, and the regression bound `regression` (see the module text).
 fn assert_bounds(case: &str, e: f64, regression: f64) {
     eprintln!(
         "{case}: worst relative error {e:.2e} (tolerance 1e-2, regression bound {regression:.1e})"
     );
-    assert!(e < 0.01, "{case}: relative error {e} above the issue's 1 %");
+    assert!(
+        e < 0.01,
+        "{case}: relative error {e} above docs/verification.md's 1 %"
+    );
     assert!(
         e < regression,
         "{case}: relative error {e} within 1 % but above the regression bound {regression:e}: find what changed"

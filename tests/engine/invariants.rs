@@ -1,7 +1,7 @@
-//! Invariants of the engine (issue 2, Verification 8), each against a law rather than a
+//! Invariants of the engine (docs/verification.md), each against a law rather than a
 //! reference run:
 //! - a dry-stone running-bond wall at rest under gravity stays at rest (≤ 0.1 mm in 10 s, the
-//!   issue's bound, and a regression bound at ~7× today's measured motion);
+//!   docs/verification.md's bound, and a regression bound at ~7× today's measured motion);
 //! - a block bouncing under the trapezoidal rule keeps its energy: ≤ 1 % loss in 10 impacts,
 //!   and never a gain beyond round-off between flights (frictionless and φ = 10°; all run, none
 //!   ignored: the gain was fixed by the release correction, see
@@ -75,7 +75,7 @@ fn penetration_tolerance(s: &Simulation) -> f64 {
 
 /// 5 courses × 6 blocks (0.4 × 0.2 m, deformable, φ = 30°) on a fixed foundation, gravity only,
 /// 10 s at Δt = 1 ms. Law: a wall in static equilibrium stays put. Tolerance 0.1 mm (the
-/// issue's): the elastic settlement under self-weight is ~1e-6 m (σ ≈ ρgH = 25 kPa over
+/// docs/verification.md): the elastic settlement under self-weight is ~1e-6 m (σ ≈ ρgH = 25 kPa over
 /// E = 20 GPa in 1 m) and penalty-spring compression ~1e-7 m, so 0.1 mm can only be exceeded by
 /// creep, drift or a spurious mechanism. Penetration must stay below the engine's tolerance
 /// (penetration_ratio × the largest step displacement).
@@ -96,7 +96,7 @@ fn running_bond_wall_stays_at_rest_for_10_s() {
     });
     let tol = penetration_tolerance(&s);
     eprintln!(
-        "wall: {} blocks, {} steps ({} cuts), largest vertex motion {worst:.3e} m (issue bound 1e-4 m, regression bound {WALL_REST_REGRESSION:e} m), geometric penetration {penetration:.3e} m (engine's statistic {:.3e} m; tolerance {tol:.3e} m)",
+        "wall: {} blocks, {} steps ({} cuts), largest vertex motion {worst:.3e} m (docs/verification.md's bound 1e-4 m, regression bound {WALL_REST_REGRESSION:e} m), geometric penetration {penetration:.3e} m (engine's statistic {:.3e} m; tolerance {tol:.3e} m)",
         scene.blocks.len(),
         s.stats.steps,
         s.stats.time_step_cuts,
@@ -104,11 +104,11 @@ fn running_bond_wall_stays_at_rest_for_10_s() {
     );
     assert!(
         worst <= 1e-4,
-        "a block moved {worst} m (the issue's bound 1e-4 m)"
+        "a block moved {worst} m (docs/verification.md's bound 1e-4 m)"
     );
     assert!(
         worst <= WALL_REST_REGRESSION,
-        "a block moved {worst} m: within the issue's 1e-4 m but above the regression bound {WALL_REST_REGRESSION} m (~7× the measured motion): find what changed"
+        "a block moved {worst} m: within docs/verification.md's 1e-4 m but above the regression bound {WALL_REST_REGRESSION} m (~7× the measured motion): find what changed"
     );
     assert!(
         penetration <= tol,
@@ -125,7 +125,7 @@ fn running_bond_wall_stays_at_rest_for_10_s() {
 
 /// Regression bound on the wall at rest's largest vertex motion, m: ~7× the 7.6e-7 m measured
 /// (penalty solver, `cargo test --test engine invariants:: running_bond -- --nocapture`): the elastic
-/// settlement under self-weight plus the springs' compression. The issue's bound, 1e-4 m, is
+/// settlement under self-weight plus the springs' compression. docs/verification.md's bound, 1e-4 m, is
 /// 130× the measurement; this one catches a drift long before it.
 const WALL_REST_REGRESSION: f64 = 5e-6;
 
@@ -210,7 +210,7 @@ fn bounce(
 /// Law: without friction or damping, the trapezoidal rule (β = 1/4, γ = 1/2) conserves the
 /// energy of a linear spring–mass system exactly; what remains is the error of switching the
 /// penalty springs on and off inside a step. Tolerances: ≤ 1 % loss over 10 impacts (the
-/// issue's); with `strict`, never a gain above 1e-6 of the drop energy between successive
+/// docs/verification.md); with `strict`, never a gain above 1e-6 of the drop energy between successive
 /// flights (flight energy is exactly constant under gravity alone; 1e-6 leaves room for
 /// round-off of m·g·y, ~1e-13 relative, and nothing else). Penetration below the engine's
 /// tolerance.
@@ -248,7 +248,7 @@ fn check_bounce(friction_deg: f64, strict: bool) {
     );
 }
 
-/// The issue's case: friction angle exactly 0, loss ≤ 1 % over 10 impacts.
+/// docs/verification.md's case: friction angle exactly 0, loss ≤ 1 % over 10 impacts.
 #[test]
 fn frictionless_bounce_keeps_energy_under_the_trapezoidal_rule() {
     check_bounce(0.0, false);

@@ -1,12 +1,12 @@
-//! Several blocks in motion against independent references (issue 25, point 2). Each reference
+//! Several blocks in motion against independent references (docs/impacts-and-multiblock.md). Each reference
 //! is written here (RK4 or a rigid-plastic integration), shares no code with the engine, and
 //! every engine run sets `"model": "dda"`:
 //!
 //! - **Rocking frame** (two equal free-standing columns carrying a free cap beam): Makris &
 //!   Vassiliou (2013) show that it rocks as one column of the same slenderness α with Housner's
 //!   frequency parameter scaled, p̂² = p² (1 + 2γ)/(1 + 3γ), γ = cap mass / total column mass
-//!   (derived again in `frame_p2`). Overturning amplitude under the seed's half-sine pulse,
-//!   within 2 % (the issue's tolerance).
+//!   (derived again in `frame_p2`). Overturning amplitude under Yagoda-Biran & Hatzor's half-sine pulse,
+//!   within 2 % (docs/verification.md's tolerance).
 //! - **Pier of three stacked blocks** with friction high enough that it moves as one body: its
 //!   overturning amplitude equals the monolithic column's (Housner), within 2 %; the test first
 //!   checks along the reference motion that every bed joint stays closed and does not slip (the
@@ -40,7 +40,7 @@ fn rocking_acc(p2: f64, alpha: f64, s: f64, th: f64, ag: f64) -> f64 {
     -p2 * (s * (alpha - s * th).sin() - ag / G * (alpha - s * th).cos())
 }
 
-/// The seed's half-sine pulse a(t) = A sin(2πt), 0 ≤ t ≤ 0.5 s.
+/// Yagoda-Biran & Hatzor's half-sine pulse a(t) = A sin(2πt), 0 ≤ t ≤ 0.5 s.
 fn pulse_fn(a: f64) -> impl Fn(f64) -> f64 {
     move |t: f64| {
         if (0.0..=0.5).contains(&t) {
@@ -195,7 +195,7 @@ fn engine_overturns(
 // Rocking frame
 // ---------------------------------------------------------------------------------------------
 
-/// Columns: half-width b, half-height h (the seed's column); cap beam: mass γ × both columns.
+/// Columns: half-width b, half-height h (Yagoda-Biran & Hatzor's column); cap beam: mass γ × both columns.
 const B: f64 = 0.2;
 const H: f64 = 0.6;
 
@@ -229,7 +229,7 @@ fn frame_scene(gamma: f64, solver: &str) -> ashlar::scene::Scene {
     ))
 }
 
-/// Tolerance 2 % on the overturning amplitude (the issue's). The reference overturns without an
+/// Tolerance 2 % on the overturning amplitude (docs/verification.md). The reference overturns without an
 /// impact at its threshold, so the restitution of the frame plays no part.
 fn check_frame(gamma: f64, solver: &str, regression: f64) {
     let alpha = (B / H).atan();
@@ -438,7 +438,7 @@ fn rocking_frame_impact_dual_short_step() {
 // Pier of stacked blocks moving as one body
 // ---------------------------------------------------------------------------------------------
 
-/// Three blocks 0.4 × 0.4 m stacked into the seed's column (b = 0.2, h = 0.6 m).
+/// Three blocks 0.4 × 0.4 m stacked into Yagoda-Biran & Hatzor's column (b = 0.2, h = 0.6 m).
 const COURSES: usize = 3;
 
 /// Along the monolithic column's motion on its pivot (θ, ω, θ̈ at t), is every bed joint closed
@@ -507,7 +507,7 @@ fn pier_scene(solver: &str) -> ashlar::scene::Scene {
     ))
 }
 
-/// Tolerance 2 % on the overturning amplitude (the issue's, as for the monolithic column in
+/// Tolerance 2 % on the overturning amplitude (docs/verification.md, as for the monolithic column in
 /// `tests/engine/rocking.rs`).
 fn check_pier(solver: &str, regression: f64) {
     let alpha = (B / H).atan();

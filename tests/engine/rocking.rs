@@ -1,9 +1,9 @@
-//! Rocking column (seed 000 §3.3): a rigid column of half-width b = 0.2 m and half-height
+//! Rocking column (Yagoda-Biran & Hatzor 2015, §3.3): a rigid column of half-width b = 0.2 m and half-height
 //! h = 0.6 m on a fixed base, under a half-sine acceleration pulse a(t) = A sin(2πt) for
 //! 0 ≤ t ≤ 0.5 s. Reference: Housner's equation of rocking integrated by RK4 (step 1e-5 s) with
 //! Housner's restitution at impacts (`ashlar::analysis::reference`, which shares no code with
 //! the engine). Tolerances: rotation up to the first impact within 2 % of the peak rotation;
-//! overturning amplitude within 2 % (both from the issue), within 1 % with the dual solver
+//! overturning amplitude within 2 % (both docs/verification.md's), within 1 % with the dual solver
 //! (`ASHLAR_CONTACT_SOLVER=dual`, no penalty stiffness to tune).
 use crate::common;
 use ashlar::analysis::reference::{half_sine_pulse, housner_history, HousnerColumn};
@@ -92,7 +92,7 @@ fn rotation_history_matches_housner_until_first_impact() {
 fn overturning_amplitude_matches_housner() {
     let (hs, hf) = threshold(4.0, 8.0, 1e-3, |a| housner(a, 4.0).2);
     let housner_a = 0.5 * (hs + hf);
-    // The issue quotes 5.64 m/s² for this pulse; our independent integration must agree.
+    // Yagoda-Biran & Hatzor 2015, §3.3, quote 5.64 m/s² for this pulse; our independent integration must agree.
     assert!(
         (housner_a - 5.64).abs() < 0.02 * 5.64,
         "reference threshold {housner_a}"
@@ -103,7 +103,7 @@ fn overturning_amplitude_matches_housner() {
         "overturning amplitude: Housner {housner_a:.3} m/s², DDA {dda_a:.3} m/s² ({:+.2} %)",
         100.0 * (dda_a / housner_a - 1.0)
     );
-    // The dual solver has no penalty stiffness to tune: the issue asks for 1 % there.
+    // The dual solver has no penalty stiffness to tune: docs/verification.md asks for 1 % there.
     let tol = if dual_under_test() { 0.01 } else { 0.02 };
     assert!((dda_a - housner_a).abs() < tol * housner_a);
     // Regression bound 0.6 %: ~5.5× the +0.11 % measured with either solver (the engine's

@@ -1,4 +1,4 @@
-//! Rocking through impacts (issue 25, point 1): the engine (`"model": "dda"`) is held to
+//! Rocking through impacts (docs/impacts-and-multiblock.md): the engine (`"model": "dda"`) is held to
 //! Housner's rocking equation *across* impacts, not only up to the first one
 //! (`tests/engine/rocking.rs` stops 0.01 s before it).
 //!
@@ -8,7 +8,7 @@
 //!   penalty springs are closed), is compared with the law the engine is documented against
 //!   (docs/pga.md, `examples/rocking_restitution.rs`): Housner's angular-momentum law for a
 //!   rectangle, r = 1 − 1.5 sin²α, for h/b = 2, 3, 4, 6.
-//! - **Histories through five impacts**: the seed's column (b = 0.2, h = 0.6 m) under the seed's
+//! - **Histories through five impacts**: Yagoda-Biran & Hatzor's column (b = 0.2, h = 0.6 m) under Yagoda-Biran & Hatzor's
 //!   half-sine pulse (5 m/s², 1 Hz, half a cycle), then free rocking through ≥ 5 impacts; the
 //!   engine with the penalty and with the dual contact solver, at default numerical settings,
 //!   against an RK4 integration of Housner's equation written here (fixed step 1e-5 s, impact
@@ -259,7 +259,7 @@ fn engine_restitution(c: Column, theta0: f64, solver: &str, dt: Option<f64>) -> 
     (((alpha - theta1).cos() - alpha.cos()) / ((alpha - theta0).cos() - alpha.cos())).sqrt()
 }
 
-/// Tolerance 1 % on r (no number in the issue; chosen before measuring): over the five
+/// Tolerance 1 % on r (no published number; chosen before measuring): over the five
 /// impacts of the history tests an error δ per impact compounds to ≈ 5δ in the angular
 /// velocity, which must stay within their 5 % tolerance. `regression`: a second bound at about
 /// 5× the error measured when the test was written; where 5× the measured error exceeds the
@@ -441,7 +441,7 @@ fn reduced_history(t_end: f64) -> Vec<(f64, f64)> {
     frames.into_inner().expect("frames")
 }
 
-/// Tolerance 5 % of the peak rotation (the issue's figure for rotations through impacts): the
+/// Tolerance 5 % of the peak rotation (docs/verification.md's figure for rotations through impacts): the
 /// engine's impact lasts a few steps of penalty contact (or one step of the dual's rigid one),
 /// where Housner's is instantaneous, and its restitution differs slightly from Housner's; both
 /// shift the later impacts, where the column turns at its fastest. `regression`: about 5× the

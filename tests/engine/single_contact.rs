@@ -5,11 +5,11 @@
 //! T1 (normal impact, no gravity): contact duration π√(m/k) (tolerance 1 %: the open–close
 //! loop resolves the contact's start and end to one step, 0.1 % of the duration here, and the
 //! DDA integrator's numerical damping shortens it slightly) and, with the trapezoidal
-//! integrator, rebound speed within 0.5 % of the incoming speed (the bound).
+//! integrator, rebound speed within 0.5 % of the incoming speed (docs/verification.md's bound).
 //!
 //! T3 (shear with Coulomb sliding, Eqs. 18–20): stick (harmonic, ω = √(k_s/m)), slide at
 //! constant deceleration μg, re-stick about the shifted equilibrium b; the slip time, the
-//! re-stick time and the sliding distance within 2 % (the bound).
+//! re-stick time and the sliding distance within 2 % (docs/verification.md's bound).
 use crate::common;
 use ashlar::contact::ContactState;
 use ashlar::motion::GroundMotion;

@@ -1,7 +1,7 @@
-//! Block on an incline under horizontal sinusoidal ground acceleration (seed 000 §3.1.2 Eq. 10,
+//! Block on an incline under horizontal sinusoidal ground acceleration (Yagoda-Biran & Hatzor 2015, §3.1.2 Eq. 10,
 //! §4.1.3): Newmark-type sliding. Reference: an independent rigid-plastic integration
 //! (`ashlar::analysis::reference`: semi-implicit Euler, Δt = 1e-5 s, stick/slip switching with
-//! the exact friction law, both sliding directions). Tolerance: final displacement within 2 % (the bound).
+//! the exact friction law, both sliding directions). Tolerance: final displacement within 2 % (docs/verification.md's bound).
 //! Regression bound 3e-3 (0.3 %): ~7.5× the largest error measured today over the cases, 0.040 %
 //! (dual solver; 0.037 % penalty: `cargo test --test engine sliding_newmark:: -- --nocapture`, and with
 //! `ASHLAR_CONTACT_SOLVER=dual`), so that a drift is caught long before the 2 %.

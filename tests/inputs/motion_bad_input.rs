@@ -327,8 +327,9 @@ fn json_fields() {
             "motion.horizontal.content",
         ),
         (
+            // The typed reader (`MotionSpec`) names the member itself, not only its component.
             serde_json::json!({"horizontal": {"samples": [1.0], "dt": 0.01, "units": "furlong"}}),
-            "motion.horizontal",
+            "motion.horizontal.units",
         ),
         (serde_json::json!({"horizontl": null}), "motion.horizontl"),
     ];

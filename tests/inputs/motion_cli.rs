@@ -1,6 +1,6 @@
 //! `ashlar motion RECORD [--svg FILE]`: the JSON has exactly the docs/format.md §3 fields (plus the
 //! documented extensions) and the SVG is written.
-use ashlar::motion::command::{report_json, MotionArgs};
+use ashlar::cli::motion::{report_json, MotionArgs};
 use ashlar::motion::RecordArgs;
 use std::path::PathBuf;
 
@@ -79,18 +79,21 @@ fn options_and_errors() {
     // Bare numbers are refused (0.5 g or 0.5 m/s²?), naming the option and both readings.
     let mut a = recorded("kobe-1995-nishi-akashi-000.csv");
     a.record_options.pga = Some("0.5".into());
-    let e = report_json(&a).expect_err("bare --pga");
+    let e = report_json(&a).expect_err("bare --pga").to_string();
     assert!(
         e.starts_with("--pga \"0.5\"") && e.contains("0.5g") && e.contains("0.5m/s2"),
         "{e}"
     );
     let mut a = recorded("kobe-1995-nishi-akashi-000.csv");
     a.record_options.units.units = Some("furlongs".into());
-    assert!(report_json(&a).expect_err("units").starts_with("--units"));
+    assert!(report_json(&a)
+        .expect_err("units")
+        .to_string()
+        .starts_with("--units"));
     // `--units` reads a CSV that names none; it must agree with one that does.
     let mut a = args("semicolon_units_comment.csv");
     a.record_options.units.units = Some("g".into());
-    let e = report_json(&a).expect_err("conflict");
+    let e = report_json(&a).expect_err("conflict").to_string();
     assert!(e.contains("units conflict"), "{e}");
     let mut a = args("synthetic.v1");
     a.highpass = Some(0.5);
@@ -98,7 +101,7 @@ fn options_and_errors() {
     assert!(report_json(&a).is_ok());
     let mut a = args("synthetic.v2");
     a.highpass = Some(0.5);
-    let e = report_json(&a).expect_err("processed");
+    let e = report_json(&a).expect_err("processed").to_string();
     assert!(
         e.contains("synthetic.v2") && e.contains("already processed"),
         "{e}"
@@ -107,5 +110,6 @@ fn options_and_errors() {
     a.baseline = "cubic".into();
     assert!(report_json(&a)
         .expect_err("baseline")
+        .to_string()
         .contains("--baseline"));
 }

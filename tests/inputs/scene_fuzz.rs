@@ -1,4 +1,4 @@
-//! Robustness of the scene and ground-motion JSON readers (issue 8, "Input robustness"):
+//! Robustness of the scene and ground-motion JSON readers (docs/stability.md):
 //! arbitrary bytes and mutated valid files never panic, and always yield either
 //! - a valid model: `Simulation::new` accepts it and a few steps run, each either accepted with
 //!   a finite state or refused with a typed diagnostic (never a silent NaN); or

@@ -1,4 +1,4 @@
-//! Issue 19: `summary.json` reported controls that did not run and numbers without units.
+//! Regression: `summary.json` reported controls that did not run and numbers without units.
 //! `examples/column.json` (a column whose own `block_model` is `"rigid"`, under the default
 //! `control.block_model` `"deformable"`) reported `control.block_model: "deformable"`; the
 //! reduced model reported `diagnostics.penalty_stiffness: 0.0` (no springs ran), as did nothing

@@ -1,4 +1,4 @@
-//! Regression (issue 8): a penalty stiffness far too soft for the loads completed silently.
+//! Regression: a penalty stiffness far too soft for the loads completed silently.
 //! A 0.5 m rigid block (625 kg) on a fixed base with `penalty_stiffness` = 1e4 N/m sank ~0.12 m
 //! into the base and the run reported success. Once a vertex is deeper than the contact search
 //! distance, contact detection drops it (`gap < −search`) and the blocks pass through each other

@@ -1,4 +1,4 @@
-//! The PostgreSQL job queue with many processes (issue 10). Needs a server: `tests/pg/run.sh`
+//! The PostgreSQL job queue with many processes (docs/cluster.md). Needs a server: `tests/pg/run.sh`
 //! starts a throwaway one on loopback and sets `ASHLAR_TEST_DATABASE_URL`
 //! (`postgresql://USER@127.0.0.1:PORT/postgres`); each test creates its own database there.
 //! Without the variable every test prints a loud SKIPPED line and passes, so that a plain
@@ -685,7 +685,7 @@ fn bad_database_urls_are_named() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Fanned-out PGA searches (issue 10): a search's runs are child jobs that every worker shares.
+// Fanned-out PGA searches (docs/cluster.md): a search's runs are child jobs that every worker shares.
 
 fn child(parent: Uuid, pga: f64, step: f64) -> NewJob {
     NewJob {

@@ -1,4 +1,4 @@
-//! TLS to PostgreSQL (issue 10). Needs the server `tests/pg/tls.sh` starts: `ssl = on` with a
+//! TLS to PostgreSQL (docs/cluster.md). Needs the server `tests/pg/tls.sh` starts: `ssl = on` with a
 //! certificate for DNS name `localhost` signed by a CA the script made, and a pg_hba.conf that
 //! accepts TCP clients over TLS only (`hostssl`). The script sets `ASHLAR_TEST_TLS_PORT` and
 //! `ASHLAR_TEST_TLS_CERTS` (holding `ca.pem` and an unrelated `wrong-ca.pem`). Without them

@@ -1,4 +1,4 @@
-//! PGA searches through the service on the real engine (issue 6): a multi-record search
+//! PGA searches through the service on the real engine (docs/pga.md): a multi-record search
 //! (`"motions"`) stores its per-record results and fragility curve with the job and serves the
 //! plot; progress streams as server-sent events and never goes back; a running search is
 //! cancellable and stops promptly; bad multi-record requests are 422 problems naming the field.

@@ -1,9 +1,9 @@
-//! The endpoints of the web page (issue 11), through the router without a socket: the page and
+//! The endpoints of the web page (docs/web.md), through the router without a socket: the page and
 //! its assets, the bundled examples, record inspection (checked against closed forms and against
 //! `ashlar motion` reading the same file), the job list, and a run's geometry and ground motion.
 use crate::service_support;
 
-use ashlar::motion::command::{report_json, MotionArgs};
+use ashlar::cli::motion::{report_json, MotionArgs};
 use ashlar::service::fake::fake_runner;
 use ashlar::service::{app, Service, ServiceConfig, WorkerParams};
 use serde_json::{json, Value};

@@ -52,7 +52,7 @@ async function colouredPixels(page, id) {
   }, id);
 }
 
-// The widths the layout is checked at: the three, plus the narrowest supported width
+// The widths the layout is checked at: the three of docs/web.md, plus the narrowest supported width
 // and the narrowest three-column layout (the tightest jobs panel).
 const WIDTHS = [1280, 1400, 1920];
 const EXTRA_WIDTHS = [1024, 1201];

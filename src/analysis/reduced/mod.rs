@@ -29,7 +29,7 @@ use ode::{State, Tolerance};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ReducedParams {
     /// Impact law of the rocking model: Housner's angular-momentum law by default, the law his
-    /// equation was published with (and the reference of the seed's rocking benchmark).
+    /// equation was published with (and the reference of Yagoda-Biran & Hatzor's rocking benchmark).
     pub restitution: Restitution,
     /// ODE tolerance: 1e-10 relative keeps the integration error four orders below the 1 %
     /// accuracy target at a cost of microseconds per simulated second.

@@ -355,10 +355,7 @@ pub fn run(
     };
     end_summary(&mut summary, settled(&m), Vec::new(), duration, motion);
     if let Some(dir) = opts.out_dir {
-        let text =
-            serde_json::to_string_pretty(&summary).map_err(|e| RunError::Io(e.to_string()))?;
-        std::fs::write(dir.join("summary.json"), text + "\n")
-            .map_err(|e| RunError::Io(format!("{}: {e}", dir.display())))?;
+        crate::analysis::run::write_summary(dir, &summary)?;
     }
     Ok(RunOutcome { summary, cancelled })
 }

@@ -1,4 +1,4 @@
-//! Flexibility of each block (seed 003 Eqs. 11–16): the block's Newmark equation
+//! Flexibility of each block (Zheng et al. 2016, Eqs. 11–16): the block's Newmark equation
 //! `K_i d_i = q_i + C_i p_i` inverted once per step, so that `d_i = f_i + K_i⁻¹ C_i p_i`.
 //! No global matrix is assembled: every block is condensed on its own (3×3 rigid, 6×6
 //! deformable), in parallel when there are many.

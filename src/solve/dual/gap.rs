@@ -1,4 +1,4 @@
-//! Gap function of the dual form (seed 003 Eqs. 18–31): for contact forces `p`, the normal
+//! Gap function of the dual form (Zheng et al. 2016, Eqs. 18–31): for contact forces `p`, the normal
 //! gap and tangential slide of every contact at the end of the step, `G(p) = c + W p`,
 //! evaluated block by block (`d_i = f_i + K_i⁻¹ C_i p_i`) without forming W.
 //!
@@ -29,7 +29,7 @@ pub struct PairTerms {
     pub wt_i: Vec6,
     pub wn_j: Vec6,
     pub wt_j: Vec6,
-    /// The same directions premultiplied by the block flexibility K⁻¹ (the seed's n_ki, τ_ki).
+    /// The same directions premultiplied by the block flexibility K⁻¹ (Zheng et al.'s n_ki, τ_ki).
     pub kn_i: Vec6,
     pub kt_i: Vec6,
     pub kn_j: Vec6,
@@ -378,7 +378,7 @@ mod tests {
     #[test]
     fn packed_product_is_the_dense_w_of_the_terms() {
         // Reference: W assembled densely from its definition, W[(k,j),(l,m)] =
-        // Σ_f g_kj,f · K_f⁻¹ g_lm,f, with g the side-signed gap gradients (seed 003 Eqs. 21–30).
+        // Σ_f g_kj,f · K_f⁻¹ g_lm,f, with g the side-signed gap gradients (Zheng et al. 2016, Eqs. 21–30).
         // The packed rows fold the edge side's sign into stored copies; a wrong sign, index
         // or block in that packing changes entries by O(1). Tolerance 1e-12 relative: the
         // two evaluations only sum the same terms in a different order.

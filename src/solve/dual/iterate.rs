@@ -1,4 +1,4 @@
-//! The compatibility iteration (seed 003 §6, Appendix B): He's projection–contraction method
+//! The compatibility iteration (Zheng et al. 2016, §6, Appendix B): He's projection–contraction method
 //! for the variational inequality `find p ∈ X(p): (q − p)ᵀ G(p) ≥ 0 ∀ q ∈ X(p)`, with the set
 //! `X(p)` frozen at the current approximation in each projection.
 //!

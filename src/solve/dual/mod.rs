@@ -1,4 +1,4 @@
-//! Dual form of DDA (seed 003, "DDA-d"): the contact forces are the unknowns, no penalty
+//! Dual form of DDA (Zheng et al. 2016, "DDA-d"): the contact forces are the unknowns, no penalty
 //! springs. The solve-stage alternative to `open_close`, chosen by
 //! `control.contact_solver = "dual"`; called once per step attempt after
 //! `BlockSystem::assemble_blocks` + `reset_to_blocks` (which give each block's Newmark matrix
@@ -7,7 +7,7 @@
 //! Per step: (1) invert each block's matrix ([`flexibility`]); (2) per-contact gap and slide
 //! terms ([`gap`]); (3) solve the quasi-variational inequality for the contact forces: first
 //! as a bound-constrained minimisation by conjugate gradients ([`mprgp`]), and where that has
-//! not converged within its budget by the seed's projection–contraction "compatibility
+//! not converged within its budget by Zheng et al.'s projection–contraction "compatibility
 //! iteration" ([`iterate`], projections in [`projection`]), both to the same stopping test;
 //! (4) re-choose the pair of each compressed vertex–vertex contact (the separating line with
 //! the largest step-end gap) and re-solve ([`switch`]); (5) block increments

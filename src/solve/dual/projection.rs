@@ -1,5 +1,5 @@
-//! Projection onto the contact-force set of the quasi-variational inequality (seed 003
-//! Eqs. 36–39, Appendix A): per contact, the normal force onto `[−T, ∞)` (T the tensile
+//! Projection onto the contact-force set of the quasi-variational inequality (Zheng et al.
+//! 2016, Eqs. 36–39, Appendix A): per contact, the normal force onto `[−T, ∞)` (T the tensile
 //! strength of an intact bond, else 0) and the tangential force onto `[−τ, τ]` with the
 //! shear strength `τ = c + μ·max(0, p_n)` taken from the *current* approximation `p`, so the
 //! set depends on the solution (the "quasi" of QVI).

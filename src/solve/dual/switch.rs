@@ -1,4 +1,4 @@
-//! Switching of vertex–vertex contact pairs (seed 003 §6, Appendix C). When vertex V of block
+//! Switching of vertex–vertex contact pairs (Zheng et al. 2016, §6, Appendix C). When vertex V of block
 //! i meets corner E of block j, several contact pairs are possible: V against either edge of
 //! j that ends at E, or E against either edge of i that ends at V. Each is one separating line;
 //! the true condition is that *some* line separates the corners. Detection picks one pair from
@@ -9,8 +9,7 @@
 use super::gap::{GapFunction, Pair};
 use super::DualInput;
 use crate::contact::{edge_points, Contact, ContactState};
-use crate::geometry::{displacement_matrix, BlockGeometry, Vec6};
-use crate::scene::inside_depth;
+use crate::geometry::{displacement_matrix, inside_depth, BlockGeometry, Vec6};
 use nalgebra::Vector2;
 
 /// A possible pair: vertex (block, index) against edge (block, index).

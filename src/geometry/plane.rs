@@ -1,5 +1,7 @@
-//! Minimal plane geometry needed to validate polygons (the full geometry stage comes later in
-//! the flow and builds on validated input).
+//! Plane geometry of polygons and segments (geometry, the ground floor of the flow): signed
+//! area, segment crossings, the depth of a point inside a polygon. Used by `scene` to validate
+//! polygons and by `contact` and `solve::dual` to tell a real penetration from a grazing one.
+//! Units: m, m²; polygons counter-clockwise.
 use nalgebra::Vector2;
 
 /// Shoelace signed area, m²; positive for counter-clockwise.

@@ -1,11 +1,33 @@
-//! `ashlar motion RECORD`: read a record, print its intensity measures as JSON (docs/format.md §3),
-//! optionally write the response spectrum as SVG. The CLI wires `Command::Motion(MotionArgs)`
-//! to `run`.
-use super::{
-    load_path_with, report_with, spectrum_svg, Baseline, HighPass, LoadParams, ProcessParams,
-    RecordArgs, ReportParams,
+//! `ashlar motion RECORD` (cli, thin): read a record with `motion`, print its intensity
+//! measures as JSON (docs/format.md §3), optionally write the response spectrum as SVG.
+use crate::motion::{
+    load_path_with, report_with, spectrum_svg, Baseline, HighPass, LoadParams, MotionError,
+    ProcessParams, RecordArgs, RecordOptionError, ReportParams,
 };
 use std::path::PathBuf;
+
+/// Why `ashlar motion` failed; each message names the option or the file (and its line).
+#[derive(Debug, thiserror::Error)]
+pub enum MotionCommandError {
+    /// `--units`, `--pga` or `--scale` refused.
+    #[error(transparent)]
+    Options(#[from] RecordOptionError),
+    /// The record could not be read or processed.
+    #[error(transparent)]
+    Record(#[from] MotionError),
+    #[error("--baseline {0:?}: expected none or linear")]
+    Baseline(String),
+    #[error("--damping {0}: must be in [0, 1)")]
+    Damping(f64),
+    #[error("{}: cannot write: {source}", path.display())]
+    WriteSvg {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// Serializing the report (never expected: it holds numbers and strings only).
+    #[error("intensity report: {0}")]
+    Json(#[from] serde_json::Error),
+}
 
 /// Arguments of `ashlar motion`.
 #[derive(Debug, Clone, clap::Args)]
@@ -33,33 +55,33 @@ pub struct MotionArgs {
 }
 
 /// Run the subcommand: JSON on stdout, errors as one line for stderr.
-pub fn run(args: &MotionArgs) -> Result<(), String> {
+pub fn run(args: &MotionArgs) -> Result<(), MotionCommandError> {
     let json = report_json(args)?;
     println!("{json}");
     Ok(())
 }
 
 /// Everything `run` does but printing; returns the JSON text.
-pub fn report_json(args: &MotionArgs) -> Result<String, String> {
+pub fn report_json(args: &MotionArgs) -> Result<String, MotionCommandError> {
     let opts = &args.record_options;
-    opts.validate().map_err(|e| e.to_string())?;
+    opts.validate()?;
     let baseline = match args.baseline.as_str() {
         "none" => Baseline::None,
         "linear" => Baseline::Linear,
-        other => return Err(format!("--baseline {other:?}: expected none or linear")),
+        other => return Err(MotionCommandError::Baseline(other.into())),
     };
     let highpass = args.highpass.map(|corner_hz| HighPass {
         corner_hz,
         order: args.order,
     });
     let params = LoadParams {
-        units: opts.units.units().map_err(|e| e.to_string())?,
+        units: opts.units.units()?,
         process: ProcessParams { highpass, baseline },
     };
-    let gm = load_path_with(&args.record, &params).map_err(|e| e.to_string())?;
-    let gm = opts.apply(gm).map_err(|e| e.to_string())?;
+    let gm = load_path_with(&args.record, &params)?;
+    let gm = opts.apply(gm)?;
     if !(0.0..1.0).contains(&args.damping) {
-        return Err(format!("--damping {}: must be in [0, 1)", args.damping));
+        return Err(MotionCommandError::Damping(args.damping));
     }
     let im = report_with(
         &gm,
@@ -69,8 +91,10 @@ pub fn report_json(args: &MotionArgs) -> Result<String, String> {
         },
     );
     if let Some(path) = &args.svg {
-        std::fs::write(path, spectrum_svg(&im))
-            .map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
+        std::fs::write(path, spectrum_svg(&im)).map_err(|source| MotionCommandError::WriteSvg {
+            path: path.clone(),
+            source,
+        })?;
     }
-    serde_json::to_string_pretty(&im).map_err(|e| e.to_string())
+    Ok(serde_json::to_string_pretty(&im)?)
 }
