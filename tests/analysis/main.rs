@@ -11,6 +11,7 @@ mod pga_frequency_sweep;
 mod pga_honesty;
 mod pga_incline;
 mod pga_search;
+mod reduced_records;
 mod reduced_rocking;
 mod reduced_selection;
 mod reduced_sliding;

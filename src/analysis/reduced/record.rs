@@ -339,8 +339,10 @@ pub fn run(
         diagnostics: Diagnostics {
             time_step_cuts: st.rejected_steps,
             max_penetration: 0.0,
-            min_time_step: (st.steps > 0).then_some(st.min_dt),
-            max_time_step: (st.steps > 0).then_some(st.max_dt),
+            // The steps the ODE's error control chose (absent when the block never moved:
+            // the at-rest state takes no time step).
+            min_time_step: st.min_dt.is_finite().then_some(st.min_dt),
+            max_time_step: (st.max_dt > 0.0).then_some(st.max_dt),
             restitution: (model == "rocking").then_some(restitution),
             impacts: (model == "rocking").then_some(st.impacts),
             ..Default::default()
