@@ -302,7 +302,7 @@ impl Signal {
             }
             Signal::Sampled(s) => {
                 let end = s.duration();
-                if s.accel.len() < 2 || !(t < end - SAME) {
+                if s.accel.len() < 2 || t.is_nan() || t >= end - SAME {
                     return f64::INFINITY;
                 }
                 // Sample k is at k·dt, the same product `duration` and `locate` use.
@@ -431,9 +431,7 @@ impl GroundMotion {
     /// The first time after `t` (s) at which either component's slope may jump
     /// ([`Signal::next_kink`]).
     pub fn next_kink(&self, t: f64) -> f64 {
-        self.horizontal
-            .next_kink(t)
-            .min(self.vertical.next_kink(t))
+        self.horizontal.next_kink(t).min(self.vertical.next_kink(t))
     }
 
     /// Are both components linear between kinks ([`Signal::piecewise_linear`])?
@@ -643,10 +641,13 @@ mod kink_tests {
         assert_eq!(k2, 2.0 * 0.1);
         let k3 = s.next_kink(k2);
         assert_eq!(k3, 3.0 * 0.1);
-        assert_eq!(k3, match &s {
-            Signal::Sampled(x) => x.duration(),
-            _ => unreachable!(),
-        });
+        assert_eq!(
+            k3,
+            match &s {
+                Signal::Sampled(x) => x.duration(),
+                _ => unreachable!(),
+            }
+        );
         assert_eq!(s.next_kink(k3), f64::INFINITY);
         assert!(s.piecewise_linear());
         // A pulse kinks where it ends; a sine never.

@@ -10,6 +10,7 @@ mod pga_fragility;
 mod pga_frequency_sweep;
 mod pga_honesty;
 mod pga_incline;
+mod pga_range;
 mod pga_search;
 mod reduced_records;
 mod reduced_rocking;

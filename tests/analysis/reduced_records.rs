@@ -120,5 +120,8 @@ fn peak_rotation_on_records_matches_housner_rk4() {
         "largest peak-rotation difference over {compared} standing cases: {:.3} %",
         100.0 * worst
     );
-    assert!(compared >= 3, "too few rocking cases to compare ({compared})");
+    assert!(
+        compared >= 3,
+        "too few rocking cases to compare ({compared})"
+    );
 }
