@@ -9,6 +9,7 @@
 //!   (what the search promises: its lowest failing PGA is at most that interval's first grid
 //!   point + the tolerance), and report nothing below the brute force's lowest failure by more
 //!   than its grid step.
+//!
 //! The brute force also shows what the resolution leaves out: near the threshold the failing
 //! set is fragmented at the 0.1 m/s² scale (measured: failing at 5.84, then 5.99–6.14,
 //! 6.24–6.49, 6.64–6.69, 6.79–6.99 m/s²), so no interval there is wider than the resolution and
