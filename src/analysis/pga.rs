@@ -1,9 +1,12 @@
 //! Paleo-PGA back-analysis: the amplitude at which a damage criterion is first met.
 //!
 //! Overturning is not monotonic in amplitude (rocking has safe regions above the first
-//! overturning amplitude), so the search first scans a coarse grid of amplitudes in parallel,
-//! then narrows the lowest safe/failing bracket, evaluating as many interior points per round
-//! as there are cores.
+//! overturning amplitude), so the search first scans a grid of amplitudes in parallel (its
+//! spacing is the search's `resolution`: every failing interval wider than it holds a scan
+//! point), then narrows *every* change of outcome between neighbouring amplitudes to the
+//! tolerance, evaluating as many interior points per round as there are cores. The lowest
+//! failing amplitude therefore does not depend on where the range starts, as long as the
+//! failing interval that holds it is wider than the resolution.
 use super::fragility::{fit_binary, fit_interval, Capacity, FitParams, Fragility, Method, Point};
 use super::run::{run, RunError, RunOptions, Tracker};
 use crate::motion::GroundMotion;
@@ -212,7 +215,8 @@ pub struct PgaRequest {
     pub min: f64,
     pub max: f64,
     pub tolerance: f64,
-    /// Coarse scan points before bisection.
+    /// Scan points before the refinement, evenly spaced over [min, max]: their spacing
+    /// (max − min)/(scan_points − 1) is the search's resolution ([`PgaResult::resolution`]).
     pub scan_points: usize,
 }
 
@@ -231,8 +235,56 @@ pub struct PgaResult {
     /// Smallest amplitude found to meet it.
     pub failing_pga: Option<f64>,
     pub units: String,
+    /// No amplitude above `failing_pga` was found safe. This holds at the scan's resolution:
+    /// a safe (or failing) interval narrower than `resolution` may lie between two scan points.
     pub monotonic: bool,
+    /// m/s², spacing of the scan grid: every failing interval wider than this holds a scan
+    /// point and was found; narrower ones may have been missed. (0 in results written before
+    /// the field existed.)
+    #[serde(default)]
+    pub resolution: f64,
+    /// m/s², every failing interval found, lowest first: `[lowest, highest]` failing amplitude
+    /// of each run of consecutive failing amplitudes (both ends refined to the tolerance where
+    /// the outcome changes inside the range).
+    #[serde(default)]
+    pub failing_intervals: Vec<[f64; 2]>,
     pub runs: Vec<PgaRun>,
+}
+
+/// The failing intervals of `runs` (sorted by amplitude): `[first, last]` failing amplitude of
+/// each maximal run of consecutive failing amplitudes.
+pub fn failing_intervals(runs: &[PgaRun]) -> Vec<[f64; 2]> {
+    let mut out: Vec<[f64; 2]> = Vec::new();
+    let mut open = false;
+    for r in runs {
+        match (r.failed, open) {
+            (true, true) => {
+                if let Some(last) = out.last_mut() {
+                    last[1] = r.pga;
+                }
+            }
+            (true, false) => out.push([r.pga, r.pga]),
+            _ => {}
+        }
+        open = r.failed;
+    }
+    out
+}
+
+/// Largest amplitude not meeting the criterion below the lowest failing one, the lowest
+/// failing one, and whether every amplitude above it fails, from `runs` sorted by amplitude.
+pub fn bracket_of(runs: &[PgaRun]) -> (Option<f64>, Option<f64>, bool) {
+    let failing = runs.iter().find(|r| r.failed).map(|r| r.pga);
+    let safe = runs
+        .iter()
+        .filter(|r| !r.failed && failing.is_none_or(|f| r.pga < f))
+        .map(|r| r.pga)
+        .fold(None, |m: Option<f64>, p| Some(m.map_or(p, |m| m.max(p))));
+    let monotonic = match failing {
+        Some(f) => runs.iter().all(|r| r.failed || r.pga < f),
+        None => true,
+    };
+    (safe, failing, monotonic)
 }
 
 fn validate(scene: &Scene, motion: &GroundMotion, req: &PgaRequest) -> Result<(), RunError> {
@@ -405,65 +457,49 @@ pub fn plan(
             }
         }
     };
-    let first_fail = runs.iter().position(|r| r.failed);
-    let monotonic_scan = match first_fail {
-        Some(k) => runs[k..].iter().all(|r| r.failed),
-        None => true,
-    };
-    let (mut safe, mut fail) = match first_fail {
-        None => (Some(req.max), None),
-        Some(0) => (None, Some(req.min)),
-        Some(k) => (Some(runs[k - 1].pga), Some(runs[k].pga)),
-    };
-    while let (Some(s), Some(f)) = (safe, fail) {
-        if f - s <= req.tolerance {
+    // Refine every change of outcome between neighbouring amplitudes, all at once: each round
+    // splits every open bracket (neighbours with different outcomes, wider than the
+    // tolerance) into equal parts, `width` interior points shared out among the brackets.
+    loop {
+        runs.sort_by(|a, b| a.pga.total_cmp(&b.pga));
+        let open: Vec<(f64, f64)> = runs
+            .windows(2)
+            .filter(|w| w[0].failed != w[1].failed && w[1].pga - w[0].pga > req.tolerance)
+            .map(|w| (w[0].pga, w[1].pga))
+            .collect();
+        let each = width.div_ceil(open.len().max(1)).max(1);
+        let pts: Vec<f64> = open
+            .iter()
+            .flat_map(|&(s, f)| {
+                (1..=each)
+                    .map(move |k| s + (f - s) * k as f64 / (each + 1) as f64)
+                    // A bracket too narrow for floating point to split (a tolerance below one
+                    // ULP of the amplitudes) is final.
+                    .filter(move |&p| p > s && p < f)
+            })
+            .collect();
+        if pts.is_empty() {
             break;
         }
-        // Split the bracket into width + 1 parts and evaluate the interior points together.
-        let pts: Vec<f64> = (1..=width)
-            .map(|k| s + (f - s) * k as f64 / (width + 1) as f64)
-            .collect();
-        let round = match batch(&pts) {
-            Ok(r) => r,
+        match batch(&pts) {
+            Ok(round) => runs.extend(round),
             Err(pending) => {
                 return Step::Pending {
                     batch: pending,
                     done,
                 }
             }
-        };
-        match round.iter().position(|r| r.failed) {
-            Some(0) => fail = Some(round[0].pga),
-            Some(k) => {
-                safe = Some(round[k - 1].pga);
-                fail = Some(round[k].pga);
-            }
-            None => safe = Some(round[round.len() - 1].pga),
-        }
-        runs.extend(round);
-        // A bracket too narrow for floating point to split (a tolerance below one ULP of the
-        // amplitudes) would otherwise be split forever.
-        if let (Some(s2), Some(f2)) = (safe, fail) {
-            if f2 - s2 >= f - s {
-                break;
-            }
         }
     }
-    let monotonic = monotonic_scan && {
-        let lowest_fail = runs
-            .iter()
-            .filter(|r| r.failed)
-            .map(|r| r.pga)
-            .fold(f64::INFINITY, f64::min);
-        runs.iter().all(|r| r.failed || r.pga < lowest_fail)
-    };
-    runs.sort_by(|a, b| a.pga.total_cmp(&b.pga));
+    let (safe, fail, monotonic) = bracket_of(&runs);
     Step::Done(PgaResult {
         criterion: req.combine.label(&req.criteria),
         safe_pga: safe,
         failing_pga: fail,
         units: "m/s2".into(),
         monotonic,
+        resolution: (req.max - req.min) / (n - 1) as f64,
+        failing_intervals: failing_intervals(&runs),
         runs,
     })
 }
@@ -881,6 +917,35 @@ mod tests {
     }
 
     #[test]
+    fn every_change_is_refined_and_the_start_of_the_range_does_not_move_the_answer() {
+        // Fails on [3.1, 3.9) (an island 0.8 m/s² wide) and from 6.2 on. Two ranges with a
+        // resolution of 0.5 (< 0.8) but different starts: both hold a scan point in the island,
+        // refine its two ends and the main region's start to the tolerance, and agree.
+        let fails = |p: f64| (3.1..3.9).contains(&p) || p >= 6.2;
+        let (a, _) = drive(&request(0.5, 10.0, 0.01, 20), 2, fails);
+        let (b, _) = drive(&request(1.0, 10.0, 0.01, 19), 2, fails);
+        for r in [&a, &b] {
+            assert!((r.resolution - 0.5).abs() < 1e-12, "{}", r.resolution);
+            assert!(!r.monotonic);
+            let f = r.failing_pga.expect("fails");
+            assert!((3.1..=3.11).contains(&f), "{f}");
+            assert_eq!(r.failing_intervals.len(), 2, "{:?}", r.failing_intervals);
+            let island_top = r.failing_intervals[0][1];
+            assert!((3.89..3.9).contains(&island_top), "{island_top}");
+            let main = r.failing_intervals[1][0];
+            assert!((6.2..=6.21).contains(&main), "{main}");
+        }
+        assert!((a.failing_pga.expect("a") - b.failing_pga.expect("b")).abs() <= 0.01);
+        // A resolution coarser than the island (2.0) steps over it in one range (scan 1, 3,
+        // 5, ...) and not the other (1.5, 3.5, ...): the answer then depends on the range,
+        // which is why the resolution is reported.
+        let (c, _) = drive(&request(1.0, 9.0, 0.01, 5), 2, fails);
+        let (d, _) = drive(&request(1.5, 9.5, 0.01, 5), 2, fails);
+        assert_eq!((c.resolution, d.resolution), (2.0, 2.0));
+        assert!(c.failing_pga.expect("c") > 6.0 && d.failing_pga.expect("d") < 4.0);
+    }
+
+    #[test]
     fn records_are_planned_side_by_side() {
         let req = request(0.0, 4.0, 0.05, 5);
         let thresholds = [2.37, 0.61];
@@ -917,6 +982,8 @@ mod tests {
             failing_pga: f,
             units: "m/s2".into(),
             monotonic: true,
+            resolution: 1.0,
+            failing_intervals: vec![],
             runs: vec![],
         };
         assert_eq!(

@@ -524,6 +524,12 @@ impl Writers {
 
     /// Record one frame, hand it to the caller's `on_frame` and report `progress` (0..1, none
     /// for the initial frame): the per-frame duties of every run loop, DDA or reduced.
+    /// Does [`Writers::emit`] use the frame (a file to write, or `opts.on_frame`)? A run
+    /// without either (a PGA search's runs) need not build its frames.
+    pub(crate) fn wants_frames(&self, opts: &RunOptions) -> bool {
+        self.histories.is_some() || self.mcap.is_some() || opts.on_frame.is_some()
+    }
+
     pub(crate) fn emit(
         &mut self,
         frame: &Frame,

@@ -258,22 +258,20 @@ pub struct Report {
 pub fn bracket(criterion: &str, runs: &[PgaRun]) -> PgaResult {
     let mut runs = runs.to_vec();
     runs.sort_by(|a, b| a.pga.total_cmp(&b.pga));
-    let failing = runs.iter().find(|r| r.failed).map(|r| r.pga);
-    let safe = runs
-        .iter()
-        .filter(|r| !r.failed && failing.is_none_or(|f| r.pga < f))
-        .map(|r| r.pga)
-        .fold(None, |m: Option<f64>, p| Some(m.map_or(p, |m| m.max(p))));
-    let monotonic = match failing {
-        Some(f) => runs.iter().all(|r| r.failed || r.pga < f),
-        None => true,
-    };
+    let (safe, failing, monotonic) = crate::analysis::pga::bracket_of(&runs);
     PgaResult {
         criterion: criterion.to_string(),
         safe_pga: safe,
         failing_pga: failing,
         units: "m/s2".into(),
         monotonic,
+        // The grid's widest gap: a failing interval narrower than it may lie between two of
+        // the manifest's amplitudes.
+        resolution: runs
+            .windows(2)
+            .map(|w| w[1].pga - w[0].pga)
+            .fold(0.0, f64::max),
+        failing_intervals: crate::analysis::pga::failing_intervals(&runs),
         runs,
     }
 }

@@ -284,6 +284,44 @@ impl Signal {
         }
     }
 
+    /// The first time after `t` (s) at which the acceleration's slope (or value) may jump: the
+    /// next sample of a record, the end of a record or of a pulse; `f64::INFINITY` when the
+    /// signal is smooth from `t` on. Between two of them the acceleration is linear (records)
+    /// or analytic (pulses, sines), so an ODE step that ends there sees a smooth load.
+    pub fn next_kink(&self, t: f64) -> f64 {
+        // Times within 1e-12 s of t are t itself (the run loops' time resolution).
+        const SAME: f64 = 1e-12;
+        match self {
+            Signal::Zero | Signal::Sine { .. } => f64::INFINITY,
+            Signal::Pulse { period, cycles, .. } => {
+                let end = cycles * period;
+                if t < end - SAME {
+                    end
+                } else {
+                    f64::INFINITY
+                }
+            }
+            Signal::Sampled(s) => {
+                let end = s.duration();
+                if s.accel.len() < 2 || t.is_nan() || t >= end - SAME {
+                    return f64::INFINITY;
+                }
+                // Sample k is at k·dt, the same product `duration` and `locate` use.
+                let mut k = (t.max(0.0) / s.dt).floor() as usize + 1;
+                while (k as f64) * s.dt <= t + SAME {
+                    k += 1;
+                }
+                ((k as f64) * s.dt).min(end)
+            }
+        }
+    }
+
+    /// Is the acceleration linear between the times [`Signal::next_kink`] gives? (Records and
+    /// zero; pulses and sines are curved.)
+    pub fn piecewise_linear(&self) -> bool {
+        matches!(self, Signal::Zero | Signal::Sampled(_))
+    }
+
     /// Length of the signal in s (`None` for steady signals and zero).
     pub fn duration(&self) -> Option<f64> {
         match self {
@@ -389,6 +427,17 @@ impl GroundMotion {
         let v = self.vertical.eval(t);
         let s = self.scale;
         [[s * h.0, s * v.0], [s * h.1, s * v.1], [s * h.2, s * v.2]]
+    }
+
+    /// The first time after `t` (s) at which either component's slope may jump
+    /// ([`Signal::next_kink`]).
+    pub fn next_kink(&self, t: f64) -> f64 {
+        self.horizontal.next_kink(t).min(self.vertical.next_kink(t))
+    }
+
+    /// Are both components linear between kinks ([`Signal::piecewise_linear`])?
+    pub fn piecewise_linear(&self) -> bool {
+        self.horizontal.piecewise_linear() && self.vertical.piecewise_linear()
     }
 
     /// Record length, s (the longer component), or `None` for steady or no motion.
@@ -576,4 +625,45 @@ pub fn load_path_with(path: &Path, params: &LoadParams) -> Result<GroundMotion, 
         gm.provenance = format!("{origin} ({})", gm.provenance);
     }
     Ok(gm)
+}
+
+#[cfg(test)]
+mod kink_tests {
+    use super::*;
+
+    #[test]
+    fn kinks_are_the_samples_then_the_end_of_the_record() {
+        // dt = 0.1 s, 4 samples: kinks at 0.1, 0.2, 0.3 (the end), then none. 0.3 / 0.1 rounds
+        // below 3 in floating point: the kink after 0.2 must still be 0.3, not 0.2 again.
+        let s = Signal::Sampled(Sampled::new(0.1, vec![0.0, 1.0, -1.0, 0.5]));
+        assert_eq!(s.next_kink(0.0), 0.1);
+        assert_eq!(s.next_kink(0.05), 0.1);
+        let k2 = s.next_kink(0.1);
+        assert_eq!(k2, 2.0 * 0.1);
+        let k3 = s.next_kink(k2);
+        assert_eq!(k3, 3.0 * 0.1);
+        assert_eq!(
+            k3,
+            match &s {
+                Signal::Sampled(x) => x.duration(),
+                _ => unreachable!(),
+            }
+        );
+        assert_eq!(s.next_kink(k3), f64::INFINITY);
+        assert!(s.piecewise_linear());
+        // A pulse kinks where it ends; a sine never.
+        let p = Signal::Pulse {
+            amplitude: 1.0,
+            period: 1.0,
+            cycles: 0.5,
+            phase: 0.0,
+        };
+        assert_eq!((p.next_kink(0.2), p.next_kink(0.5)), (0.5, f64::INFINITY));
+        assert!(!p.piecewise_linear());
+        let mut gm = GroundMotion::horizontal(s);
+        gm.vertical = p;
+        assert_eq!(gm.next_kink(0.0), 0.1);
+        assert_eq!(gm.next_kink(0.45), 0.5);
+        assert!(!gm.piecewise_linear());
+    }
 }

@@ -62,6 +62,8 @@ pub fn fake_runner(wall_per_simulated_second: Duration) -> JobRunner {
                 failing_pga: Some(hi),
                 units: "m/s2".into(),
                 monotonic: true,
+                resolution: request.max - request.min,
+                failing_intervals: vec![[hi, request.max]],
                 runs,
             };
             let value = serde_json::to_value(&result).map_err(|e| e.to_string())?;

@@ -177,10 +177,10 @@ struct PgaBody {
     scan_points: Option<usize>,
 }
 
-/// Coarse scan points of a PGA search when the request does not say: enough to catch a
-/// non-monotonic response over a typical 0–10 m/s² range, few enough to keep a search to
-/// about a dozen runs with the bisection.
-pub const DEFAULT_SCAN_POINTS: usize = 8;
+/// Scan points of a PGA search when the request does not say (as `ashlar pga`): 40 puts
+/// them 0.49 m/s² apart over 0.05–2 g, finer than the failing intervals of a rocking column
+/// under the bundled records (issue 20 §5, docs/pga.md); the search reports this resolution.
+pub const DEFAULT_SCAN_POINTS: usize = 40;
 
 /// Records of one multi-record search: 100 is more than any fragility study uses (FEMA P695
 /// has 44), and bounds one job to 100 searches; the body-size limit bounds their samples.

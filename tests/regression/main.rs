@@ -8,6 +8,7 @@ mod common;
 mod regression_auto_controls;
 mod regression_contact_chatter;
 mod regression_dual_trapezoidal;
+mod regression_pga_range;
 mod regression_phantom_penetration;
 mod regression_reported_controls;
 mod regression_sigterm_after_listening;

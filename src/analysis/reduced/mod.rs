@@ -34,11 +34,17 @@ pub struct ReducedParams {
     /// ODE tolerance: 1e-10 relative keeps the integration error four orders below the 1 %
     /// accuracy target at a cost of microseconds per simulated second.
     pub tolerance: Tolerance,
-    /// Largest ODE step, s: 2 ms so a step cannot jump over a record's feature (records are
-    /// sampled at 5–20 ms) or an output frame.
+    /// Largest ODE step, s: 2 ms bounds how far an impact or a lift-off can hide inside one
+    /// step (events are detected at step ends). Steps also end at every kink of the ground
+    /// motion (each sample of a record: the acceleration is linear between samples, so each
+    /// step integrates a smooth load and the error estimate holds) and at every output frame.
     pub max_step: f64,
-    /// Scan step of the at-rest state, s: onset conditions are checked this often and then
-    /// located by bisection (0.5 ms resolves any acceleration pulse a record can carry).
+    /// Scan step of the at-rest state under curved motions (pulses, sines), s: onset
+    /// conditions are checked this often and then located by bisection (0.5 ms resolves any
+    /// pulse a record can carry). Under records the scan goes sample by sample instead, which
+    /// is exact: between samples the load is linear, the rocking and lift-off conditions are
+    /// linear in it and the sliding condition convex, so none can hold inside a sample interval
+    /// without holding at one of its ends.
     pub rest_scan: f64,
     /// Angular speed (rad/s) below which a rocking block that lands is at rest: it would lift
     /// again by less than ω²/(2θ̈) ~ 1e-10 rad.
@@ -192,6 +198,9 @@ pub struct ReducedStats {
     pub steps: u64,
     pub rejected_steps: u64,
     pub impacts: u64,
+    /// Smallest and largest ODE step the error control chose, s (∞ and 0 while none was):
+    /// steps cut short to end on a kink of the record, an output frame or a located event are
+    /// not counted, since their length says nothing about the accuracy the control needed.
     pub min_dt: f64,
     pub max_dt: f64,
     /// Time of the first rocking and first sliding onset, s.
@@ -224,6 +233,108 @@ type Onset = (Option<usize>, Option<f64>, bool);
 
 /// Bisection depth of event location: 2⁻⁶⁰ of a step is below round-off of the time.
 const BISECTIONS: usize = 60;
+
+/// Precision of a located event's time, s: 1e-13 s moves a state by ω·1e-13, below the ODE's
+/// absolute tolerance for any angular or slip rate under 10 per second.
+const EVENT_TIME: f64 = 1e-13;
+
+/// Effective load per unit mass on `block` at t in its local coordinates (m/s²): gravity and
+/// the inertial load −a_g of the moving base.
+fn load_at(block: &SingleBlock, motion: &GroundMotion, t: f64) -> Vector2<f64> {
+    let ag = motion.acceleration(t);
+    block.to_local(Vector2::new(-ag[0], -block.gravity - ag[1]))
+}
+
+/// One adaptive step of `f` from (t, y), ending at `end` at the latest. `h` is the step-size
+/// proposal, updated for the next step. Returns the step taken, the new state, and whether the
+/// step was cut short to end exactly on `end` (the caller then sets its time to `end`).
+fn ode_step(
+    h: &mut f64,
+    stats: &mut ReducedStats,
+    params: &ReducedParams,
+    f: &impl Fn(f64, State) -> State,
+    t: f64,
+    y: State,
+    end: f64,
+) -> (f64, State, bool) {
+    loop {
+        let proposal = h.min(params.max_step);
+        let clipped = proposal >= end - t;
+        let step = if clipped { end - t } else { proposal };
+        let (y1, err) = ode::step(f, t, y, step, params.tolerance);
+        if err <= 1.0 || step < 1e-12 {
+            let next = ode::next_h(step, err).max(1e-12);
+            // A step cut short by `end` must not shrink the next proposal.
+            *h = if clipped { next.max(proposal) } else { next };
+            stats.steps += 1;
+            if !clipped {
+                stats.min_dt = stats.min_dt.min(step);
+                stats.max_dt = stats.max_dt.max(step);
+            }
+            return (step, y1, clipped);
+        }
+        stats.rejected_steps += 1;
+        *h = ode::next_h(step, err);
+    }
+}
+
+/// Smallest step in (0, h] from (t, y) after which `crossed(state)` holds (it does not at the
+/// start, it does after h), to [`EVENT_TIME`]. Each trial re-takes one step from the start, so
+/// the state returned is a full fifth-order step. The trial steps come from the Illinois
+/// variant of regula falsi on the event function `g` (positive before the event, ≤ 0 after:
+/// a handful of trials instead of bisection's 60), with a bisection whenever it stalls.
+fn locate(
+    f: &impl Fn(f64, State) -> State,
+    tol: Tolerance,
+    t: f64,
+    y: State,
+    h: f64,
+    g: impl Fn(&State) -> f64,
+    crossed: impl Fn(&State) -> bool,
+) -> (f64, State) {
+    let (mut lo, mut glo) = (0.0, g(&y));
+    let mut yh = ode::step(f, t, y, h, tol).0;
+    let (mut hi, mut ghi) = (h, g(&yh));
+    // Which end the last trial replaced (Illinois halves the weight of an end kept twice).
+    let mut last = 0i8;
+    let mut stalls = 0;
+    for _ in 0..BISECTIONS {
+        let width = hi - lo;
+        if width <= EVENT_TIME {
+            break;
+        }
+        let secant = lo + width * glo / (glo - ghi);
+        let mid = if stalls < 2 && glo > 0.0 && ghi <= 0.0 && secant > lo && secant < hi {
+            secant
+        } else {
+            stalls = 0;
+            0.5 * (lo + hi)
+        };
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        let ym = ode::step(f, t, y, mid, tol).0;
+        let gm = g(&ym);
+        if crossed(&ym) {
+            hi = mid;
+            ghi = gm.min(0.0);
+            yh = ym;
+            if last == -1 {
+                glo *= 0.5;
+            }
+            last = -1;
+        } else {
+            lo = mid;
+            glo = gm.max(f64::MIN_POSITIVE);
+            if last == 1 {
+                ghi *= 0.5;
+            }
+            last = 1;
+        }
+        stalls = if hi - lo > 0.5 * width { stalls + 1 } else { 0 };
+    }
+    (hi, yh)
+}
 
 impl Reduced {
     pub fn new(
@@ -262,9 +373,7 @@ impl Reduced {
     /// Effective load per unit mass at t in local coordinates (m/s²): gravity and the inertial
     /// load −a_g of the moving base.
     pub fn load(&self, t: f64) -> Vector2<f64> {
-        let ag = self.motion.acceleration(t);
-        let world = Vector2::new(-ag[0], -self.block.gravity - ag[1]);
-        self.block.to_local(world)
+        load_at(&self.block, &self.motion, t)
     }
 
     fn violate(&mut self, time: f64, what: String) -> bool {
@@ -294,12 +403,6 @@ impl Reduced {
             }
         }
         Ok(())
-    }
-
-    fn count_step(&mut self, h: f64) {
-        self.stats.steps += 1;
-        self.stats.min_dt = self.stats.min_dt.min(h);
-        self.stats.max_dt = self.stats.max_dt.max(h);
     }
 
     /// Which motion would start at t: (rocking pivot, sliding direction), each if any.
@@ -332,10 +435,15 @@ impl Reduced {
         if !self.quiet(&first) {
             return self.start(t0, first);
         }
-        let h = self.params.rest_scan.min(target - t0);
-        let t1 = t0 + h;
+        // Records: to the next sample (exact, see `ReducedParams::rest_scan`); curved motions:
+        // one scan step.
+        let t1 = if self.motion.piecewise_linear() {
+            self.motion.next_kink(t0).min(target)
+        } else {
+            (t0 + self.params.rest_scan).min(target)
+        };
         let end = self.onset(t1);
-        self.count_step(h);
+        self.stats.steps += 1;
         if self.quiet(&end) {
             self.time = t1;
             return false;
@@ -426,61 +534,6 @@ impl Reduced {
         false
     }
 
-    /// One adaptive step of `f` from the current state, at most to `target`; returns the step
-    /// taken and the new state.
-    fn ode_step(
-        &mut self,
-        f: &impl Fn(f64, State) -> State,
-        y: State,
-        target: f64,
-    ) -> (f64, State) {
-        let t = self.time;
-        loop {
-            let proposal = self.h.min(self.params.max_step);
-            let h = proposal.min(target - t);
-            let (y1, err) = ode::step(f, t, y, h, self.params.tolerance);
-            if err <= 1.0 || h < 1e-12 {
-                let next = ode::next_h(h, err).max(1e-12);
-                // A step clipped by the target must not shrink the next proposal.
-                self.h = if h < proposal {
-                    next.max(proposal)
-                } else {
-                    next
-                };
-                self.count_step(h);
-                return (h, y1);
-            }
-            self.stats.rejected_steps += 1;
-            self.h = ode::next_h(h, err);
-        }
-    }
-
-    /// Smallest step in (0, h] at which `crossed(state)` holds, by bisection.
-    fn locate(
-        &self,
-        f: &impl Fn(f64, State) -> State,
-        y: State,
-        h: f64,
-        crossed: impl Fn(&State) -> bool,
-    ) -> (f64, State) {
-        let (mut lo, mut hi) = (0.0, h);
-        let mut yh = ode::step(f, self.time, y, h, self.params.tolerance).0;
-        for _ in 0..BISECTIONS {
-            let mid = 0.5 * (lo + hi);
-            if mid <= lo || mid >= hi {
-                break;
-            }
-            let ym = ode::step(f, self.time, y, mid, self.params.tolerance).0;
-            if crossed(&ym) {
-                hi = mid;
-                yh = ym;
-            } else {
-                lo = mid;
-            }
-        }
-        (hi, yh)
-    }
-
     fn rock(&mut self, target: f64) -> bool {
         let Phase::Rocking {
             pivot: k,
@@ -490,22 +543,25 @@ impl Reduced {
         else {
             return false;
         };
-        let blk = self.block.clone();
-        let motion = self.motion.clone();
-        let g = blk.gravity;
-        let load = move |t: f64| {
-            let ag = motion.acceleration(t);
-            blk.to_local(Vector2::new(-ag[0], -g - ag[1]))
+        let (b, motion, params, t0) = (&self.block, &self.motion, self.params, self.time);
+        let f = |t: f64, y: State| {
+            [
+                y[1],
+                rocking::angular_acceleration(b, k, y[0], load_at(b, motion, t)),
+            ]
         };
-        let b = self.block.clone();
-        let f = |t: f64, y: State| [y[1], rocking::angular_acceleration(&b, k, y[0], load(t))];
         let s = rocking::side(k);
         let lift = 1e-9 * b.pivots[1];
-        let landed = |y: &State| s * y[0] < 0.0;
-        let on_side = |y: &State| rocking::side_clearance(&b, k, y[0], lift) < 0.0;
-        let (h, y1) = self.ode_step(&f, [theta, omega], target);
+        let landing = |y: &State| s * y[0];
+        let landed = |y: &State| landing(y) < 0.0;
+        let clearance = |y: &State| rocking::side_clearance(b, k, y[0], lift);
+        let on_side = |y: &State| clearance(y) < 0.0;
+        let end = target.min(motion.next_kink(t0));
+        let y0 = [theta, omega];
+        let (h, y1, clipped) = ode_step(&mut self.h, &mut self.stats, &params, &f, t0, y0, end);
         if landed(&y1) {
-            let (h, y) = self.locate(&f, [theta, omega], h, landed);
+            let (h, y) = locate(&f, params.tolerance, t0, y0, h, landing, landed);
+            let b = self.block.clone();
             self.time += h;
             let w = rocking::restitution(&b, k, self.params.restitution) * y[1];
             self.stats.impacts += 1;
@@ -518,12 +574,12 @@ impl Reduced {
                     omega: w,
                 }
             };
-            // Restart the step size after the velocity jump.
-            self.h = self.params.max_step.min(1e-4);
+            // The step size carries over: the motion after the impact is as smooth as before.
             return false;
         }
         if on_side(&y1) {
-            let (h, y) = self.locate(&f, [theta, omega], h, on_side);
+            let (h, y) = locate(&f, params.tolerance, t0, y0, h, clearance, on_side);
+            let b = self.block.clone();
             self.time += h;
             if !rocking::beyond_tipping(&b, k, y[0]) {
                 let t = self.time;
@@ -542,15 +598,16 @@ impl Reduced {
             };
             return false;
         }
-        self.time += h;
+        self.time = if clipped { end } else { t0 + h };
         self.phase = Phase::Rocking {
             pivot: k,
             theta: y1[0],
             omega: y1[1],
         };
+        let b = &self.block;
         if self.modes != Modes::Sliding {
             let a = self.load(self.time);
-            let r = rocking::reaction(&b, k, y1[0], y1[1], a);
+            let r = rocking::reaction(b, k, y1[0], y1[1], a);
             let t = self.time;
             if r.y < 0.0 {
                 return self.violate(
@@ -560,9 +617,10 @@ impl Reduced {
             }
             if self.modes == Modes::Auto
                 && r.x.abs() > b.mu * r.y
-                && !rocking::beyond_tipping(&b, k, y1[0])
+                && !rocking::beyond_tipping(b, k, y1[0])
             {
-                return self.violate(t, format!("the pivot slips while rocking at t = {t:.6} s (friction demand {:.3} above μ = {:.3}): sliding and rocking together", r.x.abs() / r.y, b.mu));
+                let what = format!("the pivot slips while rocking at t = {t:.6} s (friction demand {:.3} above μ = {:.3}): sliding and rocking together", r.x.abs() / r.y, b.mu);
+                return self.violate(t, what);
             }
         }
         false
@@ -572,23 +630,23 @@ impl Reduced {
         let Phase::Sliding { rate, dir } = self.phase else {
             return false;
         };
-        let blk = self.block.clone();
-        let motion = self.motion.clone();
-        let g = blk.gravity;
-        let load = move |t: f64| {
-            let ag = motion.acceleration(t);
-            blk.to_local(Vector2::new(-ag[0], -g - ag[1]))
+        let (b, motion, params, t0) = (&self.block, &self.motion, self.params, self.time);
+        let f = |t: f64, y: State| [y[1], sliding::acceleration(b, dir, load_at(b, motion, t))];
+        let speed = |y: &State| dir * y[1];
+        let stopped = |y: &State| speed(y) <= 0.0;
+        let end = target.min(motion.next_kink(t0));
+        let y0 = [self.slip, rate];
+        let (h, y1, clipped) = ode_step(&mut self.h, &mut self.stats, &params, &f, t0, y0, end);
+        let (t1, y1) = if stopped(&y1) {
+            let (h, y) = locate(&f, params.tolerance, t0, y0, h, speed, stopped);
+            (t0 + h, y)
+        } else if clipped {
+            (end, y1)
+        } else {
+            (t0 + h, y1)
         };
         let b = self.block.clone();
-        let f = |t: f64, y: State| [y[1], sliding::acceleration(&b, dir, load(t))];
-        let stopped = |y: &State| dir * y[1] <= 0.0;
-        let (h, y1) = self.ode_step(&f, [self.slip, rate], target);
-        let (h, y1) = if stopped(&y1) {
-            self.locate(&f, [self.slip, rate], h, stopped)
-        } else {
-            (h, y1)
-        };
-        self.time += h;
+        self.time = t1;
         self.slid += (y1[0] - self.slip).abs();
         self.slip = y1[0];
         if stopped(&y1) {
@@ -597,7 +655,6 @@ impl Reduced {
                 Some(d) if d != dir => Phase::Sliding { rate: 0.0, dir: d },
                 _ => Phase::Rest,
             };
-            self.h = self.params.max_step.min(1e-4);
         } else {
             self.phase = Phase::Sliding { rate: y1[1], dir };
         }

@@ -41,7 +41,9 @@ struct BlockNow {
     outline: Vec<[f64; 2]>,
 }
 
-fn block_now(m: &Reduced) -> BlockNow {
+/// The free block's state now; its outline only `with_outline` (frames need it, the tracker
+/// does not, and a run that writes no frames skips the allocation).
+fn block_now(m: &Reduced, with_outline: bool) -> BlockNow {
     let b = &m.block;
     let (d, rotation, v, omega) = m.kinematics();
     let (mut d, mut v) = (b.to_world(d), b.to_world(v));
@@ -52,14 +54,17 @@ fn block_now(m: &Reduced) -> BlockNow {
         d += shift;
         v += Vector2::new(gs[1][0], gs[1][1]);
     }
-    let outline = m
-        .outline()
-        .iter()
-        .map(|p| {
-            let w = b.origin + b.to_world(*p) + shift;
-            [w.x, w.y]
-        })
-        .collect();
+    let outline = if with_outline {
+        m.outline()
+            .iter()
+            .map(|p| {
+                let w = b.origin + b.to_world(*p) + shift;
+                [w.x, w.y]
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
     BlockNow {
         d,
         rotation,
@@ -255,7 +260,7 @@ pub fn run(
     };
     let interval = scene.control.output_interval;
     let mut frame_index: u64 = 0;
-    let now = block_now(&m);
+    let now = block_now(&m, true);
     writers.emit(&frame(scene, &m, &now, &failure), opts, None)?;
     let mut stopped_reason = None;
     let mut cancelled = false;
@@ -279,13 +284,18 @@ pub fn run(
             return Err(ReducedError::Violation(v));
         }
         frame_index += 1;
-        let now = block_now(&m);
+        let wanted = writers.wants_frames(opts);
+        let now = block_now(&m, wanted);
         track(&mut tr, &now, m.slid);
-        writers.emit(
-            &frame(scene, &m, &now, &failure),
-            opts,
-            Some(m.time / duration),
-        )?;
+        if wanted {
+            writers.emit(
+                &frame(scene, &m, &now, &failure),
+                opts,
+                Some(m.time / duration),
+            )?;
+        } else if let Some(p) = opts.progress {
+            p((m.time / duration).min(1.0));
+        }
         if opts.stop_when.is_some_and(|f| f(&tr)) {
             stopped_reason = Some("decided".to_string());
             break;
@@ -339,8 +349,10 @@ pub fn run(
         diagnostics: Diagnostics {
             time_step_cuts: st.rejected_steps,
             max_penetration: 0.0,
-            min_time_step: (st.steps > 0).then_some(st.min_dt),
-            max_time_step: (st.steps > 0).then_some(st.max_dt),
+            // The steps the ODE's error control chose (absent when the block never moved:
+            // the at-rest state takes no time step).
+            min_time_step: st.min_dt.is_finite().then_some(st.min_dt),
+            max_time_step: (st.max_dt > 0.0).then_some(st.max_dt),
             restitution: (model == "rocking").then_some(restitution),
             impacts: (model == "rocking").then_some(st.impacts),
             ..Default::default()
