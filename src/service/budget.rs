@@ -151,6 +151,24 @@ pub fn prescan(bytes: &[u8], limits: &Limits) -> Result<(), ApiError> {
     }
 }
 
+/// A number for a message: significant digits, in exponent form when very large or small
+/// (`1e308`, not the 309 digits `quantity::sig` would print).
+pub fn num(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-4..1e7).contains(&x.abs()) {
+        let t = format!("{x:.3e}");
+        // 1.000e308 → 1e308, 2.500e10 → 2.5e10
+        match t.split_once('e') {
+            Some((m, e)) => {
+                let m = m.trim_end_matches('0').trim_end_matches('.');
+                format!("{m}e{e}")
+            }
+            None => t,
+        }
+    } else {
+        crate::quantity::sig(x)
+    }
+}
+
 /// A documented range of a physical value (inclusive), with its units.
 struct Range {
     min: f64,
@@ -208,9 +226,9 @@ fn check(pointer: String, v: &Value, r: Range) -> Result<(), ApiError> {
         pointer.clone(),
         format!(
             "{pointer}: {} {u} is outside the accepted range {} … {} {u} (docs/format.md, \"Ranges\")",
-            crate::quantity::sig(x),
-            crate::quantity::sig(r.min),
-            crate::quantity::sig(r.max),
+            num(x),
+            num(r.min),
+            num(r.max),
             u = r.units
         ),
     ))
@@ -317,7 +335,7 @@ pub fn check_run_work(
             format!(
                 "/scene: {blocks} blocks × {steps:.0} steps = {} block-steps, {:.1} times the server's limit of {} \
                  (ashlar serve --max-block-steps); shorten control.duration, lengthen control.time_step or use fewer blocks",
-                crate::quantity::sig(work),
+                num(work),
                 work / limits.max_block_steps as f64,
                 limits.max_block_steps
             ),
@@ -330,7 +348,7 @@ pub fn check_run_work(
             format!(
                 "/scene/control/output_interval: {blocks} blocks × {frames:.0} recorded frames = {} block-frames, {:.1} times \
                  the server's limit of {} (ashlar serve --max-block-frames); lengthen control.output_interval",
-                crate::quantity::sig(out),
+                num(out),
                 out / limits.max_block_frames as f64,
                 limits.max_block_frames
             ),
@@ -362,7 +380,7 @@ pub fn check_search_work(
                 "/scan_points: up to {runs:.0} runs × {blocks} blocks × {steps:.0} steps = {} block-steps, {:.1} times the \
                  server's limit of {} for a search (ashlar serve --max-search-block-steps); use fewer records or scan \
                  points, a coarser tolerance, or a shorter run",
-                crate::quantity::sig(work),
+                num(work),
                 work / limits.max_search_block_steps as f64,
                 limits.max_search_block_steps
             ),
@@ -416,6 +434,13 @@ mod tests {
         s["initial"] = json!([{"block": "b", "velocity": [0, 1e308]}]);
         let e = check_ranges(&s).expect_err("velocity");
         assert_eq!(e.pointer.as_deref(), Some("/scene/initial/0/velocity/1"));
+    }
+
+    #[test]
+    fn numbers_in_messages_stay_short() {
+        assert_eq!(num(1e308), "1e308");
+        assert_eq!(num(2.5e10), "2.5e10");
+        assert_eq!(num(2500.0), crate::quantity::sig(2500.0));
     }
 
     #[test]

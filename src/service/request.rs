@@ -483,9 +483,9 @@ fn scene_and_motion(
             format!(
                 "/scene/control/duration: {} s at a time step of {} s is {} steps, over the server's limit of {} \
                  (ashlar serve --max-total-steps); shorten the duration or lengthen control.time_step",
-                crate::quantity::sig(duration),
-                crate::quantity::sig(scene.control.time_step),
-                crate::quantity::sig(steps),
+                super::budget::num(duration),
+                super::budget::num(scene.control.time_step),
+                super::budget::num(steps),
                 limits.max_total_steps
             ),
         ));
@@ -497,9 +497,9 @@ fn scene_and_motion(
             format!(
                 "/scene/control/output_interval: {} s recorded every {} s is {} frames, over the server's \
                  limit of {} (ashlar serve --max-total-steps)",
-                crate::quantity::sig(duration),
-                crate::quantity::sig(scene.control.output_interval),
-                crate::quantity::sig(frames),
+                super::budget::num(duration),
+                super::budget::num(scene.control.output_interval),
+                super::budget::num(frames),
                 limits.max_total_steps
             ),
         ));

@@ -555,6 +555,8 @@ fn run_job(core: &Core, job: JobRecord) {
         Finish::Cancelled(_) => (JobStatus::Cancelled, job.progress),
     };
     core.store_result("recording a finished job", core.store.finish(id, &finish));
+    // Its artifacts count against the disk quota from now on.
+    core.forget_artifact_bytes();
     if job.kind == JobKind::PgaRun {
         // The last child of a search queues the search again: a thread of this process may
         // be idle (another process hears it through the store's notification).
