@@ -494,13 +494,19 @@ async fn bad_requests_get_problems_naming_the_field() {
         "urn:ashlar:problem:no-route"
     );
     let req = Request::builder()
-        .method("DELETE")
+        .method("PUT")
         .uri(&uri)
         .body(Body::empty())
         .expect("req");
     let r = call(&app, req).await;
-    r.problem(405);
+    let p = r.problem(405);
     assert!(r.header("allow").unwrap_or_default().contains("GET"));
+    // The detail names the methods the path takes (it used to say "see /openapi.yaml").
+    let detail = p["detail"].as_str().unwrap_or_default();
+    assert!(
+        detail.contains("GET") && detail.contains("DELETE"),
+        "{detail}"
+    );
     svc.shutdown(Duration::from_secs(5));
     std::fs::remove_dir_all(dir).ok();
 }
