@@ -101,6 +101,10 @@ pub struct ServeArgs {
     /// Seconds a connection may stay with nothing read or written before it is closed.
     #[arg(long, default_value_t = server::ServerParams::default().idle_timeout.as_secs_f64())]
     pub idle_timeout: f64,
+    /// An origin whose web pages may call the API from a browser (CORS), repeatable; e.g.
+    /// `--cors-origin https://app.foxglove.dev` for the "open in Foxglove" link. None by default.
+    #[arg(long = "cors-origin", value_name = "ORIGIN")]
+    pub cors_origins: Vec<String>,
     /// Listen on a non-loopback address although the service has no access control (anyone
     /// who reaches the port can submit, read and delete jobs). Without it such an --addr is
     /// refused.
@@ -332,7 +336,22 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
     if args.max_connections == 0 {
         return Err("--max-connections must be at least 1".into());
     }
+    for o in &args.cors_origins {
+        let ok = (o.starts_with("https://") || o.starts_with("http://"))
+            && !o.trim_end_matches('/').split("://").nth(1).unwrap_or("").contains('/')
+            && axum::http::HeaderValue::from_str(o).is_ok();
+        if !ok {
+            return Err(format!(
+                "--cors-origin {o:?}: expected an origin, scheme://host[:port], e.g. https://app.foxglove.dev"
+            ));
+        }
+    }
     let server_params = server::ServerParams {
+        cors_origins: args
+            .cors_origins
+            .iter()
+            .map(|o| o.trim_end_matches('/').to_string())
+            .collect(),
         max_connections: args.max_connections,
         header_read_timeout: secs("header-timeout", args.header_timeout)?,
         body_read_timeout: secs("body-timeout", args.body_timeout)?,

@@ -90,8 +90,15 @@ pub fn app(state: AppState) -> Router {
         router = router.route(path, handler);
     }
     let limit = state.core.limits.max_body_bytes;
+    let origins: Vec<HeaderValue> = state
+        .core
+        .server
+        .cors_origins
+        .iter()
+        .filter_map(|o| HeaderValue::from_str(o).ok())
+        .collect();
     let cors = tower_http::cors::CorsLayer::new()
-        .allow_origin(tower_http::cors::Any)
+        .allow_origin(tower_http::cors::AllowOrigin::list(origins))
         .allow_methods([Method::GET, Method::POST, Method::DELETE])
         .allow_headers(tower_http::cors::Any)
         .expose_headers([

@@ -41,6 +41,11 @@ pub struct ServerParams {
     pub max_header_bytes: usize,
     /// Request header fields; 431 beyond.
     pub max_headers: usize,
+    /// Origins whose web pages may call the API from a browser (CORS), e.g.
+    /// `https://app.foxglove.dev` for the "open in Foxglove" link. None by default: the
+    /// service's own page is same-origin and needs none, and any other page open in a
+    /// browser on the host must not be able to submit, read or delete jobs.
+    pub cors_origins: Vec<String>,
 }
 
 impl Default for ServerParams {
@@ -52,6 +57,7 @@ impl Default for ServerParams {
             idle_timeout: Duration::from_secs(60),
             max_header_bytes: 32 * 1024,
             max_headers: 100,
+            cors_origins: Vec::new(),
         }
     }
 }

@@ -29,7 +29,11 @@ fn start(
         idle_poll: Duration::from_millis(50),
         ..WorkerParams::default()
     };
-    let svc = Service::start(cfg, fake_runner(slowness)).expect("start");
+    let server = ashlar::service::server::ServerParams {
+        cors_origins: vec!["https://app.foxglove.dev".into()],
+        ..Default::default()
+    };
+    let svc = Service::start_with(cfg, fake_runner(slowness), server).expect("start");
     let router = app(svc.state());
     (svc, router, dir)
 }
@@ -171,8 +175,16 @@ async fn a_job_runs_and_its_outputs_are_served() {
     assert_eq!(t.header("accept-ranges").as_deref(), Some("bytes"));
     assert_eq!(
         t.header("access-control-allow-origin").as_deref(),
-        Some("*")
+        Some("https://app.foxglove.dev")
     );
+    // Only the origins given with --cors-origin: any other page in the browser gets nothing.
+    let req = Request::builder()
+        .uri(format!("{uri}/trajectory.mcap"))
+        .header("origin", "https://evil.example")
+        .body(Body::empty())
+        .expect("req");
+    let t = call(&app, req).await;
+    assert_eq!(t.header("access-control-allow-origin"), None);
     for (range, a, b) in [
         ("bytes=0-99", 0, 99),
         ("bytes=9990-", 9990, 9999),
