@@ -420,10 +420,7 @@ mod tests {
         assert!(check_ranges(&s).is_ok());
         s["materials"]["stone"]["density"] = json!(1e308);
         let e = check_ranges(&s).expect_err("density 1e308");
-        assert_eq!(
-            e.pointer.as_deref(),
-            Some("/scene/materials/stone/density")
-        );
+        assert_eq!(e.pointer.as_deref(), Some("/scene/materials/stone/density"));
         assert!(e.detail.len() < 200, "{}", e.detail);
         s["materials"]["stone"]["density"] = json!(2500);
         s["control"]["duration"] = json!(1e308);

@@ -4,6 +4,7 @@
 //! `routes` answers requests (async, no simulation work), `store` keeps every job durably,
 //! `worker` runs jobs on std threads through a `JobRunner`, `events` streams progress.
 pub mod artifacts;
+pub mod auth;
 pub mod budget;
 pub mod events;
 pub mod fake;
@@ -101,6 +102,10 @@ pub struct ServeArgs {
     /// Seconds a connection may stay with nothing read or written before it is closed.
     #[arg(long, default_value_t = server::ServerParams::default().idle_timeout.as_secs_f64())]
     pub idle_timeout: f64,
+    /// Require `Authorization: Bearer TOKEN` on every /v1/ request (401 without): a file of
+    /// lines `ROLE TOKEN` (ROLE user or admin; TOKEN the token, or `sha256:HEX` its digest).
+    #[arg(long, value_name = "FILE")]
+    pub tokens: Option<PathBuf>,
     /// An origin whose web pages may call the API from a browser (CORS), repeatable; e.g.
     /// `--cors-origin https://app.foxglove.dev` for the "open in Foxglove" link. None by default.
     #[arg(long = "cors-origin", value_name = "ORIGIN")]
@@ -338,7 +343,12 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
     }
     for o in &args.cors_origins {
         let ok = (o.starts_with("https://") || o.starts_with("http://"))
-            && !o.trim_end_matches('/').split("://").nth(1).unwrap_or("").contains('/')
+            && !o
+                .trim_end_matches('/')
+                .split("://")
+                .nth(1)
+                .unwrap_or("")
+                .contains('/')
             && axum::http::HeaderValue::from_str(o).is_ok();
         if !ok {
             return Err(format!(
@@ -346,7 +356,14 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
             ));
         }
     }
+    let tokens = args
+        .tokens
+        .as_deref()
+        .map(auth::Tokens::load)
+        .transpose()?
+        .map(Arc::new);
     let server_params = server::ServerParams {
+        tokens,
         cors_origins: args
             .cors_origins
             .iter()
@@ -389,11 +406,11 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
     let local = listener
         .local_addr()
         .map_err(|e| format!("--addr {}: {e}", args.addr))?;
-    if !local.ip().is_loopback() && !args.allow_insecure {
+    if !local.ip().is_loopback() && server_params.tokens.is_none() && !args.allow_insecure {
         return Err(format!(
-            "--addr {local} is reachable from other machines, and this server has no access control: \
-             anyone who reaches the port could submit, read and delete jobs. Listen on 127.0.0.1 behind a \
-             reverse proxy that authenticates, or pass --allow-insecure on a network you trust"
+            "--addr {local} is reachable from other machines, and without --tokens anyone who reaches \
+             the port could submit, read and delete jobs. Give --tokens FILE, or pass --allow-insecure \
+             on a network you trust"
         ));
     }
     let service = Service::start_with(config, runner, server_params.clone())?;

@@ -192,13 +192,26 @@ impl ApiError {
         e
     }
 
+    /// No valid bearer token (`ashlar serve --tokens`): 401 with `WWW-Authenticate: Bearer`.
+    pub fn unauthorized(detail: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::UNAUTHORIZED,
+            "unauthorized",
+            "Authentication required",
+            detail,
+        )
+        .with_parameter("Authorization")
+    }
+
     /// The body did not arrive within `--body-timeout`.
     pub fn request_timeout(secs: f64) -> Self {
         Self::new(
             StatusCode::REQUEST_TIMEOUT,
             "request-timeout",
             "Request body too slow",
-            format!("the request body did not arrive within {secs} s (ashlar serve --body-timeout)"),
+            format!(
+                "the request body did not arrive within {secs} s (ashlar serve --body-timeout)"
+            ),
         )
         .with_pointer("")
     }
@@ -279,6 +292,12 @@ impl IntoResponse for ApiError {
             header::CONTENT_TYPE,
             HeaderValue::from_static("application/problem+json"),
         );
+        if self.status == StatusCode::UNAUTHORIZED {
+            resp.headers_mut().insert(
+                header::WWW_AUTHENTICATE,
+                HeaderValue::from_static("Bearer realm=\"ashlar\""),
+            );
+        }
         if let Some(s) = self.retry_after {
             resp.headers_mut()
                 .insert(header::RETRY_AFTER, HeaderValue::from(s));

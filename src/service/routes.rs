@@ -108,6 +108,7 @@ pub fn app(state: AppState) -> Router {
             header::LOCATION,
         ]);
     let header_limits = state.core.server.clone();
+    let tokens = state.core.server.tokens.clone();
     router
         .fallback(no_route)
         .layer(axum::middleware::map_response(problem_for_bare_errors))
@@ -122,6 +123,17 @@ pub fn app(state: AppState) -> Router {
                 }
             },
         ))
+        .layer(axum::middleware::from_fn(
+            move |req: axum::extract::Request, next: axum::middleware::Next| {
+                let tokens = tokens.clone();
+                async move {
+                    match authorize(tokens.as_deref(), &req) {
+                        Ok(()) => next.run(req).await,
+                        Err(e) => e.into_response(),
+                    }
+                }
+            },
+        ))
         .layer(DefaultBodyLimit::max(limit))
         .layer(cors)
         .layer(tower_http::trace::TraceLayer::new_for_http())
@@ -130,6 +142,32 @@ pub fn app(state: AppState) -> Router {
 
 async fn no_route(uri: axum::http::Uri) -> ApiError {
     ApiError::no_route(uri.path())
+}
+
+/// With `--tokens`, every `/v1/…` request needs a valid bearer token (the page, its assets,
+/// `/healthz` and `/openapi.yaml` stay open).
+fn authorize(
+    tokens: Option<&super::auth::Tokens>,
+    req: &axum::extract::Request,
+) -> Result<(), ApiError> {
+    let Some(tokens) = tokens else {
+        return Ok(());
+    };
+    if !req.uri().path().starts_with("/v1/") {
+        return Ok(());
+    }
+    let presented = req
+        .headers()
+        .get(header::AUTHORIZATION)
+        .and_then(|v| v.to_str().ok())
+        .and_then(super::auth::bearer);
+    match presented {
+        None => Err(ApiError::unauthorized(
+            "this server requires a token: send Authorization: Bearer TOKEN",
+        )),
+        Some(t) if tokens.check(t).is_some() => Ok(()),
+        Some(_) => Err(ApiError::unauthorized("the token is not accepted")),
+    }
 }
 
 /// Request headers within `--max-header-bytes` and `--max-headers`, else 431 as a problem.
@@ -398,7 +436,11 @@ async fn submit_pga(State(s): State<AppState>, req: axum::extract::Request) -> A
 
 /// `DELETE /v1/jobs/{id}`: a finished job and its artifacts go (204); a job still queued or
 /// running is refused (409: cancel it first).
-async fn delete_kind(s: AppState, id: Result<Path<String>, PathRejection>, kind: JobKind) -> ApiResult {
+async fn delete_kind(
+    s: AppState,
+    id: Result<Path<String>, PathRejection>,
+    kind: JobKind,
+) -> ApiResult {
     let id = parse_id(id)?;
     load(&s, id, kind).await?;
     let store = s.core.store.clone();
@@ -424,11 +466,17 @@ async fn delete_kind(s: AppState, id: Result<Path<String>, PathRejection>, kind:
     }
 }
 
-async fn delete_job(State(s): State<AppState>, id: Result<Path<String>, PathRejection>) -> ApiResult {
+async fn delete_job(
+    State(s): State<AppState>,
+    id: Result<Path<String>, PathRejection>,
+) -> ApiResult {
     delete_kind(s, id, JobKind::Run).await
 }
 
-async fn delete_pga(State(s): State<AppState>, id: Result<Path<String>, PathRejection>) -> ApiResult {
+async fn delete_pga(
+    State(s): State<AppState>,
+    id: Result<Path<String>, PathRejection>,
+) -> ApiResult {
     delete_kind(s, id, JobKind::PgaSearch).await
 }
 
@@ -689,18 +737,19 @@ async fn get_histories(
         ));
     }
     let format = history_format(&query, &headers)?;
-    let every = match query.iter().find(|(k, _)| k == "every") {
-        None => 1u64,
-        Some((_, v)) => match v.parse::<u64>() {
-            Ok(n) if n >= 1 => n,
-            _ => {
-                return Err(ApiError::invalid_parameter(
+    let every =
+        match query.iter().find(|(k, _)| k == "every") {
+            None => 1u64,
+            Some((_, v)) => match v.parse::<u64>() {
+                Ok(n) if n >= 1 => n,
+                _ => return Err(ApiError::invalid_parameter(
                     "every",
-                    format!("every {v:?} is not a whole number ≥ 1 (keep every n-th recorded frame)"),
-                ))
-            }
-        },
-    };
+                    format!(
+                        "every {v:?} is not a whole number ≥ 1 (keep every n-th recorded frame)"
+                    ),
+                )),
+            },
+        };
     let mut blocks: Vec<String> = Vec::new();
     for (_, v) in query.iter().filter(|(k, _)| k == "block") {
         if !blocks.contains(v) {
@@ -778,7 +827,9 @@ async fn get_histories(
             }
             let json = blocking(move || {
                 let h = Histories::parse_csv(&text)?;
-                let h = h.select(&blocks).map_err(|b| format!("block {b:?} vanished"))?;
+                let h = h
+                    .select(&blocks)
+                    .map_err(|b| format!("block {b:?} vanished"))?;
                 Ok::<_, String>(h.to_json())
             })
             .await?
@@ -786,9 +837,8 @@ async fn get_histories(
             Ok(axum::Json(json).into_response())
         }
         HistoryFormat::Csv => {
-            let mut first = crate::record::histories::header_line(
-                selected.iter().map(|&k| ids[k].as_str()),
-            );
+            let mut first =
+                crate::record::histories::header_line(selected.iter().map(|&k| ids[k].as_str()));
             first.push('\n');
             let all = blocks.is_empty();
             let lines = reader.lines();
@@ -872,7 +922,10 @@ fn file_body(file: tokio::fs::File, start: u64, len: u64) -> Body {
                 Ok(0) => None,
                 Ok(n) => {
                     buf.truncate(n);
-                    Some((Ok(Bytes::from(buf)), (f, pos + n as u64, left - n as u64, true)))
+                    Some((
+                        Ok(Bytes::from(buf)),
+                        (f, pos + n as u64, left - n as u64, true),
+                    ))
                 }
                 Err(e) => Some((Err(e), (f, pos, 0, true))),
             }

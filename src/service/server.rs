@@ -46,6 +46,8 @@ pub struct ServerParams {
     /// service's own page is same-origin and needs none, and any other page open in a
     /// browser on the host must not be able to submit, read or delete jobs.
     pub cors_origins: Vec<String>,
+    /// Bearer tokens required on `/v1/…` (`--tokens`); `None`: no authentication.
+    pub tokens: Option<Arc<super::auth::Tokens>>,
 }
 
 impl Default for ServerParams {
@@ -58,6 +60,7 @@ impl Default for ServerParams {
             max_header_bytes: 32 * 1024,
             max_headers: 100,
             cors_origins: Vec::new(),
+            tokens: None,
         }
     }
 }

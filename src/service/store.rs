@@ -432,7 +432,14 @@ impl JobStore for SqliteStore {
                 "INSERT INTO jobs (id, kind, status, request, motion, created_ms)
                  SELECT ?1, ?2, 'queued', ?3, ?4, ?5
                  WHERE (SELECT COUNT(*) FROM jobs WHERE status = 'queued' AND parent IS NULL) < ?6",
-                params![job.id.to_string(), job.kind.as_str(), job.request.to_string(), job.motion.to_string(), now_ms(), max],
+                params![
+                    job.id.to_string(),
+                    job.kind.as_str(),
+                    job.request.to_string(),
+                    job.motion.to_string(),
+                    now_ms(),
+                    max
+                ],
             )?;
             if n == 1 {
                 return Ok(None);
@@ -450,7 +457,11 @@ impl JobStore for SqliteStore {
         self.write(|c| {
             let tx = c.transaction()?;
             let status: Option<String> = tx
-                .query_row("SELECT status FROM jobs WHERE id = ?1 AND parent IS NULL", params![id.to_string()], |r| r.get(0))
+                .query_row(
+                    "SELECT status FROM jobs WHERE id = ?1 AND parent IS NULL",
+                    params![id.to_string()],
+                    |r| r.get(0),
+                )
                 .optional()?;
             let Some(status) = status else {
                 return Ok(DeleteOutcome::NotFound);
@@ -459,7 +470,10 @@ impl JobStore for SqliteStore {
             if !status.is_terminal() {
                 return Ok(DeleteOutcome::NotFinished(status));
             }
-            tx.execute("DELETE FROM jobs WHERE parent = ?1 OR id = ?1", params![id.to_string()])?;
+            tx.execute(
+                "DELETE FROM jobs WHERE parent = ?1 OR id = ?1",
+                params![id.to_string()],
+            )?;
             tx.commit()?;
             Ok(DeleteOutcome::Deleted)
         })

@@ -259,7 +259,11 @@ impl Core {
         }
         let jobs = self.data_dir.join("jobs");
         let total = std::fs::read_dir(&jobs)
-            .map(|rd| rd.filter_map(Result::ok).map(|e| dir_bytes(&e.path())).sum())
+            .map(|rd| {
+                rd.filter_map(Result::ok)
+                    .map(|e| dir_bytes(&e.path()))
+                    .sum()
+            })
             .unwrap_or(0);
         if let Ok(mut g) = self.disk_used.lock() {
             *g = Some((Instant::now(), total));

@@ -200,6 +200,40 @@ def main():
     check(r.returncode != 0 and "--allow-insecure" in r.stderr,
           "serve --addr 0.0.0.0 without --allow-insecure is refused")
 
+    # --- 3. Access: with --tokens, /v1/ needs a bearer token (401 problem+json without one).
+    tokfile = os.path.join(tempfile.mkdtemp(), "tokens")
+    with open(tokfile, "w") as f:
+        f.write("# role token\nadmin hostile-suite-admin-token\n")
+    t = Server("--workers", "1", "--tokens", tokfile, runner="fake")
+    st, h, b = call(t, "GET", "/v1/jobs?limit=500")
+    check(st == 401 and problem(st, h, b)[0] and (h.get("www-authenticate") or "").startswith("Bearer"),
+          f"GET /v1/jobs without a token: 401 problem+json with WWW-Authenticate ({st})")
+    st, _, _ = call(t, "POST", "/v1/jobs", {"scene": column, "motion": pulse},
+                    headers={"Authorization": "Bearer not-the-right-token-at-all"})
+    check(st == 401, f"POST /v1/jobs with a wrong token: 401 ({st})")
+    st, _, _ = call(t, "POST", "/v1/jobs", {"scene": column, "motion": pulse},
+                    headers={"Authorization": "Bearer hostile-suite-admin-token"})
+    check(st == 202, f"POST /v1/jobs with a token of the file: 202 ({st})")
+    st, _, _ = call(t, "GET", "/healthz")
+    check(st == 200, f"/healthz stays open: {st}")
+    t.stop()
+    p = subprocess.Popen([BIN, "serve", "--addr", "0.0.0.0:0", "--tokens", tokfile, "--data", tempfile.mkdtemp()],
+                         stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    line = p.stdout.readline()
+    p.terminate()
+    p.wait(30)
+    check(line.startswith("ashlar serve: listening on"), "serve --addr 0.0.0.0 with --tokens starts")
+    origin_check = Server("--workers", "1", runner="fake")
+    req = urllib.request.Request(origin_check.addr + "/v1/jobs", method="OPTIONS",
+                                 headers={"Origin": "https://evil.example", "Access-Control-Request-Method": "POST"})
+    try:
+        with urllib.request.urlopen(req, timeout=10) as r:
+            allow = r.headers.get("access-control-allow-origin")
+    except urllib.error.HTTPError as e:
+        allow = e.headers.get("access-control-allow-origin")
+    check(allow is None, f"a preflight from https://evil.example is not allowed ({allow})")
+    origin_check.stop()
+
     s = Server("--workers", "1", "--max-queued-jobs", "20", "--max-job-seconds", "5",
                "--header-timeout", "2", "--body-timeout", "2", "--max-connections", "200")
     hz = Healthz(s)
