@@ -737,19 +737,20 @@ async fn get_histories(
         ));
     }
     let format = history_format(&query, &headers)?;
-    let every =
-        match query.iter().find(|(k, _)| k == "every") {
-            None => 1u64,
-            Some((_, v)) => match v.parse::<u64>() {
-                Ok(n) if n >= 1 => n,
-                _ => return Err(ApiError::invalid_parameter(
+    let every = match query.iter().find(|(k, _)| k == "every") {
+        None => 1u64,
+        Some((_, v)) => match v.parse::<u64>() {
+            Ok(n) if n >= 1 => n,
+            _ => {
+                return Err(ApiError::invalid_parameter(
                     "every",
                     format!(
                         "every {v:?} is not a whole number ≥ 1 (keep every n-th recorded frame)"
                     ),
-                )),
-            },
-        };
+                ))
+            }
+        },
+    };
     let mut blocks: Vec<String> = Vec::new();
     for (_, v) in query.iter().filter(|(k, _)| k == "block") {
         if !blocks.contains(v) {

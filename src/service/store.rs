@@ -874,7 +874,10 @@ mod tests {
             for _ in 0..12 {
                 sc.spawn(|| {
                     for _ in 0..5 {
-                        if s.insert_bounded(&job(JobKind::Run), 20).expect("insert") == None {
+                        if s.insert_bounded(&job(JobKind::Run), 20)
+                            .expect("insert")
+                            .is_none()
+                        {
                             accepted.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
                         }
                     }
