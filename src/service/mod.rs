@@ -4,6 +4,8 @@
 //! `routes` answers requests (async, no simulation work), `store` keeps every job durably,
 //! `worker` runs jobs on std threads through a `JobRunner`, `events` streams progress.
 pub mod artifacts;
+pub mod auth;
+pub mod budget;
 pub mod events;
 pub mod fake;
 pub mod histories;
@@ -12,6 +14,7 @@ pub mod pg_tls;
 pub mod problem;
 pub mod request;
 pub mod routes;
+pub mod server;
 pub mod store;
 pub mod templates;
 pub mod web;
@@ -67,6 +70,52 @@ pub struct ServeArgs {
     /// Most jobs waiting in the queue (503 with Retry-After beyond).
     #[arg(long, default_value_t = Limits::default().max_queued_jobs)]
     pub max_queued_jobs: u64,
+    /// Most blocks × steps of one run (422 beyond; see `GET /v1/limits`).
+    #[arg(long, default_value_t = Limits::default().max_block_steps)]
+    pub max_block_steps: u64,
+    /// Most blocks × recorded frames of one run (422 beyond).
+    #[arg(long, default_value_t = Limits::default().max_block_frames)]
+    pub max_block_frames: u64,
+    /// Most runs × blocks × steps of one PGA search (422 beyond).
+    #[arg(long, default_value_t = Limits::default().max_search_block_steps)]
+    pub max_search_block_steps: u64,
+    /// Most JSON values in a request body, counted while reading (422 beyond).
+    #[arg(long, default_value_t = Limits::default().max_json_values)]
+    pub max_json_values: usize,
+    /// Wall-clock seconds one job may run before it is stopped and failed.
+    #[arg(long, default_value_t = Limits::default().max_job_seconds)]
+    pub max_job_seconds: u64,
+    /// Bytes of artifacts one job may write before it is stopped and failed.
+    #[arg(long, default_value_t = Limits::default().max_job_artifact_bytes)]
+    pub max_job_artifact_bytes: u64,
+    /// Bytes of all jobs' artifacts under --data; submissions get 507 beyond.
+    #[arg(long, default_value_t = Limits::default().max_artifact_bytes)]
+    pub max_artifact_bytes: u64,
+    /// Open connections at once; more are closed on accept.
+    #[arg(long, default_value_t = server::ServerParams::default().max_connections)]
+    pub max_connections: usize,
+    /// Seconds a client has to send a request's headers.
+    #[arg(long, default_value_t = server::ServerParams::default().header_read_timeout.as_secs_f64())]
+    pub header_timeout: f64,
+    /// Seconds a client has to send a submission's body (408 beyond).
+    #[arg(long, default_value_t = server::ServerParams::default().body_read_timeout.as_secs_f64())]
+    pub body_timeout: f64,
+    /// Seconds a connection may stay with nothing read or written before it is closed.
+    #[arg(long, default_value_t = server::ServerParams::default().idle_timeout.as_secs_f64())]
+    pub idle_timeout: f64,
+    /// Require `Authorization: Bearer TOKEN` on every /v1/ request (401 without): a file of
+    /// lines `ROLE TOKEN` (ROLE user or admin; TOKEN the token, or `sha256:HEX` its digest).
+    #[arg(long, value_name = "FILE")]
+    pub tokens: Option<PathBuf>,
+    /// An origin whose web pages may call the API from a browser (CORS), repeatable; e.g.
+    /// `--cors-origin https://app.foxglove.dev` for the "open in Foxglove" link. None by default.
+    #[arg(long = "cors-origin", value_name = "ORIGIN")]
+    pub cors_origins: Vec<String>,
+    /// Listen on a non-loopback address although the service has no access control (anyone
+    /// who reaches the port can submit, read and delete jobs). Without it such an --addr is
+    /// refused.
+    #[arg(long)]
+    pub allow_insecure: bool,
     /// Seconds running jobs get to finish on SIGINT/SIGTERM before they are stopped and requeued.
     #[arg(long, default_value_t = 20.0)]
     pub shutdown_grace: f64,
@@ -132,6 +181,15 @@ pub struct Service {
 impl Service {
     /// Open the store (recovering jobs a dead server left running) and start the workers.
     pub fn start(config: ServiceConfig, runner: JobRunner) -> Result<Self, String> {
+        Self::start_with(config, runner, server::ServerParams::default())
+    }
+
+    /// [`Service::start`] with the HTTP server's limits (the routes read the body timeout).
+    pub fn start_with(
+        config: ServiceConfig,
+        runner: JobRunner,
+        server_params: server::ServerParams,
+    ) -> Result<Self, String> {
         let jobs_dir = config.data_dir.join("jobs");
         std::fs::create_dir_all(&jobs_dir)
             .map_err(|e| format!("--data {}: {e}", config.data_dir.display()))?;
@@ -174,6 +232,7 @@ impl Service {
             config.workers,
             runner,
         );
+        core.server = server_params;
         if let Some(url) = &config.artifacts {
             core.artifacts = Some(Arc::new(artifacts::ArtifactStore::open(url)?));
         }
@@ -262,7 +321,60 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
         max_record_samples: args.max_record_samples,
         max_total_steps: args.max_total_steps,
         max_queued_jobs: args.max_queued_jobs,
+        max_block_steps: args.max_block_steps,
+        max_block_frames: args.max_block_frames,
+        max_search_block_steps: args.max_search_block_steps,
+        max_json_values: args.max_json_values,
+        max_job_seconds: args.max_job_seconds,
+        max_job_artifact_bytes: args.max_job_artifact_bytes,
+        max_artifact_bytes: args.max_artifact_bytes,
         ..Limits::default()
+    };
+    let secs = |name: &str, v: f64| {
+        if v.is_finite() && (0.1..=86_400.0).contains(&v) {
+            Ok(Duration::from_secs_f64(v))
+        } else {
+            Err(format!(
+                "--{name} must be a number of seconds between 0.1 and 86400, got {v}"
+            ))
+        }
+    };
+    if args.max_connections == 0 {
+        return Err("--max-connections must be at least 1".into());
+    }
+    for o in &args.cors_origins {
+        let ok = (o.starts_with("https://") || o.starts_with("http://"))
+            && !o
+                .trim_end_matches('/')
+                .split("://")
+                .nth(1)
+                .unwrap_or("")
+                .contains('/')
+            && axum::http::HeaderValue::from_str(o).is_ok();
+        if !ok {
+            return Err(format!(
+                "--cors-origin {o:?}: expected an origin, scheme://host[:port], e.g. https://app.foxglove.dev"
+            ));
+        }
+    }
+    let tokens = args
+        .tokens
+        .as_deref()
+        .map(auth::Tokens::load)
+        .transpose()?
+        .map(Arc::new);
+    let server_params = server::ServerParams {
+        tokens,
+        cors_origins: args
+            .cors_origins
+            .iter()
+            .map(|o| o.trim_end_matches('/').to_string())
+            .collect(),
+        max_connections: args.max_connections,
+        header_read_timeout: secs("header-timeout", args.header_timeout)?,
+        body_read_timeout: secs("body-timeout", args.body_timeout)?,
+        idle_timeout: secs("idle-timeout", args.idle_timeout)?,
+        ..server::ServerParams::default()
     };
     if let Some(n) = args.workers {
         if n == 0 && config.postgres.is_none() {
@@ -295,7 +407,14 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
     let local = listener
         .local_addr()
         .map_err(|e| format!("--addr {}: {e}", args.addr))?;
-    let service = Service::start(config, runner)?;
+    if !local.ip().is_loopback() && server_params.tokens.is_none() && !args.allow_insecure {
+        return Err(format!(
+            "--addr {local} is reachable from other machines, and without --tokens anyone who reaches \
+             the port could submit, read and delete jobs. Give --tokens FILE, or pass --allow-insecure \
+             on a network you trust"
+        ));
+    }
+    let service = Service::start_with(config, runner, server_params.clone())?;
     let state = service.state();
     let signals = runtime.block_on(async { ShutdownSignals::register() });
     // One line on stdout that scripts (and the tests) read to find the port.
@@ -303,16 +422,15 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
     tracing::info!(%local, workers = state.core.params.workers, data = %args.data.display(), "listening");
     let served = runtime.block_on(async {
         let shutdown_state = state.clone();
-        axum::serve(listener, app(state))
-            .with_graceful_shutdown(async move {
-                signals.wait().await;
-                tracing::info!(
-                    "shutting down: no new jobs; running jobs get {} s",
-                    args.shutdown_grace
-                );
-                shutdown_state.core.begin_shutdown();
-            })
-            .await
+        server::serve(listener, app(state), server_params, async move {
+            signals.wait().await;
+            tracing::info!(
+                "shutting down: no new jobs; running jobs get {} s",
+                args.shutdown_grace
+            );
+            shutdown_state.core.begin_shutdown();
+        })
+        .await
     });
     let requeued = service.shutdown(Duration::from_secs_f64(args.shutdown_grace));
     runtime.shutdown_timeout(Duration::from_secs(1));

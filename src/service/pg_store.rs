@@ -365,6 +365,9 @@ fn migrate(c: &mut Client) -> Result<(), StoreError> {
     Ok(())
 }
 
+/// Advisory lock key serialising bounded inserts (`insert_bounded`): "ashlarQ" in ASCII.
+const QUEUE_LOCK: i64 = 0x61_73_68_6c_61_72_51;
+
 impl JobStore for PgStore {
     fn insert(&self, job: &NewJob) -> Result<(), StoreError> {
         self.with(|c| {
@@ -377,6 +380,54 @@ impl JobStore for PgStore {
             tx.execute("SELECT pg_notify($1, '')", &[&CHANNEL_WORK])?;
             tx.commit()?;
             Ok(())
+        })
+    }
+
+    fn insert_bounded(&self, job: &NewJob, max_queued: u64) -> Result<Option<u64>, StoreError> {
+        let max = i64::try_from(max_queued).unwrap_or(i64::MAX);
+        self.with(|c| {
+            let mut tx = c.transaction()?;
+            // Concurrent submissions (from every API process) take this lock in turn, so the
+            // count below cannot be stale when the row goes in; released at commit.
+            tx.execute("SELECT pg_advisory_xact_lock($1)", &[&QUEUE_LOCK])?;
+            let queued: i64 = tx
+                .query_one(
+                    "SELECT COUNT(*) FROM jobs WHERE status = 'queued' AND parent IS NULL",
+                    &[],
+                )?
+                .try_get(0)?;
+            if queued >= max {
+                return Ok(Some(u64::try_from(queued).unwrap_or(0)));
+            }
+            tx.execute(
+                "INSERT INTO jobs (id, kind, status, request, motion, created_ms) VALUES ($1, $2, 'queued', $3, $4, $5)",
+                &[&job.id, &job.kind.as_str(), &job.request.to_string(), &job.motion.to_string(), &now_ms()],
+            )?;
+            tx.execute("SELECT pg_notify($1, '')", &[&CHANNEL_WORK])?;
+            tx.commit()?;
+            Ok(None)
+        })
+    }
+
+    fn delete(&self, id: Uuid) -> Result<super::store::DeleteOutcome, StoreError> {
+        use super::store::DeleteOutcome;
+        self.with(|c| {
+            let mut tx = c.transaction()?;
+            let row = tx.query_opt(
+                "SELECT status FROM jobs WHERE id = $1 AND parent IS NULL FOR UPDATE",
+                &[&id],
+            )?;
+            let Some(row) = row else {
+                return Ok(DeleteOutcome::NotFound);
+            };
+            let status: String = row.try_get(0)?;
+            let status = parse_status(&status)?;
+            if !status.is_terminal() {
+                return Ok(DeleteOutcome::NotFinished(status));
+            }
+            tx.execute("DELETE FROM jobs WHERE parent = $1 OR id = $1", &[&id])?;
+            tx.commit()?;
+            Ok(DeleteOutcome::Deleted)
         })
     }
 

@@ -249,6 +249,62 @@ impl ApiError {
         e
     }
 
+    /// No valid bearer token (`ashlar serve --tokens`): 401 with `WWW-Authenticate: Bearer`.
+    pub fn unauthorized(detail: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::UNAUTHORIZED,
+            "unauthorized",
+            "Authentication required",
+            detail,
+        )
+        .with_parameter("Authorization")
+    }
+
+    /// The body did not arrive within `--body-timeout`.
+    pub fn request_timeout(secs: f64) -> Self {
+        Self::new(
+            StatusCode::REQUEST_TIMEOUT,
+            "request-timeout",
+            "Request body too slow",
+            format!(
+                "the request body did not arrive within {secs} s (ashlar serve --body-timeout)"
+            ),
+        )
+        .with_pointer("")
+    }
+
+    /// A quota of queued work is used up (429, with Retry-After).
+    pub fn quota_exceeded(detail: impl Into<String>, retry_after: u32) -> Self {
+        let mut e = Self::new(
+            StatusCode::TOO_MANY_REQUESTS,
+            "quota-exceeded",
+            "Quota of queued work exceeded",
+            detail,
+        );
+        e.retry_after = Some(retry_after);
+        e
+    }
+
+    /// The artifact disk quota is used up (507) until jobs are deleted.
+    pub fn insufficient_storage(detail: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::INSUFFICIENT_STORAGE,
+            "insufficient-storage",
+            "Artifact storage quota exceeded",
+            detail,
+        )
+    }
+
+    /// Request headers over `--max-header-bytes` or too many of them (431).
+    pub fn headers_too_large(detail: impl Into<String>) -> Self {
+        Self::new(
+            StatusCode::REQUEST_HEADER_FIELDS_TOO_LARGE,
+            "header-fields-too-large",
+            "Request header fields too large",
+            detail,
+        )
+    }
+
     /// An internal failure: `cause` goes to the log, the client gets a generic message.
     pub fn internal(cause: impl std::fmt::Display) -> Self {
         tracing::error!(%cause, "internal error");
@@ -293,6 +349,12 @@ impl IntoResponse for ApiError {
             header::CONTENT_TYPE,
             HeaderValue::from_static("application/problem+json"),
         );
+        if self.status == StatusCode::UNAUTHORIZED {
+            resp.headers_mut().insert(
+                header::WWW_AUTHENTICATE,
+                HeaderValue::from_static("Bearer realm=\"ashlar\""),
+            );
+        }
         if let Some(s) = self.retry_after {
             resp.headers_mut()
                 .insert(header::RETRY_AFTER, HeaderValue::from(s));

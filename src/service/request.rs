@@ -34,8 +34,32 @@ pub struct Limits {
     pub max_block_vertices: usize,
     /// Coarse scan points of a PGA search (each one a full run).
     pub max_scan_points: usize,
-    /// Jobs waiting in the queue; beyond it submissions get 503 with Retry-After.
+    /// Jobs waiting in the queue (submitted jobs and searches, not a search's own runs);
+    /// beyond it submissions get 429 with Retry-After. Checked in the insert's transaction.
     pub max_queued_jobs: u64,
+    /// Work of one run, blocks × nominal steps. 1e9 is 200 000 steps (200 s at 1 ms) of a
+    /// 5000-block façade or the whole step limit for 500 blocks: minutes to hours of CPU. The
+    /// bundled examples and the study scenes need less than 1e7.
+    pub max_block_steps: u64,
+    /// Output of one run, blocks × recorded frames: what the MCAP and histories grow with
+    /// (about 100 bytes each). 2e7 is ~2 GB at most; the examples record under 1e4.
+    pub max_block_frames: u64,
+    /// Work of one PGA search, runs × blocks × steps (runs: records × (scan points + the
+    /// bisections down to the tolerance)). 1e10 is ten single-run budgets.
+    pub max_search_block_steps: u64,
+    /// JSON values (numbers, strings, objects, …) in a request body, counted while reading:
+    /// a parsed value costs 30–100 bytes of memory whatever its text length, so this bounds
+    /// what a body can make the server allocate (~200 MB at 2e6). A 1 000 000-sample record
+    /// sent as an array fits; longer records go as text (`format`/`content`).
+    pub max_json_values: usize,
+    /// Wall-clock seconds one job may run before it is stopped and failed (a search counts as
+    /// one job). 6 h: far beyond any bundled example (seconds), short of a runaway.
+    pub max_job_seconds: u64,
+    /// Bytes one job may write to its artifact directory before it is stopped and failed.
+    pub max_job_artifact_bytes: u64,
+    /// Bytes of all jobs' artifacts under `--data`; beyond it submissions get 507 until jobs
+    /// are deleted (`DELETE /v1/jobs/{id}`).
+    pub max_artifact_bytes: u64,
 }
 
 impl Default for Limits {
@@ -48,6 +72,13 @@ impl Default for Limits {
             max_block_vertices: 1000,
             max_scan_points: 64,
             max_queued_jobs: 100_000,
+            max_block_steps: 1_000_000_000,
+            max_block_frames: 20_000_000,
+            max_search_block_steps: 10_000_000_000,
+            max_json_values: 2_000_000,
+            max_job_seconds: 6 * 3600,
+            max_job_artifact_bytes: 4 << 30,
+            max_artifact_bytes: 50 << 30,
         }
     }
 }
@@ -358,6 +389,7 @@ fn scene_and_motion(
 ) -> Result<(Scene, GroundMotion), ApiError> {
     check_shapes(scene, motion)?;
     check_sizes(scene, motion, limits)?;
+    super::budget::check_ranges(scene)?;
     if let Some(n) = scene.get("blocks").and_then(Value::as_array).map(Vec::len) {
         if n > limits.max_blocks {
             return Err(ApiError::limit_exceeded(
@@ -396,30 +428,35 @@ fn scene_and_motion(
             ))
         }
     };
-    let frames = (duration / scene.control.output_interval).ceil();
-    if frames.is_nan() || frames > limits.max_total_steps as f64 {
-        return Err(ApiError::limit_exceeded(
-            "/scene/control/output_interval",
-            format!(
-                "/scene/control/output_interval: {} s recorded every {} s is {frames:.0} frames, over the server's \
-                 limit of {} (ashlar serve --max-total-steps)",
-                crate::quantity::sig(duration),
-                scene.control.output_interval, limits.max_total_steps
-            ),
-        ));
-    }
     let steps = (duration / scene.control.time_step).ceil();
     if steps.is_nan() || steps > limits.max_total_steps as f64 {
         return Err(ApiError::limit_exceeded(
             "/scene/control/duration",
             format!(
-                "/scene/control/duration: {} s at a time step of {} s is {steps:.0} steps, over the server's limit of {} \
+                "/scene/control/duration: {} s at a time step of {} s is {} steps, over the server's limit of {} \
                  (ashlar serve --max-total-steps); shorten the duration or lengthen control.time_step",
-                crate::quantity::sig(duration),
-                scene.control.time_step, limits.max_total_steps
+                super::budget::num(duration),
+                super::budget::num(scene.control.time_step),
+                super::budget::num(steps),
+                limits.max_total_steps
             ),
         ));
     }
+    let frames = (duration / scene.control.output_interval).ceil();
+    if frames.is_nan() || frames > limits.max_total_steps as f64 {
+        return Err(ApiError::limit_exceeded(
+            "/scene/control/output_interval",
+            format!(
+                "/scene/control/output_interval: {} s recorded every {} s is {} frames, over the server's \
+                 limit of {} (ashlar serve --max-total-steps)",
+                super::budget::num(duration),
+                super::budget::num(scene.control.output_interval),
+                super::budget::num(frames),
+                limits.max_total_steps
+            ),
+        ));
+    }
+    super::budget::check_run_work(scene.blocks.len(), steps, frames, limits)?;
     scene.control.max_steps = scene
         .control
         .max_steps
@@ -595,6 +632,18 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
             ),
         ));
     }
+    let runs = super::budget::search_runs(records.len(), scan_points, max - min, tolerance);
+    // The longest record sets the length of every run (a scene's own duration overrides it).
+    let duration = scene.control.duration.unwrap_or_else(|| {
+        records
+            .iter()
+            .map(|(_, m)| m)
+            .chain(std::iter::once(&motion))
+            .filter_map(|m| m.duration().map(|d| d + 2.0))
+            .fold(0.0, f64::max)
+    });
+    let steps = (duration / scene.control.time_step).ceil();
+    super::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
     let request = PgaRequest {
         criteria,
         combine,

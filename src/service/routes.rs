@@ -4,16 +4,16 @@ use super::events::{job_stream, EventParams, JobEvent};
 use super::histories::Histories;
 use super::problem::ApiError;
 use super::request::{json_body, parse_pga, parse_run};
-use super::store::{rfc3339, CancelOutcome, JobKind, JobRecord, JobStatus, NewJob};
+use super::store::{rfc3339, CancelOutcome, DeleteOutcome, JobKind, JobRecord, JobStatus, NewJob};
 use super::web;
 use super::worker::Core;
 use axum::body::{Body, Bytes};
-use axum::extract::rejection::{BytesRejection, PathRejection, QueryRejection};
+use axum::extract::rejection::{PathRejection, QueryRejection};
 use axum::extract::{DefaultBodyLimit, Path, Query, State};
 use axum::http::{header, HeaderMap, HeaderValue, Method, StatusCode};
 use axum::response::sse::{KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
-use axum::routing::{get, post, MethodRouter};
+use axum::routing::{delete, get, post, MethodRouter};
 use axum::Router;
 use serde_json::{json, Value};
 use std::sync::atomic::Ordering;
@@ -46,6 +46,9 @@ pub fn route_table() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
         ),
         (Method::GET, "/v1/jobs/{id}/events", get(job_events)),
         (Method::POST, "/v1/jobs/{id}/cancel", post(cancel_job)),
+        (Method::DELETE, "/v1/jobs/{id}", delete(delete_job)),
+        (Method::DELETE, "/v1/pga-searches/{id}", delete(delete_pga)),
+        (Method::GET, "/v1/limits", get(get_limits)),
         (Method::POST, "/v1/pga-searches", post(submit_pga)),
         (Method::GET, "/v1/pga-searches/{id}", get(get_pga)),
         (Method::GET, "/v1/pga-searches/{id}/events", get(pga_events)),
@@ -93,9 +96,16 @@ pub fn app(state: AppState) -> Router {
         router = router.route(path, handler);
     }
     let limit = state.core.limits.max_body_bytes;
+    let origins: Vec<HeaderValue> = state
+        .core
+        .server
+        .cors_origins
+        .iter()
+        .filter_map(|o| HeaderValue::from_str(o).ok())
+        .collect();
     let cors = tower_http::cors::CorsLayer::new()
-        .allow_origin(tower_http::cors::Any)
-        .allow_methods([Method::GET, Method::POST])
+        .allow_origin(tower_http::cors::AllowOrigin::list(origins))
+        .allow_methods([Method::GET, Method::POST, Method::DELETE])
         .allow_headers(tower_http::cors::Any)
         .expose_headers([
             header::CONTENT_RANGE,
@@ -103,9 +113,33 @@ pub fn app(state: AppState) -> Router {
             header::CONTENT_LENGTH,
             header::LOCATION,
         ]);
+    let header_limits = state.core.server.clone();
+    let tokens = state.core.server.tokens.clone();
     router
         .fallback(no_route)
         .layer(axum::middleware::map_response(problem_for_bare_errors))
+        .layer(axum::middleware::from_fn(
+            move |req: axum::extract::Request, next: axum::middleware::Next| {
+                let limits = header_limits.clone();
+                async move {
+                    match check_headers(req.headers(), &limits) {
+                        Ok(()) => next.run(req).await,
+                        Err(e) => e.into_response(),
+                    }
+                }
+            },
+        ))
+        .layer(axum::middleware::from_fn(
+            move |req: axum::extract::Request, next: axum::middleware::Next| {
+                let tokens = tokens.clone();
+                async move {
+                    match authorize(tokens.as_deref(), &req) {
+                        Ok(()) => next.run(req).await,
+                        Err(e) => e.into_response(),
+                    }
+                }
+            },
+        ))
         .layer(DefaultBodyLimit::max(limit))
         .layer(cors)
         .layer(tower_http::trace::TraceLayer::new_for_http())
@@ -116,25 +150,96 @@ async fn no_route(uri: axum::http::Uri) -> ApiError {
     ApiError::no_route(uri.path())
 }
 
-/// axum answers a wrong method with a bare 405; give it a problem body (keeping `Allow`).
-async fn problem_for_bare_errors(resp: Response) -> Response {
+/// With `--tokens`, every `/v1/…` request needs a valid bearer token (the page, its assets,
+/// `/healthz` and `/openapi.yaml` stay open).
+fn authorize(
+    tokens: Option<&super::auth::Tokens>,
+    req: &axum::extract::Request,
+) -> Result<(), ApiError> {
+    let Some(tokens) = tokens else {
+        return Ok(());
+    };
+    if !req.uri().path().starts_with("/v1/") {
+        return Ok(());
+    }
+    let presented = req
+        .headers()
+        .get(header::AUTHORIZATION)
+        .and_then(|v| v.to_str().ok())
+        .and_then(super::auth::bearer);
+    match presented {
+        None => Err(ApiError::unauthorized(
+            "this server requires a token: send Authorization: Bearer TOKEN",
+        )),
+        Some(t) if tokens.check(t).is_some() => Ok(()),
+        Some(_) => Err(ApiError::unauthorized("the token is not accepted")),
+    }
+}
+
+/// Request headers within `--max-header-bytes` and `--max-headers`, else 431 as a problem.
+fn check_headers(
+    headers: &HeaderMap,
+    limits: &super::server::ServerParams,
+) -> Result<(), ApiError> {
+    let n = headers.len();
+    let bytes: usize = headers
+        .iter()
+        .map(|(k, v)| k.as_str().len() + v.len() + 4)
+        .sum();
+    if n > limits.max_headers || bytes > limits.max_header_bytes {
+        return Err(ApiError::headers_too_large(format!(
+            "the request has {n} header fields, {bytes} bytes; the server takes at most {} fields and {} bytes",
+            limits.max_headers, limits.max_header_bytes
+        )));
+    }
+    Ok(())
+}
+
+/// The methods routed at a concrete path (templates' `{x}` match one segment).
+fn methods_at(path: &str) -> Vec<Method> {
+    let segs: Vec<&str> = path.trim_end_matches('/').split('/').collect();
+    route_table()
+        .into_iter()
+        .filter(|(_, t, _)| {
+            let ts: Vec<&str> = t.split('/').collect();
+            ts.len() == segs.len()
+                && ts
+                    .iter()
+                    .zip(&segs)
+                    .all(|(t, s)| t == s || (t.starts_with('{') && !s.is_empty()))
+        })
+        .map(|(m, _, _)| m)
+        .collect()
+}
+
+/// axum answers a wrong method with a bare 405; give it a problem body naming the methods
+/// the path takes (and an `Allow` header listing them).
+async fn problem_for_bare_errors(uri: axum::http::Uri, resp: Response) -> Response {
     if resp.status() == StatusCode::METHOD_NOT_ALLOWED
         && !resp.headers().contains_key(header::CONTENT_TYPE)
     {
-        let allow = resp.headers().get(header::ALLOW).cloned();
+        let mut methods: Vec<String> = methods_at(uri.path())
+            .iter()
+            .map(|m| m.as_str().to_string())
+            .collect();
+        if methods.iter().any(|m| m == "GET") {
+            methods.push("HEAD".into());
+        }
+        methods.dedup();
+        let allow = methods.join(", ");
         let body = json!({
             "type": "urn:ashlar:problem:method-not-allowed",
             "title": "Method not allowed",
             "status": 405,
-            "detail": format!("this endpoint does not support that method; allowed: {}",
-                allow.as_ref().and_then(|a| a.to_str().ok()).unwrap_or("see /openapi.yaml")),
+            "detail": format!("{} takes {}", uri.path(),
+                if allow.is_empty() { "no method here (see /openapi.yaml)".to_string() } else { allow.clone() }),
         });
         let mut out = (StatusCode::METHOD_NOT_ALLOWED, body.to_string()).into_response();
         out.headers_mut().insert(
             header::CONTENT_TYPE,
             HeaderValue::from_static("application/problem+json"),
         );
-        if let Some(a) = allow {
+        if let Ok(a) = HeaderValue::from_str(&allow) {
             out.headers_mut().insert(header::ALLOW, a);
         }
         return out;
@@ -214,12 +319,54 @@ fn links(kind: JobKind, id: Uuid) -> Value {
     }
 }
 
-async fn submit(
-    state: AppState,
-    headers: HeaderMap,
-    body: Result<Bytes, BytesRejection>,
-    kind: JobKind,
-) -> ApiResult {
+/// Read a submission's body: refused with 413 while reading once it passes
+/// `--max-body-bytes` (at once when Content-Length says so), 408 when it does not arrive within
+/// `--body-timeout`. A large body first waits for one of the few large-body slots.
+async fn read_body(
+    core: &Core,
+    req: axum::extract::Request,
+) -> Result<(Bytes, Option<tokio::sync::OwnedSemaphorePermit>), ApiError> {
+    let limit = core.limits.max_body_bytes;
+    let declared = req
+        .headers()
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.trim().parse::<u64>().ok());
+    if declared.is_some_and(|n| n > limit as u64) {
+        return Err(ApiError::payload_too_large(limit));
+    }
+    let timeout = core.server.body_read_timeout;
+    let permit = if declared.is_none_or(|n| n > super::worker::LARGE_BODY_BYTES) {
+        let slot = tokio::time::timeout(timeout, core.large_bodies.clone().acquire_owned()).await;
+        match slot {
+            Ok(Ok(p)) => Some(p),
+            _ => {
+                return Err(ApiError::unavailable(
+                    "too many large submissions are being read at once; retry shortly",
+                    5,
+                ))
+            }
+        }
+    } else {
+        None
+    };
+    let body = req.into_body();
+    match tokio::time::timeout(timeout, axum::body::to_bytes(body, limit)).await {
+        Err(_) => Err(ApiError::request_timeout(timeout.as_secs_f64())),
+        Ok(Ok(b)) => Ok((b, permit)),
+        Ok(Err(e)) => {
+            let too_large = std::error::Error::source(&e)
+                .is_some_and(|s| s.is::<http_body_util::LengthLimitError>());
+            if too_large {
+                Err(ApiError::payload_too_large(limit))
+            } else {
+                Err(ApiError::malformed_json(format!("reading the body: {e}")).with_pointer(""))
+            }
+        }
+    }
+}
+
+async fn submit(state: AppState, req: axum::extract::Request, kind: JobKind) -> ApiResult {
     let core = state.core.clone();
     if core.shutting_down.load(Ordering::SeqCst) {
         return Err(ApiError::unavailable(
@@ -227,18 +374,15 @@ async fn submit(
             5,
         ));
     }
-    check_json_content_type(&headers)?;
-    let bytes = body.map_err(|e| {
-        if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
-            ApiError::payload_too_large(core.limits.max_body_bytes)
-        } else {
-            ApiError::malformed_json(e.body_text()).with_pointer("")
-        }
-    })?;
+    check_json_content_type(req.headers())?;
+    let (bytes, permit) = read_body(&core, req).await?;
     let limits = core.limits.clone();
-    // Parsing an embedded record can take milliseconds: off the async threads.
+    // Parsing an embedded record can take milliseconds: off the async threads. The pre-scan
+    // refuses an oversized document before it is built in memory.
     let parsed = blocking(move || {
+        super::budget::prescan(&bytes, &limits)?;
         let value = json_body(&bytes)?;
+        drop(bytes);
         let parsed = match kind {
             JobKind::Run => parse_run(&value, &limits)?,
             JobKind::PgaSearch | JobKind::PgaRun => parse_pga(&value, &limits)?,
@@ -246,7 +390,17 @@ async fn submit(
         Ok::<_, ApiError>((value, parsed.motion_summary))
     })
     .await??;
+    drop(permit);
     let (request, motion) = parsed;
+    let c = core.clone();
+    let used = blocking(move || c.artifact_bytes()).await?;
+    if used >= core.limits.max_artifact_bytes {
+        return Err(ApiError::insufficient_storage(format!(
+            "the server's artifacts take {used} bytes, at its quota of {} (ashlar serve --max-artifact-bytes); \
+             delete finished jobs (DELETE /v1/jobs/{{id}}) to make room",
+            core.limits.max_artifact_bytes
+        )));
+    }
     let id = Uuid::new_v4();
     let job = NewJob {
         id,
@@ -256,20 +410,17 @@ async fn submit(
     };
     let store = core.store.clone();
     let max_queued = core.limits.max_queued_jobs;
-    blocking(move || {
-        let counts = store.counts().map_err(ApiError::internal)?;
-        if counts.queued >= max_queued {
-            return Err(ApiError::unavailable(
-                format!(
-                    "the queue is full ({} jobs waiting, limit {max_queued}); retry later",
-                    counts.queued
-                ),
-                30,
-            ));
-        }
-        store.insert(&job).map_err(ApiError::internal)
-    })
-    .await??;
+    let refused = blocking(move || store.insert_bounded(&job, max_queued))
+        .await?
+        .map_err(ApiError::internal)?;
+    if let Some(queued) = refused {
+        return Err(ApiError::quota_exceeded(
+            format!(
+                "the queue is full: {queued} jobs waiting, limit {max_queued} (ashlar serve --max-queued-jobs); retry later"
+            ),
+            30,
+        ));
+    }
     core.notify_work();
     let location = format!("{}/{id}", base(kind));
     let body =
@@ -281,20 +432,89 @@ async fn submit(
     Ok(resp)
 }
 
-async fn submit_job(
-    State(s): State<AppState>,
-    headers: HeaderMap,
-    body: Result<Bytes, BytesRejection>,
-) -> ApiResult {
-    submit(s, headers, body, JobKind::Run).await
+async fn submit_job(State(s): State<AppState>, req: axum::extract::Request) -> ApiResult {
+    submit(s, req, JobKind::Run).await
 }
 
-async fn submit_pga(
-    State(s): State<AppState>,
-    headers: HeaderMap,
-    body: Result<Bytes, BytesRejection>,
+async fn submit_pga(State(s): State<AppState>, req: axum::extract::Request) -> ApiResult {
+    submit(s, req, JobKind::PgaSearch).await
+}
+
+/// `DELETE /v1/jobs/{id}`: a finished job and its artifacts go (204); a job still queued or
+/// running is refused (409: cancel it first).
+async fn delete_kind(
+    s: AppState,
+    id: Result<Path<String>, PathRejection>,
+    kind: JobKind,
 ) -> ApiResult {
-    submit(s, headers, body, JobKind::PgaSearch).await
+    let id = parse_id(id)?;
+    load(&s, id, kind).await?;
+    let store = s.core.store.clone();
+    let outcome = blocking(move || store.delete(id))
+        .await?
+        .map_err(ApiError::internal)?;
+    match outcome {
+        DeleteOutcome::NotFound => Err(ApiError::not_found("job", id)),
+        DeleteOutcome::NotFinished(st) => Err(ApiError::conflict(format!(
+            "the job is {}; cancel it first (POST …/cancel), then delete it once it has ended",
+            st.as_str()
+        ))),
+        DeleteOutcome::Deleted => {
+            let dir = s.core.job_dir(id);
+            if let Err(e) = tokio::fs::remove_dir_all(&dir).await {
+                if e.kind() != std::io::ErrorKind::NotFound {
+                    tracing::warn!(dir = %dir.display(), error = %e, "removing a deleted job's artifacts");
+                }
+            }
+            s.core.forget_artifact_bytes();
+            Ok(StatusCode::NO_CONTENT.into_response())
+        }
+    }
+}
+
+async fn delete_job(
+    State(s): State<AppState>,
+    id: Result<Path<String>, PathRejection>,
+) -> ApiResult {
+    delete_kind(s, id, JobKind::Run).await
+}
+
+async fn delete_pga(
+    State(s): State<AppState>,
+    id: Result<Path<String>, PathRejection>,
+) -> ApiResult {
+    delete_kind(s, id, JobKind::PgaSearch).await
+}
+
+/// `GET /v1/limits`: the server's limits, so that a client can check a job before sending it.
+async fn get_limits(State(s): State<AppState>) -> ApiResult {
+    let l = &s.core.limits;
+    let p = &s.core.server;
+    let body = json!({
+        "max_body_bytes": l.max_body_bytes,
+        "max_json_values": l.max_json_values,
+        "max_blocks": l.max_blocks,
+        "max_block_vertices": l.max_block_vertices,
+        "max_record_samples": l.max_record_samples,
+        "max_total_steps": l.max_total_steps,
+        "max_block_steps": l.max_block_steps,
+        "max_block_frames": l.max_block_frames,
+        "max_search_block_steps": l.max_search_block_steps,
+        "max_scan_points": l.max_scan_points,
+        "max_records": super::request::MAX_RECORDS,
+        "max_queued_jobs": l.max_queued_jobs,
+        "max_job_seconds": l.max_job_seconds,
+        "max_job_artifact_bytes": l.max_job_artifact_bytes,
+        "max_artifact_bytes": l.max_artifact_bytes,
+        "max_connections": p.max_connections,
+        "header_timeout_s": p.header_read_timeout.as_secs_f64(),
+        "body_timeout_s": p.body_read_timeout.as_secs_f64(),
+        "idle_timeout_s": p.idle_timeout.as_secs_f64(),
+        "max_header_bytes": p.max_header_bytes,
+        "max_headers": p.max_headers,
+        "ranges": super::budget::ranges_json(),
+    });
+    Ok(axum::Json(body).into_response())
 }
 
 pub(super) fn job_json(j: &JobRecord) -> String {
@@ -497,32 +717,58 @@ fn history_format(
     )))
 }
 
+/// Largest history (bytes of `histories.csv`, after `every`) answered as JSON: the JSON form is
+/// built in memory (~3× the text). Larger ones come as CSV, which is streamed.
+pub const MAX_JSON_HISTORY_BYTES: u64 = 32 << 20;
+
+/// Bytes per chunk of a streamed file or history.
+const CHUNK: usize = 64 * 1024;
+
 async fn get_histories(
     State(s): State<AppState>,
     id: Result<Path<String>, PathRejection>,
     query: Result<Query<Vec<(String, String)>>, QueryRejection>,
     headers: HeaderMap,
 ) -> ApiResult {
+    use tokio::io::AsyncBufReadExt;
     let id = parse_id(id)?;
     let Query(query) = query.map_err(|e| ApiError::invalid_parameter("query", e.body_text()))?;
-    if let Some((k, _)) = query.iter().find(|(k, _)| k != "format" && k != "block") {
+    if let Some((k, _)) = query
+        .iter()
+        .find(|(k, _)| k != "format" && k != "block" && k != "every")
+    {
         return Err(ApiError::invalid_parameter(
             k.clone(),
-            format!("unknown query parameter {k:?} (known: block, format)"),
+            format!("unknown query parameter {k:?} (known: block, format, every)"),
         ));
     }
     let format = history_format(&query, &headers)?;
-    let blocks: Vec<String> = query
-        .iter()
-        .filter(|(k, _)| k == "block")
-        .map(|(_, v)| v.clone())
-        .collect();
+    let every = match query.iter().find(|(k, _)| k == "every") {
+        None => 1u64,
+        Some((_, v)) => match v.parse::<u64>() {
+            Ok(n) if n >= 1 => n,
+            _ => {
+                return Err(ApiError::invalid_parameter(
+                    "every",
+                    format!(
+                        "every {v:?} is not a whole number ≥ 1 (keep every n-th recorded frame)"
+                    ),
+                ))
+            }
+        },
+    };
+    let mut blocks: Vec<String> = Vec::new();
+    for (_, v) in query.iter().filter(|(k, _)| k == "block") {
+        if !blocks.contains(v) {
+            blocks.push(v.clone());
+        }
+    }
     let j = load(&s, id, JobKind::Run).await?;
     artifact_available(&j, "histories")?;
     super::artifacts::ensure_local(&s.core, id, "histories.csv").await;
     let path = s.core.job_dir(id).join("histories.csv");
-    let text = match tokio::fs::read_to_string(&path).await {
-        Ok(t) => t,
+    let file = match tokio::fs::File::open(&path).await {
+        Ok(f) => f,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             return Err(ApiError::conflict(
                 "the job finished without recording histories",
@@ -530,27 +776,169 @@ async fn get_histories(
         }
         Err(e) => return Err(ApiError::internal(format!("{}: {e}", path.display()))),
     };
-    let h = blocking(move || Histories::parse_csv(&text))
-        .await?
-        .map_err(ApiError::internal)?;
-    let known = h.block_ids().collect::<Vec<_>>().join(", ");
-    let h = h.select(&blocks).map_err(|unknown| {
-        ApiError::not_found_parameter(
-            "block",
-            format!("the job has no history for block {unknown:?} (it has: {known})"),
-        )
-    })?;
-    Ok(match format {
-        HistoryFormat::Json => axum::Json(h.to_json()).into_response(),
+    let size = file
+        .metadata()
+        .await
+        .map_err(|e| ApiError::internal(format!("{}: {e}", path.display())))?
+        .len();
+    let mut reader = tokio::io::BufReader::with_capacity(CHUNK, file);
+    let mut header = String::new();
+    reader
+        .read_line(&mut header)
+        .await
+        .map_err(|e| ApiError::internal(format!("{}: {e}", path.display())))?;
+    let head = Histories::parse_csv(header.trim_end()).map_err(ApiError::internal)?;
+    let ids: Vec<String> = head.block_ids().map(str::to_string).collect();
+    let mut selected: Vec<usize> = Vec::new();
+    for b in &blocks {
+        match ids.iter().position(|i| i == b) {
+            Some(k) => selected.push(k),
+            None => {
+                return Err(ApiError::not_found_parameter(
+                    "block",
+                    format!(
+                        "the job has no history for block {b:?} (it has: {})",
+                        ids.join(", ")
+                    ),
+                ))
+            }
+        }
+    }
+    if blocks.is_empty() {
+        selected = (0..ids.len()).collect();
+    }
+    match format {
+        HistoryFormat::Json => {
+            if size / every > MAX_JSON_HISTORY_BYTES {
+                return Err(ApiError::not_acceptable(format!(
+                    "these histories are {size} bytes of CSV; JSON is offered up to {MAX_JSON_HISTORY_BYTES} bytes \
+                     (after ?every=N). Ask for format=csv (streamed), a larger ?every, or fewer ?block="
+                )));
+            }
+            let mut text = header.clone();
+            let mut lines = reader.lines();
+            let mut row = 0u64;
+            while let Some(line) = lines
+                .next_line()
+                .await
+                .map_err(|e| ApiError::internal(format!("{}: {e}", path.display())))?
+            {
+                if line.trim().is_empty() {
+                    continue;
+                }
+                if row % every == 0 {
+                    text.push_str(&line);
+                    text.push('\n');
+                }
+                row += 1;
+            }
+            let json = blocking(move || {
+                let h = Histories::parse_csv(&text)?;
+                let h = h
+                    .select(&blocks)
+                    .map_err(|b| format!("block {b:?} vanished"))?;
+                Ok::<_, String>(h.to_json())
+            })
+            .await?
+            .map_err(ApiError::internal)?;
+            Ok(axum::Json(json).into_response())
+        }
         HistoryFormat::Csv => {
-            let mut r = h.to_csv().into_response();
+            let mut first =
+                crate::record::histories::header_line(selected.iter().map(|&k| ids[k].as_str()));
+            first.push('\n');
+            let all = blocks.is_empty();
+            let lines = reader.lines();
+            let stream = futures_util::stream::unfold(
+                (lines, Some(first), 0u64, false),
+                move |(mut lines, mut pending, mut row, mut done)| {
+                    let selected = selected.clone();
+                    async move {
+                        if done {
+                            return None;
+                        }
+                        let mut out = pending.take().unwrap_or_default();
+                        while out.len() < CHUNK {
+                            match lines.next_line().await {
+                                Ok(Some(line)) => {
+                                    if line.trim().is_empty() {
+                                        continue;
+                                    }
+                                    let keep = row % every == 0;
+                                    row += 1;
+                                    if !keep {
+                                        continue;
+                                    }
+                                    if all {
+                                        out.push_str(&line);
+                                    } else {
+                                        let vals: Vec<&str> = line.split(',').collect();
+                                        out.push_str(vals.first().copied().unwrap_or(""));
+                                        for &k in &selected {
+                                            for c in 1 + 3 * k..4 + 3 * k {
+                                                out.push(',');
+                                                out.push_str(vals.get(c).copied().unwrap_or(""));
+                                            }
+                                        }
+                                    }
+                                    out.push('\n');
+                                }
+                                Ok(None) => {
+                                    done = true;
+                                    break;
+                                }
+                                Err(e) => {
+                                    return Some((Err(e), (lines, None, row, true)));
+                                }
+                            }
+                        }
+                        if out.is_empty() {
+                            return None;
+                        }
+                        Some((Ok(Bytes::from(out)), (lines, None, row, done)))
+                    }
+                },
+            );
+            let mut r = Body::from_stream(stream).into_response();
             r.headers_mut().insert(
                 header::CONTENT_TYPE,
                 HeaderValue::from_static("text/csv; charset=utf-8"),
             );
-            r
+            Ok(r)
         }
-    })
+    }
+}
+
+/// `len` bytes of `file` from `start`, read and sent in chunks of [`CHUNK`]: memory stays
+/// one chunk per response whatever the file's size.
+fn file_body(file: tokio::fs::File, start: u64, len: u64) -> Body {
+    use tokio::io::{AsyncReadExt, AsyncSeekExt};
+    let stream = futures_util::stream::unfold(
+        (file, start, len, false),
+        |(mut f, pos, left, seeked)| async move {
+            if left == 0 {
+                return None;
+            }
+            if !seeked {
+                if let Err(e) = f.seek(std::io::SeekFrom::Start(pos)).await {
+                    return Some((Err(e), (f, pos, 0, true)));
+                }
+            }
+            let mut buf = vec![0u8; usize::try_from(left).unwrap_or(CHUNK).min(CHUNK)];
+            match f.read(&mut buf).await {
+                Ok(0) => None,
+                Ok(n) => {
+                    buf.truncate(n);
+                    Some((
+                        Ok(Bytes::from(buf)),
+                        (f, pos + n as u64, left - n as u64, true),
+                    ))
+                }
+                Err(e) => Some((Err(e), (f, pos, 0, true))),
+            }
+        },
+    );
+    Body::from_stream(stream)
 }
 
 /// A single byte range, resolved against the file length (RFC 9110 §14.1.2).
@@ -603,8 +991,8 @@ async fn get_trajectory(
     artifact_available(&j, "trajectory")?;
     super::artifacts::ensure_local(&s.core, id, "trajectory.mcap").await;
     let path = s.core.job_dir(id).join("trajectory.mcap");
-    let bytes = match tokio::fs::read(&path).await {
-        Ok(b) => b,
+    let file = match tokio::fs::File::open(&path).await {
+        Ok(f) => f,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             return Err(ApiError::conflict(
                 "the job finished without recording a trajectory",
@@ -612,19 +1000,30 @@ async fn get_trajectory(
         }
         Err(e) => return Err(ApiError::internal(format!("{}: {e}", path.display()))),
     };
-    let len = bytes.len() as u64;
+    let len = file
+        .metadata()
+        .await
+        .map_err(|e| ApiError::internal(format!("{}: {e}", path.display())))?
+        .len();
     let range = parse_range(
         headers.get(header::RANGE).and_then(|v| v.to_str().ok()),
         len,
     );
     let mut resp = match range {
-        RangeAsk::Whole => (StatusCode::OK, Body::from(bytes)).into_response(),
+        RangeAsk::Whole => {
+            let mut r = (StatusCode::OK, file_body(file, 0, len)).into_response();
+            r.headers_mut()
+                .insert(header::CONTENT_LENGTH, HeaderValue::from(len));
+            r
+        }
         RangeAsk::Part(a, b) => {
-            let part = bytes[a as usize..=b as usize].to_vec();
-            let mut r = (StatusCode::PARTIAL_CONTENT, Body::from(part)).into_response();
+            let mut r =
+                (StatusCode::PARTIAL_CONTENT, file_body(file, a, b - a + 1)).into_response();
             if let Ok(v) = HeaderValue::from_str(&format!("bytes {a}-{b}/{len}")) {
                 r.headers_mut().insert(header::CONTENT_RANGE, v);
             }
+            r.headers_mut()
+                .insert(header::CONTENT_LENGTH, HeaderValue::from(b - a + 1));
             r
         }
         RangeAsk::Unsatisfiable => {

@@ -153,6 +153,16 @@ pub enum CancelOutcome {
     NotFound,
 }
 
+/// What `delete` did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DeleteOutcome {
+    /// The job (and a search's child runs) is gone from the store.
+    Deleted,
+    /// The job has not finished (queued, running or waiting): cancel it first.
+    NotFinished(JobStatus),
+    NotFound,
+}
+
 /// Queue depth by status, for `/healthz` and the load test.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct Counts {
@@ -180,6 +190,16 @@ impl From<rusqlite::Error> for StoreError {
 /// atomic across processes (two workers never get the same job).
 pub trait JobStore: Send + Sync {
     fn insert(&self, job: &NewJob) -> Result<(), StoreError>;
+    /// Insert unless `max_queued` submitted jobs (not child runs) are already queued, deciding
+    /// in the insert's own transaction so that concurrent submissions cannot all slip under
+    /// the limit. `Ok(None)`: inserted; `Ok(Some(n))`: refused, `n` jobs are waiting.
+    fn insert_bounded(&self, job: &NewJob, max_queued: u64) -> Result<Option<u64>, StoreError>;
+    /// Remove a finished job (and a search's child runs) from the store. The caller removes
+    /// its artifacts.
+    fn delete(&self, id: Uuid) -> Result<DeleteOutcome, StoreError> {
+        let _ = id;
+        Err(StoreError("this job store cannot delete jobs".into()))
+    }
     fn get(&self, id: Uuid) -> Result<Option<JobRecord>, StoreError>;
     /// Atomically move the oldest queued job to `running` (attempts + 1) and return it.
     fn claim(&self) -> Result<Option<JobRecord>, StoreError>;
@@ -400,6 +420,62 @@ impl JobStore for SqliteStore {
                 params![job.id.to_string(), job.kind.as_str(), job.request.to_string(), job.motion.to_string(), now_ms()],
             )?;
             Ok(())
+        })
+    }
+
+    fn insert_bounded(&self, job: &NewJob, max_queued: u64) -> Result<Option<u64>, StoreError> {
+        let max = i64::try_from(max_queued).unwrap_or(i64::MAX);
+        self.write(|c| {
+            // One statement: the count and the insert see the same snapshot, and SQLite has
+            // one writer at a time (across processes too), so no other insert interleaves.
+            let n = c.execute(
+                "INSERT INTO jobs (id, kind, status, request, motion, created_ms)
+                 SELECT ?1, ?2, 'queued', ?3, ?4, ?5
+                 WHERE (SELECT COUNT(*) FROM jobs WHERE status = 'queued' AND parent IS NULL) < ?6",
+                params![
+                    job.id.to_string(),
+                    job.kind.as_str(),
+                    job.request.to_string(),
+                    job.motion.to_string(),
+                    now_ms(),
+                    max
+                ],
+            )?;
+            if n == 1 {
+                return Ok(None);
+            }
+            let queued: i64 = c.query_row(
+                "SELECT COUNT(*) FROM jobs WHERE status = 'queued' AND parent IS NULL",
+                [],
+                |r| r.get(0),
+            )?;
+            Ok(Some(u64::try_from(queued).unwrap_or(0)))
+        })
+    }
+
+    fn delete(&self, id: Uuid) -> Result<DeleteOutcome, StoreError> {
+        self.write(|c| {
+            let tx = c.transaction()?;
+            let status: Option<String> = tx
+                .query_row(
+                    "SELECT status FROM jobs WHERE id = ?1 AND parent IS NULL",
+                    params![id.to_string()],
+                    |r| r.get(0),
+                )
+                .optional()?;
+            let Some(status) = status else {
+                return Ok(DeleteOutcome::NotFound);
+            };
+            let status = JobStatus::parse(&status)?;
+            if !status.is_terminal() {
+                return Ok(DeleteOutcome::NotFinished(status));
+            }
+            tx.execute(
+                "DELETE FROM jobs WHERE parent = ?1 OR id = ?1",
+                params![id.to_string()],
+            )?;
+            tx.commit()?;
+            Ok(DeleteOutcome::Deleted)
         })
     }
 
@@ -786,6 +862,46 @@ mod tests {
         let r = s.get(a.id).expect("get").expect("exists");
         assert_eq!(r.status, JobStatus::Failed);
         assert!(r.error.unwrap_or_default().contains("3 times"));
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn bounded_insert_is_atomic_under_concurrency() {
+        let (s, dir) = temp_store();
+        let s = std::sync::Arc::new(s);
+        let accepted = std::sync::atomic::AtomicUsize::new(0);
+        std::thread::scope(|sc| {
+            for _ in 0..12 {
+                sc.spawn(|| {
+                    for _ in 0..5 {
+                        if s.insert_bounded(&job(JobKind::Run), 20)
+                            .expect("insert")
+                            .is_none()
+                        {
+                            accepted.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                        }
+                    }
+                });
+            }
+        });
+        assert_eq!(accepted.into_inner(), 20);
+        assert_eq!(s.counts().expect("counts").queued, 20);
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn only_finished_jobs_are_deleted() {
+        let (s, dir) = temp_store();
+        let a = job(JobKind::Run);
+        s.insert(&a).expect("insert");
+        assert_eq!(
+            s.delete(a.id).expect("delete"),
+            DeleteOutcome::NotFinished(JobStatus::Queued)
+        );
+        s.request_cancel(a.id).expect("cancel");
+        assert_eq!(s.delete(a.id).expect("delete"), DeleteOutcome::Deleted);
+        assert!(s.get(a.id).expect("get").is_none());
+        assert_eq!(s.delete(a.id).expect("delete"), DeleteOutcome::NotFound);
         std::fs::remove_dir_all(dir).ok();
     }
 

@@ -108,12 +108,16 @@ pub fn analysis_runner() -> JobRunner {
 const STOP_NONE: u8 = 0;
 const STOP_USER: u8 = 1;
 const STOP_SHUTDOWN: u8 = 2;
+/// Over the per-job wall-clock or artifact limit (`--max-job-seconds`, `--max-job-artifact-bytes`).
+const STOP_LIMIT: u8 = 3;
 
 /// The stop switch of one running job.
 #[derive(Default)]
 pub struct RunControl {
     pub stop: AtomicBool,
     reason: AtomicU8,
+    /// Which limit stopped the job (with `STOP_LIMIT`), for its error.
+    limit: Mutex<Option<String>>,
 }
 
 impl RunControl {
@@ -163,6 +167,13 @@ impl Default for WorkerParams {
     }
 }
 
+/// Large bodies (over [`LARGE_BODY_BYTES`]) read and parsed at once. Two: a 16 MB body of
+/// the most values allowed costs ~200 MB while parsed, and the server must stay far below the
+/// memory of a small machine; small bodies (every example, most jobs) are never held back.
+pub const LARGE_BODIES: usize = 2;
+/// A body over this many bytes (or of unknown length) waits for one of [`LARGE_BODIES`].
+pub const LARGE_BODY_BYTES: u64 = 1 << 20;
+
 /// Everything routes and workers share.
 pub struct Core {
     pub store: Arc<dyn JobStore>,
@@ -186,6 +197,13 @@ pub struct Core {
     /// Where finished jobs' artifacts are published for every process (None: they stay in
     /// `data_dir`, which all processes then share).
     pub artifacts: Option<Arc<super::artifacts::ArtifactStore>>,
+    /// Connection and timeout settings of the HTTP server (the routes read the body timeout).
+    pub server: super::server::ServerParams,
+    /// Large request bodies read and parsed at once: each can cost up to a few hundred MB
+    /// while parsed, so their number is what bounds the server's memory.
+    pub large_bodies: Arc<tokio::sync::Semaphore>,
+    /// Bytes under `<data>/jobs` and when they were counted (a cache for the disk quota).
+    pub disk_used: Mutex<Option<(Instant, u64)>>,
 }
 
 impl Core {
@@ -221,6 +239,42 @@ impl Core {
             store_healthy: AtomicBool::new(true),
             remote_workers: AtomicBool::new(false),
             artifacts: None,
+            server: super::server::ServerParams::default(),
+            large_bodies: Arc::new(tokio::sync::Semaphore::new(LARGE_BODIES)),
+            disk_used: Mutex::new(None),
+        }
+    }
+
+    /// Bytes of all jobs' artifacts under `<data>/jobs`, counted at most every 10 s (the
+    /// disk quota is a guard against filling the disk, not an exact account).
+    pub fn artifact_bytes(&self) -> u64 {
+        let fresh = self
+            .disk_used
+            .lock()
+            .ok()
+            .and_then(|g| *g)
+            .filter(|(t, _)| t.elapsed() < Duration::from_secs(10));
+        if let Some((_, b)) = fresh {
+            return b;
+        }
+        let jobs = self.data_dir.join("jobs");
+        let total = std::fs::read_dir(&jobs)
+            .map(|rd| {
+                rd.filter_map(Result::ok)
+                    .map(|e| dir_bytes(&e.path()))
+                    .sum()
+            })
+            .unwrap_or(0);
+        if let Ok(mut g) = self.disk_used.lock() {
+            *g = Some((Instant::now(), total));
+        }
+        total
+    }
+
+    /// Forget the cached artifact total (after a delete).
+    pub fn forget_artifact_bytes(&self) {
+        if let Ok(mut g) = self.disk_used.lock() {
+            *g = None;
         }
     }
 
@@ -488,6 +542,13 @@ fn run_job(core: &Core, job: JobRecord) {
             );
             return;
         }
+        Ok(RunnerOutcome::Cancelled(_)) | Err(_) if reason == STOP_LIMIT => Finish::Failed(
+            ctl.limit
+                .lock()
+                .ok()
+                .and_then(|m| m.clone())
+                .unwrap_or_else(|| "the job exceeded a server limit".into()),
+        ),
         Ok(RunnerOutcome::Cancelled(partial)) => Finish::Cancelled(partial),
         Err(_) if reason == STOP_USER => Finish::Cancelled(None),
         Err(msg) => Finish::Failed(msg),
@@ -498,6 +559,8 @@ fn run_job(core: &Core, job: JobRecord) {
         Finish::Cancelled(_) => (JobStatus::Cancelled, job.progress),
     };
     core.store_result("recording a finished job", core.store.finish(id, &finish));
+    // Its artifacts count against the disk quota from now on.
+    core.forget_artifact_bytes();
     if job.kind == JobKind::PgaRun {
         // The last child of a search queues the search again: a thread of this process may
         // be idle (another process hears it through the store's notification).
@@ -560,7 +623,15 @@ fn execute<T>(
         cancel: &ctl.stop,
         progress: &progress,
     };
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(&hooks))) {
+    let done = AtomicBool::new(false);
+    let result = std::thread::scope(|sc| {
+        // The watchdog: wall-clock and artifact-size limits, checked while the job runs.
+        sc.spawn(|| watchdog(core, dir, ctl, &done));
+        let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(&hooks)));
+        done.store(true, Ordering::SeqCst);
+        r
+    });
+    match result {
         Ok(r) => r,
         Err(panic) => {
             let msg = panic
@@ -573,6 +644,55 @@ fn execute<T>(
                 "the computation crashed (an internal error in ashlar; the cause has been logged)"
                     .into(),
             )
+        }
+    }
+}
+
+/// Bytes of the files directly in `dir` (a job directory is flat).
+pub fn dir_bytes(dir: &Path) -> u64 {
+    std::fs::read_dir(dir)
+        .map(|rd| {
+            rd.filter_map(Result::ok)
+                .filter_map(|e| e.metadata().ok())
+                .filter(|m| m.is_file())
+                .map(|m| m.len())
+                .sum()
+        })
+        .unwrap_or(0)
+}
+
+/// Stop the job (reason `STOP_LIMIT`) when it runs longer than `--max-job-seconds` or its
+/// directory grows beyond `--max-job-artifact-bytes`; returns when `done` is set.
+fn watchdog(core: &Core, dir: &Path, ctl: &RunControl, done: &AtomicBool) {
+    let start = Instant::now();
+    let max_time = Duration::from_secs(core.limits.max_job_seconds);
+    let mut tick = 0u64;
+    while !done.load(Ordering::SeqCst) {
+        std::thread::sleep(Duration::from_millis(100));
+        tick += 1;
+        let over = if start.elapsed() > max_time {
+            Some(format!(
+                "the job ran longer than the server's limit of {} s of wall-clock time (ashlar serve --max-job-seconds) and was stopped",
+                core.limits.max_job_seconds
+            ))
+        } else if tick % 5 == 0 {
+            let bytes = dir_bytes(dir);
+            (bytes > core.limits.max_job_artifact_bytes).then(|| {
+                format!(
+                    "the job wrote {bytes} bytes of artifacts, over the server's limit of {} per job (ashlar serve --max-job-artifact-bytes), and was stopped",
+                    core.limits.max_job_artifact_bytes
+                )
+            })
+        } else {
+            None
+        };
+        if let Some(msg) = over {
+            tracing::warn!(dir = %dir.display(), "{msg}");
+            if let Ok(mut m) = ctl.limit.lock() {
+                m.get_or_insert(msg);
+            }
+            ctl.throw(STOP_LIMIT);
+            return;
         }
     }
 }

@@ -29,7 +29,11 @@ fn start(
         idle_poll: Duration::from_millis(50),
         ..WorkerParams::default()
     };
-    let svc = Service::start(cfg, fake_runner(slowness)).expect("start");
+    let server = ashlar::service::server::ServerParams {
+        cors_origins: vec!["https://app.foxglove.dev".into()],
+        ..Default::default()
+    };
+    let svc = Service::start_with(cfg, fake_runner(slowness), server).expect("start");
     let router = app(svc.state());
     (svc, router, dir)
 }
@@ -171,8 +175,16 @@ async fn a_job_runs_and_its_outputs_are_served() {
     assert_eq!(t.header("accept-ranges").as_deref(), Some("bytes"));
     assert_eq!(
         t.header("access-control-allow-origin").as_deref(),
-        Some("*")
+        Some("https://app.foxglove.dev")
     );
+    // Only the origins given with --cors-origin: any other page in the browser gets nothing.
+    let req = Request::builder()
+        .uri(format!("{uri}/trajectory.mcap"))
+        .header("origin", "https://evil.example")
+        .body(Body::empty())
+        .expect("req");
+    let t = call(&app, req).await;
+    assert_eq!(t.header("access-control-allow-origin"), None);
     for (range, a, b) in [
         ("bytes=0-99", 0, 99),
         ("bytes=9990-", 9990, 9999),
@@ -494,13 +506,19 @@ async fn bad_requests_get_problems_naming_the_field() {
         "urn:ashlar:problem:no-route"
     );
     let req = Request::builder()
-        .method("DELETE")
+        .method("PUT")
         .uri(&uri)
         .body(Body::empty())
         .expect("req");
     let r = call(&app, req).await;
-    r.problem(405);
+    let p = r.problem(405);
     assert!(r.header("allow").unwrap_or_default().contains("GET"));
+    // The detail names the methods the path takes (it used to say "see /openapi.yaml").
+    let detail = p["detail"].as_str().unwrap_or_default();
+    assert!(
+        detail.contains("GET") && detail.contains("DELETE"),
+        "{detail}"
+    );
     svc.shutdown(Duration::from_secs(5));
     std::fs::remove_dir_all(dir).ok();
 }
