@@ -41,7 +41,7 @@ pub async fn build(
     let given = if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         BTreeMap::new()
     } else {
-        check_json(&headers)?;
+        super::routes::check_json_content_type(&headers)?;
         parameters(&json_body(&bytes)?)?
     };
     let (spec, _) = template.build(&given).map_err(|e| match &e {
@@ -79,23 +79,3 @@ fn parameters(body: &Value) -> Result<BTreeMap<String, Value>, ApiError> {
     }
 }
 
-/// A body, when there is one, is JSON.
-fn check_json(headers: &HeaderMap) -> Result<(), ApiError> {
-    let ct = headers
-        .get(header::CONTENT_TYPE)
-        .and_then(|v| v.to_str().ok())
-        .unwrap_or("");
-    let essence = ct
-        .split(';')
-        .next()
-        .unwrap_or("")
-        .trim()
-        .to_ascii_lowercase();
-    if essence == "application/json"
-        || (essence.starts_with("application/") && essence.ends_with("+json"))
-    {
-        Ok(())
-    } else {
-        Err(ApiError::unsupported_media_type(ct))
-    }
-}
