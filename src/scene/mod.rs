@@ -211,9 +211,9 @@ impl Default for Control {
             // repeat them).
             dual_tolerance: None,
             dual_stall_acceptance: None,
-            // Housner's law: the engine's impacts are measured within 1 % of it on slender
-            // columns at the default Δt and the reduced rocking model uses it, so the default
-            // changes neither model (docs/format.md § controls).
+            // Housner's law (e = 0 in the full engine): the reduced rocking model's law, and in
+            // the engine it makes impacts independent of Δt; measured against the contacts' own
+            // response in docs/restitution.md ("The default").
             restitution: Restitution::Housner,
         }
     }
