@@ -148,11 +148,15 @@ pub struct Control {
 /// The restitution law of impacts (`control.restitution`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Restitution {
-    /// Housner's law: the reduced rocking model's r = 1 − 3/2 sin²α (a rectangle's rocking
-    /// impact without bounce or slip, angular momentum about the new pivot conserved); the full
-    /// engine's own contact response, which measures within 1 % of it on slender columns'
-    /// rocking impacts (tests/engine/rocking_impacts.rs).
+    /// Housner's law: an impact without bounce (Newton's law with e = 0 at every contact that
+    /// closes, `assembly::restitution`); for a rocking rectangle without slip it is
+    /// r = 1 − 3/2 sin²α (angular momentum about the new pivot conserved), the reduced rocking
+    /// model's law.
     Housner,
+    /// The contacts' own response (penalty springs or the dual solver's rigid contact), no
+    /// impact law: the rebound then depends on Δt (issue 20 §6). Kept for tests and studies of
+    /// the contact model itself; the reduced models do not represent it.
+    Contact,
     /// Newton's coefficient of normal restitution e ∈ [0, 1] at every contact that closes:
     /// the normal relative velocity after the impact is −e × before, momentum conserved
     /// (`assembly::restitution`), whatever Δt and contact solver.
@@ -162,6 +166,7 @@ pub enum Restitution {
 fn ser_restitution<S: serde::Serializer>(r: &Restitution, s: S) -> Result<S::Ok, S::Error> {
     match r {
         Restitution::Housner => s.serialize_str("housner"),
+        Restitution::Contact => s.serialize_str("contact"),
         Restitution::Coefficient(e) => s.serialize_f64(*e),
     }
 }
@@ -204,9 +209,9 @@ impl Default for Control {
             // repeat them).
             dual_tolerance: None,
             dual_stall_acceptance: None,
-            // Housner's law: the engine's impacts are measured within 1 % of it on slender
-            // columns at the default Δt and the reduced rocking model uses it, so the default
-            // changes neither model (docs/format.md § controls).
+            // Housner's law (e = 0 in the full engine): the reduced rocking model's law, and in
+            // the engine it makes impacts independent of Δt; measured against the contacts' own
+            // response in docs/restitution.md ("The default").
             restitution: Restitution::Housner,
         }
     }

@@ -193,6 +193,7 @@ pub struct ControlSpec {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum RestitutionSpec {
     Housner,
+    Contact,
     Coefficient(f64),
 }
 
@@ -200,6 +201,7 @@ impl Serialize for RestitutionSpec {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         match self {
             RestitutionSpec::Housner => s.serialize_str("housner"),
+            RestitutionSpec::Contact => s.serialize_str("contact"),
             RestitutionSpec::Coefficient(e) => s.serialize_f64(*e),
         }
     }
@@ -211,7 +213,7 @@ impl<'de> Deserialize<'de> for RestitutionSpec {
         impl serde::de::Visitor<'_> for Visitor {
             type Value = RestitutionSpec;
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("a coefficient of restitution in [0, 1] or \"housner\"")
+                f.write_str("a coefficient of restitution in [0, 1], \"housner\" or \"contact\"")
             }
             fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Self::Value, E> {
                 Ok(RestitutionSpec::Coefficient(v))
@@ -225,6 +227,7 @@ impl<'de> Deserialize<'de> for RestitutionSpec {
             fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<Self::Value, E> {
                 match v {
                     "housner" => Ok(RestitutionSpec::Housner),
+                    "contact" => Ok(RestitutionSpec::Contact),
                     _ => Err(E::invalid_value(serde::de::Unexpected::Str(v), &self)),
                 }
             }

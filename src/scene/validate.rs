@@ -415,13 +415,14 @@ fn control(c: &ControlSpec) -> Result<Control, SceneError> {
     if let Some(r) = c.restitution {
         out.restitution = match r {
             RestitutionSpec::Housner => Restitution::Housner,
+            RestitutionSpec::Contact => Restitution::Contact,
             RestitutionSpec::Coefficient(e) => {
                 finite("control.restitution", e)?;
                 if !(0.0..=1.0).contains(&e) {
                     return err(
                         "control.restitution",
                         format!(
-                            "must be a coefficient of restitution in [0, 1] or \"housner\", got {e}"
+                            "must be a coefficient of restitution in [0, 1], \"housner\" or \"contact\", got {e}"
                         ),
                     );
                 }

@@ -389,8 +389,12 @@ impl Simulation {
         let t1 = Instant::now();
         self.profile.detect += t1 - t0;
         let mut dt = self.dt.min(max_dt).min(self.rotation_bound());
-        if let Restitution::Coefficient(e) = self.scene.control.restitution {
-            self.impacts(e, dt);
+        // "housner" is Newton's law with e = 0 (an impact without bounce); "contact" leaves the
+        // impact to the contact springs / dual solver.
+        match self.scene.control.restitution {
+            Restitution::Housner => self.impacts(0.0, dt),
+            Restitution::Coefficient(e) => self.impacts(e, dt),
+            Restitution::Contact => {}
         }
         self.start_states.clone_from(&self.states);
         let mut cuts = 0u32;

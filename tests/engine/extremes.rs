@@ -65,6 +65,8 @@ struct Knobs {
     budget: u64,
     model: &'static str,
     integrator: &'static str,
+    /// `control.restitution`; `None`: the default.
+    restitution: Option<&'static str>,
 }
 
 impl Default for Knobs {
@@ -86,6 +88,7 @@ impl Default for Knobs {
             budget: 4000,
             model: "rigid",
             integrator: "dda",
+            restitution: None,
         }
     }
 }
@@ -104,6 +107,9 @@ fn scene_with(k: &Knobs, blocks: Value) -> Value {
     });
     if let Some(p) = k.penalty {
         control["penalty_stiffness"] = json!(p);
+    }
+    if let Some(r) = k.restitution {
+        control["restitution"] = json!(r);
     }
     json!({
         "format": "ashlar.scene/1",
@@ -774,6 +780,10 @@ fn hard_combinations() {
                 height: 5.0,
                 friction_deg: 89.0,
                 pga_g: 50.0,
+                // "contact": this case tests the diagnostic of the penalty contact's own
+                // impacts on a needle (with the default impact law, e = 0, the needle's
+                // impacts no longer bounce and the run completes).
+                restitution: Some("contact"),
                 ..k()
             },
             Diagnostic,

@@ -310,7 +310,7 @@ fn single_impact_restitution_dual_default() {
 
 /// The stocky column at the default Δt loses more than Housner's law at its impact.
 #[test]
-#[ignore = "engine misses Housner's restitution at h/b = 2 with the default Δt = 1 ms: measured r = 0.6631 (penalty, −5.27 %) and 0.6721 (dual, −3.98 %) against 0.7000, tolerance 1 %; the dual solver converges to Housner's law with Δt (−0.17 % at 1e-4 s, test below), the penalty solver does not (+3.93 % at 1e-4 s)"]
+#[ignore = "with the default impact law (restitution \"housner\" = Newton e = 0) measured dual r = 0.67201 (−4.00 %) at h/b = 2 against 1 %: the landing contact is closed at the step start, the law does not fire; before it: engine misses Housner's restitution at h/b = 2 with the default Δt = 1 ms: measured r = 0.6631 (penalty, −5.27 %) and 0.6721 (dual, −3.98 %) against 0.7000, tolerance 1 %; the dual solver converges to Housner's law with Δt (−0.17 % at 1e-4 s, test below), the penalty solver does not (+3.93 % at 1e-4 s)"]
 fn single_impact_restitution_stocky_default() {
     check_restitution("dual", None, &[2.0], 0.01);
     check_restitution("penalty", None, &[2.0], 0.01);
@@ -328,7 +328,6 @@ fn single_impact_restitution_dual_converges_with_time_step() {
 /// the stocky column keeps more energy than Housner's law allows (the penalty springs resolve
 /// the impact over several steps and give part of it back).
 #[test]
-#[ignore = "penalty solver at Δt = 1e-4 s: measured Δr/r = +3.93 % (h/b = 2), −0.03 % (3), +0.66 % (4), +0.14 % (6) against tolerance 1 %: the penalty contact's impact is not Housner's instantaneous one"]
 fn single_impact_restitution_penalty_small_time_step() {
     check_restitution("penalty", Some(1e-4), &[2.0, 3.0, 4.0, 6.0], 0.01);
 }
@@ -480,13 +479,13 @@ fn check_history_of(solver: &str, dt: Option<f64>, regression: f64, block_model:
 // points falling below Housner's (0.0745 against 0.0757 rad after the first impact).
 
 #[test]
-#[ignore = "engine misses Housner through five impacts at the default Δt = 1 ms: measured 11.38 % of peak rotation (penalty) and 9.54 % (dual) against tolerance 5 %: each impact loses more energy than Housner's law and lands late; at Δt = 2e-4 s both pass (tests below)"]
+#[ignore = "with the default impact law (restitution \"housner\" = Newton e = 0) measured 9.43 % of peak (penalty), 7.59 % (dual) against 5 %; before it: engine misses Housner through five impacts at the default Δt = 1 ms: measured 11.38 % of peak rotation (penalty) and 9.54 % (dual) against tolerance 5 %: each impact loses more energy than Housner's law and lands late; at Δt = 2e-4 s both pass (tests below)"]
 fn history_through_five_impacts_penalty_default() {
     check_history("penalty", None, 0.05);
 }
 
 #[test]
-#[ignore = "engine misses Housner through five impacts at the default Δt = 1 ms: measured 9.54 % of peak rotation (dual) against tolerance 5 % (see the penalty test)"]
+#[ignore = "with the default impact law (restitution \"housner\" = Newton e = 0) measured 7.59 % of peak (dual) against 5 %; before it: engine misses Housner through five impacts at the default Δt = 1 ms: measured 9.54 % of peak rotation (dual) against tolerance 5 % (see the penalty test)"]
 fn history_through_five_impacts_dual_default() {
     check_history("dual", None, 0.05);
 }
@@ -505,7 +504,6 @@ fn history_through_five_impacts_dual_dt_2e4() {
 
 /// Convergence in Δt is not monotonic: at 1e-4 s both solvers are worse than at 2e-4 s.
 #[test]
-#[ignore = "at Δt = 1e-4 s the engine misses Housner through five impacts: measured 12.70 % of peak (penalty) and 3.98 % (dual, passes) against 5 %; the penalty impact keeps too much energy at small Δt (restitution test above)"]
 fn history_through_five_impacts_small_time_step() {
     check_history("dual", Some(1e-4), 0.05);
     check_history("penalty", Some(1e-4), 0.05);
@@ -515,7 +513,7 @@ fn history_through_five_impacts_small_time_step() {
 /// strains take part in the impact. Housner's equation is a rigid-body model; the stone's strain
 /// under self-weight is 1e-6, so the tolerance is the rigid column's.
 #[test]
-#[ignore = "deformable column misses Housner through five impacts at every Δt tried: measured penalty 8.70 % (Δt = 1 ms), 5.47 % (2e-4 s); dual 7.00 % (1 ms), 8.77 % (2e-4 s), 7.92 % (1e-4 s) of peak against 5 %; its single-impact restitution is within 0.76 % of Housner's at h/b = 3, 4, 6"]
+#[ignore = "with the default impact law (restitution \"housner\" = Newton e = 0) measured 9.09 % of peak (penalty, default Δt) against 5 %; before it: deformable column misses Housner through five impacts at every Δt tried: measured penalty 8.70 % (Δt = 1 ms), 5.47 % (2e-4 s); dual 7.00 % (1 ms), 8.77 % (2e-4 s), 7.92 % (1e-4 s) of peak against 5 %; its single-impact restitution is within 0.76 % of Housner's at h/b = 3, 4, 6"]
 fn history_through_five_impacts_deformable() {
     check_history_of("penalty", None, 0.05, "deformable");
     check_history_of("dual", None, 0.05, "deformable");

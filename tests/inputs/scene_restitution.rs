@@ -22,6 +22,7 @@ fn bad_restitution_is_refused_naming_the_field() {
         (json!(1.5), "[0, 1]"),
         (json!(-0.1), "[0, 1]"),
         (json!("foo"), "housner"),
+        (json!("foo"), "contact"),
         (json!(true), "housner"),
         (json!([0.5]), "housner"),
     ] {
@@ -41,6 +42,7 @@ fn accepted_restitution_forms() {
         (json!(0.75), Restitution::Coefficient(0.75)),
         (json!(1), Restitution::Coefficient(1.0)),
         (json!("housner"), Restitution::Housner),
+        (json!("contact"), Restitution::Contact),
         (Value::Null, Restitution::Housner),
     ] {
         let s = parse_scene(&example_with(given.clone())).expect("valid restitution");

@@ -107,6 +107,11 @@ pub fn represented(scene: &Scene) -> Result<(), String> {
             c.dynamic_factor
         ));
     }
+    if c.restitution == Restitution::Contact {
+        why.push(
+            "control.restitution = \"contact\" leaves impacts to the full engine's contact springs (a rebound that depends on Δt), which the reduced models do not represent".to_string(),
+        );
+    }
     if let Restitution::Coefficient(e) = c.restitution {
         // e = 0 is Housner's law (an impact without bounce or slip, angular momentum about the
         // landing corner conserved), which the rocking model uses; with e > 0 the landing corner
