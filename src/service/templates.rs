@@ -78,4 +78,3 @@ fn parameters(body: &Value) -> Result<BTreeMap<String, Value>, ApiError> {
         )),
     }
 }
-

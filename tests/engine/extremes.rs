@@ -1138,3 +1138,26 @@ fn assert_all_finite(v: &Value, path: &str) {
         _ => {}
     }
 }
+
+/// OPEN DEFECT (found when the default impact law became Newton's with e = 0): the needle of
+/// `hard_combinations` (1:500, friction 89°, 50 g) under the default law no longer ends in the
+/// penetration diagnostic that the contacts' own response gives; it completes its 0.2 s with
+/// E − E₀ − W_ground = 4.03 × the energy scale (measured 2026-11-25). Discarding impact solves
+/// that add kinetic energy did not change that figure, so the energy enters elsewhere (the
+/// step after the impact). The bound is the suite's own (`ENERGY_TOL`); this test is ignored
+/// until the defect is found, not loosened.
+#[test]
+#[ignore = "open defect: energy growth 4.03 of the scale on the 50 g needle under the default impact law"]
+fn needle_under_the_default_impact_law_keeps_energy_bounded() {
+    run_cases(vec![(
+        "needle 1:500 + friction 89° + 50 g, default impact law",
+        Knobs {
+            width: 0.01,
+            height: 5.0,
+            friction_deg: 89.0,
+            pga_g: 50.0,
+            ..k()
+        },
+        Complete,
+    )]);
+}
