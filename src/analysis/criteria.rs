@@ -1,4 +1,4 @@
-//! Damage criteria as users observe them in the field (issue 24, point 3): drums offset, a
+//! Damage criteria as users observe them in the field (docs/format.md §3): drums offset, a
 //! keystone dropped, a block rotated, a column fallen, a share of a wall displaced, and their
 //! combinations. Sits beside `pga` in `analysis`: a criterion reads the final state of the free
 //! blocks of a run (its `Tracker` while it runs, or its `Summary` afterwards) and says whether

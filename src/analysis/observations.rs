@@ -1,4 +1,4 @@
-//! Several observations at one site (issue 24, point 4): column A fell, column B stands, a drum
+//! Several observations at one site (docs/observations.md): column A fell, column B stands, a drum
 //! slid by 3 cm. Each observation is a damage criterion and whether it was seen; under one
 //! record, an observed failure bounds the site's PGA from below (the shaking reached at least
 //! that criterion's threshold), an observed survival from above (it stayed below that one's).

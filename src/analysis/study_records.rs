@@ -1,4 +1,4 @@
-//! Study on real records (issue 20 §2): free-standing columns under the repository's recorded
+//! Study on real records (docs/accuracy-vs-speed.md, Records): free-standing columns under the repository's recorded
 //! ground motions (data/ground-motions), the full engine (`"model": "dda"`) against Housner's
 //! equation (`analysis::reference`, independent RK4) and against a converged engine run. Drives
 //! `simulation` directly (no output); used by `ashlar study` (its "Records" section), by

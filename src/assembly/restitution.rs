@@ -1,4 +1,4 @@
-//! Impacts with a user-given coefficient of restitution (`control.restitution`, issue 20 §6).
+//! Impacts with a user-given coefficient of restitution (`control.restitution`, docs/restitution.md).
 //! Sits between `contact` and the step's assembly: after contact detection and linearization,
 //! before the step is assembled, it changes the free blocks' velocities at the step start by
 //! the impulses of the contacts that close within the step (Newton's law), so the step begins
@@ -6,7 +6,7 @@
 //!
 //! Why a velocity-level law: the penalty springs (10 E) and the dual solver's rigid contact both
 //! resolve an impact within one step or less at the default Δt, so the rebound they give is the
-//! integrator's (measured 0.88 at 1 ms and 1.0 at 50 ms for two equal blocks, issue 20) and a
+//! integrator's (measured 0.88 at 1 ms and 1.0 at 50 ms for two equal blocks, docs/restitution.md) and a
 //! viscous dashpot sized from e (Li et al. 2018, Eq. for ζ(e)) would act only where the contact
 //! period is resolved, ≥ 10 steps a contact. Moreau's impact law on velocities is exact for
 //! rigid bodies at any Δt:

@@ -32,7 +32,7 @@ pub struct StudyArgs {
     /// Print each point as it is measured.
     #[arg(long, short)]
     pub verbose: bool,
-    /// Run the records study instead (issue 20 §2: two columns under every record in
+    /// Run the records study instead (docs/accuracy-vs-speed.md, Records: two columns under every record in
     /// --ground-motions at 0.3–1.0 g, the engine at its defaults against Housner and against
     /// the engine at Δt = 1e-4 s) and write its Markdown table to this file.
     #[arg(long)]

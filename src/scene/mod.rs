@@ -154,7 +154,7 @@ pub enum Restitution {
     /// model's law.
     Housner,
     /// The contacts' own response (penalty springs or the dual solver's rigid contact), no
-    /// impact law: the rebound then depends on Δt (issue 20 §6). Kept for tests and studies of
+    /// impact law: the rebound then depends on Δt (docs/restitution.md). Kept for tests and studies of
     /// the contact model itself; the reduced models do not represent it.
     Contact,
     /// Newton's coefficient of normal restitution e ∈ [0, 1] at every contact that closes:

@@ -210,7 +210,7 @@ struct PgaBody {
 
 /// Scan points of a PGA search when the request does not say (as `ashlar pga`): 40 puts
 /// them 0.49 m/s² apart over 0.05–2 g, finer than the failing intervals of a rocking column
-/// under the bundled records (issue 20 §5, docs/pga.md); the search reports this resolution.
+/// under the bundled records (docs/pga.md); the search reports this resolution.
 pub const DEFAULT_SCAN_POINTS: usize = 40;
 
 /// Records of one multi-record search: 100 is more than any fragility study uses (FEMA P695

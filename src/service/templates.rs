@@ -1,5 +1,5 @@
 //! `GET /v1/templates` and `POST /v1/templates/{name}`: the parametric structures of
-//! `scene::templates` over HTTP (issue 24). Thin: parameters in, scene JSON out; building a
+//! `scene::templates` over HTTP (docs/templates.md). Thin: parameters in, scene JSON out; building a
 //! template is cheap (no simulation), so it runs on the request's task.
 use super::problem::ApiError;
 use super::request::json_body;

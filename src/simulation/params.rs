@@ -98,7 +98,7 @@ impl Default for SimParams {
             // −5.3 % → +2.7 %; on the records' well-conditioned points it moves the answer
             // towards the engine at Δt = 1e-4 s, which is itself 4–13 % off Housner there
             // (docs/accuracy-vs-speed.md, "Records"). Worth turning on once the impact law is
-            // the user's restitution rather than the springs' (issue 20 §6).
+            // the user's restitution rather than the springs' (docs/restitution.md).
             local_error_ratio: None,
             min_error_step_ratio: 0.05,
         }

@@ -1,4 +1,4 @@
-//! The PGA search does not depend on where the range starts (issue 20 §5), against an
+//! The PGA search does not depend on where the range starts (docs/pga.md), against an
 //! independent answer: a brute-force scan of the same scene (`examples/column.json`, default
 //! model) under Loma Prieta 1989 Capitola (its response is not monotonic in amplitude) every
 //! 0.05 m/s², each amplitude one `evaluate` run, no bisection. Two searches over ranges that

@@ -1,4 +1,4 @@
-//! The reduced rocking model on real records (issue 20 §3: its integrator steps from sample to
+//! The reduced rocking model on real records (docs/accuracy-vs-speed.md: its integrator steps from sample to
 //! sample of the record instead of across them) against Housner's equation integrated
 //! independently by fixed-step RK4 at Δt = 1e-5 s (`ashlar::analysis::reference`, no event
 //! location, impacts located to the step) under the same record. (At Δt = 1e-4 s, printed too,
@@ -11,7 +11,7 @@
 //! Checks, per case:
 //! - the same verdict (overturned or not);
 //! - where it stands and rocks past 0.01 rad: peak |θ| within 5 % of the reference, the
-//!   agreement issue 20 §2 asks of the full engine against the same reference. Why not less:
+//!   agreement that docs/accuracy-vs-speed.md ("Records") asks of the full engine against the same reference. Why not less:
 //!   the reference places each impact at the end of its step (ω·1e-5 s in θ per impact), and a
 //!   rocking history through ~90 impacts amplifies such differences (the 1e-4 s reference is
 //!   off by 44 %); measured agreement is in docs/accuracy-vs-speed.md.

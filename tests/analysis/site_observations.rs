@@ -1,4 +1,4 @@
-//! Several observations at one site (issue 24, point 4; `analysis::observations`): two
+//! Several observations at one site (docs/observations.md; `analysis::observations`): two
 //! free-standing columns on one base, 4 m apart so that neither can fall on the other, under
 //! the half-sine pulse of the engine issue (1 s period, rescaled by the search).
 //!

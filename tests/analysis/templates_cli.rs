@@ -1,4 +1,4 @@
-//! `ashlar scene` (issue 24): `--list` prints every template with its parameters' units,
+//! `ashlar scene` (docs/templates.md): `--list` prints every template with its parameters' units,
 //! defaults and ranges; `NAME --set` prints a scene that `ashlar run` accepts; bad values are
 //! refused naming the parameter. `ashlar run --criterion` with a damage criterion, checked on
 //! Heyman's arch (tests/engine/templates.rs): at t/R = 0.10 the crown drops (the criterion is

@@ -1,5 +1,5 @@
 //! The full engine (`"model": "dda"`) at its default numerical controls against Housner's
-//! equation on real records (issue 20 §2): the 0.4 × 1.2 m and the slender 0.25 × 1.5 m column
+//! equation on real records (docs/accuracy-vs-speed.md, Records): the 0.4 × 1.2 m and the slender 0.25 × 1.5 m column
 //! of `analysis::study_records` (φ = 75°, nothing slides; the scenes' default deformable block)
 //! under the repository's records (data/ground-motions) scaled to a PGA. Housner:
 //! `analysis::reference::housner_rocking` (RK4 at 1e-5 s, no code shared with the engine).

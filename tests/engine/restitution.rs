@@ -1,4 +1,4 @@
-//! Restitution the user controls (issue 20 §6, issue 25 "Impacts"): `control.restitution` a
+//! Restitution the user controls (docs/restitution.md): `control.restitution` a
 //! number e makes every impact of the full engine obey Newton's law, whatever Δt and contact
 //! solver; the default `"housner"` keeps Housner's rocking law in both models.
 //!
@@ -326,7 +326,7 @@ fn rocking_impact_ratio_stocky_column() {
     }
 }
 
-/// The default `"housner"` is Newton's law with e = 0 in the full engine (issue 20 §6): the two
+/// The default `"housner"` is Newton's law with e = 0 in the full engine (docs/restitution.md): the two
 /// equal blocks leave together at v0/2 at every Δt (tolerance 1e-4 × v0 as in
 /// `check_two_blocks`); `"contact"` leaves the impact to the contacts, whose rebound at 1 ms
 /// (e ≈ 0.10, measured before the law) differs from it by ≈ 0.05 × v0, far above 1e-2 × v0.

@@ -1,4 +1,4 @@
-//! The parametric structures (`scene::templates`, issue 24) under their own weight, run by the
+//! The parametric structures (`scene::templates`, docs/templates.md) under their own weight, run by the
 //! full engine (`"model": "dda"`, every other control at its default, no ground motion):
 //!
 //! - **At rest**: every template at its default parameters stands for 10 s: no vertex of any

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Hostile-client suite (issue 23): replays each attack of the issue against the real
+"""Hostile-client suite (docs/service.md): replays each attack listed in docs/service.md against the real
 `ashlar serve` binary on loopback and asserts the refusal, that the server stays up, and that
 its peak memory (VmHWM) stays under a bound. Samples /healthz through the whole suite and
 prints its latency. Standard library only.

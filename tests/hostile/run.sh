@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Hostile-client suite (issue 23): the real `ashlar serve` binary on loopback against the
+# Hostile-client suite (docs/service.md): the real `ashlar serve` binary on loopback against the
 # attacks of the issue (work budgets, huge and slow bodies, impossible values, huge artifacts
 # read by ranges, half-sent requests, queue-limit races, wall-clock and disk limits). Asserts
 # each refusal, that the server stays up, and its peak RSS under 300 MB; prints /healthz

@@ -1,4 +1,4 @@
-//! `control.restitution` bad input (issue 20 §6): out of range, negative, non-finite-like or an
+//! `control.restitution` bad input (docs/restitution.md): out of range, negative, non-finite-like or an
 //! unknown keyword gives a `SceneError` naming `control.restitution` and saying what is
 //! expected, never a panic or a silently clamped value; the accepted forms parse to the law
 //! they name.

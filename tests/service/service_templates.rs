@@ -1,4 +1,4 @@
-//! `GET /v1/templates` and `POST /v1/templates/{name}` (issue 24) through the router
+//! `GET /v1/templates` and `POST /v1/templates/{name}` (docs/templates.md) through the router
 //! (`oneshot`, no socket): the list agrees with `scene::templates::list`, a built scene is the
 //! one the library builds and is accepted as a job's scene, and bad requests are problems
 //! naming the template or the parameter.

@@ -1,4 +1,4 @@
-//! Parametric historical structures (issue 24): named templates that build an `ashlar.scene/1`
+//! Parametric historical structures (docs/templates.md): named templates that build an `ashlar.scene/1`
 //! [`SceneSpec`] from a few parameters in metres, which then goes through the same validation
 //! as a user's file. Sits before `scene::validate` in the flow (template → spec → scene); the CLI
 //! (`ashlar scene`) and the service (`/v1/templates`) only call [`list`] and [`build`].
