@@ -85,7 +85,7 @@ fn check_form(path: &str, given: &[&str]) -> Result<Option<&'static str>, Motion
     let extension_ok = matches!(*name, "samples" | "format");
     match given
         .iter()
-        .find(|k| !allowed.contains(k) && !(extension_ok && **k == "processing"))
+        .find(|k| !(allowed.contains(k) || (extension_ok && **k == "processing")))
     {
         Some(k) => Err(MotionError::new(
             format!("{path}.{k}"),
