@@ -70,7 +70,7 @@ fn parameters(body: &Value) -> Result<BTreeMap<String, Value>, ApiError> {
         ));
     }
     match obj.get("parameters") {
-        None | Some(Value::Null) => Ok(BTreeMap::new()),
+        None => Ok(BTreeMap::new()),
         Some(Value::Object(m)) => Ok(m.iter().map(|(k, v)| (k.clone(), v.clone())).collect()),
         Some(other) => Err(ApiError::invalid_field(
             "/parameters",
