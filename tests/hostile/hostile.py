@@ -334,8 +334,12 @@ def main():
           f"40 KB of headers: 431 problem+json ({st})")
 
     # --- 5. Queue limit atomic: the worker busy with a blocker, 60 concurrent POSTs, limit 20.
-    blocker = json.loads(json.dumps(column))
-    blocker["control"] = dict(blocker.get("control", {}), duration=2000)
+    # A 56-block wall on the full engine for 1e6 steps (5.6e7 block-steps, inside every budget):
+    # minutes of work, so the 5 s wall-clock limit is what ends it. A single block no longer
+    # serves: its 2e6 steps (the step limit) finish in under 5 s.
+    blocker = load("wall-window.json")
+    blocker["control"] = dict(blocker.get("control") or {}, duration=1000, time_step=1e-3,
+                              model="dda", output_interval=10)
     st, _, b = call(s, "POST", "/v1/jobs", {"scene": blocker, "motion": None})
     blocker_id = json.loads(b)["id"] if st == 202 else None
     check(st == 202 and wait_status(s, f"/v1/jobs/{blocker_id}", {"running"}, 30) is not None,
