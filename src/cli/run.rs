@@ -44,6 +44,10 @@ pub struct RunArgs {
     /// docs/format.md §3 "Damage criteria"); verdicts go to OUT/criteria.json and stderr.
     #[arg(long)]
     pub criterion: Vec<String>,
+    /// s, the longest the run goes on after its duration while the structure still moves
+    /// (default 10 s; 0 ends the run at its duration, unsettled or not: docs/run-end.md).
+    #[arg(long)]
+    pub max_extension: Option<f64>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -242,6 +246,7 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
         out_dir: Some(&args.out),
         no_trajectory: args.no_trajectory,
         history_blocks: args.blocks.clone(),
+        run_end: run_end_params(args.max_extension)?,
         ..Default::default()
     };
     let criteria = super::criteria::parse_for(&scene, &args.criterion)?;
@@ -252,6 +257,24 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
         serde_json::to_string_pretty(&outcome.summary).map_err(|e| e.to_string())?
     );
     Ok(())
+}
+
+/// The end-of-run knobs with `--max-extension` applied (defaults when it is absent).
+fn run_end_params(
+    max_extension: Option<f64>,
+) -> Result<Option<crate::analysis::run_end::RunEndParams>, String> {
+    let Some(s) = max_extension else {
+        return Ok(None);
+    };
+    if !(s.is_finite() && s >= 0.0) {
+        return Err(format!(
+            "--max-extension must be a finite number of seconds ≥ 0, got {s}"
+        ));
+    }
+    Ok(Some(crate::analysis::run_end::RunEndParams {
+        max_extension: s,
+        ..Default::default()
+    }))
 }
 
 pub fn pga(args: &PgaArgs) -> Result<(), String> {
