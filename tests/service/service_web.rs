@@ -98,7 +98,9 @@ async fn page_assets_and_examples_are_served_from_the_binary() {
         }
         let stem = path.file_stem().and_then(|s| s.to_str()).expect("name");
         assert!(names.contains(&stem), "examples/{stem}.json is not bundled");
-        let served = call(&router, get(&format!("/v1/examples/{stem}"))).await.json();
+        let served = call(&router, get(&format!("/v1/examples/{stem}")))
+            .await
+            .json();
         let on_disk: Value =
             serde_json::from_str(&std::fs::read_to_string(&path).expect("read")).expect("json");
         assert_eq!(served, on_disk, "{stem}");
