@@ -19,7 +19,8 @@ const state = {
   records: [], // [{name, format, content}]
   jobs: new Map(), // id -> job JSON
   order: [], // ids, newest first
-  streams: new Map(), // id -> EventSource
+  streams: new Map(), // id -> EventSource (or fetchEvents' stand-in)
+  templates: [], // GET /v1/templates
   watched: null, // id of the job shown in the result panel
   autoShow: null, // id of the latest job submitted here: shown when it finishes
   finished: new Set(), // ids whose end has been handled (see finished()), so it happens once
@@ -30,13 +31,74 @@ const state = {
 
 // ---------- helpers ----------
 
+// ---------- access token ----------
+// A server started with `--tokens FILE` answers 401 to every /v1/ call without a valid
+// `Authorization: Bearer TOKEN` (docs/service.md). The page then asks for a token, keeps it in
+// sessionStorage (this tab only; gone when the tab closes) and retries the call.
+const TOKEN_KEY = "ashlar-token";
+const auth = { token: sessionStorage.getItem(TOKEN_KEY) || "", waiting: null };
+
+function authHeaders(h = {}) {
+  if (auth.token) h.Authorization = `Bearer ${auth.token}`;
+  return h;
+}
+
+// Resolves when the user has entered a token; every call answered 401 meanwhile waits on the
+// same prompt.
+function askToken(message) {
+  $("auth").hidden = false;
+  $("token-error").textContent = message || "";
+  if (!auth.waiting) {
+    let resolve;
+    const p = new Promise((r) => { resolve = r; });
+    auth.waiting = { promise: p, resolve };
+    $("token").focus();
+  }
+  return auth.waiting.promise;
+}
+
+function onTokenSubmit(ev) {
+  ev.preventDefault();
+  const t = $("token").value.trim();
+  if (!t) { $("token-error").textContent = "Enter the token you were given."; return; }
+  auth.token = t;
+  sessionStorage.setItem(TOKEN_KEY, t);
+  $("token").value = "";
+  $("token-error").textContent = "";
+  $("auth").hidden = true;
+  const w = auth.waiting;
+  auth.waiting = null;
+  if (w) w.resolve();
+}
+
+function forgetToken() {
+  auth.token = "";
+  sessionStorage.removeItem(TOKEN_KEY);
+  $("token-error").textContent = "Token forgotten.";
+}
+
+// fetch() with the token; a 401 asks for a token and retries (the token in use when the call
+// was made is compared, so that a token entered meanwhile is tried before asking again).
+async function authFetch(url, init = {}) {
+  for (;;) {
+    const used = auth.token;
+    const r = await fetch(url, { ...init, headers: authHeaders({ ...(init.headers || {}) }) });
+    if (r.status !== 401) return r;
+    if (auth.token === used || !auth.token) {
+      let detail = "";
+      try { detail = (await r.json()).detail || ""; } catch (e) { /* not a problem document */ }
+      await askToken(used ? `The token was refused: ${detail}` : "");
+    }
+  }
+}
+
 async function api(method, url, body) {
   const init = { method, headers: {} };
   if (body !== undefined) {
     init.headers["Content-Type"] = "application/json";
     init.body = JSON.stringify(body);
   }
-  const r = await fetch(url, init);
+  const r = await authFetch(url, init);
   const ct = r.headers.get("content-type") || "";
   let data = null;
   if (ct.includes("json")) data = await r.json();
@@ -45,9 +107,72 @@ async function api(method, url, body) {
     const problem = data && typeof data === "object" ? data : { status: r.status, title: r.statusText, detail: String(data) };
     const err = new Error(problem.detail || problem.title || `HTTP ${r.status}`);
     err.problem = problem;
+    err.status = r.status;
     throw err;
   }
   return data;
+}
+
+// Server-sent events over fetch (EventSource cannot send an Authorization header). The same
+// interface as the part of EventSource the page uses: addEventListener(type, fn) with
+// {data}, onerror, close(), readyState.
+function fetchEvents(url) {
+  const ctl = new AbortController();
+  const es = { readyState: 0, onerror: null, listeners: {}, close() { es.readyState = 2; ctl.abort(); } };
+  es.addEventListener = (type, fn) => { (es.listeners[type] = es.listeners[type] || []).push(fn); };
+  (async () => {
+    try {
+      const r = await authFetch(url, { headers: { Accept: "text/event-stream" }, signal: ctl.signal });
+      if (!r.ok || !r.body) throw new Error(`events: HTTP ${r.status}`);
+      es.readyState = 1;
+      const reader = r.body.pipeThrough(new TextDecoderStream()).getReader();
+      let buf = "";
+      for (;;) {
+        const { value, done } = await reader.read();
+        if (done) break;
+        buf += value.replace(/\r\n?/g, "\n");
+        let cut;
+        while ((cut = buf.indexOf("\n\n")) >= 0) {
+          const block = buf.slice(0, cut);
+          buf = buf.slice(cut + 2);
+          let type = "message";
+          const data = [];
+          for (const line of block.split("\n")) {
+            if (line.startsWith("event:")) type = line.slice(6).trim();
+            else if (line.startsWith("data:")) data.push(line.slice(5).replace(/^ /, ""));
+          }
+          if (data.length) for (const fn of es.listeners[type] || []) fn({ data: data.join("\n") });
+        }
+      }
+    } catch (e) {
+      if (es.readyState === 2) return;
+    }
+    es.readyState = 2;
+    if (es.onerror) es.onerror();
+  })();
+  return es;
+}
+
+// A download link to the API: with a token, the browser's own navigation cannot send the
+// header, so the file is fetched with it and handed over as a blob.
+function apiLink(a) {
+  a.addEventListener("click", async (ev) => {
+    if (!auth.token || !a.getAttribute("href").startsWith("/v1/")) return;
+    ev.preventDefault();
+    try {
+      const r = await authFetch(a.getAttribute("href"));
+      if (!r.ok) throw new Error(`HTTP ${r.status}`);
+      const url = URL.createObjectURL(await r.blob());
+      const tmp = el("a", { href: url, download: a.getAttribute("download") || "" });
+      document.body.append(tmp);
+      tmp.click();
+      tmp.remove();
+      setTimeout(() => URL.revokeObjectURL(url), 60000);
+    } catch (e) {
+      alert(`Download: ${e.message}`);
+    }
+  });
+  return a;
 }
 
 function fmt(v, digits = 3) {
@@ -120,12 +245,14 @@ function slotInput(slot) {
     case "scene": return state.sceneSource === "file" ? $("scene-file") : $("scene-example");
     case "scale": return $("scale-value");
     case "motion": return radio("motion-source") === "pulse" ? $("pulse-amplitude") : $("record-file");
-    case "criterion": return $("criterion-kind");
+    case "criterion": return $("criterion-kind").value === "json" ? $("criterion-json") : $("criterion-kind");
+    case "template": return $("template");
+    case "dxf": return $("dxf-file");
     case "range-min": return $("range-min");
     case "range-max": return $("range-max");
     case "tolerance": return $("tolerance");
     case "scan-points": return $("scan-points");
-    default: return null;
+    default: return slot.startsWith("tp-") ? $(slot) : null;
   }
 }
 
@@ -177,37 +304,203 @@ function setScene(scene, source, label) {
   state.scene = scene;
   state.sceneSource = source;
   const blocks = Array.isArray(scene.blocks) ? scene.blocks : [];
-  const free = blocks.filter((b) => !b.fixed && !(scene.excitation && scene.excitation.block === b.id));
+  const free = blocks.filter((b) => !isHeld(scene, b));
   $("scene-info").textContent = `${label}: "${scene.name || "unnamed"}", ${blocks.length} blocks (${free.length} free)` +
     (scene.control && scene.control.duration ? `, ${scene.control.duration} s` : "");
-  const sel = $("criterion-block");
-  sel.replaceChildren(...free.map((b) => el("option", { value: b.id, text: b.id })));
-  drawScenePreview(scene);
+  $("criterion-block").replaceChildren(...free.map((b) => el("option", { value: b.id, text: b.id })));
+  $("criterion-insert").replaceChildren(el("option", { value: "", text: "(block)" }), ...free.map((b) => el("option", { value: b.id, text: b.id })));
+  // Another source replaces the scene: the other pickers go back to "none".
+  if (source !== "example") $("scene-example").value = "";
+  if (source !== "file") $("scene-file").value = "";
+  if (source !== "dxf") $("dxf-file").value = "";
+  if (source !== "template") { $("template").value = ""; $("template-box").hidden = true; }
+  drawScene(scene);
 }
 
-function drawScenePreview(scene) {
-  const c = $("scene-preview");
-  const { ctx, w, h } = window.ashlarPlot.fitCanvas(c);
-  const blocks = (scene.blocks || []).filter((b) => Array.isArray(b.vertices) && b.vertices.length >= 3);
-  const pts = blocks.flatMap((b) => b.vertices).filter((v) => Array.isArray(v) && v.every(Number.isFinite));
-  if (!pts.length) return;
+// A fixed block, or the block driven by the ground (not free to move).
+function isHeld(scene, b) {
+  return !!b.fixed || !!(scene.excitation && scene.excitation.block === b.id);
+}
+
+const SVG_NS = "http://www.w3.org/2000/svg";
+function svg(tag, attrs = {}, text) {
+  const e = document.createElementNS(SVG_NS, tag);
+  for (const [k, v] of Object.entries(attrs)) e.setAttribute(k, String(v));
+  if (text !== undefined) e.textContent = text;
+  return e;
+}
+
+// The scene to scale in an SVG: one polygon per block (data-id), fixed and driven blocks
+// shaded, a scale bar in metres at the bottom left (data-metres: its length in m). The drawing's
+// pixels per metre are in data-px-per-m (the same in x and y). A click on a block offers its id
+// to the criterion.
+function drawScene(scene) {
+  const box = $("scene-svg");
+  const w = Math.max(200, box.clientWidth || 320), h = Math.max(120, box.clientHeight || 260);
+  box.setAttribute("viewBox", `0 0 ${w} ${h}`);
+  const blocks = (scene.blocks || []).filter((b) => Array.isArray(b.vertices) && b.vertices.length >= 3 &&
+    b.vertices.every((v) => Array.isArray(v) && v.length === 2 && v.every(Number.isFinite)));
+  const defs = svg("defs");
+  const hatch = svg("pattern", { id: "hatch", width: 6, height: 6, patternUnits: "userSpaceOnUse", patternTransform: "rotate(45)" });
+  hatch.append(svg("rect", { width: 6, height: 6, fill: "#d6d3cc" }), svg("line", { x1: 0, y1: 0, x2: 0, y2: 6, stroke: "#9a968e", "stroke-width": 1.5 }));
+  defs.append(hatch);
+  box.replaceChildren(defs);
+  if (!blocks.length) return;
+  const pts = blocks.flatMap((b) => b.vertices);
   const xs = pts.map((p) => p[0]), ys = pts.map((p) => p[1]);
   const [x0, x1, y0, y1] = [Math.min(...xs), Math.max(...xs), Math.min(...ys), Math.max(...ys)];
-  const k = Math.min((w - 20) / Math.max(x1 - x0, 1e-9), (h - 20) / Math.max(y1 - y0, 1e-9));
-  const ox = (w - k * (x1 - x0)) / 2, oy = (h - k * (y1 - y0)) / 2;
+  const pad = 10, bar = 26; // margins, and room for the scale bar below the drawing (px)
+  const k = Math.min((w - 2 * pad) / Math.max(x1 - x0, 1e-9), (h - 2 * pad - bar) / Math.max(y1 - y0, 1e-9));
+  const ox = (w - k * (x1 - x0)) / 2, oy = pad + (h - 2 * pad - bar - k * (y1 - y0)) / 2;
+  const X = (x) => ox + k * (x - x0), Y = (y) => oy + k * (y1 - y);
+  box.dataset.pxPerM = String(k);
+  const g = svg("g", { class: "blocks" });
   for (const b of blocks) {
-    ctx.beginPath();
-    b.vertices.forEach((v, i) => {
-      const X = ox + k * (v[0] - x0), Y = h - oy - k * (v[1] - y0);
-      if (i === 0) ctx.moveTo(X, Y); else ctx.lineTo(X, Y);
+    const held = isHeld(scene, b);
+    const poly = svg("polygon", {
+      points: b.vertices.map((v) => `${X(v[0]).toFixed(2)},${Y(v[1]).toFixed(2)}`).join(" "),
+      class: held ? "block held" : "block free",
+      fill: held ? "url(#hatch)" : "#efe6d2",
+      stroke: held ? "#777" : "#8a6d3b",
+      "stroke-width": 1.2,
+      "data-id": b.id,
     });
-    ctx.closePath();
-    ctx.fillStyle = b.fixed ? "#d6d3cc" : "#efe6d2";
-    ctx.fill();
-    ctx.strokeStyle = b.fixed ? "#777" : "#8a6d3b";
-    ctx.lineWidth = 1.5;
-    ctx.stroke();
+    poly.append(svg("title", {}, `${b.id}${held ? " (fixed)" : ""}`));
+    if (!held) poly.addEventListener("click", () => offerBlock(b.id));
+    g.append(poly);
   }
+  box.append(g);
+  // Scale bar: a round length about a quarter of the drawing's width.
+  const len = niceLength(Math.max(x1 - x0, y1 - y0) / 4 || 1);
+  const bx = pad, by = h - 8;
+  const sb = svg("g", { id: "scale-bar", "data-metres": len });
+  sb.append(
+    svg("line", { id: "scale-bar-line", x1: bx, y1: by, x2: bx + k * len, y2: by, stroke: "#222", "stroke-width": 2 }),
+    svg("line", { x1: bx, y1: by - 4, x2: bx, y2: by + 3, stroke: "#222", "stroke-width": 1.5 }),
+    svg("line", { x1: bx + k * len, y1: by - 4, x2: bx + k * len, y2: by + 3, stroke: "#222", "stroke-width": 1.5 }),
+    svg("text", { x: bx + k * len + 6, y: by + 4, "font-size": 12, fill: "#222" }, `${len} m`));
+  box.append(sb);
+}
+
+// ---------- templates ----------
+
+const UNIT_LABELS = { m: "m", deg: "°", count: "count", 1: "ratio", "": "" };
+
+async function loadTemplates() {
+  const r = await api("GET", "/v1/templates");
+  state.templates = r.templates;
+  $("template").append(...r.templates.map((t) => el("option", { value: t.name, text: t.name })));
+}
+
+function onTemplatePick() {
+  const t = state.templates.find((x) => x.name === $("template").value);
+  clearErrors(["template"]);
+  $("template-box").hidden = !t;
+  if (!t) return;
+  $("template-description").textContent = t.description;
+  const rows = [];
+  for (const p of t.parameters) {
+    const id = `tp-${p.name}`;
+    const unit = UNIT_LABELS[p.units] !== undefined ? UNIT_LABELS[p.units] : p.units;
+    const label = el("label", { for: id, title: p.description }, `${p.name.replace(/_/g, " ")}${unit ? ` (${unit})` : ""}`);
+    let input;
+    if (Array.isArray(p.choices)) {
+      input = el("select", { id, "data-param": p.name }, ...p.choices.map((c) => el("option", { value: c, text: c, selected: c === p.default })));
+    } else {
+      input = el("input", { type: "number", id, "data-param": p.name, value: String(p.default), step: p.units === "count" ? "1" : "any",
+        min: p.min ?? undefined, max: p.max ?? undefined, inputmode: "decimal", title: p.description });
+    }
+    const range = p.min !== null && p.min !== undefined ? el("span", { class: "range", text: `${p.min}–${p.max}` }) : null;
+    rows.push(el("div", { class: "row" }, label, input, range));
+    rows.push(el("p", { id: `${id}-error`, class: "field-error", role: "alert" }));
+  }
+  $("template-fields").replaceChildren(...rows);
+  for (const i of $("template-fields").querySelectorAll("[data-param]")) i.addEventListener("change", buildTemplate);
+  buildTemplate();
+}
+
+// POST /v1/templates/{name} with the form's values; the scene is drawn (and becomes the one to
+// submit). A 422 names /parameters/KEY: shown beside that field.
+async function buildTemplate() {
+  const name = $("template").value;
+  if (!name) return;
+  const seq = (state.templateSeq = (state.templateSeq || 0) + 1);
+  const parameters = {};
+  for (const i of $("template-fields").querySelectorAll("[data-param]")) {
+    const raw = i.value.trim();
+    if (i.tagName === "SELECT") parameters[i.dataset.param] = raw;
+    else if (raw !== "") parameters[i.dataset.param] = Number(raw);
+  }
+  clearErrors([...Object.keys(parameters).map((k) => `tp-${k}`), "template"]);
+  try {
+    const scene = await api("POST", `/v1/templates/${encodeURIComponent(name)}`, { parameters });
+    if (seq !== state.templateSeq) return;
+    setScene(scene, "template", `Template ${name}`);
+    $("template").value = name;
+    $("template-box").hidden = false;
+  } catch (e) {
+    if (seq !== state.templateSeq) return;
+    const p = e.problem || {};
+    const m = typeof p.pointer === "string" && p.pointer.match(/^\/parameters\/(.+)$/);
+    const key = m ? m[1].replace(/~1/g, "/").replace(/~0/g, "~") : null;
+    if (key && $(`tp-${key}`)) showFieldError(`tp-${key}`, p.detail || e.message);
+    else showFieldError("template", p.detail || e.message);
+  }
+}
+
+// ---------- CAD import ----------
+
+// POST /v1/scenes/import {"dxf": text, "options": null} → a scene, or a 422 naming the entity
+// handle and layer. A server without the route (404) is told apart.
+async function onDxfFile() {
+  const f = $("dxf-file").files[0];
+  clearErrors(["dxf", "scene"]);
+  if (!f) return;
+  const text = await readFile(f);
+  try {
+    const scene = await api("POST", "/v1/scenes/import", { dxf: text, options: null });
+    setScene(scene, "dxf", f.name);
+  } catch (e) {
+    const p = e.problem || {};
+    if (e.status === 404 || e.status === 405) {
+      showFieldError("dxf", `This server cannot import DXF drawings (POST /v1/scenes/import answered ${e.status}): convert the drawing with \`ashlar scene import\` or use a newer server.`);
+    } else {
+      showFieldError("dxf", `${f.name}: ${p.detail || p.title || e.message}`);
+    }
+  }
+}
+
+// ---------- damage criterion (JSON) ----------
+
+function criterionSkeleton(kind) {
+  const free = [...$("criterion-block").options].map((o) => o.value);
+  const a = free[free.length - 1] || "BLOCK", b = free[free.length - 2] || "BLOCK";
+  switch (kind) {
+    case "fallen": return { kind, blocks: [a] };
+    case "relative_sliding": return { kind, blocks: [a, b], metres: 0.03 };
+    case "drop": return { kind, block: a, metres: 0.05 };
+    case "rotation": return { kind, block: a, degrees: 5 };
+    case "displaced_fraction": return { kind, metres: 0.05, fraction: 0.5 };
+    case "all": case "any": return { kind, of: [{ kind: "fallen", blocks: [a] }, { kind: "drop", block: b, metres: 0.05 }] };
+    case "not": return { kind, of: { kind: "fallen", blocks: [a] } };
+    default: return null;
+  }
+}
+
+// A block id offered by a click on the drawing or the select: into the JSON criterion at the
+// cursor (as a JSON string) when that is the criterion in use, else as the criterion's block.
+function offerBlock(id) {
+  if ($("criterion-kind").value === "json" && !$("pga-fields").hidden) {
+    const t = $("criterion-json");
+    const text = JSON.stringify(id);
+    const at = t.selectionStart ?? t.value.length, end = t.selectionEnd ?? at;
+    t.value = t.value.slice(0, at) + text + t.value.slice(end);
+    t.focus();
+    t.setSelectionRange(at + text.length, at + text.length);
+  } else if ([...$("criterion-block").options].some((o) => o.value === id)) {
+    $("criterion-block").value = id;
+  }
+  for (const p of $("scene-svg").querySelectorAll("polygon.free")) p.classList.toggle("picked", p.dataset.id === id);
 }
 
 async function onSceneExample() {
@@ -236,6 +529,7 @@ async function onSceneFile() {
     state.scene = null;
     state.sceneSource = "file";
     $("scene-info").textContent = "";
+    drawScene({ blocks: [] });
     showFieldError("scene", `${f.name}: not a scene: ${e.message}`);
   }
 }
@@ -403,7 +697,19 @@ async function onSubmit(ev) {
     url = "/v1/pga-searches";
     const block = $("criterion-block").value;
     const ck = $("criterion-kind").value;
-    const criterion = ck === "toppled" ? `toppled:${block}` : `${ck}:${block}:${$("criterion-value").value}`;
+    let criterion = ck === "toppled" ? `toppled:${block}` : `${ck}:${block}:${$("criterion-value").value}`;
+    if (ck === "json") {
+      // Sent as the JSON text the service parses (docs/format.md §3); checked here for syntax
+      // only, the server names unknown kinds, fields and blocks.
+      criterion = $("criterion-json").value.trim();
+      try {
+        const v = JSON.parse(criterion);
+        if (!v || typeof v !== "object" || Array.isArray(v)) throw new Error("expected a JSON object with a \"kind\"");
+      } catch (e) {
+        showFieldError("criterion", `The criterion is not valid JSON: ${e.message}`);
+        return;
+      }
+    }
     body = { scene, criterion, range: { min: Number($("range-min").value), max: Number($("range-max").value), units: $("range-units").value } };
     if ($("tolerance").value !== "") body.tolerance = Number($("tolerance").value);
     if ($("scan-points").value !== "") body.scan_points = Number($("scan-points").value);
@@ -443,6 +749,9 @@ function upsertJob(job) {
 }
 
 async function refreshJobs() {
+  // One listing at a time (a listing waiting on the token prompt must not pile up).
+  if (state.listing) return;
+  state.listing = true;
   try {
     const r = await api("GET", "/v1/jobs?limit=30");
     const ids = [];
@@ -463,6 +772,8 @@ async function refreshJobs() {
     for (const j of r.jobs) if (!TERMINAL.has(j.status)) follow(j);
   } catch (e) {
     console.warn("job list:", e);
+  } finally {
+    state.listing = false;
   }
 }
 
@@ -470,7 +781,8 @@ async function refreshJobs() {
 // refreshed by the periodic listing).
 function follow(job) {
   if (TERMINAL.has(job.status) || state.streams.has(job.id) || state.streams.size >= MAX_STREAMS) return;
-  const es = new EventSource(job.links.events);
+  // With a token the stream is read through fetch (an EventSource cannot send the header).
+  const es = auth.token ? fetchEvents(job.links.events) : new EventSource(job.links.events);
   state.streams.set(job.id, es);
   const update = (ev) => {
     const d = JSON.parse(ev.data);
@@ -492,7 +804,7 @@ function follow(job) {
   });
   es.onerror = () => {
     // The server closed the stream (shutdown) or the network failed: fall back to polling.
-    if (es.readyState === EventSource.CLOSED) state.streams.delete(job.id);
+    if (es.readyState === 2) state.streams.delete(job.id); // EventSource.CLOSED
   };
 }
 
@@ -805,11 +1117,19 @@ function renderSummary(j) {
 function renderDownloads(j) {
   const mcap = new URL(j.links.trajectory, location.href).href;
   const fox = `https://app.foxglove.dev/?ds=remote-file&ds.url=${encodeURIComponent(mcap)}`;
+  // With a token, links to /v1/ are fetched with the header (apiLink). Foxglove opens the MCAP
+  // URL itself, without the header: it works only if the server's job resource gives a signed
+  // URL (one that needs no header); the page says so.
+  const hist = j.links.histories;
+  const csvHref = `${hist}${hist.includes("?") ? "&" : "?"}format=csv`;
+  const foxNote = auth.token && j.links.trajectory.startsWith("/v1/") && !j.links.trajectory.includes("?")
+    ? " — this server asks for a token, which Foxglove cannot send: download the MCAP and open the file in Foxglove instead"
+    : " — needs this server to be reachable from your browser (Foxglove fetches the file)";
   $("downloads").replaceChildren(
-    el("li", {}, el("a", { href: `${j.links.histories}?format=csv`, download: `histories-${j.id.slice(0, 8)}.csv`, id: "dl-csv", text: "Histories (CSV)" }), " — time (s), x, y (m), rotation (rad) of every free block"),
-    el("li", {}, el("a", { href: j.links.trajectory, download: `trajectory-${j.id.slice(0, 8)}.mcap`, id: "dl-mcap", text: "Trajectory (MCAP)" }), " — blocks, ground motion and outlines over time"),
-    el("li", {}, el("a", { href: fox, target: "_blank", rel: "noopener", id: "dl-foxglove", text: "Open the trajectory in Foxglove" }), " — needs this server to be reachable from your browser (Foxglove fetches the file)"),
-    el("li", {}, el("a", { href: j.links.self, id: "dl-job", text: "Job and summary (JSON)" })));
+    el("li", {}, apiLink(el("a", { href: csvHref, download: `histories-${j.id.slice(0, 8)}.csv`, id: "dl-csv", text: "Histories (CSV)" })), " — time (s), x, y (m), rotation (rad) of every free block"),
+    el("li", {}, apiLink(el("a", { href: j.links.trajectory, download: `trajectory-${j.id.slice(0, 8)}.mcap`, id: "dl-mcap", text: "Trajectory (MCAP)" })), " — blocks, ground motion and outlines over time"),
+    el("li", {}, el("a", { href: fox, target: "_blank", rel: "noopener", id: "dl-foxglove", text: "Open the trajectory in Foxglove" }), foxNote),
+    el("li", {}, apiLink(el("a", { href: j.links.self, id: "dl-job", download: `job-${j.id.slice(0, 8)}.json`, text: "Job and summary (JSON)" }))));
 }
 
 function showPga(j) {
@@ -877,15 +1197,34 @@ function syncVisibility() {
   // A PGA search scales the record itself: no scale of its own.
   $("scale-mode-row").hidden = pga;
   if (pga) $("scale-row").hidden = true;
-  $("criterion-value").disabled = $("criterion-kind").value === "toppled";
+  const ck = $("criterion-kind").value;
+  $("criterion-value").disabled = ck === "toppled" || ck === "json";
+  $("criterion-block").disabled = ck === "json";
+  $("criterion-json-box").hidden = ck !== "json";
 }
 
 async function init() {
+  $("auth-form").addEventListener("submit", onTokenSubmit);
+  $("token-forget").addEventListener("click", forgetToken);
   try {
     const ex = await api("GET", "/v1/examples");
     state.examples = ex.examples;
     for (const e of ex.examples.filter((x) => x.kind === "scene")) $("scene-example").append(el("option", { value: e.name, text: e.title }));
   } catch (e) { console.warn(e); }
+  try { await loadTemplates(); } catch (e) { console.warn("templates:", e); }
+  $("template").addEventListener("change", onTemplatePick);
+  $("template-build").addEventListener("click", buildTemplate);
+  $("dxf-file").addEventListener("change", onDxfFile);
+  $("criterion-template").addEventListener("change", () => {
+    const v = criterionSkeleton($("criterion-template").value);
+    if (v) $("criterion-json").value = JSON.stringify(v, null, 1).replace(/\n\s*/g, " ");
+    $("criterion-template").value = "";
+  });
+  $("criterion-insert").addEventListener("change", () => {
+    const id = $("criterion-insert").value;
+    if (id) offerBlock(id);
+    $("criterion-insert").value = "";
+  });
   $("scene-example").addEventListener("change", onSceneExample);
   $("scene-file").addEventListener("change", onSceneFile);
   $("record-file").addEventListener("change", onRecordFiles);
@@ -906,6 +1245,7 @@ async function init() {
     resizing = requestAnimationFrame(() => {
       window.ashlarPlot.replotAll();
       if (state.view) { state.view.lastPlotFrame = -1; drawFrame(state.view.frame); }
+      if (state.scene) drawScene(state.scene);
     });
   });
   syncVisibility();

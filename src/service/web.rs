@@ -58,6 +58,30 @@ pub const EXAMPLES: &[(&str, &str, &str, &str)] = &[
         include_str!("../../examples/incline.json"),
     ),
     (
+        "two-columns",
+        "scene",
+        "Two columns side by side (one falls, one stands: site observations)",
+        include_str!("../../examples/two-columns.json"),
+    ),
+    (
+        "doric-colonnade",
+        "scene",
+        "Doric colonnade: three seven-drum columns carrying architraves (template colonnade)",
+        include_str!("../../examples/doric-colonnade.json"),
+    ),
+    (
+        "arch",
+        "scene",
+        "Semicircular arch of 15 voussoirs on two piers (template arch)",
+        include_str!("../../examples/arch.json"),
+    ),
+    (
+        "wall-window",
+        "scene",
+        "Running-bond wall with a window and its lintel (template wall)",
+        include_str!("../../examples/wall-window.json"),
+    ),
+    (
         "half-sine-pulse",
         "motion",
         "Half-sine pulse, 5 m/s², 1 s period",

@@ -88,6 +88,23 @@ async fn page_assets_and_examples_are_served_from_the_binary() {
         col, on_disk,
         "the bundled example is the file of the repository"
     );
+    // Every JSON example of the repository is bundled, byte for byte the same value (the page
+    // lists them; a new example file not added to web.rs's table fails here).
+    let dir_ex = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    for entry in std::fs::read_dir(dir_ex).expect("examples/") {
+        let path = entry.expect("entry").path();
+        if path.extension().and_then(|e| e.to_str()) != Some("json") {
+            continue;
+        }
+        let stem = path.file_stem().and_then(|s| s.to_str()).expect("name");
+        assert!(names.contains(&stem), "examples/{stem}.json is not bundled");
+        let served = call(&router, get(&format!("/v1/examples/{stem}")))
+            .await
+            .json();
+        let on_disk: Value =
+            serde_json::from_str(&std::fs::read_to_string(&path).expect("read")).expect("json");
+        assert_eq!(served, on_disk, "{stem}");
+    }
     call(&router, get("/v1/examples/nope")).await.problem(404);
     svc.shutdown(Duration::ZERO);
     std::fs::remove_dir_all(dir).ok();

@@ -5,6 +5,8 @@
 //   ASHLAR_SCENE_BAD   a scene file the server must refuse (a block with two vertices)
 //   ASHLAR_SCREENSHOT  where to save the screenshot of the finished run (and, beside it,
 //                      web-<width>.png of the PGA result at each width the layout is checked at)
+//   ASHLAR_URL_TOKENS  base URL of a second server started with --tokens (token prompt check)
+//   ASHLAR_TOKEN       a token that server accepts
 //   CHROMIUM           the browser (default /usr/bin/chromium)
 // Prints one line per check and a closing "N passed, N failed" line; exits non-zero on failure.
 import { chromium } from "playwright-core";
@@ -16,6 +18,8 @@ const base = process.env.ASHLAR_URL;
 const record = process.env.ASHLAR_RECORD;
 const badScene = process.env.ASHLAR_SCENE_BAD;
 const screenshot = process.env.ASHLAR_SCREENSHOT;
+const baseTokens = process.env.ASHLAR_URL_TOKENS;
+const token = process.env.ASHLAR_TOKEN;
 if (!base || !record || !badScene) {
   console.error("e2e: set ASHLAR_URL, ASHLAR_RECORD and ASHLAR_SCENE_BAD (tests/web/run.sh does)");
   process.exit(2);
@@ -154,6 +158,28 @@ async function legendClearOfPoints(page, id) {
   }, id);
 }
 
+async function unlabelled(page) {
+  return page.evaluate(() =>
+    [...document.querySelectorAll("input, select, button, textarea")]
+      .filter((e) => !(e.labels && e.labels.length) && !e.getAttribute("aria-label") && !(e.tagName === "BUTTON" && e.textContent.trim()))
+      .map((e) => e.id || e.outerHTML.slice(0, 60)));
+}
+
+// The scene drawing, measured as a user would with the scale bar: the rendered extent of the
+// blocks (free ones, or those named) in metres = pixels ÷ (scale bar's pixels ÷ its metres).
+async function drawnExtent(page, ids) {
+  return page.evaluate((ids) => {
+    const bar = document.getElementById("scale-bar");
+    const line = document.getElementById("scale-bar-line").getBoundingClientRect();
+    const pxPerM = line.width / Number(bar.dataset.metres);
+    const polys = [...document.querySelectorAll("#scene-svg polygon")].filter((p) => (ids ? ids.includes(p.dataset.id) : p.classList.contains("free")));
+    const r = polys.map((p) => p.getBoundingClientRect());
+    const x0 = Math.min(...r.map((b) => b.left)), x1 = Math.max(...r.map((b) => b.right));
+    const y0 = Math.min(...r.map((b) => b.top)), y1 = Math.max(...r.map((b) => b.bottom));
+    return { width: (x1 - x0) / pxPerM, height: (y1 - y0) / pxPerM, pxPerM, n: polys.length, all: document.querySelectorAll("#scene-svg polygon").length };
+  }, ids);
+}
+
 const userDataDir = mkdtempSync(join(tmpdir(), "ashlar-e2e-chromium-"));
 const context = await chromium.launchPersistentContext(userDataDir, {
   executablePath: process.env.CHROMIUM || "/usr/bin/chromium",
@@ -194,11 +220,7 @@ try {
   });
 
   await check("every input and select has a label", async () => {
-    const unlabelled = await page.evaluate(() =>
-      [...document.querySelectorAll("input, select, button")]
-        .filter((e) => !(e.labels && e.labels.length) && !e.getAttribute("aria-label") && !(e.tagName === "BUTTON" && e.textContent.trim()))
-        .map((e) => e.id || e.outerHTML.slice(0, 60)));
-    assert(unlabelled.length === 0, `unlabelled: ${unlabelled.join(", ")}`);
+    assert((await unlabelled(page)).length === 0, `unlabelled: ${(await unlabelled(page)).join(", ")}`);
   });
 
   await check("the record's intensity measures and spectrum show before submitting", async () => {
@@ -423,6 +445,219 @@ try {
     if (found.length) console.log(`     ${found.join("; ")}`);
     assert(failures.length === 0, `\n     ${failures.join("\n     ")}`);
   });
+
+  // ---------- structures: templates, bundled examples, DXF, damage criteria ----------
+
+  const templates = await (await fetch(`${base}/v1/templates`)).json();
+  await check("template picker: the default drum-column is drawn to scale, fixed blocks shaded", async () => {
+    await page.evaluate(() => window.scrollTo(0, 0));
+    const names = await page.$$eval("#template option", (os) => os.map((o) => o.value).filter(Boolean));
+    assert(JSON.stringify(names) === JSON.stringify(templates.templates.map((t) => t.name)), `templates listed: ${names}`);
+    await page.selectOption("#template", "drum-column");
+    await page.waitForFunction(() => /^Template drum-column/.test(document.getElementById("scene-info").textContent), null, { timeout: 10000 });
+    const dc = templates.templates.find((t) => t.name === "drum-column");
+    const def = Object.fromEntries(dc.parameters.map((p) => [p.name, p.default]));
+    // Every parameter has its input, bounded by its range and labelled with its units.
+    for (const p of dc.parameters) {
+      const a = await page.evaluate((n) => { const i = document.getElementById(`tp-${n}`); return { min: i.min, max: i.max, value: i.value, label: i.labels[0].textContent }; }, p.name);
+      assert(Number(a.min) === p.min && Number(a.max) === p.max && Number(a.value) === p.default, `${p.name}: ${JSON.stringify(a)} vs ${JSON.stringify(p)}`);
+      const unit = { m: "(m)", deg: "(°)", count: "(count)" }[p.units];
+      assert(!unit || a.label.endsWith(unit), `${p.name} label: ${a.label}`);
+    }
+    assert((await unlabelled(page)).length === 0, `unlabelled: ${await unlabelled(page)}`);
+    // Height of the column: shaft + echinus + abacus + base, from the template's own defaults
+    // (6.2 m). Tolerance 0.02 m: the drawing is about 35 px/m, so 0.7 px of rounding and
+    // anti-aliasing, far below a missing stone (≥ 0.2 m) or a y scale unlike the x scale.
+    const height = def.shaft_height + def.capital_height + def.abacus_height + def.base_height;
+    const m = await drawnExtent(page);
+    assert(m.n === def.drums + 2, `${m.n} free blocks drawn, want ${def.drums} drums + capital + abacus`);
+    assert(Math.abs(m.height - height) < 0.02, `drawn height ${m.height.toFixed(4)} m, template ${height} m (scale ${m.pxPerM.toFixed(2)} px/m)`);
+    // The x scale is the y scale: the lowest drum is lower_diameter wide, the abacus abacus_width.
+    const drum = await drawnExtent(page, ["drum1"]);
+    assert(Math.abs(drum.width - def.lower_diameter) < 0.02, `drum1 drawn ${drum.width.toFixed(4)} m wide, want ${def.lower_diameter}`);
+    const abacus = await drawnExtent(page, ["abacus"]);
+    assert(Math.abs(abacus.width - def.abacus_width) < 0.02 && Math.abs(abacus.height - def.abacus_height) < 0.02, `abacus drawn ${abacus.width.toFixed(3)} × ${abacus.height.toFixed(3)} m`);
+    console.log(`     drawn at ${m.pxPerM.toFixed(2)} px/m: column ${m.height.toFixed(4)} m tall (template ${height} m), drum1 ${drum.width.toFixed(4)} m wide (${def.lower_diameter}), abacus ${abacus.width.toFixed(4)} × ${abacus.height.toFixed(4)} m (${def.abacus_width} × ${def.abacus_height})`);
+    if (screenshot) await page.locator("#job-form fieldset").first().screenshot({ path: join(dirname(screenshot), "web-template.png") });
+    const fixed = await page.$$eval("#scene-svg polygon.held", (ps) => ps.map((p) => `${p.dataset.id}:${p.getAttribute("fill")}`));
+    assert(fixed.length === 1 && fixed[0] === "foundation:url(#hatch)", `fixed blocks: ${fixed}`);
+    // Five drums: redrawn with two stones fewer.
+    await page.fill("#tp-drums", "5");
+    await page.click("#template-build");
+    await page.waitForFunction(() => document.querySelectorAll("#scene-svg polygon.free").length === 7, null, { timeout: 10000 });
+  });
+
+  await check("template picker: a bad parameter shows the server's error beside its field", async () => {
+    await page.fill("#tp-drums", "0");
+    await page.click("#template-build");
+    await page.waitForFunction(() => document.getElementById("tp-drums-error").textContent.length > 0, null, { timeout: 10000 });
+    const text = await page.textContent("#tp-drums-error");
+    assert(/drums/.test(text) && /\[1, 30\]|1/.test(text), text);
+    assert((await page.getAttribute("#tp-drums", "aria-invalid")) === "true", "the field is not marked invalid");
+    assert((await page.textContent("#template-error")) === "", "the error went to the template's slot instead of the field's");
+    await page.fill("#tp-drums", "7");
+    await page.click("#template-build");
+    await page.waitForFunction(() => document.getElementById("tp-drums-error").textContent === "" && document.querySelectorAll("#scene-svg polygon.free").length === 9, null, { timeout: 10000 });
+  });
+
+  await check("bundled examples: listed, and each drawn with every block", async () => {
+    const listed = await page.$$eval("#scene-example option", (os) => os.map((o) => o.value).filter(Boolean));
+    for (const name of ["column", "incline", "arch", "doric-colonnade", "wall-window", "two-columns"]) {
+      assert(listed.includes(name), `${name} not listed: ${listed}`);
+      const scene = JSON.parse(readFileSync(new URL(`../../examples/${name}.json`, import.meta.url), "utf8"));
+      await page.selectOption("#scene-example", name);
+      await page.waitForFunction((want) => document.querySelectorAll("#scene-svg polygon").length === want && /^Example/.test(document.getElementById("scene-info").textContent), scene.blocks.length, { timeout: 10000 });
+      const held = await page.$$eval("#scene-svg polygon.held", (ps) => ps.map((p) => p.dataset.id));
+      const want = scene.blocks.filter((b) => b.fixed || (scene.excitation && scene.excitation.block === b.id)).map((b) => b.id);
+      assert(JSON.stringify(held) === JSON.stringify(want), `${name}: shaded ${held}, fixed ${want}`);
+    }
+    assert((await page.$eval("#template", (s) => s.value)) === "", "the template picker still shows a template");
+  });
+
+  await check("damage criterion: built from a kind, block ids inserted by clicking the drawing, server errors beside it", async () => {
+    await page.selectOption("#scene-example", "arch");
+    await page.waitForFunction(() => document.querySelectorAll("#scene-svg polygon").length === 18);
+    await page.check('input[name="analysis"][value="pga"]');
+    await page.selectOption("#criterion-kind", "json");
+    assert(!(await page.isHidden("#criterion-json")), "the JSON criterion field is hidden");
+    await page.selectOption("#criterion-template", "relative_sliding");
+    const built = JSON.parse(await page.inputValue("#criterion-json"));
+    assert(built.kind === "relative_sliding" && built.blocks.length === 2 && typeof built.metres === "number", JSON.stringify(built));
+    // Typed, with the keystone and a pier inserted by clicking them and from the select.
+    await page.fill("#criterion-json", '{"kind": "any", "of": [{"kind": "drop", "block": ');
+    await page.click('#scene-svg polygon[data-id="v8"]');
+    await page.focus("#criterion-json");
+    await page.keyboard.press("End");
+    await page.keyboard.type(', "metres": 0.05}, {"kind": "fallen", "blocks": [');
+    await page.selectOption("#criterion-insert", "pier_left");
+    await page.focus("#criterion-json");
+    await page.keyboard.press("End");
+    await page.keyboard.type("]}]}");
+    const typed = JSON.parse(await page.inputValue("#criterion-json"));
+    assert(JSON.stringify(typed) === JSON.stringify({ kind: "any", of: [{ kind: "drop", block: "v8", metres: 0.05 }, { kind: "fallen", blocks: ["pier_left"] }] }), JSON.stringify(typed));
+    // A fixed block is not offered (and the server refuses it, naming the field).
+    const offered = await page.$$eval("#criterion-insert option", (os) => os.map((o) => o.value));
+    assert(!offered.includes("foundation") && offered.includes("v1"), `offered: ${offered}`);
+    // (The service checks the first block a criterion names at submission; docs/format.md.)
+    await page.fill("#criterion-json", '{"kind": "drop", "block": "foundation", "metres": 0.05}');
+    await page.click("#submit-button");
+    await page.waitForFunction(() => document.getElementById("criterion-error").textContent.length > 0, null, { timeout: 10000 });
+    const err = await page.textContent("#criterion-error");
+    assert(err.includes("/criterion") && err.includes('"foundation"'), err);
+    assert((await page.getAttribute("#criterion-json", "aria-invalid")) === "true", "the criterion field is not marked invalid");
+    // Bad JSON is caught before sending.
+    await page.fill("#criterion-json", '{"kind": "fallen", "blocks": ["v8"]');
+    await page.click("#submit-button");
+    await page.waitForFunction(() => /not valid JSON/.test(document.getElementById("criterion-error").textContent), null, { timeout: 5000 });
+  });
+
+  await check("damage criterion: a PGA search with a JSON criterion runs", async () => {
+    // The column under the record already loaded, as in the search above: rotation beyond 2°.
+    await page.selectOption("#scene-example", "column");
+    await page.waitForFunction(() => document.querySelectorAll("#scene-svg polygon").length === 2);
+    await page.click('#scene-svg polygon[data-id="column"]'); // not the JSON criterion: picks the block
+    await page.fill("#criterion-json", '{"kind": "rotation", "block": "column", "degrees": 2}');
+    await page.click("#submit-button");
+    await page.waitForFunction(() => /Queued PGA search/.test(document.getElementById("submit-status").textContent), null, { timeout: 20000 });
+    const id = (await page.textContent("#submit-status")).match(/Queued PGA search (\w+)/)[1];
+    await page.waitForFunction((id) => new RegExp(`PGA search ${id}: succeeded`).test(document.getElementById("result-head").textContent) && !document.getElementById("pga-view").hidden, id, { timeout: 300000 });
+    const text = await page.textContent("#pga-summary");
+    assert(text.includes('"kind":"rotation"') || text.includes('"kind": "rotation"'), text);
+    console.log(`     ${text.slice(0, 160)}`);
+    await page.selectOption("#criterion-kind", "toppled");
+    await page.check('input[name="analysis"][value="run"]');
+  });
+
+  await check("DXF upload: a scene drawn, a 422 naming the entity shown, a server without the route told apart (route stubbed)", async () => {
+    const dxf = "0\nSECTION\n2\nENTITIES\n0\nENDSEC\n0\nEOF\n";
+    const scene = JSON.parse(readFileSync(new URL("../../examples/two-columns.json", import.meta.url), "utf8"));
+    let sent = null;
+    let answer = { status: 200, contentType: "application/json", body: JSON.stringify(scene) };
+    await page.route("**/v1/scenes/import", async (route) => {
+      sent = { method: route.request().method(), type: route.request().headers()["content-type"], body: route.request().postDataJSON() };
+      await route.fulfill(answer);
+    });
+    await page.setInputFiles("#dxf-file", { name: "survey.dxf", mimeType: "application/dxf", buffer: Buffer.from(dxf) });
+    await page.waitForFunction((n) => /^survey\.dxf: /.test(document.getElementById("scene-info").textContent) && document.querySelectorAll("#scene-svg polygon").length === n, scene.blocks.length, { timeout: 10000 });
+    assert(sent && sent.method === "POST" && sent.type === "application/json" && sent.body.dxf === dxf && sent.body.options === null && Object.keys(sent.body).length === 2, `request: ${JSON.stringify(sent)}`);
+    assert((await page.$eval("#scene-example", (s) => s.value)) === "", "the example picker still shows an example");
+    const problem = { type: "about:blank", title: "invalid drawing", status: 422, detail: "entity 2F (LWPOLYLINE) on layer \"marble\": the polyline is not closed", pointer: "/dxf" };
+    answer = { status: 422, contentType: "application/problem+json", body: JSON.stringify(problem) };
+    await page.setInputFiles("#dxf-file", { name: "open.dxf", mimeType: "application/dxf", buffer: Buffer.from(dxf) });
+    await page.waitForFunction(() => document.getElementById("dxf-error").textContent.length > 0, null, { timeout: 10000 });
+    const text = await page.textContent("#dxf-error");
+    assert(text.includes("open.dxf") && text.includes("2F") && text.includes('"marble"'), text);
+    assert((await page.getAttribute("#dxf-file", "aria-invalid")) === "true", "the DXF field is not marked invalid");
+    // This binary's own answer for a route it does not have, as a server before the import.
+    const missing = await fetch(`${base}/v1/scenes/import`, { method: "POST", headers: { "Content-Type": "application/json" }, body: "{}" });
+    answer = { status: 404, contentType: "application/problem+json", body: JSON.stringify({ type: "about:blank", title: "not found", status: 404, detail: "no route /v1/scenes/import" }) };
+    if (missing.status === 404) answer.body = await missing.text();
+    await page.setInputFiles("#dxf-file", { name: "any.dxf", mimeType: "application/dxf", buffer: Buffer.from(dxf) });
+    await page.waitForFunction(() => /cannot import DXF/.test(document.getElementById("dxf-error").textContent), null, { timeout: 10000 });
+    await page.unroute("**/v1/scenes/import");
+  });
+
+  if (baseTokens && token) {
+    await check("token prompt: asked on 401, kept in sessionStorage, sent on every call, event stream and downloads", async () => {
+      const p2 = await context.newPage();
+      const errors = [];
+      p2.on("pageerror", (e) => errors.push(String(e)));
+      const calls = [];
+      p2.on("request", (r) => { const u = r.url().replace(baseTokens, ""); if (u.startsWith("/v1/")) calls.push({ u, auth: r.headers().authorization || "", t: Date.now() }); });
+      await p2.goto(`${baseTokens}/`);
+      await p2.waitForSelector("#auth", { state: "visible", timeout: 10000 });
+      assert((await p2.evaluate(() => sessionStorage.getItem("ashlar-token"))) === null, "a token is stored before one was given");
+      assert((await p2.$$("#scene-example option[value=column]")).length === 0, "examples listed without a token");
+      // A wrong token is refused and asked again.
+      await p2.fill("#token", "not-the-right-token-0000");
+      await p2.click("#token-submit");
+      await p2.waitForFunction(() => /refused/.test(document.getElementById("token-error").textContent) && !document.getElementById("auth").hidden, null, { timeout: 10000 });
+      await p2.fill("#token", token);
+      const t0 = Date.now();
+      await p2.click("#token-submit");
+      await p2.waitForSelector("#scene-example option[value=column]", { state: "attached", timeout: 10000 });
+      assert(await p2.isHidden("#auth"), "the prompt is still shown");
+      assert((await p2.evaluate(() => sessionStorage.getItem("ashlar-token"))) === token, "the token is not in sessionStorage");
+      await p2.waitForSelector("#template option[value=drum-column]", { state: "attached", timeout: 10000 });
+      // A run of the column under the bundled pulse: submitted, followed, shown. The full
+      // engine and 20 s, so that it is still running when the page follows it (the reduced model
+      // would end before). The events the page's fetch-based stream delivers are counted.
+      await p2.evaluate(() => {
+        const inner = fetchEvents;
+        window.__events = [];
+        fetchEvents = (url) => {
+          const es = inner(url);
+          const add = es.addEventListener;
+          es.addEventListener = (type, fn) => add(type, (ev) => { window.__events.push(type); fn(ev); });
+          return es;
+        };
+      });
+      await p2.selectOption("#scene-example", "column");
+      await p2.check('input[name="motion-source"][value="example"]');
+      await p2.fill("#duration", "20");
+      await p2.selectOption("#model", "dda");
+      await p2.click("#submit-button");
+      await p2.waitForFunction(() => /: succeeded/.test(document.getElementById("result-head").textContent) && !document.getElementById("run-view").hidden, null, { timeout: 120000 });
+      const events = await p2.evaluate(() => window.__events);
+      assert(events.includes("end"), `events read through the token-carrying stream: ${events}`);
+      const [dl] = await Promise.all([p2.waitForEvent("download", { timeout: 10000 }), p2.click("#dl-csv")]);
+      const path = await dl.path();
+      const csv = readFileSync(path, "utf8");
+      assert(csv.startsWith("time_s,column.x_m"), `downloaded: ${csv.slice(0, 60)}`);
+      // After the token: every API call carried it (the page's reads, the submission, the job's
+      // event stream when it was followed, the download).
+      const after = calls.filter((c) => c.t >= t0);
+      const bare = after.filter((c) => c.auth !== `Bearer ${token}`);
+      assert(after.length >= 5 && bare.length === 0, `${bare.length} of ${after.length} calls without the token: ${bare.map((c) => c.u).join(", ")}`);
+      assert(after.some((c) => c.u.endsWith("histories?format=csv")), `no download call: ${after.map((c) => c.u).join(", ")}`);
+      // A reload keeps the token (same tab): no prompt.
+      await p2.reload();
+      await p2.waitForSelector("#scene-example option[value=column]", { state: "attached", timeout: 10000 });
+      assert(await p2.isHidden("#auth"), "asked again after a reload");
+      assert(errors.length === 0, `script errors: ${errors.join(" | ")}`);
+      await p2.close();
+    });
+  }
 
   await check("no script errors, nothing fetched from another host", async () => {
     assert(pageErrors.length === 0, `errors: ${pageErrors.join(" | ")}`);

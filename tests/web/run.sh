@@ -32,25 +32,40 @@ fi
 RECORD=$ROOT/data/ground-motions/friuli-1976-tolmezzo-000.at2
 
 WORK=$(mktemp -d)
-# Created before the server starts: the loop below may read it before the server's shell opens it.
-: >"$WORK/stdout"
-"$BIN" serve --addr 127.0.0.1:0 --data "$WORK/data" --workers 1 >"$WORK/stdout" 2>"$WORK/server.log" &
-PID=$!
+PIDS=()
 cleanup() {
-    kill -TERM "$PID" 2>/dev/null || true
-    wait "$PID" 2>/dev/null || true
+    for pid in "${PIDS[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+    for pid in "${PIDS[@]}"; do wait "$pid" 2>/dev/null || true; done
     rm -rf "$WORK"
 }
 trap cleanup EXIT
 
-ADDR=""
-for _ in $(seq 1 200); do
-    ADDR=$(sed -n 's/^ashlar serve: listening on //p' "$WORK/stdout")
-    [ -n "$ADDR" ] && break
-    kill -0 "$PID" 2>/dev/null || { cat "$WORK/server.log" >&2; echo "web e2e: the server did not start" >&2; exit 1; }
-    sleep 0.05
-done
-[ -n "$ADDR" ] || { echo "web e2e: the server did not report its address" >&2; exit 1; }
+# start_server NAME ARGS...: `ashlar serve` on a free loopback port, its address in ADDR.
+start_server() {
+    local name=$1
+    shift
+    # Created before the server starts: the loop below may read it before the server's shell opens it.
+    : >"$WORK/$name.stdout"
+    "$BIN" serve --addr 127.0.0.1:0 --data "$WORK/$name-data" --workers 1 "$@" >"$WORK/$name.stdout" 2>"$WORK/$name.log" &
+    local pid=$!
+    PIDS+=("$pid")
+    ADDR=""
+    for _ in $(seq 1 200); do
+        ADDR=$(sed -n 's/^ashlar serve: listening on //p' "$WORK/$name.stdout")
+        [ -n "$ADDR" ] && return 0
+        kill -0 "$pid" 2>/dev/null || { cat "$WORK/$name.log" >&2; echo "web e2e: the $name server did not start" >&2; exit 1; }
+        sleep 0.05
+    done
+    echo "web e2e: the $name server did not report its address" >&2
+    exit 1
+}
+
+# A second server that asks for a token (the page's token prompt, docs/service.md --tokens).
+TOKEN=web-e2e-token-$RANDOM$RANDOM-0123456789
+echo "user $TOKEN" >"$WORK/tokens"
+start_server tokens --tokens "$WORK/tokens"
+ADDR_TOKENS=$ADDR
+start_server server
 
 # The bundled column with its column reduced to a segment: the server must name the field.
 python3 - "$ROOT/examples/column.json" "$WORK/bad-scene.json" <<'PY'
@@ -61,7 +76,7 @@ json.dump(scene, open(sys.argv[2], "w"))
 PY
 
 set +e
-ASHLAR_URL=$ADDR ASHLAR_RECORD=$RECORD ASHLAR_SCENE_BAD=$WORK/bad-scene.json \
+ASHLAR_URL=$ADDR ASHLAR_URL_TOKENS=$ADDR_TOKENS ASHLAR_TOKEN=$TOKEN ASHLAR_RECORD=$RECORD ASHLAR_SCENE_BAD=$WORK/bad-scene.json \
 ASHLAR_SCREENSHOT=${ASHLAR_SCREENSHOT:-$TARGET/web-screenshot.png} \
     node tests/web/e2e.mjs
 STATUS=$?
