@@ -11,8 +11,9 @@
 //! period is resolved, ≥ 10 steps a contact. Moreau's impact law on velocities is exact for
 //! rigid bodies at any Δt:
 //!
-//! - an *impacting* contact approaches (gap rate ġ < −`v_min`) and is at its impact: closed at
-//!   the step start (the contact closed at the end of the last step), or open and closing within
+//! - an *impacting* contact approaches (gap rate ġ < −`v_min`) and is at its impact: closed
+//!   within the last step (`Contact::closed_within_last_step`; a contact closed for longer, a
+//!   block settling on its springs, is the contact's own), or open and closing within
 //!   the first `window` × Δt of the step (g0 + ġ·t + ½·g̈·t² = 0, g̈ from the blocks'
 //!   accelerations at the step start);
 //! - an impact later in the step ends the step at its instant ([`next_impact`], the step is
@@ -148,8 +149,8 @@ fn motion_of(input: &ImpactInput, b: usize, states: &[BlockState]) -> (Vec6, Vec
     }
 }
 
-/// When contact `c` impacts, s from the step start: 0 for a closed contact still approaching
-/// faster than `v_min`, the first root within the step of g0 + ġ·t + ½·g̈·t² for an open one
+/// When contact `c` impacts, s from the step start: 0 for a contact closed within the last step
+/// still approaching faster than `v_min`, the first root within the step of g0 + ġ·t + ½·g̈·t² for an open one
 /// approaching that fast, `None` otherwise (not approaching, settling, or not closing within
 /// the step: an approach decelerating before contact has no root).
 fn impact_time(
@@ -168,7 +169,11 @@ fn impact_time(
     if rate >= -v_min {
         return None;
     }
-    if c.state.is_closed() || c.g0 <= 0.0 {
+    if c.state.is_closed() {
+        // Closed for longer than the last step: the contact's own (a block on its springs).
+        return c.closed_within_last_step.then_some(0.0);
+    }
+    if c.g0 <= 0.0 {
         return Some(0.0);
     }
     let accel = c.e_i.dot(&ai) - c.e_j.dot(&aj);

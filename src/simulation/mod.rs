@@ -852,6 +852,7 @@ impl Simulation {
     fn finish_step(&mut self, dt: f64, cuts: u32, error: Option<f64>) {
         let shear = self.springs.shear;
         for (c, law) in self.contacts.contacts.iter_mut().zip(&self.laws) {
+            c.closed_within_last_step = c.g0 > 0.0 && c.state.is_closed();
             match c.state {
                 ContactState::Open => c.bonded = false,
                 ContactState::Sliding { dir } => {
