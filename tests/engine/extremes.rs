@@ -749,26 +749,9 @@ fn hard_combinations() {
             Knobs {
                 penalty: Some(1e6),
                 pga_g: 50.0,
-                // "contact": this case tests the too-soft-penalty diagnostic of the contact's
-                // own response. Under the default law (e = 0, impacts located in time) the
-                // impulses hold the blocks out (the case below).
-                restitution: Some("contact"),
                 ..k()
             },
             Diagnostic,
-        ),
-        (
-            // Measured when impacts were located in time: 1.5 mm deep at most against the
-            // 2.44 mm limit, energy bounded, but the contacts re-close every few steps and each
-            // landing takes a short step: 4000 steps (the budget) to t = 0.135 s, ~30 × the
-            // nominal count (docs/restitution.md, "Cost").
-            "soft penalty 1e6 + 50 g, default impact law",
-            Knobs {
-                penalty: Some(1e6),
-                pga_g: 50.0,
-                ..k()
-            },
-            Complete,
         ),
         (
             "penalty 1e15 + Δt 1e-7",
