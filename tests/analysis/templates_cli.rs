@@ -114,15 +114,8 @@ fn run_evaluates_a_damage_criterion_on_heymans_arch() {
             "friction_angle=60",
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        // A step budget of 4000 (3 s at the default 1 ms, with room for cuts) ends the collapsing
-        // arch soon after its duration instead of up to 10 s later while its voussoirs settle
-        // (the run goes on while the structure moves, docs/run-end.md): its criterion is met
-        // long before. The standing arch must reach its duration within the budget (checked
-        // below), so its verdict is on the state at 3 s.
-        let mut v: Value = serde_json::from_slice(&o.stdout).expect("scene json");
-        v["control"]["max_steps"] = serde_json::json!(4000);
         let scene = dir.join(format!("arch-{ratio}.json"));
-        std::fs::write(&scene, v.to_string()).expect("write");
+        std::fs::write(&scene, &o.stdout).expect("write");
         let out = dir.join(format!("out-{ratio}"));
         let o = Command::new(env!("CARGO_BIN_EXE_ashlar"))
             .arg("run")
@@ -144,13 +137,6 @@ fn run_evaluates_a_damage_criterion_on_heymans_arch() {
         )
         .expect("json");
         assert_eq!(verdicts[0]["met"], expect, "t/R = {ratio}: {verdicts}");
-        if !expect {
-            let summary: Value = serde_json::from_slice(&o.stdout).expect("summary json");
-            assert!(
-                summary["stopped_reason"].is_null(),
-                "t/R = {ratio}: the standing arch stopped early: {summary}"
-            );
-        }
     }
     // A criterion naming a fixed block is refused before the run.
     let o = Command::new(env!("CARGO_BIN_EXE_ashlar"))
