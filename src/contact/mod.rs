@@ -117,6 +117,11 @@ pub struct Contact {
     /// For sliding contacts: elastic shear displacement kept in the shear spring (m), so that
     /// re-sticking starts from the Coulomb force rather than from zero.
     pub slide_offset: f64,
+    /// Open at the start of the last accepted step and closed at its end, or found already
+    /// penetrating by a detection after the first step: the impact law
+    /// (`assembly::restitution`) still treats it as at its impact while it approaches; a
+    /// contact closed for longer (a block settling on its springs) is the contact's own.
+    pub closed_within_last_step: bool,
     /// The last friction fixed-point update within the current open–close loop: the normal
     /// force the friction used, and the one the solve then gave (N); for the secant step
     /// (`OpenCloseParams::secant_friction`).
@@ -192,6 +197,7 @@ impl ContactSet {
                             normal_force: old.normal_force,
                             friction_normal: old.friction_normal,
                             slide_offset: old.slide_offset,
+                            closed_within_last_step: old.closed_within_last_step,
                             ..new_contact(cand)
                         }
                     }
@@ -201,6 +207,7 @@ impl ContactSet {
                         // scene starts in equilibrium rather than falling into its springs.
                         if cand.gap <= 0.0 {
                             c.state = ContactState::Locked;
+                            c.closed_within_last_step = !first_step;
                         }
                         c.bonded = first_step
                             && cand.gap <= search * 1e-3
@@ -291,6 +298,7 @@ fn new_contact(cand: &Candidate) -> Contact {
         gap: cand.gap,
         slip: 0.0,
         slide_offset: 0.0,
+        closed_within_last_step: false,
         friction_secant: None,
         flips: 0,
         start_normal_force: 0.0,

@@ -9,7 +9,7 @@ pub use energy::Energy;
 pub use params::{resolve_penalty, SimParams, IMPACT_APPROACH_RATIO};
 
 use crate::assembly::contact_springs::{JointLaw, Prescribed, SpringParams};
-use crate::assembly::restitution::{apply_impacts, ImpactInput};
+use crate::assembly::restitution::{apply_impacts, next_impact, ImpactInput};
 use crate::assembly::{elasticity, BlockState, BlockSystem, BodyLoads, Dofs, Newmark};
 use crate::contact::{Contact, ContactSet, ContactState, Mobility};
 use crate::geometry::{displacement_matrix, BlockGeometry, Vec6};
@@ -392,8 +392,8 @@ impl Simulation {
         // "housner" is Newton's law with e = 0 (an impact without bounce); "contact" leaves the
         // impact to the contact springs / dual solver.
         match self.scene.control.restitution {
-            Restitution::Housner => self.impacts(0.0, dt),
-            Restitution::Coefficient(e) => self.impacts(e, dt),
+            Restitution::Housner => dt = self.impacts(0.0, dt),
+            Restitution::Coefficient(e) => dt = self.impacts(e, dt),
             Restitution::Contact => {}
         }
         self.start_states.clone_from(&self.states);
@@ -516,9 +516,11 @@ impl Simulation {
             .bind_contacts(&self.dofs, &self.contacts.contacts);
     }
 
-    /// Newton's impact law at the contacts that close within the step (`control.restitution`
-    /// a number): the step then starts from the velocities after the impact.
-    fn impacts(&mut self, e: f64, dt: f64) {
+    /// Newton's impact law (`control.restitution`) at the contacts at their impact at the step
+    /// start: the step then starts from the velocities after the impact. Returns the step to
+    /// take: `dt`, or shorter so that it ends just before the next impact (event location,
+    /// `ImpactParams::window`; not a cut: the next step is `dt` again).
+    fn impacts(&mut self, e: f64, dt: f64) -> f64 {
         let immobile: Vec<[f64; 3]> = (0..self.scene.blocks.len())
             .map(|b| match self.dofs.free_index[b] {
                 Some(_) => [0.0; 3],
@@ -535,6 +537,7 @@ impl Simulation {
             retired: &self.retired,
             restitution: e,
             dt,
+            nominal_dt: self.scene.control.time_step,
             gravity: self.scene.gravity,
         };
         let n = apply_impacts(
@@ -544,6 +547,13 @@ impl Simulation {
             &self.params.impact,
         );
         self.stats.impacts += n as u64;
+        let next = next_impact(
+            &input,
+            &self.contacts.contacts,
+            &self.states,
+            &self.params.impact,
+        );
+        next.map_or(dt, |t| t - self.params.impact.margin * dt)
     }
 
     /// Kinetic damping, loads at the step end, prescribed motion, block terms.
@@ -842,6 +852,7 @@ impl Simulation {
     fn finish_step(&mut self, dt: f64, cuts: u32, error: Option<f64>) {
         let shear = self.springs.shear;
         for (c, law) in self.contacts.contacts.iter_mut().zip(&self.laws) {
+            c.closed_within_last_step = c.g0 > 0.0 && c.state.is_closed();
             match c.state {
                 ContactState::Open => c.bonded = false,
                 ContactState::Sliding { dir } => {
