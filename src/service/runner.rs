@@ -124,6 +124,8 @@ fn limits_to_value(l: &Limits) -> Value {
     })
 }
 
+// `..d`: a field added to `Limits` later keeps its default here until it is sent.
+#[allow(clippy::needless_update)]
 fn limits_from_value(v: &Value) -> Limits {
     let d = Limits::default();
     let u = |k: &str, or: u64| v.get(k).and_then(Value::as_u64).unwrap_or(or);
@@ -382,7 +384,7 @@ fn human_bytes(b: u64) -> String {
 /// Parse `--job-memory-limit`: bytes, or with a K/M/G suffix (powers of 1024); 0 is no limit.
 pub fn parse_bytes(s: &str) -> Result<u64, String> {
     let t = s.trim();
-    let (num, mult) = match t.char_indices().last() {
+    let (num, mult) = match t.char_indices().next_back() {
         Some((i, c)) if c.is_ascii_alphabetic() => {
             let m = match c.to_ascii_uppercase() {
                 'K' => 1u64 << 10,

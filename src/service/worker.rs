@@ -501,7 +501,13 @@ fn run_job(core: &Core, job: JobRecord) {
                 _ => match &core.params.isolation {
                     super::runner::Isolation::Process(p) => {
                         execute(core, id, &dir, &ctl, |hooks| {
-                            super::runner::run_in_child(p, job.kind, &job.request, &core.limits, hooks)
+                            super::runner::run_in_child(
+                                p,
+                                job.kind,
+                                &job.request,
+                                &core.limits,
+                                hooks,
+                            )
                         })
                         .map(Some)
                     }

@@ -13,7 +13,11 @@ use serde_json::{json, Value};
 use service_support::*;
 use std::time::Duration;
 
-fn start(tag: &str, workers: usize, tune: impl FnOnce(&mut ProcessParams)) -> (Service, axum::Router) {
+fn start(
+    tag: &str,
+    workers: usize,
+    tune: impl FnOnce(&mut ProcessParams),
+) -> (Service, axum::Router) {
     let dir = temp_dir(tag);
     let mut cfg = ServiceConfig::new(&dir);
     let mut p = ProcessParams::new(env!("CARGO_BIN_EXE_ashlar").into());
