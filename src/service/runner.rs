@@ -55,10 +55,10 @@ pub struct ProcessParams {
     pub env: Vec<(String, String)>,
 }
 
-/// Default `--job-memory-limit`: 8 GiB of address space. The largest runs the budgets admit
-/// touch about 2 GB (20 M block-frames held for the MCAP writer); glibc and rayon reserve
-/// several hundred MB more that are never touched. Far below that a run fails for no reason;
-/// the point is that one job cannot take the machine's memory from the server and the others.
+/// Default `--job-memory-limit`: 8 GiB of address space. Generous on purpose (not measured
+/// against the largest run the budgets admit): address space counts reservations that are never
+/// touched (thread stacks, allocator arenas), so a tight default would fail legitimate runs; the
+/// point is that one job cannot take the whole machine's memory from the server and the others.
 pub const DEFAULT_JOB_MEMORY_LIMIT: u64 = 8 << 30;
 
 impl ProcessParams {
