@@ -42,6 +42,9 @@ pub enum Command {
     Scene(scene::SceneArgs),
     /// The PGA interval consistent with several observations at one site (docs/observations.md).
     Site(site::SiteArgs),
+    /// Internal: one job of `ashlar serve` in its own process (job isolation).
+    #[command(hide = true, name = "internal-run-job")]
+    InternalRunJob,
 }
 
 /// Run the CLI; errors go to stderr as one clear line.
@@ -57,6 +60,7 @@ pub fn main() -> ExitCode {
         Command::Sweep(args) => sweep::run(&args),
         Command::Scene(args) => scene::run(&args),
         Command::Site(args) => site::run(&args),
+        Command::InternalRunJob => crate::service::runner::child_main(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

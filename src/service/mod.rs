@@ -14,6 +14,7 @@ pub mod pg_tls;
 pub mod problem;
 pub mod request;
 pub mod routes;
+pub mod runner;
 pub mod server;
 pub mod store;
 pub mod templates;
@@ -128,6 +129,35 @@ pub struct ServeArgs {
     /// embedded store's default).
     #[arg(long)]
     pub fanout_width: Option<usize>,
+    /// Where jobs run: `process` (a child process per job or search, with the limits below: a
+    /// crash or exhausted memory fails that job only) or `thread` (on the worker threads).
+    #[arg(long, value_enum, default_value_t = IsolationFlag::default())]
+    pub isolation: IsolationFlag,
+    /// Address space of a job's process (RLIMIT_AS), bytes or with K/M/G; 0: no limit.
+    /// With --isolation process.
+    #[arg(long, default_value = "8G", value_parser = runner::parse_bytes)]
+    pub job_memory_limit: u64,
+    /// CPU seconds of a job's process (RLIMIT_CPU; default: --max-job-seconds × cores).
+    #[arg(long)]
+    pub job_cpu_seconds: Option<u64>,
+}
+
+/// `--isolation`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum IsolationFlag {
+    Process,
+    Thread,
+}
+
+impl Default for IsolationFlag {
+    /// Child processes where they exist (Unix); threads elsewhere.
+    fn default() -> Self {
+        if cfg!(unix) {
+            IsolationFlag::Process
+        } else {
+            IsolationFlag::Thread
+        }
+    }
 }
 
 /// The fan-out width a process uses: `--fanout-width` if given (0: none), else fan out on a
@@ -391,6 +421,7 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
     if !args.fake_runner {
         config.workers.fanout_width = fanout_width(args.fanout_width, config.postgres.is_some());
     }
+    config.workers.isolation = isolation(&args, &config.limits)?;
     let runner = if args.fake_runner {
         fake::fake_runner(Duration::from_millis(200))
     } else {
@@ -436,6 +467,25 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
     runtime.shutdown_timeout(Duration::from_secs(1));
     tracing::info!(requeued, "stopped");
     served.map_err(|e| format!("serving: {e}"))
+}
+
+/// The isolation a `serve` command line asks for.
+fn isolation(args: &ServeArgs, limits: &Limits) -> Result<runner::Isolation, String> {
+    if args.isolation == IsolationFlag::Thread || !cfg!(unix) {
+        return Ok(runner::Isolation::Thread);
+    }
+    let exe = std::env::current_exe()
+        .map_err(|e| format!("--isolation process: cannot find the ashlar executable: {e}"))?;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64;
+    let mut p = runner::ProcessParams::new(exe);
+    p.memory_limit = args.job_memory_limit;
+    p.cpu_seconds = args
+        .job_cpu_seconds
+        .unwrap_or_else(|| limits.max_job_seconds.saturating_mul(cores));
+    if args.fake_runner {
+        p.fake = Some(Duration::from_millis(200));
+    }
+    Ok(runner::Isolation::Process(p))
 }
 
 /// `--lease SECONDS` as lease parameters.

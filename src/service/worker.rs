@@ -151,6 +151,10 @@ pub struct WorkerParams {
     /// default of the embedded store; `ashlar serve|worker` with PostgreSQL fan out). A search
     /// that already has children is always replayed from them, whatever this says.
     pub fanout_width: Option<usize>,
+    /// Where runs and in-process searches execute: on the worker thread, or in a child process
+    /// with resource limits ([`super::runner`]). Fan-out steps and `pga_run` children run on
+    /// the thread.
+    pub isolation: super::runner::Isolation,
 }
 
 impl Default for WorkerParams {
@@ -163,6 +167,7 @@ impl Default for WorkerParams {
             progress_write_interval: Duration::from_millis(250),
             max_attempts: 3,
             fanout_width: None,
+            isolation: super::runner::Isolation::Thread,
         }
     }
 }
@@ -493,10 +498,24 @@ fn run_job(core: &Core, job: JobRecord) {
                         fan_out_search(core, &job, &input, hooks)
                     })
                 }
-                _ => {
-                    let runner = core.runner.clone();
-                    execute(core, id, &dir, &ctl, |hooks| runner(&input, hooks)).map(Some)
-                }
+                _ => match &core.params.isolation {
+                    super::runner::Isolation::Process(p) => {
+                        execute(core, id, &dir, &ctl, |hooks| {
+                            super::runner::run_in_child(
+                                p,
+                                job.kind,
+                                &job.request,
+                                &core.limits,
+                                hooks,
+                            )
+                        })
+                        .map(Some)
+                    }
+                    super::runner::Isolation::Thread => {
+                        let runner = core.runner.clone();
+                        execute(core, id, &dir, &ctl, |hooks| runner(&input, hooks)).map(Some)
+                    }
+                },
             }
         })
     };

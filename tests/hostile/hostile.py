@@ -30,14 +30,15 @@ def check(cond, what):
 
 
 class Server:
-    def __init__(self, *args, runner="real"):
+    def __init__(self, *args, runner="real", env=None, data=None):
         self.dir = tempfile.mkdtemp(prefix="ashlar-hostile-")
-        cmd = [BIN, "serve", "--addr", "127.0.0.1:0", "--data", os.path.join(self.dir, "data"), *args]
+        self.data_dir = data or os.path.join(self.dir, "data")
+        cmd = [BIN, "serve", "--addr", "127.0.0.1:0", "--data", self.data_dir, *args]
         if runner == "fake":
             cmd.append("--fake-runner")
         self.out = open(os.path.join(self.dir, "stdout"), "w+")
         self.err = open(os.path.join(self.dir, "stderr"), "w+")
-        self.proc = subprocess.Popen(cmd, stdout=self.out, stderr=self.err)
+        self.proc = subprocess.Popen(cmd, stdout=self.out, stderr=self.err, env=dict(os.environ, **(env or {})))
         self.addr = None
         for _ in range(400):
             self.out.seek(0)
@@ -54,7 +55,15 @@ class Server:
         self.host, self.port = hostport.split(":")[0], int(hostport.split(":")[1])
 
     def data(self):
-        return os.path.join(self.dir, "data")
+        return self.data_dir
+
+    def children(self):
+        """Pids of the server's child processes (the jobs' `internal-run-job` processes)."""
+        pids = []
+        for task in os.listdir(f"/proc/{self.proc.pid}/task"):
+            with open(f"/proc/{self.proc.pid}/task/{task}/children") as f:
+                pids += [int(x) for x in f.read().split()]
+        return pids
 
     def alive(self):
         return self.proc.poll() is None
@@ -187,6 +196,65 @@ def wait_status(s, path, want, timeout=120):
             return json.loads(b)
         time.sleep(0.2)
     return None
+
+
+def pid_alive(pid):
+    """A process that exists and is not a zombie."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def isolation():
+    """6. Jobs run in child processes with limits: a job that exhausts its memory or crashes
+    fails alone (the cause named) while a job on the other worker succeeds, the server's memory
+    stays flat; a SIGKILLed server leaves no child running and its job is run again."""
+    column, pulse = load("column.json"), load("half-sine-pulse.json")
+    faults = {"ASHLAR_TEST_FAULTS": "1"}  # honoured by debug builds only (src/service/runner.rs)
+    i = Server("--workers", "2", "--job-memory-limit", "256M", env=faults)
+    rss0 = i.hwm_mb()
+    good_scene = json.loads(json.dumps(column))
+    good_scene["control"] = dict(good_scene.get("control") or {}, duration=30)
+    st, _, b = call(i, "POST", "/v1/jobs", {"scene": good_scene, "motion": pulse})
+    good = json.loads(b)["id"]
+    bad = {}
+    for name in ["fault:alloc", "fault:segv", "fault:alloc", "fault:abort"]:
+        st, _, b = call(i, "POST", "/v1/jobs", {"scene": dict(column, name=name), "motion": pulse})
+        bad.setdefault(name, []).append(json.loads(b)["id"])
+    for name, want in [("fault:alloc", "job memory limit of 268435456 bytes"), ("fault:segv", "signal 11"),
+                       ("fault:abort", "signal 6")]:
+        for jid in bad[name]:
+            j = wait_status(i, f"/v1/jobs/{jid}", {"failed", "succeeded", "cancelled"}, 120)
+            err = (j or {}).get("error") or ""
+            check(j is not None and j["status"] == "failed" and want in err,
+                  f"a {name} job fails alone with its cause ({j and j['status']}: {err[:110]})")
+    j = wait_status(i, f"/v1/jobs/{good}", {"failed", "succeeded", "cancelled"}, 300)
+    check(j is not None and j["status"] == "succeeded",
+          f"the job beside them on the other worker succeeds ({j and j['status']}: {j and j.get('error')})")
+    rss1 = i.hwm_mb()
+    check(i.alive() and rss1 - rss0 < 30,
+          f"the server stays up, peak RSS {rss0:.0f} → {rss1:.0f} MB through 4 failed jobs (two of 256 MB)")
+    # A SIGKILLed server: its job's process dies with it; the next server runs the job again.
+    blocker = json.loads(json.dumps(column))
+    blocker["control"] = dict(blocker.get("control") or {}, duration=2000)
+    st, _, b = call(i, "POST", "/v1/jobs", {"scene": blocker, "motion": pulse})
+    jid = json.loads(b)["id"]
+    wait_status(i, f"/v1/jobs/{jid}", {"running"}, 60)
+    kids = i.children()
+    i.proc.kill()
+    i.proc.wait(10)
+    time.sleep(1.0)
+    left = [p for p in kids if pid_alive(p)]
+    check(kids and not left, f"SIGKILL of the server: its job processes {kids} end with it (left: {left})")
+    r = Server("--workers", "1", data=i.data_dir, env=faults)
+    j = wait_status(r, f"/v1/jobs/{jid}", {"running"}, 60)
+    check(j is not None and j["attempts"] == 2, f"the restarted server runs the job again (attempt {j and j['attempts']})")
+    call(r, "POST", f"/v1/jobs/{jid}/cancel", {})
+    j = wait_status(r, f"/v1/jobs/{jid}", {"cancelled", "failed", "succeeded"}, 60)
+    check(j is not None and j["status"] == "cancelled", f"and cancels it in its process ({j and j['status']})")
+    r.stop()
 
 
 def main():
@@ -482,6 +550,8 @@ def main():
     check(j is not None and j["status"] == "failed" and "max-job-artifact-bytes" in (j.get("error") or ""),
           f"a job writing over --max-job-artifact-bytes fails with the limit named ({j and j.get('error')})")
     a.stop()
+
+    isolation()
 
     hz.done = True
     hz.join()

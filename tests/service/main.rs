@@ -6,6 +6,7 @@
 mod pg_cluster;
 mod pg_tls;
 mod service_durability;
+mod service_isolation;
 mod service_openapi;
 mod service_pga;
 mod service_routes;
