@@ -149,11 +149,33 @@ fn get_bytes(addr: &str, path: &str) -> (u16, Vec<u8>) {
         .nth(1)
         .and_then(|c| c.parse().ok())
         .unwrap_or(0);
-    assert!(
-        !head.contains("transfer-encoding: chunked"),
-        "unexpected chunked body for {path}"
-    );
-    (status, raw[split + 4..].to_vec())
+    let body = &raw[split + 4..];
+    // Streamed artifacts (histories CSV) come chunked: decode, so the bytes compare as sent.
+    if head.contains("transfer-encoding: chunked") {
+        return (status, dechunk(body, path));
+    }
+    (status, body.to_vec())
+}
+
+/// The payload of a `Transfer-Encoding: chunked` body (RFC 9112 §7.1; no trailers expected).
+fn dechunk(mut body: &[u8], path: &str) -> Vec<u8> {
+    let mut out = Vec::new();
+    loop {
+        let line_end = body
+            .windows(2)
+            .position(|w| w == b"\r\n")
+            .unwrap_or_else(|| panic!("chunk size line of {path}"));
+        let size_text = String::from_utf8_lossy(&body[..line_end]);
+        let size = usize::from_str_radix(size_text.split(';').next().unwrap_or("").trim(), 16)
+            .unwrap_or_else(|_| panic!("chunk size {size_text:?} of {path}"));
+        body = &body[line_end + 2..];
+        if size == 0 {
+            return out;
+        }
+        assert!(body.len() >= size + 2, "truncated chunk of {path}");
+        out.extend_from_slice(&body[..size]);
+        body = &body[size + 2..];
+    }
 }
 
 fn wait_succeeded(addr: &str, id: &str) -> Value {
