@@ -158,6 +158,12 @@ fn main() {
             if let Some(v) = arg("--force-tol") {
                 params.open_close.force_tolerance = v.parse().expect("--force-tol");
             }
+            if let Some(v) = arg("--hysteresis") {
+                params.open_close.hysteresis = v.parse().expect("--hysteresis");
+            }
+            if let Some(v) = arg("--max-iterations") {
+                params.open_close.max_iterations = v.parse().expect("--max-iterations");
+            }
             if let Some(v) = arg("--max-flips") {
                 params.open_close.max_flips = v.parse().expect("--max-flips");
             }

@@ -53,12 +53,14 @@ pub struct LinearSolver {
 }
 
 /// Work counters of the sparse path (diagnostics for benchmarks).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SparseCounts {
     pub symbolic: u64,
     pub numeric: u64,
     /// Conjugate-gradient iterations preconditioned by a reused factor.
     pub reuse_iterations: u64,
+    /// See [`SparseParams::check_reuse`]; 0 when unchecked.
+    pub reuse_max_error: f64,
 }
 
 impl LinearSolver {
@@ -74,6 +76,7 @@ impl LinearSolver {
             symbolic: self.sparse.symbolic_count,
             numeric: self.sparse.numeric_count,
             reuse_iterations: self.sparse.reuse_iterations,
+            reuse_max_error: self.sparse.reuse_max_error,
         }
     }
 

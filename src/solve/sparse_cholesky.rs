@@ -52,6 +52,10 @@ pub struct SparseCholesky {
     pub symbolic_count: u64,
     pub numeric_count: u64,
     pub reuse_iterations: u64,
+    /// With [`SparseParams::check_reuse`]: the largest difference between a reused-factor
+    /// solution and the refactored solution of the same system, relative to the largest
+    /// unknown of the latter.
+    pub reuse_max_error: f64,
 }
 
 /// Tuning of the sparse path.
@@ -73,6 +77,11 @@ pub struct SparseParams {
     /// 1e-12 leaves the solution as accurate as the direct solve's round-off at the condition
     /// numbers of penalty systems (≈ 1e4 relative to eps).
     pub reuse_tolerance: f64,
+    /// Check every reused-factor solve against a fresh factorization of the same system and
+    /// keep the largest relative difference (`SparseCounts::reuse_max_error`). Off: it costs a
+    /// factorization a solve, the work the reuse saves; for tests of the shortcut only (the
+    /// reused factor itself is kept, so the run takes the same path as without the check).
+    pub check_reuse: bool,
 }
 
 impl Default for SparseParams {
@@ -81,6 +90,7 @@ impl Default for SparseParams {
             supernodal: true,
             max_reuse_iterations: 8,
             reuse_tolerance: 1e-12,
+            check_reuse: false,
         }
     }
 }
@@ -191,9 +201,14 @@ impl SparseCholesky {
         if self.factored
             && params.max_reuse_iterations > 0
             && self.major_changes(sys, dofs) < params.max_reuse_iterations
-            && self.reuse_solve(x, params)
         {
-            return Ok(());
+            let rhs = params.check_reuse.then(|| x.to_vec());
+            if self.reuse_solve(x, params) {
+                if let Some(mut fresh) = rhs {
+                    self.check_against_fresh(sys, dofs, x, &mut fresh)?;
+                }
+                return Ok(());
+            }
         }
         self.factorize(sys, dofs)?;
         let (Some(symbolic), Some(mem)) = (self.symbolic.as_ref(), self.mem.as_mut()) else {
@@ -240,6 +255,40 @@ impl SparseCholesky {
             .iter()
             .filter(|[delta, size]| *delta > MAJOR_CHANGE * size)
             .count()
+    }
+
+    /// Solve the system with the right-hand side `fresh` by a fresh factorization, compare
+    /// with the reused-factor solution `x`, and restore the reused factor (so a checked run
+    /// takes the same path as an unchecked one).
+    fn check_against_fresh(
+        &mut self,
+        sys: &BlockSystem,
+        dofs: &Dofs,
+        x: &[f64],
+        fresh: &mut [f64],
+    ) -> Result<(), SolveError> {
+        let kept = (
+            self.l_values.clone(),
+            self.factored_values.clone(),
+            self.numeric_count,
+        );
+        self.factorize(sys, dofs)?;
+        let (Some(symbolic), Some(mem)) = (self.symbolic.as_ref(), self.mem.as_mut()) else {
+            return Err(SolveError::Backend("symbolic factorization missing".into()));
+        };
+        let llt = LltRef::new(symbolic, &self.l_values);
+        let rhs = faer::MatMut::from_column_major_slice_mut(fresh, self.n, 1);
+        llt.solve_in_place_with_conj(faer::Conj::No, rhs, Par::Seq, MemStack::new(mem));
+        let scale = max_abs(fresh);
+        let diff = x
+            .iter()
+            .zip(fresh.iter())
+            .fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
+        if scale > 0.0 {
+            self.reuse_max_error = self.reuse_max_error.max(diff / scale);
+        }
+        (self.l_values, self.factored_values, self.numeric_count) = kept;
+        Ok(())
     }
 
     /// Numeric factorization of the current values into `l_values`.
