@@ -37,6 +37,12 @@ pub struct Limits {
     /// Jobs waiting in the queue (submitted jobs and searches, not a search's own runs);
     /// beyond it submissions get 429 with Retry-After. Checked in the insert's transaction.
     pub max_queued_jobs: u64,
+    /// Runs (`POST /v1/jobs`) one token may have waiting in the queue (`--tokens` only; 429
+    /// beyond). 1000: a study's batch of runs fits, one user cannot fill the server's queue.
+    pub max_queued_jobs_per_token: u64,
+    /// PGA searches one token may have waiting in the queue (`--tokens` only; 429 beyond).
+    /// 100: each search is tens of runs, so ten times fewer than runs.
+    pub max_queued_searches_per_token: u64,
     /// Work of one run, blocks × nominal steps. 1e9 is 200 000 steps (200 s at 1 ms) of a
     /// 5000-block façade or the whole step limit for 500 blocks: minutes to hours of CPU. The
     /// bundled examples and the study scenes need less than 1e7.
@@ -72,6 +78,8 @@ impl Default for Limits {
             max_block_vertices: 1000,
             max_scan_points: 64,
             max_queued_jobs: 100_000,
+            max_queued_jobs_per_token: 1000,
+            max_queued_searches_per_token: 100,
             max_block_steps: 1_000_000_000,
             max_block_frames: 20_000_000,
             max_search_block_steps: 10_000_000_000,

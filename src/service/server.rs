@@ -48,6 +48,9 @@ pub struct ServerParams {
     pub cors_origins: Vec<String>,
     /// Bearer tokens required on `/v1/…` (`--tokens`); `None`: no authentication.
     pub tokens: Option<Arc<super::auth::Tokens>>,
+    /// The key of signed short-lived URLs (with `--tokens`): `--signing-key-file`, or a
+    /// random key per start.
+    pub signing: Option<super::auth::SigningKey>,
 }
 
 impl Default for ServerParams {
@@ -61,6 +64,7 @@ impl Default for ServerParams {
             max_headers: 100,
             cors_origins: Vec::new(),
             tokens: None,
+            signing: None,
         }
     }
 }

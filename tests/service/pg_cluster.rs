@@ -200,6 +200,7 @@ fn embedded_results(bodies: &[Value]) -> Vec<String> {
                     kind: JobKind::Run,
                     request: b.clone(),
                     motion: parsed.motion_summary,
+                    owner: None,
                 })
                 .expect("insert");
             core.notify_work();
@@ -331,6 +332,7 @@ fn lease_expiry_requeues_and_discards_the_late_result() {
         kind: JobKind::Run,
         request: json!({"k": 1}),
         motion: json!({"pga": 1.0}),
+        owner: None,
     };
     a.insert(&job).expect("insert");
     assert_eq!(a.claim().expect("claim").expect("job").id, job.id);
@@ -413,6 +415,7 @@ fn store_contract_matches_the_embedded_store() {
         kind,
         request: json!({"a": 1}),
         motion: json!({"pga": 2.0}),
+        owner: None,
     };
     let (a, b) = (job(JobKind::Run), job(JobKind::PgaSearch));
     s.insert(&a).expect("insert");
@@ -588,6 +591,7 @@ fn notify_wakes_an_idle_worker() {
                 kind: JobKind::Run,
                 request: body,
                 motion: json!({"pga": 2.0}),
+                owner: None,
             })
             .expect("insert");
         let t = Instant::now();
@@ -694,6 +698,7 @@ fn child(parent: Uuid, pga: f64, step: f64) -> NewJob {
         request: json!({"parent": parent, "record": 0, "pga": pga, "pga_bits": pga.to_bits(),
                         "width": 2, "progress_step": step}),
         motion: json!({"pga": pga}),
+        owner: None,
     }
 }
 
@@ -703,6 +708,7 @@ fn new_search() -> NewJob {
         kind: JobKind::PgaSearch,
         request: json!({"a": 1}),
         motion: json!({"pga": 1.0}),
+        owner: None,
     }
 }
 
@@ -1070,6 +1076,7 @@ fn embedded_store_fans_out_with_one_worker_thread() {
                     kind: JobKind::PgaSearch,
                     request: (*b).clone(),
                     motion: parsed.motion_summary,
+                    owner: None,
                 })
                 .expect("insert");
             core.notify_work();
