@@ -398,6 +398,9 @@ fn scene_and_motion(
     check_shapes(scene, motion)?;
     check_sizes(scene, motion, limits)?;
     super::budget::check_ranges(scene)?;
+    if let Some(m) = motion {
+        super::budget::check_motion_ranges("/motion", m)?;
+    }
     if let Some(n) = scene.get("blocks").and_then(Value::as_array).map(Vec::len) {
         if n > limits.max_blocks {
             return Err(ApiError::limit_exceeded(
