@@ -397,6 +397,9 @@ pub fn inspect_motion(
             "the body must be a ground motion object {\"horizontal\": …, \"vertical\": …, \"scale\": …} (docs/format.md §2)",
         ));
     }
+    // Values outside docs/format.md "Ranges", as a submission's motion (pointers relative to
+    // the body: `/horizontal/pulse/amplitude`).
+    super::budget::check_motion_ranges("", body)?;
     // Read as a `MotionSpec` (unknown members, members of another form and nulls refused),
     // without the command-line extension `processing`.
     let problem = |e: crate::motion::MotionError| {
