@@ -29,7 +29,10 @@ pub fn owner_id(digest: &[u8; 32]) -> String {
     let mut h = Sha256::new();
     h.update(b"ashlar-owner\0");
     h.update(digest);
-    h.finalize()[..8].iter().map(|b| format!("{b:02x}")).collect()
+    h.finalize()[..8]
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 /// The accepted tokens, as digests.
@@ -402,7 +405,10 @@ mod tests {
             other.verify(path, e.as_deref(), s.as_deref(), 1_500),
             Err(SignError::BadSignature)
         );
-        assert_eq!(ok(path, None, s.as_deref(), 1_500), Err(SignError::Malformed));
+        assert_eq!(
+            ok(path, None, s.as_deref(), 1_500),
+            Err(SignError::Malformed)
+        );
         assert!(SigningKey::from_bytes(b"short", key.validity).is_err());
         assert!(SigningKey::from_bytes(&[b'k'; 32], key.validity).is_ok());
     }

@@ -313,7 +313,6 @@ pub fn check_motion_ranges(base: &str, motion: &Value) -> Result<(), ApiError> {
     Ok(())
 }
 
-
 fn check(pointer: String, v: &Value, r: Range) -> Result<(), ApiError> {
     let Some(x) = v.as_f64() else {
         return Ok(()); // not a number: the scene reader names the type error

@@ -16,9 +16,9 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
     let t = text.trim();
     let split = t.find(|c: char| !c.is_ascii_digit()).unwrap_or(t.len());
     let (n, unit) = t.split_at(split);
-    let n: u64 = n
-        .parse()
-        .map_err(|_| format!("{text:?}: expected a whole number and a unit, e.g. 7d, 12h, 30m, 90s"))?;
+    let n: u64 = n.parse().map_err(|_| {
+        format!("{text:?}: expected a whole number and a unit, e.g. 7d, 12h, 30m, 90s")
+    })?;
     let secs = match unit {
         "s" => Some(n),
         "m" => n.checked_mul(60),
@@ -129,10 +129,22 @@ mod tests {
         assert_eq!(parse_duration("12h"), Ok(Duration::from_secs(43_200)));
         assert_eq!(parse_duration("30m"), Ok(Duration::from_secs(1800)));
         assert_eq!(parse_duration(" 90s "), Ok(Duration::from_secs(90)));
-        for bad in ["", "7", "d", "7w", "0s", "-1d", "1.5h", "99999999999999999999d"] {
+        for bad in [
+            "",
+            "7",
+            "d",
+            "7w",
+            "0s",
+            "-1d",
+            "1.5h",
+            "99999999999999999999d",
+        ] {
             assert!(parse_duration(bad).is_err(), "{bad:?} accepted");
         }
-        assert_eq!(sweep_interval(Duration::from_secs(2)), Duration::from_secs(1));
+        assert_eq!(
+            sweep_interval(Duration::from_secs(2)),
+            Duration::from_secs(1)
+        );
         assert_eq!(
             sweep_interval(Duration::from_secs(7 * 86_400)),
             Duration::from_secs(600)

@@ -1,10 +1,10 @@
 //! HTTP routes (docs/format.md §4, `openapi.yaml`): thin async handlers that validate, talk to the
 //! store on the blocking pool, and answer. No simulation work happens here.
+use super::auth::Access;
 use super::events::{job_stream, EventParams, JobEvent};
 use super::histories::Histories;
 use super::problem::ApiError;
 use super::request::{json_body, parse_pga, parse_run};
-use super::auth::Access;
 use super::store::{
     rfc3339, CancelOutcome, DeleteOutcome, JobKind, JobRecord, JobStatus, NewJob, QueueFull,
 };
@@ -181,7 +181,11 @@ fn authorize(
     let query: Vec<(String, String)> = req
         .uri()
         .query()
-        .map(|q| url::form_urlencoded::parse(q.as_bytes()).into_owned().collect())
+        .map(|q| {
+            url::form_urlencoded::parse(q.as_bytes())
+                .into_owned()
+                .collect()
+        })
         .unwrap_or_default();
     let param = |k: &str| {
         query

@@ -123,7 +123,11 @@ pub async fn serve(
             continue;
         };
         let _ = stream.set_nodelay(true);
-        let io = TokioIo::new(IdleIo::new(stream, params.idle_timeout, params.max_header_bytes));
+        let io = TokioIo::new(IdleIo::new(
+            stream,
+            params.idle_timeout,
+            params.max_header_bytes,
+        ));
         let service = TowerToHyperService::new(app.clone());
         let builder = builder.clone();
         let mut stop_rx = stop_rx.clone();

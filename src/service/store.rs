@@ -1022,10 +1022,7 @@ mod tests {
             s.insert_quota(&theirs, 5, 2).expect("i"),
             Some(QueueFull::Server(5))
         );
-        assert_eq!(
-            s.list_owned(10, None, Some("aaaa")).expect("list").len(),
-            3
-        );
+        assert_eq!(s.list_owned(10, None, Some("aaaa")).expect("list").len(), 3);
         assert_eq!(s.list_owned(10, None, Some("bbbb")).expect("list").len(), 1);
         assert_eq!(s.list_recent(10, None).expect("list").len(), 5);
         let first = s.list_owned(10, None, Some("bbbb")).expect("list")[0].clone();

@@ -36,7 +36,8 @@ fn start(
         idle_poll: Duration::from_millis(50),
         ..WorkerParams::default()
     };
-    let tokens = Tokens::parse(&format!("user {ALICE}\nuser {BOB}\nadmin {ROOT}\n")).expect("tokens");
+    let tokens =
+        Tokens::parse(&format!("user {ALICE}\nuser {BOB}\nadmin {ROOT}\n")).expect("tokens");
     let server = ServerParams {
         tokens: Some(Arc::new(tokens)),
         signing: Some(SigningKey::from_bytes(KEY, Duration::from_secs(900)).expect("key")),
@@ -328,7 +329,10 @@ async fn motion_values_outside_their_ranges_are_refused_with_their_pointer() {
             pulse_with("amplitude", 1e308),
             "/motion/horizontal/pulse/amplitude",
         ),
-        (pulse_with("period", 1e-9), "/motion/horizontal/pulse/period"),
+        (
+            pulse_with("period", 1e-9),
+            "/motion/horizontal/pulse/period",
+        ),
         (pulse_with("phase", -1e30), "/motion/horizontal/pulse/phase"),
         (
             json!({"horizontal": {"sine": {"amplitude": 0.1, "frequency": 1e9}}}),
