@@ -744,10 +744,11 @@ mod tests {
             pointer_of(parse_run(&json!({"scene": s}), &l)),
             "/scene/materials/stone/density"
         );
+        // The range check (docs/format.md "Ranges") names the member itself.
         let m = json!({"horizontal": {"pulse": {"amplitude": 1, "period": -1}}});
         assert_eq!(
             pointer_of(parse_run(&json!({"scene": scene(), "motion": m}), &l)),
-            "/motion/horizontal/pulse"
+            "/motion/horizontal/pulse/period"
         );
     }
 
