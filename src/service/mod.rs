@@ -174,8 +174,6 @@ pub struct ServiceConfig {
     /// Shared artifact storage URL (see [`artifacts::ArtifactStore::open`]).
     pub artifacts: Option<String>,
     pub lease: pg_store::LeaseParams,
-    /// Delete finished jobs this long after they ended (`--retain-finished`); `None`: keep.
-    pub retain_finished: Option<Duration>,
 }
 
 impl ServiceConfig {
@@ -188,7 +186,6 @@ impl ServiceConfig {
             postgres: None,
             artifacts: None,
             lease: pg_store::LeaseParams::default(),
-            retain_finished: None,
         }
     }
 }
@@ -267,7 +264,8 @@ impl Service {
             None => None,
         };
         let pool = worker::Pool::start(core.clone())?;
-        let sweeper = config
+        let sweeper = core
+            .limits
             .retain_finished
             .map(|keep| retention::Sweeper::start(core.clone(), keep))
             .transpose()?;
@@ -361,6 +359,7 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
         max_job_seconds: args.max_job_seconds,
         max_job_artifact_bytes: args.max_job_artifact_bytes,
         max_artifact_bytes: args.max_artifact_bytes,
+        retain_finished: args.retain_finished,
         ..Limits::default()
     };
     let secs = |name: &str, v: f64| {
@@ -408,7 +407,6 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
         (Some(_), None) => Some(auth::SigningKey::random(validity)),
         (None, None) => None,
     };
-    config.retain_finished = args.retain_finished;
     let server_params = server::ServerParams {
         signing: tokens.as_ref().and(signing),
         tokens,

@@ -66,6 +66,10 @@ pub struct Limits {
     /// Bytes of all jobs' artifacts under `--data`; beyond it submissions get 507 until jobs
     /// are deleted (`DELETE /v1/jobs/{id}`).
     pub max_artifact_bytes: u64,
+    /// Finished jobs are deleted this long after they ended (`--retain-finished`, the
+    /// retention policy of docs/service.md); `None`, the default: kept until deleted, since
+    /// deleting results is the operator's choice.
+    pub retain_finished: Option<std::time::Duration>,
 }
 
 impl Default for Limits {
@@ -87,6 +91,7 @@ impl Default for Limits {
             max_job_seconds: 6 * 3600,
             max_job_artifact_bytes: 4 << 30,
             max_artifact_bytes: 50 << 30,
+            retain_finished: None,
         }
     }
 }

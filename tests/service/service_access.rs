@@ -29,8 +29,10 @@ fn start(
 ) -> (Service, axum::Router, std::path::PathBuf) {
     let dir = temp_dir(tag);
     let mut cfg = ServiceConfig::new(&dir);
-    cfg.limits = limits;
-    cfg.retain_finished = retain;
+    cfg.limits = Limits {
+        retain_finished: retain,
+        ..limits
+    };
     cfg.workers = WorkerParams {
         workers: 1,
         idle_poll: Duration::from_millis(50),
