@@ -171,7 +171,17 @@ impl MotionSpec {
     pub fn build(self, process: &ProcessParams) -> Result<GroundMotion, MotionError> {
         let comp = |name: &str, c: Option<ComponentSpec>| match c {
             None => Ok((Signal::Zero, RecordMeta::default(), "none".into())),
-            Some(c) => component(&format!("motion.{name}"), c, process),
+            Some(c) => {
+                let form = if c.samples.is_some() {
+                    "samples"
+                } else {
+                    "content"
+                };
+                let path = format!("motion.{name}");
+                let built = component(&path, c, process)?;
+                check_samples(&format!("{path}.{form}"), &built.0)?;
+                Ok(built)
+            }
         };
         let (horizontal, meta, provenance) = comp("horizontal", self.horizontal)?;
         let (vertical, _, _) = comp("vertical", self.vertical)?;
@@ -218,6 +228,30 @@ impl MotionSpec {
             ));
         }
         Ok(gm)
+    }
+}
+
+/// Every sample of a recorded component finite and within ±[`MAX_PGA`] m/s² as read (before
+/// any `scale`), else an error naming the member and the sample's index (from 0): a garbage
+/// sample is refused where it is, not reported later as a peak or a non-finite solve.
+fn check_samples(path: &str, signal: &Signal) -> Result<(), MotionError> {
+    let Signal::Sampled(x) = signal else {
+        return Ok(());
+    };
+    match x
+        .accel
+        .iter()
+        .position(|a| !(a.is_finite() && a.abs() <= MAX_PGA))
+    {
+        None => Ok(()),
+        Some(i) => Err(MotionError::new(
+            path,
+            None,
+            format!(
+                "sample {i} (from 0) is {:e} m/s², outside the accepted ±{MAX_PGA:e} m/s²",
+                x.accel[i]
+            ),
+        )),
     }
 }
 

@@ -195,6 +195,19 @@ pub const TIME_STEP: (f64, f64) = (1.0e-9, 10.0); // s
 pub const OUTPUT_INTERVAL: (f64, f64) = (1.0e-9, 1.0e6); // s
 pub const COORDINATE: (f64, f64) = (-1.0e6, 1.0e6); // m, each vertex coordinate
 pub const COHESION: (f64, f64) = (0.0, 1.0e10); // Pa, cohesion and tensile strength
+/// Ground acceleration, m/s², each record sample and a pulse's or sine's amplitude (in its own
+/// units, converted): the motion reader's largest accepted peak (`motion::json::MAX_PGA`,
+/// ~10⁵ g), so that a value refused later is refused here with its pointer instead.
+pub const GROUND_ACCELERATION: (f64, f64) = (-1.0e6, 1.0e6);
+/// A record's sample interval, s: > 0; 1 µs … 10 s spans every instrument (100–1000 Hz) and
+/// any decimated record, and keeps the samples per second of a run bounded.
+pub const RECORD_DT: (f64, f64) = (1.0e-6, 10.0);
+/// A sine's frequency, Hz: 1 mHz … 1 kHz (ground shaking that moves a structure is 0.1–30 Hz).
+pub const FREQUENCY: (f64, f64) = (1.0e-3, 1.0e3);
+/// A pulse's period, s: the reciprocal of [`FREQUENCY`].
+pub const PERIOD: (f64, f64) = (1.0e-3, 1.0e3);
+/// A pulse's phase, rad: finite and a few hundred turns at most.
+pub const PHASE: (f64, f64) = (-1.0e3, 1.0e3);
 
 /// The ranges as `GET /v1/limits` reports them: `{"<field>": {"min", "max", "units"}}`.
 pub fn ranges_json() -> Value {
@@ -212,7 +225,92 @@ pub fn ranges_json() -> Value {
         "blocks.vertices": r(COORDINATE, "m"),
         "joints.cohesion": r(COHESION, "Pa"),
         "joints.tensile_strength": r(COHESION, "Pa"),
+        "motion.samples": r(GROUND_ACCELERATION, "m/s2"),
+        "motion.dt": r(RECORD_DT, "s"),
+        "motion.pulse.amplitude": r(GROUND_ACCELERATION, "m/s2"),
+        "motion.pulse.period": r(PERIOD, "s"),
+        "motion.pulse.phase": r(PHASE, "rad"),
+        "motion.sine.amplitude": r(GROUND_ACCELERATION, "m/s2"),
+        "motion.sine.frequency": r(FREQUENCY, "Hz"),
     })
+}
+
+/// m/s² per unit of a motion component's `units` (default g); `None` for an unknown name (the
+/// motion reader names that error).
+fn accel_units(v: Option<&Value>) -> Option<(f64, &'static str)> {
+    match v.and_then(Value::as_str) {
+        None | Some("g") => Some((crate::motion::STANDARD_GRAVITY, "g")),
+        Some("m/s2") => Some((1.0, "m/s²")),
+        Some("cm/s2") | Some("gal") => Some((0.01, "cm/s²")),
+        Some(_) => None,
+    }
+}
+
+/// An acceleration `x` given in `units`, against [`GROUND_ACCELERATION`] (in m/s²).
+fn check_accel(pointer: String, v: &Value, units: Option<&Value>) -> Result<(), ApiError> {
+    let (Some(x), Some((k, name))) = (v.as_f64(), accel_units(units)) else {
+        return Ok(());
+    };
+    let (lo, hi) = GROUND_ACCELERATION;
+    if x.is_finite() && (lo..=hi).contains(&(x * k)) {
+        return Ok(());
+    }
+    Err(ApiError::invalid_field(
+        pointer.clone(),
+        format!(
+            "{pointer}: {} {name} is outside the accepted range {} … {} m/s² (docs/format.md, \"Ranges\")",
+            num(x),
+            num(lo),
+            num(hi)
+        ),
+    ))
+}
+
+/// Refuse motion values outside their documented ranges, before the motion is read: a sample
+/// list's samples (the pointer names the sample's index) and `dt`, a pulse's amplitude, period
+/// and phase, a sine's amplitude and frequency. `base` is the motion's pointer (`/motion`).
+pub fn check_motion_ranges(base: &str, motion: &Value) -> Result<(), ApiError> {
+    let r = |(min, max): (f64, f64), units| range(min, max, units);
+    for name in ["horizontal", "vertical"] {
+        let Some(c) = motion.get(name).filter(|c| c.is_object()) else {
+            continue;
+        };
+        let p = format!("{base}/{name}");
+        if let Some(samples) = c.get("samples").and_then(Value::as_array) {
+            let k = accel_units(c.get("units")).map_or(1.0, |(k, _)| k);
+            let (lo, hi) = GROUND_ACCELERATION;
+            // The pointer is only built for the sample refused (a record has up to 10⁶).
+            if let Some(i) = samples.iter().position(|x| {
+                x.as_f64()
+                    .is_some_and(|x| !(x.is_finite() && (lo..=hi).contains(&(x * k))))
+            }) {
+                check_accel(format!("{p}/samples/{i}"), &samples[i], c.get("units"))?;
+            }
+        }
+        if let Some(dt) = c.get("dt") {
+            check(format!("{p}/dt"), dt, r(RECORD_DT, "s"))?;
+        }
+        if let Some(pulse) = c.get("pulse").filter(|v| v.is_object()) {
+            if let Some(a) = pulse.get("amplitude") {
+                check_accel(format!("{p}/pulse/amplitude"), a, pulse.get("units"))?;
+            }
+            if let Some(t) = pulse.get("period") {
+                check(format!("{p}/pulse/period"), t, r(PERIOD, "s"))?;
+            }
+            if let Some(f) = pulse.get("phase") {
+                check(format!("{p}/pulse/phase"), f, r(PHASE, "rad"))?;
+            }
+        }
+        if let Some(sine) = c.get("sine").filter(|v| v.is_object()) {
+            if let Some(a) = sine.get("amplitude") {
+                check_accel(format!("{p}/sine/amplitude"), a, sine.get("units"))?;
+            }
+            if let Some(f) = sine.get("frequency") {
+                check(format!("{p}/sine/frequency"), f, r(FREQUENCY, "Hz"))?;
+            }
+        }
+    }
+    Ok(())
 }
 
 fn check(pointer: String, v: &Value, r: Range) -> Result<(), ApiError> {

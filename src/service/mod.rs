@@ -13,6 +13,7 @@ pub mod pg_store;
 pub mod pg_tls;
 pub mod problem;
 pub mod request;
+pub mod retention;
 pub mod routes;
 pub mod runner;
 pub mod server;
@@ -68,9 +69,15 @@ pub struct ServeArgs {
     /// Most steps of one run, duration / time_step (422 beyond).
     #[arg(long, default_value_t = Limits::default().max_total_steps)]
     pub max_total_steps: u64,
-    /// Most jobs waiting in the queue (503 with Retry-After beyond).
+    /// Most jobs waiting in the queue (429 with Retry-After beyond).
     #[arg(long, default_value_t = Limits::default().max_queued_jobs)]
     pub max_queued_jobs: u64,
+    /// With --tokens: most runs one token may have waiting in the queue (429 beyond).
+    #[arg(long, default_value_t = Limits::default().max_queued_jobs_per_token)]
+    pub max_queued_jobs_per_token: u64,
+    /// With --tokens: most PGA searches one token may have waiting in the queue (429 beyond).
+    #[arg(long, default_value_t = Limits::default().max_queued_searches_per_token)]
+    pub max_queued_searches_per_token: u64,
     /// Most blocks × steps of one run (422 beyond; see `GET /v1/limits`).
     #[arg(long, default_value_t = Limits::default().max_block_steps)]
     pub max_block_steps: u64,
@@ -108,6 +115,18 @@ pub struct ServeArgs {
     /// lines `ROLE TOKEN` (ROLE user or admin; TOKEN the token, or `sha256:HEX` its digest).
     #[arg(long, value_name = "FILE")]
     pub tokens: Option<PathBuf>,
+    /// With --tokens: the key (a file of at least 32 bytes) that signs the short-lived URLs of
+    /// artifact and event links a browser or Foxglove opens without headers. Default: a random
+    /// key per start (links then stop working when the server restarts).
+    #[arg(long, value_name = "FILE")]
+    pub signing_key_file: Option<PathBuf>,
+    /// Seconds a signed URL stays valid.
+    #[arg(long, default_value_t = auth::SIGNED_URL_SECONDS)]
+    pub signed_url_seconds: u64,
+    /// Delete finished jobs and searches (and their artifacts) this long after they ended,
+    /// e.g. `7d`, `12h`, `30m`, `90s`. Default: keep them until deleted.
+    #[arg(long, value_name = "DURATION", value_parser = retention::parse_duration)]
+    pub retain_finished: Option<Duration>,
     /// An origin whose web pages may call the API from a browser (CORS), repeatable; e.g.
     /// `--cors-origin https://app.foxglove.dev` for the "open in Foxglove" link. None by default.
     #[arg(long = "cors-origin", value_name = "ORIGIN")]
@@ -206,6 +225,7 @@ pub struct Service {
     state: AppState,
     pool: worker::Pool,
     cluster: Option<pg_store::ClusterThreads>,
+    sweeper: Option<retention::Sweeper>,
 }
 
 impl Service {
@@ -274,10 +294,16 @@ impl Service {
             None => None,
         };
         let pool = worker::Pool::start(core.clone())?;
+        let sweeper = core
+            .limits
+            .retain_finished
+            .map(|keep| retention::Sweeper::start(core.clone(), keep))
+            .transpose()?;
         Ok(Self {
             state: AppState { core },
             pool,
             cluster,
+            sweeper,
         })
     }
 
@@ -287,6 +313,9 @@ impl Service {
 
     /// Stop gracefully (see [`worker::Pool::shutdown`]); returns how many jobs were requeued.
     pub fn shutdown(self, grace: Duration) -> usize {
+        if let Some(s) = self.sweeper {
+            s.stop();
+        }
         let n = self.pool.shutdown(grace);
         if let Some(c) = self.cluster {
             c.stop();
@@ -351,6 +380,8 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
         max_record_samples: args.max_record_samples,
         max_total_steps: args.max_total_steps,
         max_queued_jobs: args.max_queued_jobs,
+        max_queued_jobs_per_token: args.max_queued_jobs_per_token,
+        max_queued_searches_per_token: args.max_queued_searches_per_token,
         max_block_steps: args.max_block_steps,
         max_block_frames: args.max_block_frames,
         max_search_block_steps: args.max_search_block_steps,
@@ -358,6 +389,7 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
         max_job_seconds: args.max_job_seconds,
         max_job_artifact_bytes: args.max_job_artifact_bytes,
         max_artifact_bytes: args.max_artifact_bytes,
+        retain_finished: args.retain_finished,
         ..Limits::default()
     };
     let secs = |name: &str, v: f64| {
@@ -393,7 +425,20 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
         .map(auth::Tokens::load)
         .transpose()?
         .map(Arc::new);
+    if !(1..=7 * 86_400).contains(&args.signed_url_seconds) {
+        return Err(format!(
+            "--signed-url-seconds must be between 1 and 604800 (a week), got {}",
+            args.signed_url_seconds
+        ));
+    }
+    let validity = Duration::from_secs(args.signed_url_seconds);
+    let signing = match (&tokens, &args.signing_key_file) {
+        (_, Some(path)) => Some(auth::SigningKey::load(path, validity)?),
+        (Some(_), None) => Some(auth::SigningKey::random(validity)),
+        (None, None) => None,
+    };
     let server_params = server::ServerParams {
+        signing: tokens.as_ref().and(signing),
         tokens,
         cors_origins: args
             .cors_origins

@@ -35,10 +35,11 @@ use uuid::Uuid;
 pub const MIGRATIONS: &[(i32, &str)] = &[
     (1, include_str!("migrations/0001_jobs.sql")),
     (2, include_str!("migrations/0002_leases.sql")),
+    (3, include_str!("migrations/0003_owner.sql")),
 ];
 
 /// The schema version this binary works with.
-pub const SCHEMA_VERSION: i32 = 2;
+pub const SCHEMA_VERSION: i32 = 3;
 
 /// Advisory-lock key serialising migrations of concurrently starting processes ("ashlar" in ASCII).
 const MIGRATION_LOCK: i64 = 0x61_73_68_6c_61_72;
@@ -113,7 +114,7 @@ impl From<postgres::Error> for StoreError {
     }
 }
 
-const COLUMNS: &str = "id, kind, status, request, motion, progress, result, error, cancel_requested, attempts, created_ms, started_ms, finished_ms, parent";
+const COLUMNS: &str = "id, kind, status, request, motion, progress, result, error, cancel_requested, attempts, created_ms, started_ms, finished_ms, parent, owner";
 
 fn row_to_record(row: &Row) -> Result<JobRecord, StoreError> {
     let json = |k: usize, what: &str| -> Result<serde_json::Value, StoreError> {
@@ -138,6 +139,7 @@ fn row_to_record(row: &Row) -> Result<JobRecord, StoreError> {
         started_ms: row.try_get(11)?,
         finished_ms: row.try_get(12)?,
         parent: row.try_get(13)?,
+        owner: row.try_get(14)?,
     })
 }
 
@@ -373,8 +375,8 @@ impl JobStore for PgStore {
         self.with(|c| {
             let mut tx = c.transaction()?;
             tx.execute(
-                "INSERT INTO jobs (id, kind, status, request, motion, created_ms) VALUES ($1, $2, 'queued', $3, $4, $5)",
-                &[&job.id, &job.kind.as_str(), &job.request.to_string(), &job.motion.to_string(), &now_ms()],
+                "INSERT INTO jobs (id, kind, status, request, motion, created_ms, owner) VALUES ($1, $2, 'queued', $3, $4, $5, $6)",
+                &[&job.id, &job.kind.as_str(), &job.request.to_string(), &job.motion.to_string(), &now_ms(), &job.owner],
             )?;
             // Delivered at commit: a woken worker always finds the row.
             tx.execute("SELECT pg_notify($1, '')", &[&CHANNEL_WORK])?;
@@ -383,25 +385,36 @@ impl JobStore for PgStore {
         })
     }
 
-    fn insert_bounded(&self, job: &NewJob, max_queued: u64) -> Result<Option<u64>, StoreError> {
+    fn insert_quota(
+        &self,
+        job: &NewJob,
+        max_queued: u64,
+        max_owner: u64,
+    ) -> Result<Option<super::store::QueueFull>, StoreError> {
+        use super::store::QueueFull;
         let max = i64::try_from(max_queued).unwrap_or(i64::MAX);
+        let max_owner = i64::try_from(max_owner).unwrap_or(i64::MAX);
         self.with(|c| {
             let mut tx = c.transaction()?;
             // Concurrent submissions (from every API process) take this lock in turn, so the
-            // count below cannot be stale when the row goes in; released at commit.
+            // counts below cannot be stale when the row goes in; released at commit.
             tx.execute("SELECT pg_advisory_xact_lock($1)", &[&QUEUE_LOCK])?;
-            let queued: i64 = tx
-                .query_one(
-                    "SELECT COUNT(*) FROM jobs WHERE status = 'queued' AND parent IS NULL",
-                    &[],
-                )?
-                .try_get(0)?;
+            let row = tx.query_one(
+                "SELECT COUNT(*), COUNT(*) FILTER (WHERE owner = $1 AND kind = $2)
+                 FROM jobs WHERE status = 'queued' AND parent IS NULL",
+                &[&job.owner, &job.kind.as_str()],
+            )?;
+            let (queued, mine): (i64, i64) = (row.try_get(0)?, row.try_get(1)?);
+            let n = |v: i64| u64::try_from(v).unwrap_or(0);
             if queued >= max {
-                return Ok(Some(u64::try_from(queued).unwrap_or(0)));
+                return Ok(Some(QueueFull::Server(n(queued))));
+            }
+            if job.owner.is_some() && mine >= max_owner {
+                return Ok(Some(QueueFull::Owner(n(mine))));
             }
             tx.execute(
-                "INSERT INTO jobs (id, kind, status, request, motion, created_ms) VALUES ($1, $2, 'queued', $3, $4, $5)",
-                &[&job.id, &job.kind.as_str(), &job.request.to_string(), &job.motion.to_string(), &now_ms()],
+                "INSERT INTO jobs (id, kind, status, request, motion, created_ms, owner) VALUES ($1, $2, 'queued', $3, $4, $5, $6)",
+                &[&job.id, &job.kind.as_str(), &job.request.to_string(), &job.motion.to_string(), &now_ms(), &job.owner],
             )?;
             tx.execute("SELECT pg_notify($1, '')", &[&CHANNEL_WORK])?;
             tx.commit()?;
@@ -440,10 +453,26 @@ impl JobStore for PgStore {
         })
     }
 
-    fn list_recent(
+    fn finished_before(&self, cutoff_ms: i64, limit: usize) -> Result<Vec<Uuid>, StoreError> {
+        let limit = i64::try_from(limit).unwrap_or(i64::MAX);
+        self.with(|c| {
+            c.query(
+                "SELECT id FROM jobs WHERE parent IS NULL AND finished_ms < $1
+                   AND status IN ('succeeded', 'failed', 'cancelled')
+                 ORDER BY finished_ms LIMIT $2",
+                &[&cutoff_ms, &limit],
+            )?
+            .iter()
+            .map(|r| r.try_get(0).map_err(StoreError::from))
+            .collect()
+        })
+    }
+
+    fn list_owned(
         &self,
         limit: usize,
         kind: Option<JobKind>,
+        owner: Option<&str>,
     ) -> Result<Vec<JobRecord>, StoreError> {
         // The request body can be large and the listing does not show it.
         let cols = COLUMNS.replace("request,", "'null',");
@@ -451,9 +480,10 @@ impl JobStore for PgStore {
         let kind = kind.map(JobKind::as_str);
         self.with(|c| {
             let sql = format!(
-                "SELECT {cols} FROM jobs WHERE parent IS NULL AND ($1::TEXT IS NULL OR kind = $1) ORDER BY seq DESC LIMIT $2"
+                "SELECT {cols} FROM jobs WHERE parent IS NULL AND ($1::TEXT IS NULL OR kind = $1)
+                   AND ($3::TEXT IS NULL OR owner = $3) ORDER BY seq DESC LIMIT $2"
             );
-            c.query(&sql, &[&kind, &limit])?
+            c.query(&sql, &[&kind, &limit, &owner])?
                 .iter()
                 .map(row_to_record)
                 .collect()
@@ -733,8 +763,10 @@ impl JobStore for PgStore {
             )?;
             let now = now_ms();
             for ch in children {
+                // A child run belongs to its search's owner.
                 tx.execute(
-                    "INSERT INTO jobs (id, kind, status, request, motion, created_ms, parent) VALUES ($1, $2, 'queued', $3, $4, $5, $6)",
+                    "INSERT INTO jobs (id, kind, status, request, motion, created_ms, parent, owner)
+                     VALUES ($1, $2, 'queued', $3, $4, $5, $6, (SELECT owner FROM jobs WHERE id = $6))",
                     &[&ch.id, &ch.kind.as_str(), &ch.request.to_string(), &ch.motion.to_string(), &now, &id],
                 )?;
             }

@@ -37,6 +37,12 @@ pub struct Limits {
     /// Jobs waiting in the queue (submitted jobs and searches, not a search's own runs);
     /// beyond it submissions get 429 with Retry-After. Checked in the insert's transaction.
     pub max_queued_jobs: u64,
+    /// Runs (`POST /v1/jobs`) one token may have waiting in the queue (`--tokens` only; 429
+    /// beyond). 1000: a study's batch of runs fits, one user cannot fill the server's queue.
+    pub max_queued_jobs_per_token: u64,
+    /// PGA searches one token may have waiting in the queue (`--tokens` only; 429 beyond).
+    /// 100: each search is tens of runs, so ten times fewer than runs.
+    pub max_queued_searches_per_token: u64,
     /// Work of one run, blocks × nominal steps. 1e9 is 200 000 steps (200 s at 1 ms) of a
     /// 5000-block façade or the whole step limit for 500 blocks: minutes to hours of CPU. The
     /// bundled examples and the study scenes need less than 1e7.
@@ -60,6 +66,10 @@ pub struct Limits {
     /// Bytes of all jobs' artifacts under `--data`; beyond it submissions get 507 until jobs
     /// are deleted (`DELETE /v1/jobs/{id}`).
     pub max_artifact_bytes: u64,
+    /// Finished jobs are deleted this long after they ended (`--retain-finished`, the
+    /// retention policy of docs/service.md); `None`, the default: kept until deleted, since
+    /// deleting results is the operator's choice.
+    pub retain_finished: Option<std::time::Duration>,
 }
 
 impl Default for Limits {
@@ -72,6 +82,8 @@ impl Default for Limits {
             max_block_vertices: 1000,
             max_scan_points: 64,
             max_queued_jobs: 100_000,
+            max_queued_jobs_per_token: 1000,
+            max_queued_searches_per_token: 100,
             max_block_steps: 1_000_000_000,
             max_block_frames: 20_000_000,
             max_search_block_steps: 10_000_000_000,
@@ -79,6 +91,7 @@ impl Default for Limits {
             max_job_seconds: 6 * 3600,
             max_job_artifact_bytes: 4 << 30,
             max_artifact_bytes: 50 << 30,
+            retain_finished: None,
         }
     }
 }
@@ -390,6 +403,9 @@ fn scene_and_motion(
     check_shapes(scene, motion)?;
     check_sizes(scene, motion, limits)?;
     super::budget::check_ranges(scene)?;
+    if let Some(m) = motion {
+        super::budget::check_motion_ranges("/motion", m)?;
+    }
     if let Some(n) = scene.get("blocks").and_then(Value::as_array).map(Vec::len) {
         if n > limits.max_blocks {
             return Err(ApiError::limit_exceeded(
@@ -733,10 +749,11 @@ mod tests {
             pointer_of(parse_run(&json!({"scene": s}), &l)),
             "/scene/materials/stone/density"
         );
+        // The range check (docs/format.md "Ranges") names the member itself.
         let m = json!({"horizontal": {"pulse": {"amplitude": 1, "period": -1}}});
         assert_eq!(
             pointer_of(parse_run(&json!({"scene": scene(), "motion": m}), &l)),
-            "/motion/horizontal/pulse"
+            "/motion/horizontal/pulse/period"
         );
     }
 

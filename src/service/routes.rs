@@ -1,10 +1,13 @@
 //! HTTP routes (docs/format.md §4, `openapi.yaml`): thin async handlers that validate, talk to the
 //! store on the blocking pool, and answer. No simulation work happens here.
+use super::auth::Access;
 use super::events::{job_stream, EventParams, JobEvent};
 use super::histories::Histories;
 use super::problem::ApiError;
 use super::request::{json_body, parse_pga, parse_run};
-use super::store::{rfc3339, CancelOutcome, DeleteOutcome, JobKind, JobRecord, JobStatus, NewJob};
+use super::store::{
+    rfc3339, CancelOutcome, DeleteOutcome, JobKind, JobRecord, JobStatus, NewJob, QueueFull,
+};
 use super::web;
 use super::worker::Core;
 use axum::body::{Body, Bytes};
@@ -115,6 +118,7 @@ pub fn app(state: AppState) -> Router {
         ]);
     let header_limits = state.core.server.clone();
     let tokens = state.core.server.tokens.clone();
+    let signing = state.core.server.signing.clone();
     router
         .fallback(no_route)
         .layer(axum::middleware::map_response(problem_for_bare_errors))
@@ -130,11 +134,15 @@ pub fn app(state: AppState) -> Router {
             },
         ))
         .layer(axum::middleware::from_fn(
-            move |req: axum::extract::Request, next: axum::middleware::Next| {
+            move |mut req: axum::extract::Request, next: axum::middleware::Next| {
                 let tokens = tokens.clone();
+                let signing = signing.clone();
                 async move {
-                    match authorize(tokens.as_deref(), &req) {
-                        Ok(()) => next.run(req).await,
+                    match authorize(tokens.as_deref(), signing.as_ref(), &req) {
+                        Ok(access) => {
+                            req.extensions_mut().insert(access);
+                            next.run(req).await
+                        }
                         Err(e) => e.into_response(),
                     }
                 }
@@ -151,29 +159,79 @@ async fn no_route(uri: axum::http::Uri) -> ApiError {
 }
 
 /// With `--tokens`, every `/v1/…` request needs a valid bearer token (the page, its assets,
-/// `/healthz` and `/openapi.yaml` stay open).
+/// `/healthz` and `/openapi.yaml` stay open), or, on the GET routes a browser or Foxglove opens
+/// without headers ([`signable`]), a valid signed URL. Says who the caller is.
 fn authorize(
     tokens: Option<&super::auth::Tokens>,
+    signing: Option<&super::auth::SigningKey>,
     req: &axum::extract::Request,
-) -> Result<(), ApiError> {
+) -> Result<Access, ApiError> {
     let Some(tokens) = tokens else {
-        return Ok(());
+        return Ok(Access::Open);
     };
-    if !req.uri().path().starts_with("/v1/") {
-        return Ok(());
+    let path = req.uri().path();
+    if !path.starts_with("/v1/") {
+        return Ok(Access::Open);
     }
     let presented = req
         .headers()
         .get(header::AUTHORIZATION)
         .and_then(|v| v.to_str().ok())
         .and_then(super::auth::bearer);
+    let query: Vec<(String, String)> = req
+        .uri()
+        .query()
+        .map(|q| {
+            url::form_urlencoded::parse(q.as_bytes())
+                .into_owned()
+                .collect()
+        })
+        .unwrap_or_default();
+    let param = |k: &str| {
+        query
+            .iter()
+            .rev()
+            .find(|(n, _)| n == k)
+            .map(|(_, v)| v.as_str())
+    };
     match presented {
+        Some(t) => match tokens.identify(t) {
+            Some(identity) => Ok(Access::Token(identity)),
+            None => Err(ApiError::unauthorized("the token is not accepted")),
+        },
+        None if param("sig").is_some() || param("expires").is_some() => {
+            if !(req.method() == Method::GET && signable(path)) {
+                return Err(ApiError::unauthorized(
+                    "signed links are accepted only on GET of a job's trajectory, histories and events and a search's events and fragility plot; send Authorization: Bearer TOKEN",
+                ));
+            }
+            let Some(key) = signing else {
+                return Err(ApiError::unauthorized("this server does not sign links"));
+            };
+            key.verify(
+                path,
+                param("expires"),
+                param("sig"),
+                super::auth::unix_now(),
+            )
+            .map_err(|e| ApiError::unauthorized(e.to_string()).with_parameter("sig"))?;
+            Ok(Access::Signed)
+        }
         None => Err(ApiError::unauthorized(
             "this server requires a token: send Authorization: Bearer TOKEN",
         )),
-        Some(t) if tokens.check(t).is_some() => Ok(()),
-        Some(_) => Err(ApiError::unauthorized("the token is not accepted")),
     }
+}
+
+/// The routes a signed URL opens (GET only): what a browser or Foxglove fetches by URL.
+fn signable(path: &str) -> bool {
+    let segs: Vec<&str> = path.split('/').collect();
+    matches!(
+        segs.as_slice(),
+        ["", "v1", "jobs", id, "trajectory.mcap" | "histories" | "events"]
+            | ["", "v1", "pga-searches", id, "events" | "fragility.svg"]
+            if !id.is_empty()
+    )
 }
 
 /// Request headers within `--max-header-bytes` and `--max-headers`, else 431 as a problem.
@@ -262,7 +320,14 @@ pub(super) fn parse_id(path: Result<Path<String>, PathRejection>) -> Result<Uuid
         .map_err(|_| ApiError::invalid_parameter("id", format!("id {raw:?} is not a UUID")))
 }
 
-pub(super) async fn load(state: &AppState, id: Uuid, kind: JobKind) -> Result<JobRecord, ApiError> {
+/// The job `id` of `kind`, if `access` may see it: another token's job answers 404, like a job
+/// that does not exist, so that ids do not leak.
+pub(super) async fn load(
+    state: &AppState,
+    access: &Access,
+    id: Uuid,
+    kind: JobKind,
+) -> Result<JobRecord, ApiError> {
     let store = state.core.store.clone();
     let job = blocking(move || store.get(id))
         .await?
@@ -273,7 +338,7 @@ pub(super) async fn load(state: &AppState, id: Uuid, kind: JobKind) -> Result<Jo
         "PGA search"
     };
     match job {
-        Some(j) if j.kind == kind => Ok(j),
+        Some(j) if j.kind == kind && access.may_see(j.owner.as_deref()) => Ok(j),
         _ => Err(ApiError::not_found(what, id)),
     }
 }
@@ -366,7 +431,12 @@ async fn read_body(
     }
 }
 
-async fn submit(state: AppState, req: axum::extract::Request, kind: JobKind) -> ApiResult {
+async fn submit(
+    state: AppState,
+    access: Access,
+    req: axum::extract::Request,
+    kind: JobKind,
+) -> ApiResult {
     let core = state.core.clone();
     if core.shutting_down.load(Ordering::SeqCst) {
         return Err(ApiError::unavailable(
@@ -407,19 +477,43 @@ async fn submit(state: AppState, req: axum::extract::Request, kind: JobKind) -> 
         kind,
         request,
         motion,
+        owner: access.owner(),
     };
     let store = core.store.clone();
     let max_queued = core.limits.max_queued_jobs;
-    let refused = blocking(move || store.insert_bounded(&job, max_queued))
+    let (max_owner, what, flag) = match kind {
+        JobKind::Run => (
+            core.limits.max_queued_jobs_per_token,
+            "jobs",
+            "--max-queued-jobs-per-token",
+        ),
+        JobKind::PgaSearch | JobKind::PgaRun => (
+            core.limits.max_queued_searches_per_token,
+            "PGA searches",
+            "--max-queued-searches-per-token",
+        ),
+    };
+    let refused = blocking(move || store.insert_quota(&job, max_queued, max_owner))
         .await?
         .map_err(ApiError::internal)?;
-    if let Some(queued) = refused {
-        return Err(ApiError::quota_exceeded(
-            format!(
-                "the queue is full: {queued} jobs waiting, limit {max_queued} (ashlar serve --max-queued-jobs); retry later"
-            ),
-            30,
-        ));
+    match refused {
+        None => {}
+        Some(QueueFull::Server(queued)) => {
+            return Err(ApiError::quota_exceeded(
+                format!(
+                    "the queue is full: {queued} jobs waiting, limit {max_queued} (ashlar serve --max-queued-jobs); retry later"
+                ),
+                30,
+            ))
+        }
+        Some(QueueFull::Owner(queued)) => {
+            return Err(ApiError::quota_exceeded(
+                format!(
+                    "this token's quota of queued {what} is used up: {queued} waiting, limit {max_owner} (ashlar serve {flag}); retry when some have started"
+                ),
+                30,
+            ))
+        }
     }
     core.notify_work();
     let location = format!("{}/{id}", base(kind));
@@ -432,23 +526,32 @@ async fn submit(state: AppState, req: axum::extract::Request, kind: JobKind) -> 
     Ok(resp)
 }
 
-async fn submit_job(State(s): State<AppState>, req: axum::extract::Request) -> ApiResult {
-    submit(s, req, JobKind::Run).await
+async fn submit_job(
+    State(s): State<AppState>,
+    access: Access,
+    req: axum::extract::Request,
+) -> ApiResult {
+    submit(s, access, req, JobKind::Run).await
 }
 
-async fn submit_pga(State(s): State<AppState>, req: axum::extract::Request) -> ApiResult {
-    submit(s, req, JobKind::PgaSearch).await
+async fn submit_pga(
+    State(s): State<AppState>,
+    access: Access,
+    req: axum::extract::Request,
+) -> ApiResult {
+    submit(s, access, req, JobKind::PgaSearch).await
 }
 
 /// `DELETE /v1/jobs/{id}`: a finished job and its artifacts go (204); a job still queued or
 /// running is refused (409: cancel it first).
 async fn delete_kind(
     s: AppState,
+    access: Access,
     id: Result<Path<String>, PathRejection>,
     kind: JobKind,
 ) -> ApiResult {
     let id = parse_id(id)?;
-    load(&s, id, kind).await?;
+    load(&s, &access, id, kind).await?;
     let store = s.core.store.clone();
     let outcome = blocking(move || store.delete(id))
         .await?
@@ -460,30 +563,37 @@ async fn delete_kind(
             st.as_str()
         ))),
         DeleteOutcome::Deleted => {
-            let dir = s.core.job_dir(id);
-            if let Err(e) = tokio::fs::remove_dir_all(&dir).await {
-                if e.kind() != std::io::ErrorKind::NotFound {
-                    tracing::warn!(dir = %dir.display(), error = %e, "removing a deleted job's artifacts");
-                }
-            }
-            s.core.forget_artifact_bytes();
+            remove_artifacts(&s.core, id);
             Ok(StatusCode::NO_CONTENT.into_response())
         }
     }
 }
 
+/// Remove a deleted job's artifact directory (also used by the retention sweeper).
+pub(super) fn remove_artifacts(core: &Core, id: Uuid) {
+    let dir = core.job_dir(id);
+    if let Err(e) = std::fs::remove_dir_all(&dir) {
+        if e.kind() != std::io::ErrorKind::NotFound {
+            tracing::warn!(dir = %dir.display(), error = %e, "removing a deleted job's artifacts");
+        }
+    }
+    core.forget_artifact_bytes();
+}
+
 async fn delete_job(
     State(s): State<AppState>,
+    access: Access,
     id: Result<Path<String>, PathRejection>,
 ) -> ApiResult {
-    delete_kind(s, id, JobKind::Run).await
+    delete_kind(s, access, id, JobKind::Run).await
 }
 
 async fn delete_pga(
     State(s): State<AppState>,
+    access: Access,
     id: Result<Path<String>, PathRejection>,
 ) -> ApiResult {
-    delete_kind(s, id, JobKind::PgaSearch).await
+    delete_kind(s, access, id, JobKind::PgaSearch).await
 }
 
 /// `GET /v1/limits`: the server's limits, so that a client can check a job before sending it.
@@ -503,6 +613,9 @@ async fn get_limits(State(s): State<AppState>) -> ApiResult {
         "max_scan_points": l.max_scan_points,
         "max_records": super::request::MAX_RECORDS,
         "max_queued_jobs": l.max_queued_jobs,
+        "max_queued_jobs_per_token": l.max_queued_jobs_per_token,
+        "max_queued_searches_per_token": l.max_queued_searches_per_token,
+        "retain_finished_s": l.retain_finished.map(|d| d.as_secs_f64()),
         "max_job_seconds": l.max_job_seconds,
         "max_job_artifact_bytes": l.max_job_artifact_bytes,
         "max_artifact_bytes": l.max_artifact_bytes,
@@ -517,8 +630,30 @@ async fn get_limits(State(s): State<AppState>) -> ApiResult {
     Ok(axum::Json(body).into_response())
 }
 
-pub(super) fn job_json(j: &JobRecord) -> String {
-    let v = json!({
+/// Links of a job that a browser or Foxglove opens without headers, signed for
+/// [`super::auth::SigningKey::validity`] from now (with `--tokens` only).
+fn signed_links(kind: JobKind, id: Uuid, key: &super::auth::SigningKey) -> Value {
+    let now = super::auth::unix_now();
+    let b = format!("{}/{id}", base(kind));
+    let sign = |tail: &str| key.sign(&format!("{b}/{tail}"), now);
+    let mut v = match kind {
+        JobKind::Run => json!({
+            "events": sign("events"), "histories": sign("histories"),
+            "trajectory": sign("trajectory.mcap"),
+        }),
+        JobKind::PgaSearch | JobKind::PgaRun => {
+            json!({"events": sign("events"), "fragility": sign("fragility.svg")})
+        }
+    };
+    v["expires_at"] = json!(rfc3339(
+        i64::try_from(now + key.validity.as_secs()).unwrap_or(i64::MAX / 1000) * 1000
+    ));
+    v
+}
+
+/// [`job_json`], with `signed_links` when the server signs links.
+pub(super) fn job_json_signed(j: &JobRecord, key: Option<&super::auth::SigningKey>) -> String {
+    let mut v = json!({
         "id": j.id,
         "kind": j.kind,
         "status": j.status,
@@ -532,6 +667,9 @@ pub(super) fn job_json(j: &JobRecord) -> String {
         "error": j.error,
         "links": links(j.kind, j.id),
     });
+    if let Some(k) = key {
+        v["signed_links"] = signed_links(j.kind, j.id, k);
+    }
     let key = if j.kind == JobKind::Run {
         "summary"
     } else {
@@ -563,19 +701,38 @@ fn json_response(status: StatusCode, body: String) -> Response {
     r
 }
 
-async fn get_job(State(s): State<AppState>, id: Result<Path<String>, PathRejection>) -> ApiResult {
-    let j = load(&s, parse_id(id)?, JobKind::Run).await?;
-    Ok(json_response(StatusCode::OK, job_json(&j)))
+async fn get_job(
+    State(s): State<AppState>,
+    access: Access,
+    id: Result<Path<String>, PathRejection>,
+) -> ApiResult {
+    let j = load(&s, &access, parse_id(id)?, JobKind::Run).await?;
+    Ok(json_response(
+        StatusCode::OK,
+        job_json_signed(&j, s.core.server.signing.as_ref()),
+    ))
 }
 
-async fn get_pga(State(s): State<AppState>, id: Result<Path<String>, PathRejection>) -> ApiResult {
-    let j = load(&s, parse_id(id)?, JobKind::PgaSearch).await?;
-    Ok(json_response(StatusCode::OK, job_json(&j)))
+async fn get_pga(
+    State(s): State<AppState>,
+    access: Access,
+    id: Result<Path<String>, PathRejection>,
+) -> ApiResult {
+    let j = load(&s, &access, parse_id(id)?, JobKind::PgaSearch).await?;
+    Ok(json_response(
+        StatusCode::OK,
+        job_json_signed(&j, s.core.server.signing.as_ref()),
+    ))
 }
 
-async fn cancel(s: AppState, id: Result<Path<String>, PathRejection>, kind: JobKind) -> ApiResult {
+async fn cancel(
+    s: AppState,
+    access: Access,
+    id: Result<Path<String>, PathRejection>,
+    kind: JobKind,
+) -> ApiResult {
     let id = parse_id(id)?;
-    load(&s, id, kind).await?;
+    load(&s, &access, id, kind).await?;
     let store = s.core.store.clone();
     let outcome = blocking(move || store.request_cancel(id))
         .await?
@@ -605,26 +762,36 @@ async fn cancel(s: AppState, id: Result<Path<String>, PathRejection>, kind: JobK
             )))
         }
     };
-    let j = load(&s, id, kind).await?;
-    Ok(json_response(status, job_json(&j)))
+    let j = load(&s, &access, id, kind).await?;
+    Ok(json_response(
+        status,
+        job_json_signed(&j, s.core.server.signing.as_ref()),
+    ))
 }
 
 async fn cancel_job(
     State(s): State<AppState>,
+    access: Access,
     id: Result<Path<String>, PathRejection>,
 ) -> ApiResult {
-    cancel(s, id, JobKind::Run).await
+    cancel(s, access, id, JobKind::Run).await
 }
 
 async fn cancel_pga(
     State(s): State<AppState>,
+    access: Access,
     id: Result<Path<String>, PathRejection>,
 ) -> ApiResult {
-    cancel(s, id, JobKind::PgaSearch).await
+    cancel(s, access, id, JobKind::PgaSearch).await
 }
 
-async fn events(s: AppState, id: Result<Path<String>, PathRejection>, kind: JobKind) -> ApiResult {
-    let j = load(&s, parse_id(id)?, kind).await?;
+async fn events(
+    s: AppState,
+    access: Access,
+    id: Result<Path<String>, PathRejection>,
+    kind: JobKind,
+) -> ApiResult {
+    let j = load(&s, &access, parse_id(id)?, kind).await?;
     let current = JobEvent {
         status: j.status,
         progress: j.progress,
@@ -644,16 +811,18 @@ async fn events(s: AppState, id: Result<Path<String>, PathRejection>, kind: JobK
 
 async fn job_events(
     State(s): State<AppState>,
+    access: Access,
     id: Result<Path<String>, PathRejection>,
 ) -> ApiResult {
-    events(s, id, JobKind::Run).await
+    events(s, access, id, JobKind::Run).await
 }
 
 async fn pga_events(
     State(s): State<AppState>,
+    access: Access,
     id: Result<Path<String>, PathRejection>,
 ) -> ApiResult {
-    events(s, id, JobKind::PgaSearch).await
+    events(s, access, id, JobKind::PgaSearch).await
 }
 
 /// Artifacts exist for finished runs; a cancelled run keeps what it wrote before stopping.
@@ -726,6 +895,7 @@ const CHUNK: usize = 64 * 1024;
 
 async fn get_histories(
     State(s): State<AppState>,
+    access: Access,
     id: Result<Path<String>, PathRejection>,
     query: Result<Query<Vec<(String, String)>>, QueryRejection>,
     headers: HeaderMap,
@@ -735,7 +905,7 @@ async fn get_histories(
     let Query(query) = query.map_err(|e| ApiError::invalid_parameter("query", e.body_text()))?;
     if let Some((k, _)) = query
         .iter()
-        .find(|(k, _)| k != "format" && k != "block" && k != "every")
+        .find(|(k, _)| !matches!(k.as_str(), "format" | "block" | "every" | "expires" | "sig"))
     {
         return Err(ApiError::invalid_parameter(
             k.clone(),
@@ -763,7 +933,7 @@ async fn get_histories(
             blocks.push(v.clone());
         }
     }
-    let j = load(&s, id, JobKind::Run).await?;
+    let j = load(&s, &access, id, JobKind::Run).await?;
     artifact_available(&j, "histories")?;
     super::artifacts::ensure_local(&s.core, id, "histories.csv").await;
     let path = s.core.job_dir(id).join("histories.csv");
@@ -983,11 +1153,12 @@ fn parse_range(value: Option<&str>, len: u64) -> RangeAsk {
 
 async fn get_trajectory(
     State(s): State<AppState>,
+    access: Access,
     id: Result<Path<String>, PathRejection>,
     headers: HeaderMap,
 ) -> ApiResult {
     let id = parse_id(id)?;
-    let j = load(&s, id, JobKind::Run).await?;
+    let j = load(&s, &access, id, JobKind::Run).await?;
     artifact_available(&j, "trajectory")?;
     super::artifacts::ensure_local(&s.core, id, "trajectory.mcap").await;
     let path = s.core.job_dir(id).join("trajectory.mcap");
@@ -1051,10 +1222,11 @@ async fn get_trajectory(
 /// The fragility plot of a finished multi-record search.
 async fn get_fragility_svg(
     State(s): State<AppState>,
+    access: Access,
     id: Result<Path<String>, PathRejection>,
 ) -> ApiResult {
     let id = parse_id(id)?;
-    let j = load(&s, id, JobKind::PgaSearch).await?;
+    let j = load(&s, &access, id, JobKind::PgaSearch).await?;
     if j.status != JobStatus::Succeeded {
         return Err(ApiError::conflict(format!(
             "the search is {}; its fragility plot is available once it has succeeded",

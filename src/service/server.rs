@@ -3,7 +3,8 @@
 //! client cannot stretch: at most `--max-connections` at once (more are closed on accept),
 //! request headers within `--header-timeout`, no connection idle (nothing read or written)
 //! beyond `--idle-timeout`, and a graceful stop on shutdown. Body read time is enforced by the
-//! routes that read bodies (`--body-timeout`).
+//! routes that read bodies (`--body-timeout`). Headers beyond hyper's own buffer get hyper's
+//! 431, which this loop rewrites on the wire into the same problem+json as the routes' 431.
 use axum::Router;
 use hyper::server::conn::http1;
 use hyper_util::rt::{TokioIo, TokioTimer};
@@ -48,6 +49,9 @@ pub struct ServerParams {
     pub cors_origins: Vec<String>,
     /// Bearer tokens required on `/v1/…` (`--tokens`); `None`: no authentication.
     pub tokens: Option<Arc<super::auth::Tokens>>,
+    /// The key of signed short-lived URLs (with `--tokens`): `--signing-key-file`, or a
+    /// random key per start.
+    pub signing: Option<super::auth::SigningKey>,
 }
 
 impl Default for ServerParams {
@@ -61,11 +65,13 @@ impl Default for ServerParams {
             max_headers: 100,
             cors_origins: Vec::new(),
             tokens: None,
+            signing: None,
         }
     }
 }
 
-/// hyper's read buffer: headers beyond it get hyper's own (bodiless) 431.
+/// hyper's read buffer: headers beyond it get hyper's own (bodiless) 431, which [`IdleIo`]
+/// rewrites into problem+json.
 pub const HYPER_BUF: usize = 256 * 1024;
 /// hyper's header count limit: beyond it, hyper's own 431.
 pub const HYPER_MAX_HEADERS: usize = 400;
@@ -117,7 +123,11 @@ pub async fn serve(
             continue;
         };
         let _ = stream.set_nodelay(true);
-        let io = TokioIo::new(IdleIo::new(stream, params.idle_timeout));
+        let io = TokioIo::new(IdleIo::new(
+            stream,
+            params.idle_timeout,
+            params.max_header_bytes,
+        ));
         let service = TowerToHyperService::new(app.clone());
         let builder = builder.clone();
         let mut stop_rx = stop_rx.clone();
@@ -150,19 +160,56 @@ pub async fn serve(
 }
 
 /// A TCP stream that fails with `TimedOut` once nothing has been read or written for
-/// `idle` while hyper waits on it.
+/// `idle` while hyper waits on it, and that replaces hyper's own bodiless 431 (headers beyond
+/// its buffer, before any route sees the request) with a problem+json answer.
 struct IdleIo {
     inner: TcpStream,
     idle: Duration,
     timer: Pin<Box<tokio::time::Sleep>>,
+    /// The routes' header limit, named in the rewritten 431.
+    max_header_bytes: usize,
+    /// A rewritten answer being written, and how much of it is out.
+    replacing: Option<(Vec<u8>, usize)>,
+}
+
+/// hyper's own 431: its status line with an empty body (the routes' 431 has a body).
+fn is_bare_431(buf: &[u8]) -> bool {
+    if !buf.starts_with(b"HTTP/1.1 431 ") {
+        return false;
+    }
+    let head = String::from_utf8_lossy(&buf[..buf.len().min(1024)]).to_ascii_lowercase();
+    head.contains("content-length: 0\r\n") && !head.contains("content-type:")
+}
+
+/// The problem+json 431 written instead of hyper's; the connection closes after it, as after
+/// hyper's.
+fn problem_431(max_header_bytes: usize) -> Vec<u8> {
+    let body = serde_json::json!({
+        "type": "urn:ashlar:problem:header-fields-too-large",
+        "title": "Request header fields too large",
+        "status": 431,
+        "detail": format!(
+            "the request's header fields exceed {HYPER_BUF} bytes or {HYPER_MAX_HEADERS} fields, more than the \
+             server reads; it takes at most {max_header_bytes} bytes of headers"
+        ),
+    })
+    .to_string();
+    format!(
+        "HTTP/1.1 431 Request Header Fields Too Large\r\ncontent-type: application/problem+json\r\n\
+         content-length: {}\r\nconnection: close\r\n\r\n{body}",
+        body.len()
+    )
+    .into_bytes()
 }
 
 impl IdleIo {
-    fn new(inner: TcpStream, idle: Duration) -> Self {
+    fn new(inner: TcpStream, idle: Duration, max_header_bytes: usize) -> Self {
         Self {
             inner,
             idle,
             timer: Box::pin(tokio::time::sleep(idle)),
+            max_header_bytes,
+            replacing: None,
         }
     }
     fn touch(&mut self) {
@@ -206,6 +253,31 @@ impl AsyncWrite for IdleIo {
         buf: &[u8],
     ) -> Poll<io::Result<usize>> {
         let this = self.get_mut();
+        if this.replacing.is_none() && is_bare_431(buf) {
+            this.replacing = Some((problem_431(this.max_header_bytes), 0));
+        }
+        if let Some((bytes, mut done)) = this.replacing.take() {
+            // hyper's bytes count as written once the replacement is out (hyper writes its
+            // error answer in one buffer: this stream is not vectored).
+            while done < bytes.len() {
+                match Pin::new(&mut this.inner).poll_write(cx, &bytes[done..]) {
+                    Poll::Ready(Ok(0)) => return Poll::Ready(Ok(0)),
+                    Poll::Ready(Ok(n)) => {
+                        done += n;
+                        this.touch();
+                    }
+                    Poll::Ready(Err(e)) => return Poll::Ready(Err(e)),
+                    Poll::Pending if this.expired(cx) => return Poll::Ready(Err(idle_error())),
+                    Poll::Pending => {
+                        this.replacing = Some((bytes, done));
+                        return Poll::Pending;
+                    }
+                }
+            }
+            // Anything hyper writes after its error answer is dropped: the connection closes.
+            this.replacing = Some((bytes, done));
+            return Poll::Ready(Ok(buf.len()));
+        }
         match Pin::new(&mut this.inner).poll_write(cx, buf) {
             Poll::Ready(Ok(n)) => {
                 if n > 0 {

@@ -121,6 +121,9 @@ pub struct JobRecord {
     pub finished_ms: Option<i64>,
     /// The search a child run belongs to (`None` for jobs submitted over HTTP).
     pub parent: Option<Uuid>,
+    /// The owner id of the token that submitted it ([`super::auth::owner_id`]); `None` when
+    /// the server ran without tokens.
+    pub owner: Option<String>,
 }
 
 /// A new job to enqueue.
@@ -130,6 +133,17 @@ pub struct NewJob {
     pub kind: JobKind,
     pub request: serde_json::Value,
     pub motion: serde_json::Value,
+    /// See [`JobRecord::owner`].
+    pub owner: Option<String>,
+}
+
+/// Why a bounded insert refused a job: the number of jobs already waiting.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum QueueFull {
+    /// The whole server's queue (`--max-queued-jobs`) is full.
+    Server(u64),
+    /// The owner's own quota of queued jobs of this kind is used up.
+    Owner(u64),
 }
 
 /// How a claimed job ended.
@@ -193,7 +207,26 @@ pub trait JobStore: Send + Sync {
     /// Insert unless `max_queued` submitted jobs (not child runs) are already queued, deciding
     /// in the insert's own transaction so that concurrent submissions cannot all slip under
     /// the limit. `Ok(None)`: inserted; `Ok(Some(n))`: refused, `n` jobs are waiting.
-    fn insert_bounded(&self, job: &NewJob, max_queued: u64) -> Result<Option<u64>, StoreError>;
+    fn insert_bounded(&self, job: &NewJob, max_queued: u64) -> Result<Option<u64>, StoreError> {
+        Ok(self
+            .insert_quota(job, max_queued, u64::MAX)?
+            .map(|(QueueFull::Server(n) | QueueFull::Owner(n))| n))
+    }
+    /// [`JobStore::insert_bounded`], and also unless the job's owner (when it has one) already
+    /// has `max_owner` jobs of the job's kind queued: both counts and the insert in one
+    /// transaction.
+    fn insert_quota(
+        &self,
+        job: &NewJob,
+        max_queued: u64,
+        max_owner: u64,
+    ) -> Result<Option<QueueFull>, StoreError>;
+    /// Top-level jobs (searches with their child runs) that ended before `cutoff_ms` (Unix
+    /// ms), oldest first, at most `limit`: what the retention sweeper deletes.
+    fn finished_before(&self, cutoff_ms: i64, limit: usize) -> Result<Vec<Uuid>, StoreError> {
+        let _ = (cutoff_ms, limit);
+        Ok(Vec::new())
+    }
     /// Remove a finished job (and a search's child runs) from the store. The caller removes
     /// its artifacts.
     fn delete(&self, id: Uuid) -> Result<DeleteOutcome, StoreError> {
@@ -223,7 +256,16 @@ pub trait JobStore: Send + Sync {
         limit: usize,
         kind: Option<JobKind>,
     ) -> Result<Vec<JobRecord>, StoreError> {
-        let _ = (limit, kind);
+        self.list_owned(limit, kind, None)
+    }
+    /// [`JobStore::list_recent`] of one owner's jobs (`None`: everyone's).
+    fn list_owned(
+        &self,
+        limit: usize,
+        kind: Option<JobKind>,
+        owner: Option<&str>,
+    ) -> Result<Vec<JobRecord>, StoreError> {
+        let _ = (limit, kind, owner);
         Err(StoreError("this job store cannot list jobs".into()))
     }
     /// Fan a running job out, in one transaction: insert `children` (queued, `parent` = `id`)
@@ -311,8 +353,18 @@ ALTER TABLE jobs ADD COLUMN parent TEXT;
 const INDEX_PARENT: &str =
     "CREATE INDEX IF NOT EXISTS jobs_parent ON jobs(parent) WHERE parent IS NOT NULL;";
 
+/// Added for ownership (`--tokens`); files created before it get the column on open (their
+/// jobs have no owner: only an admin token sees them).
+const SCHEMA_OWNER: &str = "
+ALTER TABLE jobs ADD COLUMN owner TEXT;
+";
+const INDEX_OWNER: &str = "
+CREATE INDEX IF NOT EXISTS jobs_owner ON jobs(owner, seq) WHERE owner IS NOT NULL;
+CREATE INDEX IF NOT EXISTS jobs_finished ON jobs(finished_ms) WHERE parent IS NULL;
+";
+
 const COLUMNS: &str =
-    "id, kind, status, request, motion, progress, result, error, cancel_requested, attempts, created_ms, started_ms, finished_ms, parent";
+    "id, kind, status, request, motion, progress, result, error, cancel_requested, attempts, created_ms, started_ms, finished_ms, parent, owner";
 
 impl SqliteStore {
     /// Open (or create) the store at `path`.
@@ -335,6 +387,13 @@ impl SqliteStore {
             writer.execute_batch(SCHEMA_PARENT)?;
         }
         writer.execute_batch(INDEX_PARENT)?;
+        let has_owner: bool = writer
+            .prepare("SELECT 1 FROM pragma_table_info('jobs') WHERE name = 'owner'")?
+            .exists([])?;
+        if !has_owner {
+            writer.execute_batch(SCHEMA_OWNER)?;
+        }
+        writer.execute_batch(INDEX_OWNER)?;
         let reader = open()?;
         Ok(Self {
             writer: Mutex::new(writer),
@@ -387,6 +446,7 @@ fn row_to_record(row: &rusqlite::Row<'_>) -> rusqlite::Result<Result<JobRecord, 
     let started_ms: Option<i64> = row.get(11)?;
     let finished_ms: Option<i64> = row.get(12)?;
     let parent: Option<String> = row.get(13)?;
+    let owner: Option<String> = row.get(14)?;
     Ok((|| {
         Ok(JobRecord {
             id: Uuid::parse_str(&id).map_err(|e| StoreError(format!("corrupt id {id:?}: {e}")))?,
@@ -408,6 +468,7 @@ fn row_to_record(row: &rusqlite::Row<'_>) -> rusqlite::Result<Result<JobRecord, 
                         .map_err(|e| StoreError(format!("corrupt parent {p:?}: {e}")))
                 })
                 .transpose()?,
+            owner,
         })
     })())
 }
@@ -416,40 +477,76 @@ impl JobStore for SqliteStore {
     fn insert(&self, job: &NewJob) -> Result<(), StoreError> {
         self.write(|c| {
             c.execute(
-                "INSERT INTO jobs (id, kind, status, request, motion, created_ms) VALUES (?1, ?2, 'queued', ?3, ?4, ?5)",
-                params![job.id.to_string(), job.kind.as_str(), job.request.to_string(), job.motion.to_string(), now_ms()],
+                "INSERT INTO jobs (id, kind, status, request, motion, created_ms, owner) VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6)",
+                params![job.id.to_string(), job.kind.as_str(), job.request.to_string(), job.motion.to_string(), now_ms(), job.owner],
             )?;
             Ok(())
         })
     }
 
-    fn insert_bounded(&self, job: &NewJob, max_queued: u64) -> Result<Option<u64>, StoreError> {
+    fn insert_quota(
+        &self,
+        job: &NewJob,
+        max_queued: u64,
+        max_owner: u64,
+    ) -> Result<Option<QueueFull>, StoreError> {
         let max = i64::try_from(max_queued).unwrap_or(i64::MAX);
+        let max_owner = i64::try_from(max_owner).unwrap_or(i64::MAX);
         self.write(|c| {
-            // One statement: the count and the insert see the same snapshot, and SQLite has
+            // One statement: the counts and the insert see the same snapshot, and SQLite has
             // one writer at a time (across processes too), so no other insert interleaves.
+            // A job without an owner (no tokens) meets only the server's limit.
             let n = c.execute(
-                "INSERT INTO jobs (id, kind, status, request, motion, created_ms)
-                 SELECT ?1, ?2, 'queued', ?3, ?4, ?5
-                 WHERE (SELECT COUNT(*) FROM jobs WHERE status = 'queued' AND parent IS NULL) < ?6",
+                "INSERT INTO jobs (id, kind, status, request, motion, created_ms, owner)
+                 SELECT ?1, ?2, 'queued', ?3, ?4, ?5, ?7
+                 WHERE (SELECT COUNT(*) FROM jobs WHERE status = 'queued' AND parent IS NULL) < ?6
+                   AND (?7 IS NULL OR (SELECT COUNT(*) FROM jobs
+                        WHERE status = 'queued' AND parent IS NULL AND owner = ?7 AND kind = ?2) < ?8)",
                 params![
                     job.id.to_string(),
                     job.kind.as_str(),
                     job.request.to_string(),
                     job.motion.to_string(),
                     now_ms(),
-                    max
+                    max,
+                    job.owner,
+                    max_owner
                 ],
             )?;
             if n == 1 {
                 return Ok(None);
             }
-            let queued: i64 = c.query_row(
-                "SELECT COUNT(*) FROM jobs WHERE status = 'queued' AND parent IS NULL",
-                [],
-                |r| r.get(0),
+            let (queued, mine): (i64, i64) = c.query_row(
+                "SELECT COUNT(*), COALESCE(SUM(owner IS NOT NULL AND owner = ?1 AND kind = ?2), 0)
+                 FROM jobs WHERE status = 'queued' AND parent IS NULL",
+                params![job.owner, job.kind.as_str()],
+                |r| Ok((r.get(0)?, r.get(1)?)),
             )?;
-            Ok(Some(u64::try_from(queued).unwrap_or(0)))
+            let n = |v: i64| u64::try_from(v).unwrap_or(0);
+            Ok(Some(if queued >= max {
+                QueueFull::Server(n(queued))
+            } else {
+                QueueFull::Owner(n(mine))
+            }))
+        })
+    }
+
+    fn finished_before(&self, cutoff_ms: i64, limit: usize) -> Result<Vec<Uuid>, StoreError> {
+        let limit = i64::try_from(limit).unwrap_or(i64::MAX);
+        self.read(|c| {
+            let mut st = c.prepare(
+                "SELECT id FROM jobs WHERE parent IS NULL AND finished_ms < ?1
+                   AND status IN ('succeeded', 'failed', 'cancelled')
+                 ORDER BY finished_ms LIMIT ?2",
+            )?;
+            let ids: Vec<String> = st
+                .query_map(params![cutoff_ms, limit], |r| r.get(0))?
+                .collect::<Result<_, _>>()?;
+            ids.iter()
+                .map(|i| {
+                    Uuid::parse_str(i).map_err(|e| StoreError(format!("corrupt id {i:?}: {e}")))
+                })
+                .collect()
         })
     }
 
@@ -642,8 +739,10 @@ impl JobStore for SqliteStore {
                 return Ok(false);
             }
             for ch in children {
+                // A child run belongs to its search's owner.
                 tx.execute(
-                    "INSERT INTO jobs (id, kind, status, request, motion, created_ms, parent) VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6)",
+                    "INSERT INTO jobs (id, kind, status, request, motion, created_ms, parent, owner)
+                     VALUES (?1, ?2, 'queued', ?3, ?4, ?5, ?6, (SELECT owner FROM jobs WHERE id = ?6))",
                     params![ch.id.to_string(), ch.kind.as_str(), ch.request.to_string(), ch.motion.to_string(), now_ms(), id.to_string()],
                 )?;
             }
@@ -667,18 +766,23 @@ impl JobStore for SqliteStore {
         })
     }
 
-    fn list_recent(
+    fn list_owned(
         &self,
         limit: usize,
         kind: Option<JobKind>,
+        owner: Option<&str>,
     ) -> Result<Vec<JobRecord>, StoreError> {
         let cols = COLUMNS.replace("request,", "'null',");
         let limit = i64::try_from(limit).unwrap_or(i64::MAX);
         self.read(|c| {
             let mut st = c.prepare(&format!(
-                "SELECT {cols} FROM jobs WHERE parent IS NULL AND (?1 IS NULL OR kind = ?1) ORDER BY seq DESC LIMIT ?2"
+                "SELECT {cols} FROM jobs WHERE parent IS NULL AND (?1 IS NULL OR kind = ?1)
+                   AND (?3 IS NULL OR owner = ?3) ORDER BY seq DESC LIMIT ?2"
             ))?;
-            let rows = st.query_map(params![kind.map(JobKind::as_str), limit], row_to_record)?;
+            let rows = st.query_map(
+                params![kind.map(JobKind::as_str), limit, owner],
+                row_to_record,
+            )?;
             let mut out = Vec::new();
             for r in rows {
                 out.push(r??);
@@ -799,6 +903,7 @@ mod tests {
             kind,
             request: serde_json::json!({"a": 1}),
             motion: serde_json::json!({"pga": 2.0}),
+            owner: None,
         }
     }
 
@@ -886,6 +991,42 @@ mod tests {
         });
         assert_eq!(accepted.into_inner(), 20);
         assert_eq!(s.counts().expect("counts").queued, 20);
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn owner_quota_and_listing() {
+        let (s, dir) = temp_store();
+        let mine = |kind| NewJob {
+            owner: Some("aaaa".into()),
+            ..job(kind)
+        };
+        assert_eq!(s.insert_quota(&mine(JobKind::Run), 10, 2).expect("i"), None);
+        assert_eq!(s.insert_quota(&mine(JobKind::Run), 10, 2).expect("i"), None);
+        assert_eq!(
+            s.insert_quota(&mine(JobKind::Run), 10, 2).expect("i"),
+            Some(QueueFull::Owner(2))
+        );
+        // Another kind, another owner, no owner: their own counts.
+        assert_eq!(
+            s.insert_quota(&mine(JobKind::PgaSearch), 10, 2).expect("i"),
+            None
+        );
+        let theirs = NewJob {
+            owner: Some("bbbb".into()),
+            ..job(JobKind::Run)
+        };
+        assert_eq!(s.insert_quota(&theirs, 10, 2).expect("i"), None);
+        assert_eq!(s.insert_quota(&job(JobKind::Run), 10, 0).expect("i"), None);
+        assert_eq!(
+            s.insert_quota(&theirs, 5, 2).expect("i"),
+            Some(QueueFull::Server(5))
+        );
+        assert_eq!(s.list_owned(10, None, Some("aaaa")).expect("list").len(), 3);
+        assert_eq!(s.list_owned(10, None, Some("bbbb")).expect("list").len(), 1);
+        assert_eq!(s.list_recent(10, None).expect("list").len(), 5);
+        let first = s.list_owned(10, None, Some("bbbb")).expect("list")[0].clone();
+        assert_eq!(first.owner.as_deref(), Some("bbbb"));
         std::fs::remove_dir_all(dir).ok();
     }
 

@@ -4,7 +4,7 @@
 //! top of the flow; the page itself is plain HTML/CSS/JS under `web/`, embedded in the binary.
 use super::problem::{dotted_to_pointer, ApiError};
 use super::request::json_body;
-use super::routes::{blocking, check_json_content_type, job_json, load, parse_id, AppState};
+use super::routes::{blocking, check_json_content_type, job_json_signed, load, parse_id, AppState};
 use super::store::{JobKind, JobRecord};
 use crate::geometry::polygon_moments;
 use crate::motion::{report_with, GroundMotion, ReportParams, Signal};
@@ -193,6 +193,7 @@ fn query_usize(
 /// `GET /v1/jobs/{id}` (or `/v1/pga-searches/{id}`) answers.
 pub async fn list_jobs(
     State(s): State<AppState>,
+    access: super::auth::Access,
     query: Result<Query<Vec<(String, String)>>, QueryRejection>,
 ) -> ApiResult {
     let Query(query) = query.map_err(|e| ApiError::invalid_parameter("query", e.body_text()))?;
@@ -212,12 +213,17 @@ pub async fn list_jobs(
         }),
     };
     let store = s.core.store.clone();
-    let jobs = blocking(move || store.list_recent(limit, kind))
+    // A user token lists its own jobs; an admin token (or no tokens) everyone's.
+    let owner = access.list_filter().map(str::to_string);
+    let jobs = blocking(move || store.list_owned(limit, kind, owner.as_deref()))
         .await?
         .map_err(ApiError::internal)?;
     let body = format!(
         "{{\"jobs\":[{}]}}",
-        jobs.iter().map(job_json).collect::<Vec<_>>().join(",")
+        jobs.iter()
+            .map(|j| job_json_signed(j, s.core.server.signing.as_ref()))
+            .collect::<Vec<_>>()
+            .join(",")
     );
     let mut r = (StatusCode::OK, body).into_response();
     r.headers_mut().insert(
@@ -281,9 +287,10 @@ pub fn scene_geometry(scene: &Scene) -> Value {
 /// `GET /v1/jobs/{id}/scene`.
 pub async fn job_scene(
     State(s): State<AppState>,
+    access: super::auth::Access,
     id: Result<Path<String>, PathRejection>,
 ) -> ApiResult {
-    let j = load(&s, parse_id(id)?, JobKind::Run).await?;
+    let j = load(&s, &access, parse_id(id)?, JobKind::Run).await?;
     let body =
         blocking(move || stored_input(&j).map(|(scene, _)| scene_geometry(&scene))).await??;
     Ok(axum::Json(body).into_response())
@@ -325,13 +332,14 @@ pub fn ground_series(motion: &GroundMotion, duration: f64, n: usize) -> Value {
 /// `GET /v1/jobs/{id}/ground?points=N`: the ground motion the run felt, over its duration.
 pub async fn job_ground(
     State(s): State<AppState>,
+    access: super::auth::Access,
     id: Result<Path<String>, PathRejection>,
     query: Result<Query<Vec<(String, String)>>, QueryRejection>,
 ) -> ApiResult {
     let Query(query) = query.map_err(|e| ApiError::invalid_parameter("query", e.body_text()))?;
     let p = WebParams::default();
     let points = query_usize(&query, "points", p.series_points, p.max_series_points)?;
-    let j = load(&s, parse_id(id)?, JobKind::Run).await?;
+    let j = load(&s, &access, parse_id(id)?, JobKind::Run).await?;
     let body = blocking(move || {
         let (scene, motion) = stored_input(&j)?;
         let duration = scene
@@ -413,6 +421,9 @@ pub fn inspect_motion(
             "the body must be a ground motion object {\"horizontal\": …, \"vertical\": …, \"scale\": …} (docs/format.md §2)",
         ));
     }
+    // Values outside docs/format.md "Ranges", as a submission's motion (pointers relative to
+    // the body: `/horizontal/pulse/amplitude`).
+    super::budget::check_motion_ranges("", body)?;
     // Read as a `MotionSpec` (unknown members, members of another form and nulls refused),
     // without the command-line extension `processing`.
     let problem = |e: crate::motion::MotionError| {

@@ -840,6 +840,7 @@ fn fan_out_search(
                         progress_step: 1.0 / expected,
                     }),
                     motion: serde_json::json!({ "pga": pga }),
+                    owner: None,
                 })
                 .collect();
             let progress = (done as f64 / expected).min(0.99);

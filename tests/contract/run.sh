@@ -6,6 +6,8 @@
 #
 # Usage: tests/contract/run.sh [extra schemathesis options]
 #   ASHLAR_CONTRACT_MAX_EXAMPLES  examples per operation (default 40; the run takes about 2 min)
+#   ASHLAR_CONTRACT_TOKEN_MAX_EXAMPLES  examples per operation of the second run, against a server
+#                                 started with --tokens and a user token (default 8; under a minute)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 ROOT=$PWD
@@ -33,9 +35,14 @@ BIN=$TARGET/debug/ashlar
 WORK=$(mktemp -d)
 "$BIN" serve --addr 127.0.0.1:0 --data "$WORK/data" --workers 1 >"$WORK/stdout" 2>"$WORK/server.log" &
 PID=$!
+PID2=""
 cleanup() {
     kill -TERM "$PID" 2>/dev/null || true
     wait "$PID" 2>/dev/null || true
+    if [ -n "$PID2" ]; then
+        kill -TERM "$PID2" 2>/dev/null || true
+        wait "$PID2" 2>/dev/null || true
+    fi
     rm -rf "$WORK"
 }
 trap cleanup EXIT
@@ -105,5 +112,66 @@ set -e
 if [ "$STATUS" -ne 0 ]; then
     echo "--- server log (tail) ---" >&2
     tail -n 50 "$WORK/server.log" >&2
+    exit "$STATUS"
+fi
+
+# Second run: the same contract against a server started with --tokens, every request carrying
+# a user token (docs/service.md, "Access"). Fewer examples and no coverage phase (its ~50 s of
+# boundary values do not depend on the token and ran above): it checks that authentication and
+# ownership change nothing of the contract for a token's own jobs. Before it: without a token
+# 401 problem+json, and another token's job 404.
+printf 'user contract-user-token-0001\nuser contract-user-token-0002\nadmin contract-admin-token-01\n' >"$WORK/tokens"
+"$BIN" serve --addr 127.0.0.1:0 --data "$WORK/data2" --workers 1 --tokens "$WORK/tokens" >"$WORK/stdout2" 2>"$WORK/server2.log" &
+PID2=$!
+ADDR2=""
+for _ in $(seq 1 200); do
+    ADDR2=$(sed -n 's/^ashlar serve: listening on //p' "$WORK/stdout2")
+    [ -n "$ADDR2" ] && break
+    kill -0 "$PID2" 2>/dev/null || { cat "$WORK/server2.log" >&2; echo "contract: the server with --tokens did not start" >&2; exit 1; }
+    sleep 0.05
+done
+[ -n "$ADDR2" ] || { echo "contract: the server with --tokens did not report its address" >&2; exit 1; }
+"$VENV/bin/python" - "$ADDR2" "$ROOT" <<'EOF_TOKENS' || { echo "contract: access control with --tokens failed (see above)" >&2; exit 1; }
+import json, sys, urllib.error, urllib.request
+addr, root = sys.argv[1], sys.argv[2]
+def call(method, path, token=None, body=None):
+    h = {"content-type": "application/json"}
+    if token:
+        h["authorization"] = "Bearer " + token
+    data = None if body is None else json.dumps(body).encode()
+    req = urllib.request.Request(addr + path, data=data, method=method, headers=h)
+    try:
+        with urllib.request.urlopen(req, timeout=30) as r:
+            return r.status, r.headers, r.read().decode()
+    except urllib.error.HTTPError as e:
+        return e.code, e.headers, e.read().decode()
+st, h, _ = call("GET", "/v1/jobs")
+assert st == 401 and h.get("content-type") == "application/problem+json", f"no token: {st}"
+load = lambda n: json.load(open(f"{root}/examples/{n}"))
+st, _, text = call("POST", "/v1/jobs", "contract-user-token-0001",
+                   {"scene": load("column.json"), "motion": load("half-sine-pulse.json")})
+assert st == 202, f"submit with a token: {st} {text}"
+jid = json.loads(text)["id"]
+st, _, _ = call("GET", f"/v1/jobs/{jid}", "contract-user-token-0002")
+assert st == 404, f"another user's job: {st}"
+st, _, text = call("GET", f"/v1/jobs/{jid}", "contract-admin-token-01")
+assert st == 200 and "signed_links" in json.loads(text), f"the admin reads it, with signed links: {st}"
+print("contract: --tokens: 401 without a token, 404 for another user's job, 200 for the admin")
+EOF_TOKENS
+set +e
+"$VENV/bin/schemathesis" --no-color --config-file "$ROOT/tests/contract/schemathesis.toml" run "$ADDR2/openapi.yaml" \
+    --url "$ADDR2" \
+    --header "Authorization: Bearer contract-user-token-0001" \
+    --checks all \
+    --max-examples "${ASHLAR_CONTRACT_TOKEN_MAX_EXAMPLES:-8}" \
+    --phases examples,fuzzing,stateful \
+    --seed 2 \
+    --workers 1 \
+    "$@"
+STATUS=$?
+set -e
+if [ "$STATUS" -ne 0 ]; then
+    echo "--- server with --tokens log (tail) ---" >&2
+    tail -n 50 "$WORK/server2.log" >&2
 fi
 exit "$STATUS"

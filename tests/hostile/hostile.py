@@ -6,6 +6,8 @@ prints its latency. Standard library only.
 
 Usage: hostile.py BINARY   (run by tests/hostile/run.sh)
 """
+import hashlib
+import hmac
 import json
 import os
 import socket
@@ -271,8 +273,14 @@ def main():
     # --- 3. Access: with --tokens, /v1/ needs a bearer token (401 problem+json without one).
     tokfile = os.path.join(tempfile.mkdtemp(), "tokens")
     with open(tokfile, "w") as f:
-        f.write("# role token\nadmin hostile-suite-admin-token\n")
-    t = Server("--workers", "1", "--tokens", tokfile, runner="fake")
+        f.write("# role token\nadmin hostile-suite-admin-token\n"
+                "user hostile-suite-user-token-a\nuser hostile-suite-user-token-b\n")
+    keyfile = os.path.join(os.path.dirname(tokfile), "signing.key")
+    signing_key = b"hostile-suite-signing-key-0123456789abcdef"
+    with open(keyfile, "wb") as f:
+        f.write(signing_key)
+    t = Server("--workers", "1", "--tokens", tokfile, "--signing-key-file", keyfile,
+               "--max-queued-jobs-per-token", "3", runner="fake")
     st, h, b = call(t, "GET", "/v1/jobs?limit=500")
     check(st == 401 and problem(st, h, b)[0] and (h.get("www-authenticate") or "").startswith("Bearer"),
           f"GET /v1/jobs without a token: 401 problem+json with WWW-Authenticate ({st})")
@@ -284,6 +292,79 @@ def main():
     check(st == 202, f"POST /v1/jobs with a token of the file: 202 ({st})")
     st, _, _ = call(t, "GET", "/healthz")
     check(st == 200, f"/healthz stays open: {st}")
+
+    # Ownership: a user sees only its own jobs (others' answer 404, not 403); an admin all.
+    A = {"Authorization": "Bearer hostile-suite-user-token-a"}
+    B = {"Authorization": "Bearer hostile-suite-user-token-b"}
+    ADMIN = {"Authorization": "Bearer hostile-suite-admin-token"}
+    st, _, b = call(t, "POST", "/v1/jobs", {"scene": column, "motion": pulse}, headers=A)
+    a_job = json.loads(b)["id"] if st == 202 else "none"
+    st, _, b = call(t, "POST", "/v1/jobs", {"scene": column, "motion": pulse}, headers=ADMIN)
+    admin_job = json.loads(b)["id"] if st == 202 else "none"
+    codes = [call(t, m, f"/v1/jobs/{a_job}{tail}", headers=B)[0]
+             for m, tail in [("GET", ""), ("GET", "/trajectory.mcap"), ("POST", "/cancel"), ("DELETE", "")]]
+    check(codes == [404] * 4, f"another user's job: GET, trajectory, cancel, DELETE all 404 ({codes})")
+    st, _, b = call(t, "GET", "/v1/jobs?limit=500", headers=B)
+    check(st == 200 and json.loads(b)["jobs"] == [], f"another user's jobs are not listed ({st})")
+    def wait_status_h(path, want, h, timeout=60):
+        end = time.time() + timeout
+        while time.time() < end:
+            st, _, b = call(t, "GET", path, headers=h)
+            if st == 200 and json.loads(b)["status"] in want:
+                return json.loads(b)
+            time.sleep(0.1)
+        return None
+
+    done_admin = wait_status_h(f"/v1/jobs/{admin_job}", {"succeeded", "failed"}, ADMIN)
+    st, _, _ = call(t, "DELETE", f"/v1/jobs/{admin_job}", headers=A)
+    st2, _, _ = call(t, "GET", f"/v1/jobs/{admin_job}", headers=ADMIN)
+    check(done_admin is not None and st == 404 and st2 == 200,
+          f"a user cannot delete an admin's job: DELETE {st}, the admin still reads it ({st2})")
+    st, _, b = call(t, "GET", "/v1/jobs?limit=500", headers=ADMIN)
+    ids = [j["id"] for j in json.loads(b)["jobs"]] if st == 200 else []
+    check(a_job in ids and admin_job in ids, "the admin lists every token's jobs")
+
+    # Signed links: a's finished job gives signed URLs that open without a header; tampered or
+    # expired ones are 401 problem+json.
+    done_a = wait_status_h(f"/v1/jobs/{a_job}", {"succeeded", "failed"}, A)
+    signed = (done_a or {}).get("signed_links") or {}
+    traj = signed.get("trajectory", "")
+    st, _, body = call(t, "GET", traj) if traj else (None, None, b"")
+    check(st == 200 and len(body) > 0, f"a signed trajectory link opens without a header ({st}, {len(body)} bytes)")
+    if traj:
+        path, query = traj.split("?", 1)
+        q = dict(kv.split("=", 1) for kv in query.split("&"))
+        flipped = ("1" if q["sig"][0] == "0" else "0") + q["sig"][1:]
+        st, h, b = call(t, "GET", f"{path}?expires={q['expires']}&sig={flipped}")
+        check(st == 401 and problem(st, h, b)[0], f"a tampered signed link: 401 problem+json ({st})")
+        st, h, b = call(t, "GET", f"{path}?expires={int(q['expires']) + 86400}&sig={q['sig']}")
+        check(st == 401, f"a signed link with a later expiry: 401 ({st})")
+        old = int(time.time()) - 60
+        sig = hmac.new(signing_key, f"GET\n{path}\n{old}".encode(), hashlib.sha256).hexdigest()
+        st, h, b = call(t, "GET", f"{path}?expires={old}&sig={sig}")
+        ok, p = problem(st, h, b)
+        check(st == 401 and ok and "expired" in p.get("detail", ""),
+              f"an expired signed link (right signature): 401 saying expired ({st}: {p.get('detail')})")
+        st, _, _ = call(t, "GET", f"/v1/jobs/{a_job}?expires={q['expires']}&sig={q['sig']}")
+        check(st == 401, f"a signed link is not accepted on another route ({st})")
+
+    # Per-token quota: b fills its 3 queued jobs (the worker busy with a long one), gets 429
+    # naming the quota and the count; a is not affected.
+    slow = json.loads(json.dumps(column))
+    slow["control"] = dict(slow.get("control") or {}, duration=600)
+    codes = []
+    last = None
+    for _ in range(8):
+        st, h, b = call(t, "POST", "/v1/jobs", {"scene": slow, "motion": pulse}, headers=B)
+        codes.append(st)
+        if st == 429:
+            last = (st, h, b)
+            break
+    ok, p = problem(*last) if last else (False, {})
+    check(ok and "--max-queued-jobs-per-token" in p.get("detail", "") and "3 waiting, limit 3" in p.get("detail", ""),
+          f"per-token quota: 429 naming the quota and the count after {codes.count(202)} accepted ({p.get('detail')})")
+    st, _, _ = call(t, "POST", "/v1/jobs", {"scene": column, "motion": pulse}, headers=A)
+    check(st == 202, f"another token's quota is its own: 202 ({st})")
     t.stop()
     p = subprocess.Popen([BIN, "serve", "--addr", "0.0.0.0:0", "--tokens", tokfile, "--data", tempfile.mkdtemp()],
                          stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
@@ -400,6 +481,10 @@ def main():
     st, h, b = raw_request(s, b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Big: " + b"a" * 40000 + b"\r\nConnection: close\r\n\r\n")
     check(st == 431 and h.get("content-type", "").startswith("application/problem+json"),
           f"40 KB of headers: 431 problem+json ({st})")
+    st, h, b = raw_request(s, b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Big: " + b"a" * 300_000 + b"\r\nConnection: close\r\n\r\n")
+    ok, p = problem(st, h, b)
+    check(st == 431 and ok and p.get("status") == 431,
+          f"300 KB of headers (beyond hyper's buffer): 431 problem+json ({st} {h.get('content-type')})")
 
     # --- 5. Queue limit atomic: the worker busy with a blocker, 60 concurrent POSTs, limit 20.
     # A 56-block wall on the full engine for 1e6 steps (5.6e7 block-steps, inside every budget):

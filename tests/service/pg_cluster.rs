@@ -14,7 +14,7 @@
 use crate::service_support;
 
 use ashlar::service::pg_store::{LeaseParams, PgStore, SCHEMA_VERSION};
-use ashlar::service::store::{Finish, JobKind, JobStatus, JobStore, NewJob};
+use ashlar::service::store::{Finish, JobKind, JobStatus, JobStore, NewJob, QueueFull};
 use ashlar::service::{Service, ServiceConfig};
 use postgres::NoTls;
 use serde_json::{json, Value};
@@ -200,6 +200,7 @@ fn embedded_results(bodies: &[Value]) -> Vec<String> {
                     kind: JobKind::Run,
                     request: b.clone(),
                     motion: parsed.motion_summary,
+                    owner: None,
                 })
                 .expect("insert");
             core.notify_work();
@@ -331,6 +332,7 @@ fn lease_expiry_requeues_and_discards_the_late_result() {
         kind: JobKind::Run,
         request: json!({"k": 1}),
         motion: json!({"pga": 1.0}),
+        owner: None,
     };
     a.insert(&job).expect("insert");
     assert_eq!(a.claim().expect("claim").expect("job").id, job.id);
@@ -413,6 +415,7 @@ fn store_contract_matches_the_embedded_store() {
         kind,
         request: json!({"a": 1}),
         motion: json!({"pga": 2.0}),
+        owner: None,
     };
     let (a, b) = (job(JobKind::Run), job(JobKind::PgaSearch));
     s.insert(&a).expect("insert");
@@ -588,6 +591,7 @@ fn notify_wakes_an_idle_worker() {
                 kind: JobKind::Run,
                 request: body,
                 motion: json!({"pga": 2.0}),
+                owner: None,
             })
             .expect("insert");
         let t = Instant::now();
@@ -694,6 +698,7 @@ fn child(parent: Uuid, pga: f64, step: f64) -> NewJob {
         request: json!({"parent": parent, "record": 0, "pga": pga, "pga_bits": pga.to_bits(),
                         "width": 2, "progress_step": step}),
         motion: json!({"pga": pga}),
+        owner: None,
     }
 }
 
@@ -703,6 +708,7 @@ fn new_search() -> NewJob {
         kind: JobKind::PgaSearch,
         request: json!({"a": 1}),
         motion: json!({"pga": 1.0}),
+        owner: None,
     }
 }
 
@@ -1070,6 +1076,7 @@ fn embedded_store_fans_out_with_one_worker_thread() {
                     kind: JobKind::PgaSearch,
                     request: (*b).clone(),
                     motion: parsed.motion_summary,
+                    owner: None,
                 })
                 .expect("insert");
             core.notify_work();
@@ -1104,4 +1111,59 @@ fn embedded_store_fans_out_with_one_worker_thread() {
     assert!(core.job_dir(ids[1]).join("fragility.svg").exists());
     svc.shutdown(Duration::from_secs(5));
     std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn owners_quotas_and_retention_lookup_match_the_embedded_store() {
+    // The SQLite store's `owner_quota_and_listing` unit test, on PostgreSQL (migration 3).
+    let Some(base) = base_url("owners_quotas_and_retention_lookup_match_the_embedded_store") else {
+        return;
+    };
+    let url = fresh_db(&base, "owner");
+    let s = PgStore::open(&url, LeaseParams::default()).expect("open");
+    let job = |kind, owner: Option<&str>| NewJob {
+        id: Uuid::new_v4(),
+        kind,
+        request: json!({"a": 1}),
+        motion: json!({"pga": 2.0}),
+        owner: owner.map(str::to_string),
+    };
+    let mine = |kind| job(kind, Some("aaaa"));
+    assert_eq!(s.insert_quota(&mine(JobKind::Run), 10, 2).expect("i"), None);
+    assert_eq!(s.insert_quota(&mine(JobKind::Run), 10, 2).expect("i"), None);
+    assert_eq!(
+        s.insert_quota(&mine(JobKind::Run), 10, 2).expect("i"),
+        Some(QueueFull::Owner(2))
+    );
+    assert_eq!(
+        s.insert_quota(&mine(JobKind::PgaSearch), 10, 2).expect("i"),
+        None
+    );
+    let theirs = job(JobKind::Run, Some("bbbb"));
+    assert_eq!(s.insert_quota(&theirs, 10, 2).expect("i"), None);
+    assert_eq!(
+        s.insert_quota(&job(JobKind::Run, None), 10, 0).expect("i"),
+        None
+    );
+    assert_eq!(
+        s.insert_quota(&job(JobKind::Run, Some("bbbb")), 5, 2)
+            .expect("i"),
+        Some(QueueFull::Server(5))
+    );
+    assert_eq!(s.list_owned(10, None, Some("aaaa")).expect("l").len(), 3);
+    let b = s.list_owned(10, None, Some("bbbb")).expect("l");
+    assert_eq!(b.len(), 1);
+    assert_eq!(b[0].owner.as_deref(), Some("bbbb"));
+    assert_eq!(s.list_recent(10, None).expect("l").len(), 5);
+    // Retention: only a finished top-level job that ended before the cutoff is listed.
+    assert!(s
+        .finished_before(i64::MAX, 10)
+        .expect("finished")
+        .is_empty());
+    s.request_cancel(theirs.id).expect("cancel");
+    assert_eq!(
+        s.finished_before(i64::MAX, 10).expect("finished"),
+        vec![theirs.id]
+    );
+    assert!(s.finished_before(0, 10).expect("finished").is_empty());
 }

@@ -323,8 +323,9 @@ async fn bad_requests_get_problems_naming_the_field() {
             "/scene/excitation/block",
         ),
         (
+            // The range check (docs/format.md "Ranges") names the member itself.
             json!({"scene": scene, "motion": {"horizontal": {"pulse": {"amplitude": 1, "period": 0}}}}),
-            "/motion/horizontal/pulse",
+            "/motion/horizontal/pulse/period",
         ),
         (
             json!({"scene": scene, "motion": {"horizontal": {"pulse": {"amplitude": 1, "period": 1}, "sine": {}}}}),

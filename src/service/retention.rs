@@ -1,0 +1,153 @@
+//! Service: the retention policy (`ashlar serve --retain-finished FOR`), beside the routes and
+//! the workers. A sweeper thread deletes finished jobs and searches (with a search's child runs)
+//! and their artifacts once they ended longer ago than `FOR`, exactly as `DELETE
+//! /v1/jobs/{id}` would. Opt-in and documented (docs/service.md "Retention"): deleting by a
+//! stated policy is not losing a job. Queued, running and waiting jobs are never touched.
+use super::store::{now_ms, DeleteOutcome};
+use super::worker::Core;
+use std::sync::mpsc;
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+/// Parse a retention duration: a whole number with a unit, `s`, `m`, `h` or `d` (`7d`, `12h`,
+/// `30m`, `90s`), from one second to ten years.
+pub fn parse_duration(text: &str) -> Result<Duration, String> {
+    let t = text.trim();
+    let split = t.find(|c: char| !c.is_ascii_digit()).unwrap_or(t.len());
+    let (n, unit) = t.split_at(split);
+    let n: u64 = n.parse().map_err(|_| {
+        format!("{text:?}: expected a whole number and a unit, e.g. 7d, 12h, 30m, 90s")
+    })?;
+    let secs = match unit {
+        "s" => Some(n),
+        "m" => n.checked_mul(60),
+        "h" => n.checked_mul(3600),
+        "d" => n.checked_mul(86_400),
+        other => {
+            return Err(format!(
+                "{text:?}: unknown unit {other:?} (s, m, h or d, e.g. 7d)"
+            ))
+        }
+    };
+    match secs {
+        Some(s) if (1..=10 * 365 * 86_400).contains(&s) => Ok(Duration::from_secs(s)),
+        _ => Err(format!(
+            "{text:?}: the retention must be between 1 s and 10 years"
+        )),
+    }
+}
+
+/// How often the sweeper looks: a tenth of the retention, between 1 s and 10 min, so that a
+/// job is gone at most 10 % (or 10 min) after its time.
+pub fn sweep_interval(keep: Duration) -> Duration {
+    (keep / 10).clamp(Duration::from_secs(1), Duration::from_secs(600))
+}
+
+/// Jobs deleted per store query, so that a first sweep over a large store holds no long
+/// transaction.
+const BATCH: usize = 200;
+
+/// Delete every job that ended before `now - keep`; returns how many went.
+pub fn sweep(core: &Core, keep: Duration) -> usize {
+    let keep_ms = i64::try_from(keep.as_millis()).unwrap_or(i64::MAX);
+    let cutoff = now_ms().saturating_sub(keep_ms);
+    let mut deleted = 0;
+    loop {
+        let ids = match core.store.finished_before(cutoff, BATCH) {
+            Ok(ids) => ids,
+            Err(e) => {
+                tracing::warn!(error = %e, "retention: listing finished jobs");
+                return deleted;
+            }
+        };
+        let n = ids.len();
+        for id in ids {
+            match core.store.delete(id) {
+                Ok(DeleteOutcome::Deleted) => {
+                    super::routes::remove_artifacts(core, id);
+                    deleted += 1;
+                }
+                // Deleted meanwhile by its owner, or by another server's sweeper.
+                Ok(_) => {}
+                Err(e) => {
+                    tracing::warn!(%id, error = %e, "retention: deleting a finished job");
+                    return deleted;
+                }
+            }
+        }
+        if n < BATCH {
+            return deleted;
+        }
+    }
+}
+
+/// The sweeper thread; stopped on shutdown.
+#[derive(Debug)]
+pub struct Sweeper {
+    stop: mpsc::Sender<()>,
+    thread: JoinHandle<()>,
+}
+
+impl Sweeper {
+    pub fn start(core: Arc<Core>, keep: Duration) -> Result<Self, String> {
+        let (stop, rx) = mpsc::channel::<()>();
+        let every = sweep_interval(keep);
+        let thread = std::thread::Builder::new()
+            .name("ashlar-retention".into())
+            .spawn(move || loop {
+                let n = sweep(&core, keep);
+                if n > 0 {
+                    tracing::info!(
+                        deleted = n,
+                        retain_s = keep.as_secs(),
+                        "retention: deleted finished jobs"
+                    );
+                }
+                match rx.recv_timeout(every) {
+                    Err(mpsc::RecvTimeoutError::Timeout) => {}
+                    _ => return,
+                }
+            })
+            .map_err(|e| format!("starting the retention sweeper: {e}"))?;
+        Ok(Self { stop, thread })
+    }
+
+    pub fn stop(self) {
+        let _ = self.stop.send(());
+        let _ = self.thread.join();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations() {
+        assert_eq!(parse_duration("7d"), Ok(Duration::from_secs(7 * 86_400)));
+        assert_eq!(parse_duration("12h"), Ok(Duration::from_secs(43_200)));
+        assert_eq!(parse_duration("30m"), Ok(Duration::from_secs(1800)));
+        assert_eq!(parse_duration(" 90s "), Ok(Duration::from_secs(90)));
+        for bad in [
+            "",
+            "7",
+            "d",
+            "7w",
+            "0s",
+            "-1d",
+            "1.5h",
+            "99999999999999999999d",
+        ] {
+            assert!(parse_duration(bad).is_err(), "{bad:?} accepted");
+        }
+        assert_eq!(
+            sweep_interval(Duration::from_secs(2)),
+            Duration::from_secs(1)
+        );
+        assert_eq!(
+            sweep_interval(Duration::from_secs(7 * 86_400)),
+            Duration::from_secs(600)
+        );
+    }
+}
