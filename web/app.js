@@ -1115,14 +1115,15 @@ function renderSummary(j) {
 }
 
 function renderDownloads(j) {
-  const mcap = new URL(j.links.trajectory, location.href).href;
+  // With tokens on, the job gives signed links (docs/service.md "Signed links"): Foxglove
+  // fetches the MCAP itself, without the header, so it gets the signed one.
+  const signed = j.signed_links && j.signed_links.trajectory;
+  const mcap = new URL(signed || j.links.trajectory, location.href).href;
   const fox = `https://app.foxglove.dev/?ds=remote-file&ds.url=${encodeURIComponent(mcap)}`;
-  // With a token, links to /v1/ are fetched with the header (apiLink). Foxglove opens the MCAP
-  // URL itself, without the header: it works only if the server's job resource gives a signed
-  // URL (one that needs no header); the page says so.
+  // With a token, links to /v1/ are fetched with the header (apiLink).
   const hist = j.links.histories;
   const csvHref = `${hist}${hist.includes("?") ? "&" : "?"}format=csv`;
-  const foxNote = auth.token && j.links.trajectory.startsWith("/v1/") && !j.links.trajectory.includes("?")
+  const foxNote = auth.token && !signed
     ? " — this server asks for a token, which Foxglove cannot send: download the MCAP and open the file in Foxglove instead"
     : " — needs this server to be reachable from your browser (Foxglove fetches the file)";
   $("downloads").replaceChildren(
