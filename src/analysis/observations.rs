@@ -198,7 +198,10 @@ fn empirical_fraction(thresholds: &[Option<f64>], a: f64) -> f64 {
     if thresholds.is_empty() {
         return 0.0;
     }
-    let met = thresholds.iter().filter(|t| t.is_some_and(|t| t <= a)).count();
+    let met = thresholds
+        .iter()
+        .filter(|t| t.is_some_and(|t| t <= a))
+        .count();
     met as f64 / thresholds.len() as f64
 }
 
@@ -215,7 +218,9 @@ fn posterior(grid: &[f64], likelihood: &[f64]) -> Option<Posterior> {
     }
     let quantile = |q: f64| {
         let target = q * total;
-        let i = cdf.partition_point(|&c| c < target).clamp(1, grid.len() - 1);
+        let i = cdf
+            .partition_point(|&c| c < target)
+            .clamp(1, grid.len() - 1);
         let (c0, c1) = (cdf[i - 1], cdf[i]);
         let (a0, a1) = (grid[i - 1], grid[i]);
         let (l0, l1) = (likelihood[i - 1], likelihood[i]);

@@ -1,7 +1,7 @@
 //! `ashlar site`: the PGA interval consistent with several observations at one site, per record
 //! and, over several records, its distribution (`analysis::observations`; docs/observations.md).
 //! Thin: arguments in, JSON out.
-use super::run::{acceleration_option, load_scene, record_name, record_paths};
+use super::run::{acceleration_option, apply_duration, load_scene, record_name, record_paths};
 use crate::analysis::observations::{
     criterion_records, distribution, site_interval, DistributionParams, Observation,
 };
@@ -27,6 +27,9 @@ pub struct SiteArgs {
     pub not_seen: Vec<String>,
     #[command(flatten)]
     pub units: UnitsArg,
+    /// Run duration in seconds (overrides the scene's control.duration), as for `pga`.
+    #[arg(long)]
+    pub duration: Option<f64>,
     /// Lower end of the searched range, with units.
     #[arg(long, default_value = "0.05g")]
     pub min: String,
@@ -63,7 +66,8 @@ pub fn run(args: &SiteArgs) -> Result<(), String> {
         tolerance: acceleration_option("tolerance", &args.tolerance)?,
         scan_points: args.scan_points,
     };
-    let scene = load_scene(&args.scene)?;
+    let mut scene = load_scene(&args.scene)?;
+    apply_duration(&mut scene, args.duration)?;
     let params = args.units.load_params().map_err(|e| e.to_string())?;
     let mut paths = Vec::new();
     for m in &args.motion {

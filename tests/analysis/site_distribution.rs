@@ -13,7 +13,9 @@
 //!   fit is the one `pga --motion DIR` reports (`pga::multi_result`).
 use ashlar::analysis::fragility::{normal_cdf, Capacity, Method};
 use ashlar::analysis::observations::{distribution, CriterionRecords, DistributionParams};
-use ashlar::analysis::pga::{multi_result, Combine, Criterion, PgaRequest, PgaResult, RecordResult};
+use ashlar::analysis::pga::{
+    multi_result, Combine, Criterion, PgaRequest, PgaResult, RecordResult,
+};
 
 fn exact(thresholds: &[f64]) -> Vec<Capacity> {
     thresholds
@@ -57,7 +59,12 @@ fn site_distribution_with_empirical_fragilities_matches_the_hand_computed_quanti
     let d = distribution(&[obs("c2", false, &[6.0, 8.0])], 0.0, 10.0, &params);
     let p = d.empirical.expect("empirical posterior");
     close("not seen median", p.median, 3.5, h);
-    close("not seen 95 %", p.p05_p95[1], 6.0 + 2.0 * (0.95 * 7.0 - 6.0), h);
+    close(
+        "not seen 95 %",
+        p.p05_p95[1],
+        6.0 + 2.0 * (0.95 * 7.0 - 6.0),
+        h,
+    );
     // Both: L = F1 (1 − F2) = 1/2 on [3, 5), 1 on [5, 6), 1/2 on [6, 8), 0 elsewhere; mass 3.
     let d = distribution(
         &[obs("c1", true, &[3.0, 5.0]), obs("c2", false, &[6.0, 8.0])],
@@ -70,7 +77,12 @@ fn site_distribution_with_empirical_fragilities_matches_the_hand_computed_quanti
     close("joint 5 %", p.p05_p95[0], 3.0 + 2.0 * 0.15, h);
     close("joint 16 %", p.p16_p84[0], 3.96, h);
     close("joint 84 %", p.p16_p84[1], 7.04, h);
-    close("joint 95 %", p.p05_p95[1], 6.0 + 2.0 * (0.95 * 3.0 - 2.0), h);
+    close(
+        "joint 95 %",
+        p.p05_p95[1],
+        6.0 + 2.0 * (0.95 * 3.0 - 2.0),
+        h,
+    );
     // The density integrates to 1 (trapezoid) and vanishes where a record set rules a out.
     let mass: f64 = p
         .density
@@ -149,8 +161,16 @@ fn site_distribution_of_one_observation_reduces_to_its_lognormal_fragility() {
             (0.95, p.p05_p95[1]),
         ] {
             let want = bisect(cdf, q, min, max);
-            eprintln!("observed {observed}: q {q}: {got} vs closed form {want} ({:.1e})", got - want);
-            close(&format!("observed {observed}: quantile {q}"), got, want, 1e-4);
+            eprintln!(
+                "observed {observed}: q {q}: {got} vs closed form {want} ({:.1e})",
+                got - want
+            );
+            close(
+                &format!("observed {observed}: quantile {q}"),
+                got,
+                want,
+                1e-4,
+            );
         }
     }
 
