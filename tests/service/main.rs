@@ -5,6 +5,7 @@
 
 mod pg_cluster;
 mod pg_tls;
+mod service_criteria;
 mod service_durability;
 mod service_openapi;
 mod service_pga;
