@@ -67,7 +67,10 @@ async fn site_criteria_as_objects_are_accepted_and_every_missing_block_is_named(
         .await
         .problem(422);
     assert_eq!(p["pointer"], "/criterion", "{p}");
-    assert!(p["detail"].as_str().unwrap_or_default().contains("metres"), "{p}");
+    assert!(
+        p["detail"].as_str().unwrap_or_default().contains("metres"),
+        "{p}"
+    );
     bad["criterion"] = json!({"kind": "dropped", "block": "column"});
     call(&router, post_json("/v1/pga-searches", &bad))
         .await
