@@ -184,7 +184,7 @@ fn apply_model(scene: &mut Scene, model: Option<&str>) -> Result<(), String> {
 }
 
 /// `--duration SECONDS` as the scene's `control.duration`.
-fn apply_duration(scene: &mut Scene, duration: Option<f64>) -> Result<(), String> {
+pub(super) fn apply_duration(scene: &mut Scene, duration: Option<f64>) -> Result<(), String> {
     if let Some(d) = duration {
         if !(d.is_finite() && d > 0.0) {
             return Err(format!(

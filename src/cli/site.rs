@@ -1,7 +1,10 @@
 //! `ashlar site`: the PGA interval consistent with several observations at one site, per record
-//! (`analysis::observations`; docs/observations.md). Thin: arguments in, JSON out.
-use super::run::{acceleration_option, load_scene, record_name, record_paths};
-use crate::analysis::observations::{site_interval, Observation};
+//! and, over several records, its distribution (`analysis::observations`; docs/observations.md).
+//! Thin: arguments in, JSON out.
+use super::run::{acceleration_option, apply_duration, load_scene, record_name, record_paths};
+use crate::analysis::observations::{
+    criterion_records, distribution, site_interval, DistributionParams, Observation,
+};
 use crate::analysis::pga::{Combine, Criterion, PgaRequest};
 use crate::analysis::run::RunOptions;
 use crate::motion::{self, UnitsArg};
@@ -12,8 +15,9 @@ pub struct SiteArgs {
     /// Scene file (ashlar.scene/1 JSON).
     pub scene: PathBuf,
     /// Record(s), as for `pga`: a file, a directory, a comma-separated list or a `.list` file.
-    #[arg(long)]
-    pub motion: String,
+    /// Repeat for several; over several records the PGA distribution is printed too.
+    #[arg(long, required = true)]
+    pub motion: Vec<String>,
     /// Damage seen at the site (a `pga` criterion or the JSON of docs/format.md §3): a lower
     /// bound. Repeat for several.
     #[arg(long)]
@@ -23,6 +27,9 @@ pub struct SiteArgs {
     pub not_seen: Vec<String>,
     #[command(flatten)]
     pub units: UnitsArg,
+    /// Run duration in seconds (overrides the scene's control.duration), as for `pga`.
+    #[arg(long)]
+    pub duration: Option<f64>,
     /// Lower end of the searched range, with units.
     #[arg(long, default_value = "0.05g")]
     pub min: String,
@@ -59,10 +66,15 @@ pub fn run(args: &SiteArgs) -> Result<(), String> {
         tolerance: acceleration_option("tolerance", &args.tolerance)?,
         scan_points: args.scan_points,
     };
-    let scene = load_scene(&args.scene)?;
+    let mut scene = load_scene(&args.scene)?;
+    apply_duration(&mut scene, args.duration)?;
     let params = args.units.load_params().map_err(|e| e.to_string())?;
-    let (paths, _) = record_paths(&args.motion)?;
+    let mut paths = Vec::new();
+    for m in &args.motion {
+        paths.extend(record_paths(m)?.0);
+    }
     let mut records = Vec::new();
+    let mut intervals = Vec::new();
     for p in &paths {
         let gm = motion::load_path_with(p, &params).map_err(|e| e.to_string())?;
         let interval = site_interval(&scene, &gm, &observations, &base, &RunOptions::default())
@@ -70,8 +82,15 @@ pub fn run(args: &SiteArgs) -> Result<(), String> {
         let mut v = serde_json::to_value(&interval).map_err(|e| e.to_string())?;
         v["record"] = serde_json::Value::from(record_name(p));
         records.push(v);
+        intervals.push(interval);
     }
-    let out = serde_json::json!({ "units": "m/s2", "records": records });
+    let dist = distribution(
+        &criterion_records(&observations, &intervals),
+        base.min,
+        base.max,
+        &DistributionParams::default(),
+    );
+    let out = serde_json::json!({ "units": "m/s2", "records": records, "distribution": dist });
     println!(
         "{}",
         serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?

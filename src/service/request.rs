@@ -177,11 +177,86 @@ struct RunBody {
     motion: Option<Value>,
 }
 
-#[derive(Deserialize)]
-#[serde(untagged)]
-enum CriterionSpec {
-    One(String),
-    Many(Vec<String>),
+/// Criteria of a request at JSON pointer `pointer`: a string (`toppled:B`, …), a damage object
+/// (docs/format.md §3), or a non-empty array of them. Each comes back with its text form (the
+/// compact JSON for an object). Every block named by any criterion that is not a free block of
+/// the scene is reported at once, in one 422, so a user fixes them in one go.
+pub fn parse_criteria(
+    spec: &Value,
+    pointer: &str,
+    scene: &Scene,
+) -> Result<Vec<(String, Criterion)>, ApiError> {
+    let items: Vec<(String, &Value)> = match spec {
+        Value::Array(v) => v
+            .iter()
+            .enumerate()
+            .map(|(i, x)| (format!("{pointer}/{i}"), x))
+            .collect(),
+        other => vec![(pointer.to_string(), other)],
+    };
+    if items.is_empty() {
+        return Err(ApiError::invalid_field(
+            pointer,
+            format!("{pointer}: give at least one criterion"),
+        ));
+    }
+    let mut out = Vec::new();
+    for (p, item) in &items {
+        let c = match item {
+            Value::String(t) => Criterion::parse(t)
+                .map_err(|e| ApiError::invalid_field(p.clone(), format!("{p}: {e}")))
+                .map(|c| (t.clone(), c))?,
+            Value::Object(_) => {
+                let damage: crate::analysis::criteria::Damage = typed(p, item)?;
+                let c = Criterion::Damage { damage };
+                (c.text(), c)
+            }
+            _ => {
+                return Err(ApiError::invalid_field(
+                    p.clone(),
+                    format!("{p}: a criterion is a string (\"toppled:BLOCK\") or a damage object ({{\"kind\": …}})"),
+                ))
+            }
+        };
+        out.push((p.clone(), c));
+    }
+    let mut missing = Vec::new();
+    for (p, (_, c)) in &out {
+        for id in c.blocks() {
+            let free = scene
+                .block_index(id)
+                .is_some_and(|i| matches!(scene.blocks[i].kind, crate::scene::BlockKind::Free(_)));
+            if !free
+                && !missing
+                    .iter()
+                    .any(|(q, b): &(String, String)| q == p && b == id)
+            {
+                missing.push((p.clone(), id.to_string()));
+            }
+        }
+    }
+    if let Some((first, _)) = missing.first() {
+        let list = missing
+            .iter()
+            .map(|(p, b)| format!("{p}: {b:?}"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        return Err(ApiError::invalid_field(
+            first.clone(),
+            format!(
+                "{first}: not a free block of the scene ({} in all): {list}",
+                missing.len()
+            ),
+        ));
+    }
+    for (p, (_, c)) in &out {
+        if let Criterion::Damage { damage } = c {
+            damage
+                .check(scene)
+                .map_err(|e| ApiError::invalid_field(p.clone(), format!("{p}: {e}")))?;
+        }
+    }
+    Ok(out.into_iter().map(|(_, tc)| tc).collect())
 }
 
 #[derive(Deserialize)]
@@ -208,7 +283,7 @@ struct PgaBody {
     /// Several records (a fragility study) instead of `motion`.
     #[serde(default)]
     motions: Option<Vec<Value>>,
-    criterion: CriterionSpec,
+    criterion: Value,
     #[serde(default)]
     combine: Option<String>,
     #[serde(default)]
@@ -579,36 +654,10 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
             "/motion/horizontal: a PGA search scales the horizontal component, which is missing or zero",
         ));
     }
-    let texts = match b.criterion {
-        CriterionSpec::One(s) => vec![(String::from("/criterion"), s)],
-        CriterionSpec::Many(v) => v
+    let (texts, criteria): (Vec<String>, Vec<Criterion>) =
+        parse_criteria(&b.criterion, "/criterion", &scene)?
             .into_iter()
-            .enumerate()
-            .map(|(i, s)| (format!("/criterion/{i}"), s))
-            .collect(),
-    };
-    if texts.is_empty() {
-        return Err(ApiError::invalid_field(
-            "/criterion",
-            "/criterion: give at least one criterion",
-        ));
-    }
-    let mut criteria = Vec::new();
-    for (p, t) in &texts {
-        let c = Criterion::parse(t)
-            .map_err(|e| ApiError::invalid_field(p.clone(), format!("{p}: {e}")))?;
-        let block = c.block();
-        let free = scene
-            .block_index(block)
-            .is_some_and(|i| matches!(scene.blocks[i].kind, crate::scene::BlockKind::Free(_)));
-        if !free {
-            return Err(ApiError::invalid_field(
-                p.clone(),
-                format!("{p}: {block:?} is not a free block of the scene"),
-            ));
-        }
-        criteria.push(c);
-    }
+            .unzip();
     // Amplitudes in m/s² from here on.
     let units = b.range.units;
     let amplitude = |a: &Amplitude, p: &str| {
@@ -679,11 +728,7 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
             .collect();
         obj.insert("records".into(), Value::Array(list));
     }
-    let joined = texts
-        .iter()
-        .map(|(_, t)| t.as_str())
-        .collect::<Vec<_>>()
-        .join(",");
+    let joined = texts.join(",");
     let criterion = match combine {
         Combine::Any if texts.len() > 1 => format!("any({joined})"),
         _ => joined,

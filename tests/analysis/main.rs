@@ -17,6 +17,7 @@ mod reduced_rocking;
 mod reduced_selection;
 mod reduced_sliding;
 mod run_end;
+mod site_distribution;
 mod site_observations;
 mod sweep_cli;
 mod templates_cli;

@@ -110,6 +110,16 @@ fn obelisk_stands() {
 fn pyramid_stands() {
     stands_at_defaults("pyramid");
 }
+/// The corbelled section at its other defaults: the chamber's corbels (0.15 m a course) stand.
+#[test]
+fn corbelled_pyramid_stands() {
+    let s = scene("pyramid", &[("section", Value::from("corbelled"))], 10.0);
+    let (worst, _, _) = settle(&s, 10.0, |_| false);
+    assert!(
+        worst <= REST_BOUND,
+        "corbelled pyramid: a block moved {worst:.3e} m under its own weight (bound {REST_BOUND} m)"
+    );
+}
 
 /// The 40-voussoir semicircular arch of the statics reference at `ratio` = t/R.
 fn heyman_arch(ratio: f64) -> Scene {

@@ -6,6 +6,7 @@
 mod pg_cluster;
 mod pg_tls;
 mod service_access;
+mod service_criteria;
 mod service_durability;
 mod service_isolation;
 mod service_openapi;
