@@ -14,6 +14,7 @@ pub mod pg_tls;
 pub mod problem;
 pub mod request;
 pub mod routes;
+pub mod scene_import;
 pub mod server;
 pub mod store;
 pub mod templates;

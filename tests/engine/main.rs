@@ -7,6 +7,7 @@
 mod common;
 mod damping;
 mod dual_mprgp;
+mod dxf_at_rest;
 mod dual_seed;
 mod dual_stall;
 mod dual_stiff_limit;

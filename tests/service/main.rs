@@ -9,6 +9,7 @@ mod service_durability;
 mod service_openapi;
 mod service_pga;
 mod service_routes;
+mod service_scene_import;
 #[path = "../service_support/mod.rs"]
 mod service_support;
 mod service_templates;
