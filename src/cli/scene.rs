@@ -88,8 +88,7 @@ fn import(args: &SceneArgs) -> Result<(), String> {
     };
     let bytes = std::fs::read(path)
         .map_err(|e| format!("scene import: cannot read {}: {e}", path.display()))?;
-    let imported =
-        dxf::import(&bytes, &options).map_err(|e| format!("{}: {e}", path.display()))?;
+    let imported = dxf::import(&bytes, &options).map_err(|e| format!("{}: {e}", path.display()))?;
     for note in &imported.notes {
         eprintln!("ashlar: {}: note: {note}", path.display());
     }

@@ -10,7 +10,8 @@ use ashlar::scene::import::dxf::{self, ImportOptions};
 
 #[test]
 fn imported_wall_stands_at_rest() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/dxf/wall_mm.dxf");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/dxf/wall_mm.dxf");
     let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let imported = dxf::import(&bytes, &ImportOptions::default()).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(imported.spec.blocks.len(), 19);

@@ -7,10 +7,10 @@
 mod common;
 mod damping;
 mod dual_mprgp;
-mod dxf_at_rest;
 mod dual_seed;
 mod dual_stall;
 mod dual_stiff_limit;
+mod dxf_at_rest;
 mod extremes;
 mod failure_modes;
 mod foundation;

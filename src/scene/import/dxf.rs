@@ -282,7 +282,7 @@ pub enum DxfImportError {
     Block {
         handle: String,
         layer: String,
-        source: SceneError,
+        source: Box<SceneError>,
     },
     #[error(
         "entity {handle} on layer {layer:?} overlaps entity {other_handle} on layer \
@@ -293,7 +293,7 @@ pub enum DxfImportError {
         layer: String,
         other_handle: String,
         other_layer: String,
-        source: SceneError,
+        source: Box<SceneError>,
     },
     #[error("the imported scene is refused: {0}")]
     Scene(SceneError),
@@ -409,7 +409,10 @@ pub fn import(bytes: &[u8], options: &ImportOptions) -> Result<Imported, DxfImpo
             EntityType::LwPolyline(p) => {
                 let mirror = plane(&at, &p.extrusion_direction)?;
                 let raw = p.vertices.iter().map(|v| ([v.x, v.y], v.bulge)).collect();
-                Some((closed_outline(&at, "LWPOLYLINE", p.is_closed(), raw)?, mirror))
+                Some((
+                    closed_outline(&at, "LWPOLYLINE", p.is_closed(), raw)?,
+                    mirror,
+                ))
             }
             EntityType::Polyline(p) => {
                 let unsupported = if p.is_3d_polyline() {
@@ -499,7 +502,9 @@ pub fn import(bytes: &[u8], options: &ImportOptions) -> Result<Imported, DxfImpo
         return Err(DxfImportError::Empty);
     }
     if paper > 0 {
-        notes.push(format!("{paper} paper-space entities skipped (layouts, not the model)"));
+        notes.push(format!(
+            "{paper} paper-space entities skipped (layouts, not the model)"
+        ));
     }
     if skipped > 0 {
         notes.push(format!(
@@ -539,9 +544,7 @@ fn read(bytes: &[u8]) -> Result<Drawing, DxfImportError> {
         }
     }
     let mut reader = bytes;
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        Drawing::load(&mut reader)
-    })) {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| Drawing::load(&mut reader))) {
         Ok(Ok(d)) => Ok(d),
         Ok(Err(e)) => Err(DxfImportError::Unreadable(e)),
         Err(panic) => {
@@ -561,7 +564,10 @@ fn units(
     options: &ImportOptions,
     notes: &mut Vec<String>,
 ) -> Result<Scale, DxfImportError> {
-    match (drawing_scale(drawing.header.default_drawing_units), options.units) {
+    match (
+        drawing_scale(drawing.header.default_drawing_units),
+        options.units,
+    ) {
         (Some(d), Some(given)) if given.scale() != d => Err(DxfImportError::UnitsConflict {
             given: given.scale().name().to_string(),
             drawing: d.name().to_string(),
@@ -764,25 +770,23 @@ fn locate(
     {
         let at = sources[i].clone();
         if e.message.contains(" overlaps block ") {
-            let other = spec
-                .blocks
-                .iter()
-                .zip(sources)
-                .find(|(b, _)| b.id != spec.blocks[i].id && e.message.contains(&format!("{:?}", b.id)));
+            let other = spec.blocks.iter().zip(sources).find(|(b, _)| {
+                b.id != spec.blocks[i].id && e.message.contains(&format!("{:?}", b.id))
+            });
             if let Some((_, o)) = other {
                 return DxfImportError::Overlap {
                     handle: at.handle,
                     layer: at.layer,
                     other_handle: o.handle.clone(),
                     other_layer: o.layer.clone(),
-                    source: e,
+                    source: Box::new(e),
                 };
             }
         }
         return DxfImportError::Block {
             handle: at.handle,
             layer: at.layer,
-            source: e,
+            source: Box::new(e),
         };
     }
     if let Some(rest) = e.path.strip_prefix("materials.") {
@@ -828,8 +832,8 @@ mod tests {
                 ([0.0, 0.0], 0.0),
             ]
         };
-        let v = closed_outline(&at(), "LWPOLYLINE", false, sq(0.0))
-            .expect("closed by coincident ends");
+        let v =
+            closed_outline(&at(), "LWPOLYLINE", false, sq(0.0)).expect("closed by coincident ends");
         assert_eq!(v, vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
         // The repeated vertex's bulge belongs to the segment that follows it (segment 1).
         match closed_outline(&at(), "LWPOLYLINE", true, sq(0.5)) {
@@ -845,7 +849,10 @@ mod tests {
 
     #[test]
     fn units_divide_decimal_fractions_exactly() {
-        assert_eq!(drawing_scale(Units::Millimeters).map(|s| s.apply(1234.5)), Some(1.2345));
+        assert_eq!(
+            drawing_scale(Units::Millimeters).map(|s| s.apply(1234.5)),
+            Some(1.2345)
+        );
         assert_eq!(drawing_scale(Units::Unitless), None);
         let ft = drawing_scale(Units::Feet).map_or(0.0, |s| s.apply(10.0));
         assert!((ft - 3.048).abs() < 1e-15, "{ft}");
