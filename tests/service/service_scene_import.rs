@@ -129,6 +129,7 @@ async fn dxf_drawings_import_to_scenes_and_bad_ones_are_problems() {
             "/options/joint/friction_angle",
         ),
         (json!({"dxf": wall, "options": 3}), "/options"),
+        (json!({"dxf": wall, "options": [null, null]}), "/options"),
         (json!({"dxf": 3}), "/dxf"),
         (json!({"options": {}}), "/dxf"),
         (json!({"dxf": wall, "drawing": 1}), "/drawing"),

@@ -189,7 +189,7 @@ pub enum DxfImportError {
         "the file does not end with the DXF end marker `0 EOF`: it is truncated or not a DXF file"
     )]
     Truncated,
-    #[error("the options: {path}: {message}")]
+    #[error("the options{}: {message}", member(path))]
     Options { path: String, message: String },
     #[error(
         "the options' units {given:?} contradict the drawing's $INSUNITS ({drawing}); remove \
@@ -299,6 +299,15 @@ pub enum DxfImportError {
     Scene(SceneError),
 }
 
+/// ` at MEMBER` for an error about one member of the options, nothing for the whole.
+fn member(path: &str) -> String {
+    if path.is_empty() {
+        String::new()
+    } else {
+        format!(" at {path}")
+    }
+}
+
 impl DxfImportError {
     /// The entity the error is about, if any: (handle, layer).
     pub fn entity(&self) -> Option<(&str, &str)> {
@@ -332,16 +341,27 @@ impl DxfImportError {
 impl ImportOptions {
     /// Parse the options from JSON text; an error names the member.
     pub fn from_json(text: &str) -> Result<Self, DxfImportError> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        serde_path_to_error::deserialize(de).map_err(options_error)
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| DxfImportError::Options {
+                path: String::new(),
+                message: format!("not JSON: {e}"),
+            })?;
+        Self::from_value(&value)
     }
 
     /// The options from a JSON value (`null` is every default).
     pub fn from_value(value: &serde_json::Value) -> Result<Self, DxfImportError> {
-        if value.is_null() {
-            return Ok(Self::default());
+        match value {
+            serde_json::Value::Null => Ok(Self::default()),
+            // serde would also take a struct from an array of its fields in order.
+            serde_json::Value::Object(_) => {
+                serde_path_to_error::deserialize(value).map_err(options_error)
+            }
+            other => Err(DxfImportError::Options {
+                path: String::new(),
+                message: format!("expected an object of options or null, got {other}"),
+            }),
         }
-        serde_path_to_error::deserialize(value).map_err(options_error)
     }
 }
 
