@@ -1,28 +1,54 @@
-//! `ashlar scene`: build a parametric structure (`scene::templates`) and print its scene JSON, or
-//! list the templates. Thin: parsing `--set` and printing; the templates live in the library.
+//! `ashlar scene`: build a parametric structure (`scene::templates`) and print its scene JSON, list
+//! the templates, or import a DXF drawing (`ashlar scene import FILE`, `scene::import::dxf`). Thin:
+//! parsing arguments and printing; the templates and the importer live in the library.
+use crate::scene::import::dxf::{self, ImportOptions};
 use crate::scene::templates;
 use serde_json::Value;
 use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+/// The word that makes `ashlar scene` import a drawing instead of building a template (no
+/// template has this name: `scene::templates::find` refuses it).
+pub const IMPORT: &str = "import";
 
 #[derive(Debug, clap::Args)]
 pub struct SceneArgs {
     /// Template to build (`ashlar scene --list` names them): drum-column, colonnade, arch,
-    /// wall, buttressed-wall, obelisk, pyramid.
+    /// wall, buttressed-wall, obelisk, pyramid; or `import` to read a DXF drawing (docs/import.md).
     #[arg(required_unless_present = "list")]
     pub name: Option<String>,
+    /// With `import`: the DXF drawing (closed polylines; layer = material, layer `fixed` = fixed).
+    #[arg(value_name = "DRAWING.dxf")]
+    pub drawing: Option<PathBuf>,
     /// A parameter's value, `KEY=VALUE` (lengths in m, angles in degrees); repeat for several.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+    /// With `import`: a JSON file of materials, joint, units and layers to skip (docs/import.md).
+    #[arg(long, value_name = "FILE")]
+    pub options: Option<PathBuf>,
     /// Print the templates and their parameters (name, units, default, min, max) as JSON.
     #[arg(long, conflicts_with_all = ["name", "set"])]
     pub list: bool,
 }
 
 pub fn run(args: &SceneArgs) -> Result<(), String> {
+    let name = args.name.as_deref().unwrap_or_default();
+    if name == IMPORT {
+        return import(args);
+    }
+    if let Some(d) = &args.drawing {
+        return Err(format!(
+            "scene {name}: unexpected argument {}; a template takes --set KEY=VALUE (to import a \
+             drawing: ashlar scene import DRAWING.dxf)",
+            d.display()
+        ));
+    }
+    if args.options.is_some() {
+        return Err("scene: --options applies to `ashlar scene import DRAWING.dxf`".into());
+    }
     let text = if args.list {
         serde_json::to_string_pretty(&templates::list())
     } else {
-        let name = args.name.as_deref().unwrap_or_default();
         let mut given = BTreeMap::new();
         for kv in &args.set {
             let (k, v) = kv
@@ -39,6 +65,35 @@ pub fn run(args: &SceneArgs) -> Result<(), String> {
         serde_json::to_string_pretty(&spec)
     }
     .map_err(|e| format!("scene: cannot write JSON: {e}"))?;
+    println!("{text}");
+    Ok(())
+}
+
+/// `ashlar scene import DRAWING.dxf [--options FILE]`: the scene JSON on stdout, notes (units
+/// assumed, materials defaulted, entities skipped) on stderr.
+fn import(args: &SceneArgs) -> Result<(), String> {
+    let Some(path) = &args.drawing else {
+        return Err("scene import: give the drawing: ashlar scene import DRAWING.dxf".into());
+    };
+    if !args.set.is_empty() {
+        return Err("scene import: --set applies to templates; use --options FILE".into());
+    }
+    let options = match &args.options {
+        None => ImportOptions::default(),
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .map_err(|e| format!("scene import: cannot read {}: {e}", p.display()))?;
+            ImportOptions::from_json(&text).map_err(|e| format!("{}: {e}", p.display()))?
+        }
+    };
+    let bytes = std::fs::read(path)
+        .map_err(|e| format!("scene import: cannot read {}: {e}", path.display()))?;
+    let imported = dxf::import(&bytes, &options).map_err(|e| format!("{}: {e}", path.display()))?;
+    for note in &imported.notes {
+        eprintln!("ashlar: {}: note: {note}", path.display());
+    }
+    let text = serde_json::to_string_pretty(&imported.spec)
+        .map_err(|e| format!("scene: cannot write JSON: {e}"))?;
     println!("{text}");
     Ok(())
 }

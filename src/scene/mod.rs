@@ -4,6 +4,7 @@
 //! Conventions fixed here for the whole engine: SI units, y up, gravity along −y,
 //! polygons stored counter-clockwise, rotations counter-clockwise positive (radians).
 pub mod generate;
+pub mod import;
 pub mod spec;
 pub mod templates;
 mod validate;

@@ -16,6 +16,7 @@ pub mod request;
 pub mod retention;
 pub mod routes;
 pub mod runner;
+pub mod scene_import;
 pub mod server;
 pub mod store;
 pub mod templates;

@@ -82,6 +82,11 @@ pub fn route_table() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
             "/v1/templates/{name}",
             post(super::templates::build),
         ),
+        (
+            Method::POST,
+            "/v1/scenes/import",
+            post(super::scene_import::import),
+        ),
     ]
 }
 

@@ -10,6 +10,7 @@ mod dual_mprgp;
 mod dual_seed;
 mod dual_stall;
 mod dual_stiff_limit;
+mod dxf_at_rest;
 mod extremes;
 mod failure_modes;
 mod foundation;

@@ -22,7 +22,7 @@ use serde_json::Value;
 use std::collections::BTreeMap;
 
 /// The rest bound: no block moves more than 0.1 mm, m.
-const REST_BOUND: f64 = 1e-4;
+pub(crate) const REST_BOUND: f64 = 1e-4;
 
 /// Build template `name` with `set`, force the full engine for `duration` s.
 fn scene(name: &str, set: &[(&str, Value)], duration: f64) -> Scene {
@@ -48,7 +48,7 @@ fn largest_move(sim: &Simulation, start: &[Vec<nalgebra::Vector2<f64>>]) -> f64 
 
 /// Run under gravity alone for `t_end` s (or until `stop`); the largest vertex move over the
 /// run, m, and whether `stop` ended it.
-fn settle(
+pub(crate) fn settle(
     scene: &Scene,
     t_end: f64,
     stop: impl Fn(&Simulation) -> bool,

@@ -9,5 +9,6 @@ mod motion_closed_forms;
 mod motion_formats;
 mod motion_fuzz;
 mod motion_golden;
+mod scene_dxf;
 mod scene_fuzz;
 mod scene_restitution;

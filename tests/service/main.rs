@@ -12,6 +12,7 @@ mod service_isolation;
 mod service_openapi;
 mod service_pga;
 mod service_routes;
+mod service_scene_import;
 #[path = "../service_support/mod.rs"]
 mod service_support;
 mod service_templates;

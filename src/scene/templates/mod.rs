@@ -11,7 +11,7 @@
 mod arch;
 mod buttressed_wall;
 mod column;
-mod common;
+pub(crate) mod common;
 mod obelisk;
 mod pyramid;
 mod wall;
