@@ -13,9 +13,10 @@ use super::reduced::ReducedParams;
 use super::reference;
 use super::run::{run, RunOptions};
 use crate::motion::{self, GroundMotion, Signal};
+use crate::presets::{self, incline_blocks, rocking_pulse as pulse};
 use crate::record::Frame;
-use crate::scene::generate::{running_bond_wall, WallParams};
-use crate::scene::{scene_from_value, BlockModel};
+use crate::scene::generate::running_bond_wall;
+use crate::scene::scene_from_value;
 use serde::Serialize;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -334,28 +335,7 @@ struct Bench {
 }
 
 fn material_scene(blocks: Value, friction_deg: f64) -> Value {
-    json!({
-        "format": "ashlar.scene/1",
-        "gravity": G,
-        "materials": { "stone": { "density": 2500.0, "young_modulus": 2.0e10, "poisson_ratio": 0.2 } },
-        "joints": { "j": { "friction_angle": friction_deg } },
-        "blocks": blocks,
-    })
-}
-
-/// A 1 m × 0.5 m block on an incline α descending towards +x.
-fn incline_blocks(alpha_deg: f64) -> (Value, [f64; 2]) {
-    let a = alpha_deg.to_radians();
-    let d = [a.cos(), -a.sin()];
-    let n = [a.sin(), a.cos()];
-    let (w, h, l) = (1.0, 0.5, 200.0);
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true,
-          "vertices": [[-l * d[0], -l * d[1]], [l * d[0], l * d[1]], [l * d[0], l * d[1] - 20.0], [-l * d[0], -l * d[1] - 20.0]] },
-        { "id": "block", "material": "stone",
-          "vertices": [[0.0, 0.0], [w * d[0], w * d[1]], [w * d[0] + h * n[0], w * d[1] + h * n[1]], [h * n[0], h * n[1]]] },
-    ]);
-    (blocks, d)
+    presets::scene_json(blocks, friction_deg, Value::Null)
 }
 
 /// Housner's rocking of Yagoda-Biran & Hatzor's (2015) column under its half-sine pulse of amplitude `a` (RK4 at
@@ -367,40 +347,16 @@ fn housner(a: f64, t_end: f64, every: f64) -> (Vec<(f64, f64)>, bool, Option<f64
     (r.samples, r.overturned, r.first_impact)
 }
 
-fn pulse(a: f64) -> GroundMotion {
-    GroundMotion::horizontal(Signal::Pulse {
-        amplitude: a,
-        period: 1.0,
-        cycles: 0.5,
-        phase: 0.0,
-    })
-}
-
 /// The study's column is the reference's.
 const COL_B: f64 = reference::HousnerColumn::SEED_000.b;
 const COL_H: f64 = reference::HousnerColumn::SEED_000.h;
+const _: () = assert!(
+    COL_B == presets::Column::SEED.half_width && COL_H == presets::Column::SEED.half_height
+);
 
+/// The reference's column with the scene's default block model.
 fn column_scene() -> Value {
-    material_scene(
-        json!([
-            { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
-            { "id": "column", "material": "stone", "vertices": [[-COL_B, 0.0], [COL_B, 0.0], [COL_B, 2.0 * COL_H], [-COL_B, 2.0 * COL_H]] },
-        ]),
-        75.0,
-    )
-}
-
-/// The study's masonry wall: 3 courses of two 0.6 × 0.3 m deformable blocks, φ = 35°
-/// (also the scene of `tests/engine/dual_stiff_limit.rs` and `examples/wall_stiff_limit.rs`).
-pub fn wall_params() -> WallParams {
-    WallParams {
-        courses: 3,
-        blocks_per_course: 2,
-        block_length: 0.6,
-        block_height: 0.3,
-        friction_angle: 35.0,
-        block_model: BlockModel::Deformable,
-    }
+    presets::Column::SEED.default_model().json(Value::Null)
 }
 
 /// The wall's record: Northridge (Mulholland 009) from `ground_motions`, scaled to 0.4 g.
@@ -513,7 +469,7 @@ fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
     });
     // 6. Masonry wall under a recorded ground motion (data/ground-motions).
     let gm = wall_record(&opts.ground_motions)?;
-    let wall = running_bond_wall(&wall_params());
+    let wall = running_bond_wall(&presets::study_wall());
     let scene = serde_json::to_value(&wall).map_err(|e| e.to_string())?;
     let observed = scene["blocks"].as_array().map(|b| b.len() - 1).unwrap_or(1);
     let duration = if opts.quick { 3.0 } else { 8.0 };

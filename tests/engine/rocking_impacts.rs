@@ -205,12 +205,7 @@ fn controls(solver: &str, duration: f64, dt: Option<f64>) -> serde_json::Value {
 }
 
 fn seed_pulse(a: f64) -> GroundMotion {
-    GroundMotion::horizontal(Signal::Pulse {
-        amplitude: a,
-        period: 1.0,
-        cycles: 0.5,
-        phase: 0.0,
-    })
+    rocking_pulse(a)
 }
 
 fn seed_pulse_fn(a: f64) -> impl Fn(f64) -> f64 {
