@@ -80,7 +80,7 @@ pub fn buttressed_wall(v: &Values) -> Result<SceneSpec, TemplateError> {
             format!("{steps} steps do not fit in the buttress's {b_courses} courses"),
         ));
     }
-    let mut spec = skeleton(
+    let mut spec = stone_scene(
         format!(
             "buttressed wall section: {} m high, {t} m thick, buttress {depth} m deep in {steps} steps",
             tidy(courses as f64 * h)
@@ -91,7 +91,6 @@ pub fn buttressed_wall(v: &Values) -> Result<SceneSpec, TemplateError> {
     spec.blocks
         .push(foundation(LIMESTONE.name, -0.5, t + depth + 0.5));
     for c in 0..courses {
-        let (y0, y1) = (c as f64 * h, (c + 1) as f64 * h);
         // Step k (0 at the foot) of the buttress holds this course; its depth falls linearly.
         let d = if c < b_courses {
             let k = c * steps / b_courses;
@@ -99,15 +98,15 @@ pub fn buttressed_wall(v: &Values) -> Result<SceneSpec, TemplateError> {
         } else {
             0.0
         };
-        let offset = if c % 2 == 1 { 0.5 * l } else { 0.0 };
-        for (k, [x0, x1]) in running_bond(0.0, t + d, l, offset).into_iter().enumerate() {
-            spec.blocks.push(stone(
-                format!("c{}b{}", c + 1, k + 1),
-                LIMESTONE.name,
-                rect(x0, y0, x1, y1),
-            ));
-        }
-        within_budget(&spec, "block_length")?;
+        lay_course(
+            &mut spec,
+            LIMESTONE.name,
+            c,
+            h,
+            l,
+            &[[0.0, t + d]],
+            Vec::new(),
+        )?;
     }
     Ok(spec)
 }

@@ -76,7 +76,7 @@ pub fn wall(v: &Values) -> Result<SceneSpec, TemplateError> {
     let (w, bearing) = (v.num("opening_width"), v.num("lintel_bearing"));
     let sill = (v.num("sill_height") / h).round() as usize;
     let tall = (v.num("opening_height") / h).round().max(1.0) as usize;
-    let mut spec = skeleton(
+    let mut spec = stone_scene(
         format!(
             "running-bond wall {length} m × {} m, {n_open} opening(s)",
             tidy(courses as f64 * h)
@@ -116,8 +116,6 @@ pub fn wall(v: &Values) -> Result<SceneSpec, TemplateError> {
         .push(foundation(LIMESTONE.name, -0.5, length + 0.5));
     let lintel_course = sill + tall;
     for c in 0..courses {
-        let (y0, y1) = (c as f64 * h, (c + 1) as f64 * h);
-        let offset = if c % 2 == 1 { 0.5 * l } else { 0.0 };
         // The segments of this course to fill with stones, and its lintels.
         let mut segments = vec![[0.0, length]];
         let mut lintels = Vec::new();
@@ -147,28 +145,12 @@ pub fn wall(v: &Values) -> Result<SceneSpec, TemplateError> {
                     .collect();
             }
         }
-        let mut pieces: Vec<([f64; 2], String)> = Vec::new();
-        for [a, b] in segments {
-            for p in running_bond(a, b, l, offset) {
-                pieces.push((p, String::new()));
-            }
-        }
-        for (i, g) in lintels.into_iter().enumerate() {
-            pieces.push((g, format!("lintel{}", i + 1)));
-        }
-        pieces.sort_by(|a, b| a.0[0].total_cmp(&b.0[0]));
-        let mut k = 0;
-        for ([x0, x1], name) in pieces {
-            let id = if name.is_empty() {
-                k += 1;
-                format!("c{}b{k}", c + 1)
-            } else {
-                name
-            };
-            spec.blocks
-                .push(stone(id, LIMESTONE.name, rect(x0, y0, x1, y1)));
-        }
-        within_budget(&spec, "block_length")?;
+        let lintels = lintels
+            .into_iter()
+            .enumerate()
+            .map(|(i, g)| (g, format!("lintel{}", i + 1)))
+            .collect();
+        lay_course(&mut spec, LIMESTONE.name, c, h, l, &segments, lintels)?;
     }
     Ok(spec)
 }
