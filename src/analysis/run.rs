@@ -248,7 +248,10 @@ pub enum RunError {
     /// `control.model` forces a reduced model (`"rocking"`, `"sliding"`) that cannot represent
     /// the scene; `why` says what disqualifies it.
     #[error("control.model: the scene does not qualify for the reduced {model:?} model: {why}")]
-    ModelNotApplicable { model: &'static str, why: String },
+    ModelNotApplicable {
+        model: &'static str,
+        why: super::reduced::NotReducible,
+    },
     /// The engine stopped with a typed diagnostic saying when, where and what to change.
     #[error("simulation failed: {0}")]
     Simulation(#[from] SimError),

@@ -1,5 +1,6 @@
 //! `ashlar scene`: build a parametric structure (`scene::templates`) and print its scene JSON, or
 //! list the templates. Thin: parsing `--set` and printing; the templates live in the library.
+use super::error::CliError;
 use crate::scene::templates;
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -18,7 +19,7 @@ pub struct SceneArgs {
     pub list: bool,
 }
 
-pub fn run(args: &SceneArgs) -> Result<(), String> {
+pub fn run(args: &SceneArgs) -> Result<(), CliError> {
     let text = if args.list {
         serde_json::to_string_pretty(&templates::list())
     } else {
@@ -27,18 +28,19 @@ pub fn run(args: &SceneArgs) -> Result<(), String> {
         for kv in &args.set {
             let (k, v) = kv
                 .split_once('=')
-                .ok_or_else(|| format!("--set {kv:?}: expected KEY=VALUE"))?;
+                .ok_or_else(|| CliError::Usage(format!("--set {kv:?}: expected KEY=VALUE")))?;
             if given
                 .insert(k.trim().to_string(), Value::String(v.trim().to_string()))
                 .is_some()
             {
-                return Err(format!("--set {k}: given twice"));
+                return Err(CliError::Usage(format!("--set {k}: given twice")));
             }
         }
-        let (spec, _) = templates::build(name, &given).map_err(|e| format!("scene {name}: {e}"))?;
+        let (spec, _) = templates::build(name, &given)
+            .map_err(|e| CliError::from(e).at(format!("scene {name}")))?;
         serde_json::to_string_pretty(&spec)
     }
-    .map_err(|e| format!("scene: cannot write JSON: {e}"))?;
+    .map_err(CliError::json("scene: cannot write JSON"))?;
     println!("{text}");
     Ok(())
 }

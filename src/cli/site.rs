@@ -1,10 +1,11 @@
 //! `ashlar site`: the PGA interval consistent with several observations at one site, per record
 //! (`analysis::observations`; docs/observations.md). Thin: arguments in, JSON out.
-use super::run::{acceleration_option, load_scene, record_name, record_paths};
+use super::error::{pretty, CliError};
+use super::load::{load_records, load_scene, record_name, RangeArgs};
 use crate::analysis::observations::{site_interval, Observation};
-use crate::analysis::pga::{Combine, Criterion, PgaRequest};
+use crate::analysis::pga::{Combine, Criterion};
 use crate::analysis::run::RunOptions;
-use crate::motion::{self, UnitsArg};
+use crate::motion::UnitsArg;
 use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
@@ -23,25 +24,20 @@ pub struct SiteArgs {
     pub not_seen: Vec<String>,
     #[command(flatten)]
     pub units: UnitsArg,
-    /// Lower end of the searched range, with units.
-    #[arg(long, default_value = "0.05g")]
-    pub min: String,
-    /// Upper end of the searched range, with units.
-    #[arg(long, default_value = "2g")]
-    pub max: String,
-    /// Bracket width to stop at, with units.
-    #[arg(long, default_value = "0.01m/s2")]
-    pub tolerance: String,
+    /// `--min`, `--max`, `--tolerance`: the searched range, as for `pga`.
+    #[command(flatten)]
+    pub range: RangeArgs,
     /// Coarse scan points before bisection.
     #[arg(long, default_value_t = 8)]
     pub scan_points: usize,
 }
 
-pub fn run(args: &SiteArgs) -> Result<(), String> {
+pub fn run(args: &SiteArgs) -> Result<(), CliError> {
     let mut observations = Vec::new();
     for (texts, observed) in [(&args.seen, true), (&args.not_seen, false)] {
         for t in texts {
-            let criterion = Criterion::parse(t).map_err(|e| format!("--seen/--not-seen: {e}"))?;
+            let criterion =
+                Criterion::parse(t).map_err(CliError::criterion("--seen/--not-seen"))?;
             observations.push(Observation {
                 criterion,
                 observed,
@@ -49,32 +45,25 @@ pub fn run(args: &SiteArgs) -> Result<(), String> {
         }
     }
     if observations.is_empty() {
-        return Err("site: give at least one --seen or --not-seen observation".into());
+        return Err(CliError::Usage(
+            "site: give at least one --seen or --not-seen observation".into(),
+        ));
     }
-    let base = PgaRequest {
-        criteria: Vec::new(),
-        combine: Combine::All,
-        min: acceleration_option("min", &args.min)?,
-        max: acceleration_option("max", &args.max)?,
-        tolerance: acceleration_option("tolerance", &args.tolerance)?,
-        scan_points: args.scan_points,
-    };
+    let base = args
+        .range
+        .request(Vec::new(), Combine::All, args.scan_points)?;
     let scene = load_scene(&args.scene)?;
-    let params = args.units.load_params().map_err(|e| e.to_string())?;
-    let (paths, _) = record_paths(&args.motion)?;
+    let params = args.units.load_params()?;
+    let (loaded, _) = load_records(&args.motion, &params)?;
     let mut records = Vec::new();
-    for p in &paths {
-        let gm = motion::load_path_with(p, &params).map_err(|e| e.to_string())?;
-        let interval = site_interval(&scene, &gm, &observations, &base, &RunOptions::default())
-            .map_err(|e| format!("{}: {e}", p.display()))?;
-        let mut v = serde_json::to_value(&interval).map_err(|e| e.to_string())?;
+    for (p, gm) in &loaded {
+        let interval = site_interval(&scene, gm, &observations, &base, &RunOptions::default())
+            .map_err(|e| CliError::from(e).at(p.display().to_string()))?;
+        let mut v = serde_json::to_value(&interval).map_err(CliError::json("output"))?;
         v["record"] = serde_json::Value::from(record_name(p));
         records.push(v);
     }
     let out = serde_json::json!({ "units": "m/s2", "records": records });
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&out).map_err(|e| e.to_string())?
-    );
+    println!("{}", pretty(&out)?);
     Ok(())
 }
