@@ -7,6 +7,10 @@
 //! tolerance, evaluating as many interior points per round as there are cores. The lowest
 //! failing amplitude therefore does not depend on where the range starts, as long as the
 //! failing interval that holds it is wider than the resolution.
+//!
+//! Length (over 600 lines): the criteria, the planner (scan, refinement of every change of
+//! outcome) and the single- and multi-record searches share the request and the run tracker;
+//! about a quarter of the file is their unit tests.
 use super::fragility::{fit_binary, fit_interval, Capacity, FitParams, Fragility, Method, Point};
 use super::run::{run, RunError, RunOptions, Tracker};
 use crate::motion::GroundMotion;

@@ -1,5 +1,9 @@
 //! One run of a scene under a ground motion: drives the simulation to the end, records frames
 //! (histories, trajectory), classifies the outcome and writes `summary.json` (docs/format.md §3).
+//!
+//! Length (over 600 lines): one run's stages (model choice, the engine loop with its frames,
+//! the summary and its units) read in order here; the end of a run is already `run_end.rs`,
+//! the reduced models `reduced/`. A split along those stages is the next step.
 use crate::analysis::reduced::{
     self, record::ReducedError, Modes, ReducedParams, Restitution, SingleBlock,
 };
