@@ -5,6 +5,7 @@
 //!   under gravity (the target, docs/speed.md: < 1 s); the same with the engine's shortcuts off (contact
 //!   detection skipped while nothing moves, the last factorization reused as a preconditioner).
 //!   The shaken wall is measured by `examples/wall_probe.rs` (a criterion run would take minutes).
+use ashlar::motion::GroundMotion;
 use ashlar::presets::rocking_pulse;
 use ashlar::scene::generate::{column, running_bond_wall, WallParams};
 use ashlar::scene::validate;

@@ -14,7 +14,7 @@
 //!   ω⁺/ω⁻ = 1 − 3/2 (1 + e) sin²α, α = atan(b/h); e = 0 is Housner's 1 − 3/2 sin²α.
 use crate::common;
 use ashlar::analysis::run::{run as run_scene, RunOptions};
-use ashlar::motion::{GroundMotion, Signal};
+use ashlar::motion::GroundMotion;
 use ashlar::scene::Scene;
 use common::*;
 use serde_json::{json, Value};

@@ -7,13 +7,9 @@
 //! (`ASHLAR_CONTACT_SOLVER=dual`, no penalty stiffness to tune).
 use crate::common;
 use ashlar::analysis::reference::{half_sine_pulse, housner_history, HousnerColumn};
-use ashlar::motion::{GroundMotion, Signal};
+use ashlar::motion::GroundMotion;
 use common::*;
 use serde_json::json;
-
-/// The scene's column is the reference's.
-const B: f64 = HousnerColumn::SEED_000.b;
-const H: f64 = HousnerColumn::SEED_000.h;
 
 fn pulse(a: f64) -> GroundMotion {
     rocking_pulse(a)

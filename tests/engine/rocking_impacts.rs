@@ -26,7 +26,7 @@
 //! the histories miss at every Δt tried (5.5–8.8 %).
 use crate::common;
 use ashlar::analysis::run::{run as run_scene, RunOptions};
-use ashlar::motion::{GroundMotion, Signal};
+use ashlar::motion::GroundMotion;
 use common::*;
 use serde_json::json;
 use std::sync::Mutex;
