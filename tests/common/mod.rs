@@ -155,6 +155,21 @@ pub fn example_column() -> Scene {
         .unwrap_or_else(|e| panic!("examples/column.json: {e}"))
 }
 
+/// The PGA-range tests' search: `toppled:column` from `min_g` to 2 g (g = 9.80665 m/s²) with
+/// 40 scan points (the CLI's defaults but the start of the range), to 0.01 m/s².
+pub fn toppled_column_search(min_g: f64) -> ashlar::analysis::pga::PgaRequest {
+    use ashlar::analysis::pga::{Combine, Criterion, PgaRequest};
+    const G_STANDARD: f64 = 9.80665;
+    PgaRequest {
+        criteria: vec![Criterion::parse("toppled:column").expect("criterion")],
+        combine: Combine::All,
+        min: min_g * G_STANDARD,
+        max: 2.0 * G_STANDARD,
+        tolerance: 0.01,
+        scan_points: 40,
+    }
+}
+
 /// One of the repository's recorded ground motions by file name (data/ground-motions).
 pub fn record(name: &str) -> GroundMotion {
     ashlar::presets::record(name).unwrap_or_else(|e| panic!("{name}: {e}"))

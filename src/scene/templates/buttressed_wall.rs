@@ -11,16 +11,9 @@ use crate::scene::spec::SceneSpec;
 
 pub fn params() -> Vec<Param> {
     vec![
-        number(
-            "height",
-            "m",
-            "height of the wall (rounded to whole courses)",
-            4.8,
-            0.5,
-            40.0,
-        ),
+        wall_height(4.8, 0.5, 40.0),
         number("thickness", "m", "thickness of the wall", 0.8, 0.1, 5.0),
-        number("course_height", "m", "height of a course", 0.4, 0.05, 3.0),
+        course_height(0.4, 3.0),
         number(
             "block_length",
             "m",
@@ -62,8 +55,8 @@ pub fn buttressed_wall(v: &Values) -> Result<SceneSpec, TemplateError> {
         v.num("course_height"),
         v.num("block_length"),
     );
-    let courses = (v.num("height") / h).round().max(1.0) as usize;
-    let b_courses = (v.num("buttress_height") / h).round().max(1.0) as usize;
+    let courses = whole_courses(v.num("height"), h);
+    let b_courses = whole_courses(v.num("buttress_height"), h);
     let steps = v.count("buttress_steps");
     let depth = v.num("buttress_depth");
     if b_courses > courses {

@@ -39,6 +39,35 @@ pub fn number(
     }
 }
 
+/// The `height` of a wall, m, rounded to whole courses by the template.
+pub fn wall_height(default: f64, min: f64, max: f64) -> Param {
+    number(
+        "height",
+        "m",
+        "height of the wall (rounded to whole courses)",
+        default,
+        min,
+        max,
+    )
+}
+
+/// The `course_height` of a coursed template, m (at least 5 cm).
+pub fn course_height(default: f64, max: f64) -> Param {
+    number(
+        "course_height",
+        "m",
+        "height of a course",
+        default,
+        0.05,
+        max,
+    )
+}
+
+/// How many whole courses of height `course` make `height` (at least one).
+pub fn whole_courses(height: f64, course: f64) -> usize {
+    (height / course).round().max(1.0) as usize
+}
+
 pub fn integer(
     name: &'static str,
     description: &'static str,

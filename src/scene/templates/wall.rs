@@ -12,16 +12,9 @@ use crate::scene::spec::SceneSpec;
 pub fn params() -> Vec<Param> {
     vec![
         number("length", "m", "length of the wall", 4.2, 0.5, 60.0),
-        number(
-            "height",
-            "m",
-            "height of the wall (rounded to whole courses)",
-            2.4,
-            0.1,
-            30.0,
-        ),
+        wall_height(2.4, 0.1, 30.0),
         number("block_length", "m", "length of a stone", 0.6, 0.05, 5.0),
-        number("course_height", "m", "height of a course", 0.3, 0.05, 3.0),
+        course_height(0.3, 3.0),
         integer(
             "openings",
             "number of openings (windows or doors), evenly spaced",
@@ -71,11 +64,11 @@ pub fn wall(v: &Values) -> Result<SceneSpec, TemplateError> {
         v.num("block_length"),
         v.num("course_height"),
     );
-    let courses = (v.num("height") / h).round().max(1.0) as usize;
+    let courses = whole_courses(v.num("height"), h);
     let n_open = v.count("openings");
     let (w, bearing) = (v.num("opening_width"), v.num("lintel_bearing"));
     let sill = (v.num("sill_height") / h).round() as usize;
-    let tall = (v.num("opening_height") / h).round().max(1.0) as usize;
+    let tall = whole_courses(v.num("opening_height"), h);
     let mut spec = stone_scene(
         format!(
             "running-bond wall {length} m × {} m, {n_open} opening(s)",
