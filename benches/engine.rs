@@ -5,7 +5,8 @@
 //!   under gravity (the target, docs/speed.md: < 1 s); the same with the engine's shortcuts off (contact
 //!   detection skipped while nothing moves, the last factorization reused as a preconditioner).
 //!   The shaken wall is measured by `examples/wall_probe.rs` (a criterion run would take minutes).
-use ashlar::motion::{GroundMotion, Signal};
+use ashlar::motion::GroundMotion;
+use ashlar::presets::rocking_pulse;
 use ashlar::scene::generate::{column, running_bond_wall, WallParams};
 use ashlar::scene::validate;
 use ashlar::simulation::{SimParams, Simulation};
@@ -25,12 +26,7 @@ fn rocking_column(c: &mut Criterion) {
     spec.control.duration = Some(10.0);
     spec.control.time_step = Some(1e-3);
     let scene = validate(&spec).expect("column scene");
-    let pulse = GroundMotion::horizontal(Signal::Pulse {
-        amplitude: 5.0,
-        period: 1.0,
-        cycles: 0.5,
-        phase: 0.0,
-    });
+    let pulse = rocking_pulse(5.0);
     c.bench_function("rocking_column_1000_steps", |b| {
         b.iter(|| {
             let mut sim = Simulation::new(&scene, &pulse, SimParams::default());

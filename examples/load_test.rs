@@ -78,17 +78,8 @@ fn http(addr: &str, method: &str, path: &str, body: &str) -> std::io::Result<(u1
 fn job_body(k: usize) -> String {
     // A column on a plinth under a pulse, 20 s simulated: about 0.1 s of CPU with the engine.
     serde_json::json!({
-        "scene": {
-            "format": "ashlar.scene/1",
-            "materials": {"limestone": {"density": 2500, "young_modulus": 2.0e10, "poisson_ratio": 0.2}},
-            "joints": {"dry": {"friction_angle": 40.0}},
-            "blocks": [
-                {"id": "plinth", "material": "limestone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]]},
-                {"id": "column", "material": "limestone", "vertices": [[-0.2, 0.0], [0.2, 0.0], [0.2, 1.2], [-0.2, 1.2]]}
-            ],
-            "control": {"duration": 20.0}
-        },
-        "motion": {"horizontal": {"pulse": {"amplitude": 2.0 + 0.01 * (k % 100) as f64, "period": 0.4, "cycles": 0.5, "units": "m/s2"}}}
+        "scene": ashlar::presets::plinth_column_json(20.0),
+        "motion": ashlar::presets::half_sine_json(2.0 + 0.01 * (k % 100) as f64, 0.4),
     })
     .to_string()
 }

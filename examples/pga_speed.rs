@@ -10,8 +10,7 @@
 //! `cargo run --release --example pga_speed`
 use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};
 use ashlar::analysis::run::{run, RunOptions};
-use ashlar::motion::{GroundMotion, Signal};
-use ashlar::scene::parse_scene;
+use ashlar::presets::{rocking_pulse, Column};
 use std::time::Instant;
 
 fn median(mut v: Vec<f64>) -> f64 {
@@ -20,27 +19,10 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 fn main() {
-    let scene = parse_scene(
-        &serde_json::json!({
-            "format": "ashlar.scene/1",
-            "gravity": 9.81,
-            "materials": { "stone": { "density": 2500.0, "young_modulus": 2.0e10, "poisson_ratio": 0.2 } },
-            "joints": { "j": { "friction_angle": 75.0 } },
-            "blocks": [
-                { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
-                { "id": "column", "material": "stone", "block_model": "rigid", "vertices": [[-0.2, 0.0], [0.2, 0.0], [0.2, 1.2], [-0.2, 1.2]] }
-            ],
-            "control": { "duration": 3.0 }
-        })
-        .to_string(),
-    )
-    .expect("scene");
-    let pulse = GroundMotion::horizontal(Signal::Pulse {
-        amplitude: 1.0,
-        period: 1.0,
-        cycles: 0.5,
-        phase: 0.0,
-    });
+    let scene = Column::SEED
+        .scene(serde_json::json!({ "duration": 3.0 }))
+        .expect("scene");
+    let pulse = rocking_pulse(1.0);
     let req = PgaRequest {
         criteria: vec![Criterion::parse("toppled:column").expect("criterion")],
         combine: Combine::All,

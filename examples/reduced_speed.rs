@@ -15,7 +15,6 @@ use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};
 use ashlar::analysis::run::{run, RunOptions, Summary};
 use ashlar::motion::{load_path, GroundMotion};
 use ashlar::scene::{parse_scene, ModelChoice, Scene};
-use std::path::Path;
 use std::time::Instant;
 
 const G: f64 = 9.80665;
@@ -47,14 +46,12 @@ fn main() {
         .and_then(|a| a.parse().ok())
         .unwrap_or(5)
         .max(1);
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let text = std::fs::read_to_string(root.join("examples/column.json")).expect("scene");
-    let auto = parse_scene(&text).expect("scene");
+    let auto = parse_scene(ashlar::presets::EXAMPLE_COLUMN).expect("scene");
     let mut dda = auto.clone();
     dda.control.model = ModelChoice::Dda;
     let mut rocking = auto.clone();
     rocking.control.model = ModelChoice::Rocking;
-    let mut records: Vec<_> = std::fs::read_dir(root.join("data/ground-motions"))
+    let mut records: Vec<_> = std::fs::read_dir(ashlar::presets::records_dir())
         .expect("records")
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("at2" | "csv")))

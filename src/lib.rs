@@ -11,6 +11,8 @@ pub mod contact;
 pub mod geometry;
 pub mod integrate;
 pub mod motion;
+pub mod plot;
+pub mod presets;
 pub mod quantity;
 pub mod record;
 pub mod scene;

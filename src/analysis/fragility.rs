@@ -15,6 +15,7 @@
 //!   has safe regions), but the runs of a bisection cluster at the threshold.
 //!
 //! Units: PGA in m/s² throughout; β is dimensionless (a standard deviation of ln PGA).
+use crate::plot;
 use serde::{Deserialize, Serialize};
 
 /// One outcome: a run at `pga` (m/s²) met the criterion or not.
@@ -410,29 +411,6 @@ pub fn probability(f: &Fragility, pga: f64) -> f64 {
     normal_cdf((pga / f.median).ln() / f.beta)
 }
 
-/// A "nice" tick step (1, 2 or 5 × 10^k) for a span.
-fn tick_step(span: f64, target: usize) -> f64 {
-    let raw = span / target.max(1) as f64;
-    let mag = 10f64.powf(raw.log10().floor());
-    let r = raw / mag;
-    mag * if r < 1.5 {
-        1.0
-    } else if r < 3.5 {
-        2.0
-    } else if r < 7.5 {
-        5.0
-    } else {
-        10.0
-    }
-}
-
-fn esc(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
 /// The fragility plot: curve, every run as a point at 0 (stood) or 1 (failed), and each
 /// record's capacity (bracket midpoint) at its empirical probability i/(n+1). Axes: PGA (m/s²)
 /// and probability of failure.
@@ -443,44 +421,41 @@ pub fn svg(f: &Fragility, capacities: &[(String, Capacity)], title: &str) -> Str
     for pt in &f.points {
         xmax = xmax.max(pt.pga);
     }
-    let step = tick_step(xmax, 6);
+    let step = plot::tick_step(xmax, 6);
     let xmax = (xmax / step).ceil() * step;
     let px = |x: f64| l + (w - l - r) * x / xmax;
     let py = |p: f64| t + (h - t - b) * (1.0 - p);
-    let mut s = String::new();
-    s.push_str(&format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"12\">\n"
-    ));
-    s.push_str(&format!("<title>{}</title>\n", esc(title)));
-    s.push_str("<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n");
+    let mut s = plot::document(w, h, 12.0, true);
+    s.push_str(&format!("<title>{}</title>\n", plot::escape(title)));
     s.push_str(&format!(
         "<text x=\"{}\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">{}</text>\n",
         w / 2.0,
-        esc(title)
+        plot::escape(title)
     ));
     // Axes and grid.
     let mut k = 0.0;
     while k <= xmax + 1e-9 * xmax {
         let x = px(k);
+        s.push_str(&plot::grid_line(x, py(0.0), x, py(1.0)));
         s.push_str(&format!(
-            "<line x1=\"{x:.1}\" y1=\"{:.1}\" x2=\"{x:.1}\" y2=\"{:.1}\" stroke=\"#ddd\"/>\n<text x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{}</text>\n",
-            py(0.0), py(1.0), py(0.0) + 16.0, trim(k)
+            "<text x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{}</text>\n",
+            py(0.0) + 16.0,
+            trim(k)
         ));
         k += step;
     }
     for i in 0..=5 {
         let p = i as f64 / 5.0;
         let y = py(p);
+        s.push_str(&plot::grid_line(l, y, w - r, y));
         s.push_str(&format!(
-            "<line x1=\"{l}\" y1=\"{y:.1}\" x2=\"{:.1}\" y2=\"{y:.1}\" stroke=\"#ddd\"/>\n<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>\n",
-            w - r, l - 6.0, y + 4.0, trim(p)
+            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>\n",
+            l - 6.0,
+            y + 4.0,
+            trim(p)
         ));
     }
-    s.push_str(&format!(
-        "<rect x=\"{l}\" y=\"{t}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"black\"/>\n",
-        w - l - r,
-        h - t - b
-    ));
+    s.push_str(&plot::frame(l, t, w - l - r, h - t - b));
     s.push_str(&format!(
         "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">Peak ground acceleration, PGA (m/s²)</text>\n",
         l + (w - l - r) / 2.0,
@@ -491,16 +466,13 @@ pub fn svg(f: &Fragility, capacities: &[(String, Capacity)], title: &str) -> Str
         t + (h - t - b) / 2.0
     ));
     // Curve.
-    let pts: Vec<String> = (0..=200)
+    let pts: Vec<(f64, f64)> = (0..=200)
         .map(|i| {
             let x = xmax * i as f64 / 200.0;
-            format!("{:.1},{:.1}", px(x), py(probability(f, x)))
+            (px(x), py(probability(f, x)))
         })
         .collect();
-    s.push_str(&format!(
-        "<polyline fill=\"none\" stroke=\"#1f5fbf\" stroke-width=\"2\" points=\"{}\"/>\n",
-        pts.join(" ")
-    ));
+    s.push_str(&plot::polyline(&pts, "#1f5fbf", 2.0, ""));
     // Runs.
     for pt in &f.points {
         let (y, colour) = if pt.failed {
@@ -532,7 +504,7 @@ pub fn svg(f: &Fragility, capacities: &[(String, Capacity)], title: &str) -> Str
             "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"7\" height=\"7\" fill=\"black\"><title>{}: capacity {} m/s²</title></rect>\n",
             px(*x) - 3.5,
             py((i + 1) as f64 / (n + 1.0)) - 3.5,
-            esc(name),
+            plot::escape(name),
             trim(*x)
         ));
     }
@@ -543,25 +515,19 @@ pub fn svg(f: &Fragility, capacities: &[(String, Capacity)], title: &str) -> Str
         t + 18.0,
         trim(f.median),
         trim(f.beta),
-        esc(&f.method)
+        plot::escape(&f.method)
     ));
     s.push_str(&format!(
         "<text x=\"{lx}\" y=\"{:.1}\" fill=\"#555\">line: fitted lognormal; squares: record capacities at i/(n+1); dots: runs (red failed, green stood)</text>\n",
         t + 34.0
     ));
-    s.push_str("</svg>\n");
+    s.push_str(plot::END);
     s
 }
 
 /// A number with at most 4 significant decimals, no trailing zeros.
 fn trim(x: f64) -> String {
-    let t = format!("{x:.4}");
-    let t = t.trim_end_matches('0').trim_end_matches('.');
-    if t.is_empty() || t == "-" {
-        "0".into()
-    } else {
-        t.into()
-    }
+    plot::short(x, 4)
 }
 
 #[cfg(test)]
@@ -588,11 +554,5 @@ mod tests {
             );
         }
         assert!((normal_cdf(1.959_963_984_540_054) - 0.975).abs() < 1e-14);
-    }
-
-    #[test]
-    fn ticks_are_round() {
-        assert_eq!(tick_step(10.0, 5), 2.0);
-        assert_eq!(tick_step(1.0, 6), 0.2);
     }
 }

@@ -7,6 +7,10 @@
 //! tolerance, evaluating as many interior points per round as there are cores. The lowest
 //! failing amplitude therefore does not depend on where the range starts, as long as the
 //! failing interval that holds it is wider than the resolution.
+//!
+//! Length (over 600 lines): the criteria, the planner (scan, refinement of every change of
+//! outcome) and the single- and multi-record searches share the request and the run tracker;
+//! about a quarter of the file is their unit tests.
 use super::fragility::{fit_binary, fit_interval, Capacity, FitParams, Fragility, Method, Point};
 use super::run::{run, RunError, RunOptions, Tracker};
 use crate::motion::GroundMotion;
@@ -40,15 +44,31 @@ pub enum Criterion {
     },
 }
 
+/// A criterion that does not parse: the text as given and what is wrong with it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CriterionParseError {
+    /// A JSON damage criterion (docs/format.md §3) that does not parse; names the path.
+    #[error(transparent)]
+    Damage(#[from] super::criteria::CriterionError),
+    #[error("criterion {text:?}: {what} must be a positive number, got {got:?}")]
+    NotPositive {
+        text: String,
+        what: &'static str,
+        got: String,
+    },
+    #[error("criterion {text:?}: expected toppled:BLOCK, displacement:BLOCK:METRES or rotation:BLOCK:DEGREES (optionally prefixed not:)")]
+    Form { text: String },
+}
+
 /// Rotation (rad) past which a toppling block is counted as fallen before the run ends: at
 /// 60° every block with a width-to-height ratio below 1.7 is beyond its tipping angle.
 const FALLEN_ROTATION: f64 = std::f64::consts::FRAC_PI_3;
 
 impl Criterion {
     /// Parse the command-line / API form.
-    pub fn parse(text: &str) -> Result<Self, String> {
+    pub fn parse(text: &str) -> Result<Self, CriterionParseError> {
         if text.trim_start().starts_with('{') {
-            let damage = super::criteria::Damage::parse(text).map_err(|e| e.to_string())?;
+            let damage = super::criteria::Damage::parse(text)?;
             return Ok(Criterion::Damage { damage });
         }
         if let Some(rest) = text.strip_prefix("not:") {
@@ -57,19 +77,31 @@ impl Criterion {
             });
         }
         let parts: Vec<&str> = text.split(':').collect();
-        let num = |s: &str, what: &str| -> Result<f64, String> {
+        let num = |s: &str, what: &'static str| -> Result<f64, CriterionParseError> {
             s.parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite() && *v > 0.0)
-                .ok_or_else(|| {
-                    format!("criterion {text:?}: {what} must be a positive number, got {s:?}")
+                .ok_or_else(|| CriterionParseError::NotPositive {
+                    text: text.to_string(),
+                    what,
+                    got: s.to_string(),
                 })
         };
         match parts.as_slice() {
-            ["toppled", b] if !b.is_empty() => Ok(Criterion::Toppled { block: b.to_string() }),
-            ["displacement", b, m] if !b.is_empty() => Ok(Criterion::Displacement { block: b.to_string(), metres: num(m, "METRES")? }),
-            ["rotation", b, d] if !b.is_empty() => Ok(Criterion::Rotation { block: b.to_string(), degrees: num(d, "DEGREES")? }),
-            _ => Err(format!("criterion {text:?}: expected toppled:BLOCK, displacement:BLOCK:METRES or rotation:BLOCK:DEGREES (optionally prefixed not:)")),
+            ["toppled", b] if !b.is_empty() => Ok(Criterion::Toppled {
+                block: b.to_string(),
+            }),
+            ["displacement", b, m] if !b.is_empty() => Ok(Criterion::Displacement {
+                block: b.to_string(),
+                metres: num(m, "METRES")?,
+            }),
+            ["rotation", b, d] if !b.is_empty() => Ok(Criterion::Rotation {
+                block: b.to_string(),
+                degrees: num(d, "DEGREES")?,
+            }),
+            _ => Err(CriterionParseError::Form {
+                text: text.to_string(),
+            }),
         }
     }
 

@@ -1,5 +1,9 @@
 //! One run of a scene under a ground motion: drives the simulation to the end, records frames
 //! (histories, trajectory), classifies the outcome and writes `summary.json` (docs/format.md §3).
+//!
+//! Length (over 600 lines): one run's stages (model choice, the engine loop with its frames,
+//! the summary and its units) read in order here; the end of a run is already `run_end.rs`,
+//! the reduced models `reduced/`. A split along those stages is the next step.
 use crate::analysis::reduced::{
     self, record::ReducedError, Modes, ReducedParams, Restitution, SingleBlock,
 };
@@ -248,7 +252,10 @@ pub enum RunError {
     /// `control.model` forces a reduced model (`"rocking"`, `"sliding"`) that cannot represent
     /// the scene; `why` says what disqualifies it.
     #[error("control.model: the scene does not qualify for the reduced {model:?} model: {why}")]
-    ModelNotApplicable { model: &'static str, why: String },
+    ModelNotApplicable {
+        model: &'static str,
+        why: super::reduced::NotReducible,
+    },
     /// The engine stopped with a typed diagnostic saying when, where and what to change.
     #[error("simulation failed: {0}")]
     Simulation(#[from] SimError),

@@ -8,6 +8,7 @@
 //! accelerating to +x tips the column back, θ > 0), as in the reference.
 use super::reference::{housner_rocking, HousnerColumn};
 use crate::motion::{self, GroundMotion};
+use crate::presets;
 use crate::scene::scene_from_value;
 use crate::simulation::{SimParams, Simulation};
 use serde_json::{json, Value};
@@ -61,17 +62,13 @@ pub const RECORDS: [&str; 6] = [
 pub fn column_scene(col: &RecordColumn, control: &Value) -> Value {
     let mut control = control.clone();
     control["model"] = json!("dda");
-    json!({
-        "format": "ashlar.scene/1",
-        "gravity": G,
-        "materials": { "stone": { "density": 2500.0, "young_modulus": 2.0e10, "poisson_ratio": 0.2 } },
-        "joints": { "j": { "friction_angle": 75.0 } },
-        "blocks": [
-            { "id": "base", "material": "stone", "fixed": true, "vertices": [[-3.0, -0.5], [3.0, -0.5], [3.0, 0.0], [-3.0, 0.0]] },
-            { "id": "column", "material": "stone", "vertices": [[-col.b, 0.0], [col.b, 0.0], [col.b, 2.0 * col.h], [-col.b, 2.0 * col.h]] },
-        ],
-        "control": control,
-    })
+    let column = presets::Column {
+        half_width: col.b,
+        half_height: col.h,
+        base_half_width: 3.0,
+        ..presets::Column::SEED.default_model()
+    };
+    column.json(control)
 }
 
 /// A record from `dir`, scaled to the PGA `pga_g` (in g, 9.80665 m/s²).

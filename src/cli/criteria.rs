@@ -1,6 +1,7 @@
 //! `ashlar run --criterion`: evaluate damage criteria (`analysis::criteria`, or the `pga`
 //! forms) on a finished run's summary; verdicts to OUT/criteria.json and one line each on
 //! standard error (standard output keeps the summary alone).
+use super::error::{pretty, CliError};
 use crate::analysis::criteria::{Damage, FinalState};
 use crate::analysis::pga::{met_by_summary, Criterion};
 use crate::analysis::run::Summary;
@@ -8,21 +9,23 @@ use crate::scene::{BlockKind, Scene};
 use std::path::Path;
 
 /// Parse the criteria and check them against the scene before anything runs.
-pub fn parse_for(scene: &Scene, texts: &[String]) -> Result<Vec<Criterion>, String> {
+pub fn parse_for(scene: &Scene, texts: &[String]) -> Result<Vec<Criterion>, CliError> {
     let mut out = Vec::new();
     for t in texts {
-        let c = Criterion::parse(t).map_err(|e| format!("--criterion: {e}"))?;
+        let c = Criterion::parse(t).map_err(CliError::criterion("--criterion"))?;
         if let Criterion::Damage { damage } = &c {
             damage
                 .check(scene)
-                .map_err(|e| format!("--criterion: {e}"))?;
+                .map_err(|e| CliError::from(e).at("--criterion"))?;
         }
         for id in c.blocks() {
             let free = scene
                 .block_index(id)
                 .is_some_and(|b| matches!(scene.blocks[b].kind, BlockKind::Free(_)));
             if !free {
-                return Err(format!("--criterion {t:?}: no free block with id {id:?}"));
+                return Err(CliError::Usage(format!(
+                    "--criterion {t:?}: no free block with id {id:?}"
+                )));
             }
         }
         out.push(c);
@@ -31,7 +34,7 @@ pub fn parse_for(scene: &Scene, texts: &[String]) -> Result<Vec<Criterion>, Stri
 }
 
 /// Evaluate and report; nothing when no criterion was given.
-pub fn report(criteria: &[Criterion], summary: &Summary, out: &Path) -> Result<(), String> {
+pub fn report(criteria: &[Criterion], summary: &Summary, out: &Path) -> Result<(), CliError> {
     if criteria.is_empty() {
         return Ok(());
     }
@@ -51,8 +54,8 @@ pub fn report(criteria: &[Criterion], summary: &Summary, out: &Path) -> Result<(
             serde_json::json!({ "criterion": c.text(), "met": met })
         })
         .collect();
-    let text = serde_json::to_string_pretty(&verdicts).map_err(|e| e.to_string())?;
-    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let text = pretty(&verdicts)?;
+    std::fs::create_dir_all(out).map_err(CliError::write(out))?;
     let path = out.join("criteria.json");
-    std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))
+    std::fs::write(&path, text).map_err(CliError::write(&path))
 }

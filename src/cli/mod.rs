@@ -1,5 +1,7 @@
 //! Command line: a thin layer that parses arguments and calls `analysis` / `service`.
 mod criteria;
+mod error;
+mod load;
 pub mod motion;
 mod run;
 mod scene;
@@ -7,6 +9,8 @@ mod site;
 mod study;
 mod sweep;
 mod worker;
+
+pub use error::CliError;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -47,25 +51,26 @@ pub enum Command {
     InternalRunJob,
 }
 
-/// Run the CLI; errors go to stderr as one clear line.
+/// Run the CLI; an error goes to stderr once, as one clear line (its text carries the cause
+/// chain, see [`CliError`]).
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(args) => run::run(&args),
         Command::Pga(args) => run::pga(&args),
-        Command::Motion(args) => motion::run(&args).map_err(|e| e.to_string()),
-        Command::Serve(args) => crate::service::serve_cli(args),
+        Command::Motion(args) => motion::run(&args).map_err(CliError::from),
+        Command::Serve(args) => crate::service::serve_cli(args).map_err(CliError::Untyped),
         Command::Study(args) => study::run(&args),
         Command::Worker(args) => worker::run(&args),
         Command::Sweep(args) => sweep::run(&args),
         Command::Scene(args) => scene::run(&args),
         Command::Site(args) => site::run(&args),
-        Command::InternalRunJob => crate::service::runner::child_main(),
+        Command::InternalRunJob => crate::service::runner::child_main().map_err(CliError::Untyped),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(msg) => {
-            eprintln!("ashlar: {msg}");
+        Err(e) => {
+            eprintln!("ashlar: {e}");
             ExitCode::FAILURE
         }
     }

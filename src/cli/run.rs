@@ -1,10 +1,12 @@
 //! `ashlar run` and `ashlar pga`: load the scene and the record, call `analysis`, print.
+use super::error::{pretty, CliError};
+use super::load::{load_records, load_scene, record_name, RangeArgs};
 use crate::analysis::fragility::Method;
-use crate::analysis::pga::{fragility_svg, search, search_records, Combine, Criterion, PgaRequest};
+use crate::analysis::pga::{fragility_svg, search, search_records, Combine, Criterion};
 use crate::analysis::run::{run as run_scene, RunOptions};
-use crate::motion::{self, parse_acceleration, GroundMotion, RecordArgs, UnitsArg};
-use crate::scene::{parse_scene, Scene};
-use std::path::{Path, PathBuf};
+use crate::motion::{self, GroundMotion, RecordArgs, UnitsArg};
+use crate::scene::Scene;
+use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
 pub struct RunArgs {
@@ -70,15 +72,9 @@ pub struct PgaArgs {
     /// (No `--pga`/`--scale`: the search sets the amplitude itself.)
     #[command(flatten)]
     pub units: UnitsArg,
-    /// Lower end of the amplitude range, with units (0.05g, 0.5m/s2, 50gal).
-    #[arg(long, default_value = "0.05g")]
-    pub min: String,
-    /// Upper end of the amplitude range, with units (2g, 20m/s2).
-    #[arg(long, default_value = "2g")]
-    pub max: String,
-    /// Bracket width to stop at, with units (0.01m/s2, 0.001g, 1gal).
-    #[arg(long, default_value = "0.01m/s2")]
-    pub tolerance: String,
+    /// `--min`, `--max`, `--tolerance`: the amplitude range, shared with `site`.
+    #[command(flatten)]
+    pub range: RangeArgs,
     /// Scan points over [min, max] before the refinement; their spacing is the search's
     /// resolution (failing intervals narrower than it may be missed): 40 gives 0.49 m/s²
     /// over the default range (docs/pga.md).
@@ -101,95 +97,25 @@ pub struct PgaArgs {
     pub duration: Option<f64>,
 }
 
-/// Record file extensions picked from a directory.
-const RECORD_EXTENSIONS: [&str; 8] = ["at2", "csv", "v1", "v2", "v1c", "v2c", "asc", "json"];
-
-/// The record paths `--motion` names: one file, a directory, a comma-separated list or a
-/// `.list` file. Returns whether several were meant (a directory or list, even of one).
-pub fn record_paths(spec: &str) -> Result<(Vec<PathBuf>, bool), String> {
-    if spec.contains(',') {
-        let paths: Vec<PathBuf> = spec
-            .split(',')
-            .map(str::trim)
-            .filter(|s| !s.is_empty())
-            .map(PathBuf::from)
-            .collect();
-        if paths.is_empty() {
-            return Err(format!("--motion {spec:?}: the list names no record"));
-        }
-        return Ok((paths, true));
-    }
-    let path = PathBuf::from(spec);
-    if path.is_dir() {
-        let mut paths: Vec<PathBuf> = std::fs::read_dir(&path)
-            .map_err(|e| format!("--motion {}: {e}", path.display()))?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| {
-                p.is_file()
-                    && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
-                        RECORD_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str())
-                    })
-            })
-            .collect();
-        paths.sort();
-        if paths.is_empty() {
-            return Err(format!(
-                "--motion {}: the directory holds no record file (.{})",
-                path.display(),
-                RECORD_EXTENSIONS.join(", .")
-            ));
-        }
-        return Ok((paths, true));
-    }
-    if path.extension().and_then(|e| e.to_str()) == Some("list") {
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| format!("--motion {}: {e}", path.display()))?;
-        let dir = path.parent().unwrap_or(Path::new("."));
-        let paths: Vec<PathBuf> = text
-            .lines()
-            .map(str::trim)
-            .filter(|l| !l.is_empty() && !l.starts_with('#'))
-            .map(|l| dir.join(l))
-            .collect();
-        if paths.is_empty() {
-            return Err(format!(
-                "--motion {}: the list names no record",
-                path.display()
-            ));
-        }
-        return Ok((paths, true));
-    }
-    Ok((vec![path], false))
-}
-
-/// A record's name in results: its file name.
-pub(super) fn record_name(p: &Path) -> String {
-    p.file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| p.display().to_string())
-}
-
-/// `--NAME TEXT` as an acceleration with units, in m/s².
-pub(super) fn acceleration_option(name: &str, text: &str) -> Result<f64, String> {
-    parse_acceleration(text).map_err(|e| format!("--{name} {text:?}: {e}"))
-}
-
 /// `--model NAME` as the scene's `control.model`.
-fn apply_model(scene: &mut Scene, model: Option<&str>) -> Result<(), String> {
+fn apply_model(scene: &mut Scene, model: Option<&str>) -> Result<(), CliError> {
     if let Some(m) = model {
-        scene.control.model = serde_json::from_value(serde_json::Value::from(m))
-            .map_err(|_| format!("--model {m:?}: expected one of auto, dda, rocking, sliding"))?;
+        scene.control.model = serde_json::from_value(serde_json::Value::from(m)).map_err(|_| {
+            CliError::Usage(format!(
+                "--model {m:?}: expected one of auto, dda, rocking, sliding"
+            ))
+        })?;
     }
     Ok(())
 }
 
 /// `--duration SECONDS` as the scene's `control.duration`.
-pub(super) fn apply_duration(scene: &mut Scene, duration: Option<f64>) -> Result<(), String> {
+pub(super) fn apply_duration(scene: &mut Scene, duration: Option<f64>) -> Result<(), CliError> {
     if let Some(d) = duration {
         if !(d.is_finite() && d > 0.0) {
-            return Err(format!(
+            return Err(CliError::Usage(format!(
                 "--duration {d}: must be a positive number of seconds"
-            ));
+            )));
         }
         scene.control.duration = Some(d);
     }
@@ -208,35 +134,30 @@ fn warn_truncation(scene: &Scene, gm: &GroundMotion) {
     }
 }
 
-pub(super) fn load_scene(path: &Path) -> Result<Scene, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    parse_scene(&text).map_err(|e| format!("{}: {e}", path.display()))
-}
-
-fn load_motion(args: &RunArgs) -> Result<GroundMotion, String> {
+fn load_motion(args: &RunArgs) -> Result<GroundMotion, CliError> {
     let opts = &args.record_options;
-    opts.validate().map_err(|e| e.to_string())?;
-    let params = opts.units.load_params().map_err(|e| e.to_string())?;
+    opts.validate()?;
+    let params = opts.units.load_params()?;
     let mut gm = match &args.motion {
-        Some(p) => motion::load_path_with(p, &params).map_err(|e| e.to_string())?,
+        Some(p) => motion::load_path_with(p, &params)?,
         None => GroundMotion::none(),
     };
     if let Some(v) = &args.vertical {
-        let vm = motion::load_path_with(v, &params).map_err(|e| e.to_string())?;
+        let vm = motion::load_path_with(v, &params)?;
         gm.vertical = vm.horizontal;
     }
-    opts.apply(gm).map_err(|e| e.to_string())
+    Ok(opts.apply(gm)?)
 }
 
-pub fn run(args: &RunArgs) -> Result<(), String> {
+pub fn run(args: &RunArgs) -> Result<(), CliError> {
     let mut scene = load_scene(&args.scene)?;
     apply_model(&mut scene, args.model.as_deref())?;
     apply_duration(&mut scene, args.duration)?;
     if let Some(i) = args.output_interval {
         if !(i.is_finite() && i > 0.0) {
-            return Err(format!(
+            return Err(CliError::Usage(format!(
                 "--output-interval {i}: must be a positive number of seconds"
-            ));
+            )));
         }
         scene.control.output_interval = i;
     }
@@ -250,26 +171,23 @@ pub fn run(args: &RunArgs) -> Result<(), String> {
         ..Default::default()
     };
     let criteria = super::criteria::parse_for(&scene, &args.criterion)?;
-    let outcome = run_scene(&scene, &gm, &opts).map_err(|e| e.to_string())?;
+    let outcome = run_scene(&scene, &gm, &opts)?;
     super::criteria::report(&criteria, &outcome.summary, &args.out)?;
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&outcome.summary).map_err(|e| e.to_string())?
-    );
+    println!("{}", pretty(&outcome.summary)?);
     Ok(())
 }
 
 /// The end-of-run knobs with `--max-extension` applied (defaults when it is absent).
 fn run_end_params(
     max_extension: Option<f64>,
-) -> Result<Option<crate::analysis::run_end::RunEndParams>, String> {
+) -> Result<Option<crate::analysis::run_end::RunEndParams>, CliError> {
     let Some(s) = max_extension else {
         return Ok(None);
     };
     if !(s.is_finite() && s >= 0.0) {
-        return Err(format!(
+        return Err(CliError::Usage(format!(
             "--max-extension must be a finite number of seconds ≥ 0, got {s}"
-        ));
+        )));
     }
     Ok(Some(crate::analysis::run_end::RunEndParams {
         max_extension: s,
@@ -277,54 +195,39 @@ fn run_end_params(
     }))
 }
 
-pub fn pga(args: &PgaArgs) -> Result<(), String> {
+pub fn pga(args: &PgaArgs) -> Result<(), CliError> {
     let criteria = args
         .criterion
         .iter()
-        .map(|c| Criterion::parse(c))
+        .map(|c| Criterion::parse(c).map_err(CliError::criterion("--criterion")))
         .collect::<Result<Vec<_>, _>>()?;
-    let req = PgaRequest {
-        criteria,
-        combine: Combine::parse(&args.combine).map_err(|e| format!("--{e}"))?,
-        min: acceleration_option("min", &args.min)?,
-        max: acceleration_option("max", &args.max)?,
-        tolerance: acceleration_option("tolerance", &args.tolerance)?,
-        scan_points: args.scan_points,
-    };
-    let method = Method::parse(&args.fit).map_err(|e| format!("--fit: {e}"))?;
+    let combine = Combine::parse(&args.combine).map_err(|e| CliError::Usage(format!("--{e}")))?;
+    let req = args.range.request(criteria, combine, args.scan_points)?;
+    let method = Method::parse(&args.fit).map_err(|e| CliError::Usage(format!("--fit: {e}")))?;
     let mut scene = load_scene(&args.scene)?;
     apply_model(&mut scene, args.model.as_deref())?;
     apply_duration(&mut scene, args.duration)?;
-    let params = args.units.load_params().map_err(|e| e.to_string())?;
-    let (paths, several) = record_paths(&args.motion)?;
+    let params = args.units.load_params()?;
+    let (loaded, several) = load_records(&args.motion, &params)?;
     let mut records = Vec::new();
-    for p in &paths {
-        let gm = motion::load_path_with(p, &params).map_err(|e| e.to_string())?;
+    for (p, gm) in loaded {
         warn_truncation(&scene, &gm);
-        records.push((record_name(p), gm));
+        records.push((record_name(&p), gm));
     }
-    std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
+    std::fs::create_dir_all(&args.out).map_err(CliError::write(&args.out))?;
     let write = |name: &str, text: &str| {
-        std::fs::write(args.out.join(name), text)
-            .map_err(|e| format!("{}: {e}", args.out.join(name).display()))
+        std::fs::write(args.out.join(name), text).map_err(CliError::write(args.out.join(name)))
     };
     let text = if several {
-        let result = search_records(&scene, &records, &req, method, &RunOptions::default())
-            .map_err(|e| e.to_string())?;
-        let text = serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?;
+        let result = search_records(&scene, &records, &req, method, &RunOptions::default())?;
+        let text = pretty(&result)?;
         let frag = serde_json::json!({
             "criterion": result.criterion,
             "units": result.units,
             "fragility": result.fragility,
             "fragility_error": result.fragility_error,
         });
-        write(
-            "fragility.json",
-            &format!(
-                "{}\n",
-                serde_json::to_string_pretty(&frag).map_err(|e| e.to_string())?
-            ),
-        )?;
+        write("fragility.json", &format!("{}\n", pretty(&frag)?))?;
         match fragility_svg(&result) {
             Some(svg) => write("fragility.svg", &svg)?,
             None => eprintln!(
@@ -338,8 +241,8 @@ pub fn pga(args: &PgaArgs) -> Result<(), String> {
         text
     } else {
         let (_, gm) = &records[0];
-        let result = search(&scene, gm, &req, &RunOptions::default()).map_err(|e| e.to_string())?;
-        serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?
+        let result = search(&scene, gm, &req, &RunOptions::default())?;
+        pretty(&result)?
     };
     write("result.json", &format!("{text}\n"))?;
     println!("{text}");

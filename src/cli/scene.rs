@@ -1,6 +1,7 @@
 //! `ashlar scene`: build a parametric structure (`scene::templates`) and print its scene JSON, list
 //! the templates, or import a DXF drawing (`ashlar scene import FILE`, `scene::import::dxf`). Thin:
 //! parsing arguments and printing; the templates and the importer live in the library.
+use super::error::CliError;
 use crate::scene::import::dxf::{self, ImportOptions};
 use crate::scene::templates;
 use serde_json::Value;
@@ -31,20 +32,22 @@ pub struct SceneArgs {
     pub list: bool,
 }
 
-pub fn run(args: &SceneArgs) -> Result<(), String> {
+pub fn run(args: &SceneArgs) -> Result<(), CliError> {
     let name = args.name.as_deref().unwrap_or_default();
     if name == IMPORT {
         return import(args);
     }
     if let Some(d) = &args.drawing {
-        return Err(format!(
+        return Err(CliError::Usage(format!(
             "scene {name}: unexpected argument {}; a template takes --set KEY=VALUE (to import a \
              drawing: ashlar scene import DRAWING.dxf)",
             d.display()
-        ));
+        )));
     }
     if args.options.is_some() {
-        return Err("scene: --options applies to `ashlar scene import DRAWING.dxf`".into());
+        return Err(CliError::Usage(
+            "scene: --options applies to `ashlar scene import DRAWING.dxf`".into(),
+        ));
     }
     let text = if args.list {
         serde_json::to_string_pretty(&templates::list())
@@ -53,47 +56,56 @@ pub fn run(args: &SceneArgs) -> Result<(), String> {
         for kv in &args.set {
             let (k, v) = kv
                 .split_once('=')
-                .ok_or_else(|| format!("--set {kv:?}: expected KEY=VALUE"))?;
+                .ok_or_else(|| CliError::Usage(format!("--set {kv:?}: expected KEY=VALUE")))?;
             if given
                 .insert(k.trim().to_string(), Value::String(v.trim().to_string()))
                 .is_some()
             {
-                return Err(format!("--set {k}: given twice"));
+                return Err(CliError::Usage(format!("--set {k}: given twice")));
             }
         }
-        let (spec, _) = templates::build(name, &given).map_err(|e| format!("scene {name}: {e}"))?;
+        let (spec, _) = templates::build(name, &given)
+            .map_err(|e| CliError::from(e).at(format!("scene {name}")))?;
         serde_json::to_string_pretty(&spec)
     }
-    .map_err(|e| format!("scene: cannot write JSON: {e}"))?;
+    .map_err(CliError::json("scene: cannot write JSON"))?;
     println!("{text}");
     Ok(())
 }
 
 /// `ashlar scene import DRAWING.dxf [--options FILE]`: the scene JSON on stdout, notes (units
 /// assumed, materials defaulted, entities skipped) on stderr.
-fn import(args: &SceneArgs) -> Result<(), String> {
+fn import(args: &SceneArgs) -> Result<(), CliError> {
     let Some(path) = &args.drawing else {
-        return Err("scene import: give the drawing: ashlar scene import DRAWING.dxf".into());
+        return Err(CliError::Usage(
+            "scene import: give the drawing: ashlar scene import DRAWING.dxf".into(),
+        ));
     };
     if !args.set.is_empty() {
-        return Err("scene import: --set applies to templates; use --options FILE".into());
+        return Err(CliError::Usage(
+            "scene import: --set applies to templates; use --options FILE".into(),
+        ));
     }
     let options = match &args.options {
         None => ImportOptions::default(),
         Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .map_err(|e| format!("scene import: cannot read {}: {e}", p.display()))?;
-            ImportOptions::from_json(&text).map_err(|e| format!("{}: {e}", p.display()))?
+            let text = std::fs::read_to_string(p).map_err(CliError::read(p))?;
+            ImportOptions::from_json(&text).map_err(|source| CliError::Import {
+                path: p.clone(),
+                source,
+            })?
         }
     };
-    let bytes = std::fs::read(path)
-        .map_err(|e| format!("scene import: cannot read {}: {e}", path.display()))?;
-    let imported = dxf::import(&bytes, &options).map_err(|e| format!("{}: {e}", path.display()))?;
+    let bytes = std::fs::read(path).map_err(CliError::read(path))?;
+    let imported = dxf::import(&bytes, &options).map_err(|source| CliError::Import {
+        path: path.clone(),
+        source,
+    })?;
     for note in &imported.notes {
         eprintln!("ashlar: {}: note: {note}", path.display());
     }
     let text = serde_json::to_string_pretty(&imported.spec)
-        .map_err(|e| format!("scene: cannot write JSON: {e}"))?;
+        .map_err(CliError::json("scene: cannot write JSON"))?;
     println!("{text}");
     Ok(())
 }

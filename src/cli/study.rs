@@ -39,24 +39,25 @@ pub struct StudyArgs {
     pub records: Option<PathBuf>,
 }
 
-pub fn run(args: &StudyArgs) -> Result<(), String> {
+pub fn run(args: &StudyArgs) -> Result<(), super::error::CliError> {
+    use super::error::CliError;
     // Quick: 60 s a point. CI runs the quick study in a debug build and `--check` fails a point
     // without an error value, so the budget only guards against a hang: the slowest quick point
     // (the wall with the trapezoidal integrator at Δt = 1e-3 s, thousands of Δt cuts) took over
     // 10 s in a debug build on the shared 2-core machine (2.5 of its 3 s simulated in 10 s).
     let budget = args.budget.unwrap_or(if args.quick { 60.0 } else { 120.0 });
     if !(budget.is_finite() && budget > 0.0) {
-        return Err(format!(
+        return Err(CliError::Usage(format!(
             "--budget {budget}: must be a positive number of seconds"
-        ));
+        )));
     }
     if !args.ground_motions.is_dir() {
-        return Err(format!(
+        return Err(CliError::Usage(format!(
             "--ground-motions {}: not a directory (the records are in the repository's \
              {GROUND_MOTIONS_DIR}/: run from the repository root or pass \
              --ground-motions PATH/TO/ashlar/{GROUND_MOTIONS_DIR})",
             args.ground_motions.display()
-        ));
+        )));
     }
     if let Some(path) = &args.records {
         return crate::analysis::study_records::run_cli(
@@ -64,7 +65,8 @@ pub fn run(args: &StudyArgs) -> Result<(), String> {
             path,
             args.quick,
             args.verbose,
-        );
+        )
+        .map_err(CliError::Untyped);
     }
     let opts = StudyOptions {
         quick: args.quick,
@@ -72,8 +74,8 @@ pub fn run(args: &StudyArgs) -> Result<(), String> {
         point_budget_s: budget,
         verbose: args.verbose,
     };
-    let result = run_study(&opts)?;
-    let written = write_outputs(&result, &args.out)?;
+    let result = run_study(&opts).map_err(CliError::Untyped)?;
+    let written = write_outputs(&result, &args.out).map_err(CliError::Untyped)?;
     if let Some(path) = &args.report {
         let base = path.parent().unwrap_or(std::path::Path::new("."));
         let rel = pathdiff(&args.out, base);
@@ -83,8 +85,7 @@ pub fn run(args: &StudyArgs) -> Result<(), String> {
             args.out.display(),
             path.display()
         );
-        std::fs::write(path, report(&result, &rel, &command))
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+        std::fs::write(path, report(&result, &rel, &command)).map_err(CliError::write(path))?;
     }
     let failed = result.points.iter().filter(|p| p.error.is_none()).count();
     println!(
@@ -106,14 +107,7 @@ pub fn run(args: &StudyArgs) -> Result<(), String> {
                 }
                 println!("check: passed");
             }
-            Err(failures) => {
-                return Err(format!(
-                    "study check failed ({} failure{}):\n  {}",
-                    failures.len(),
-                    if failures.len() == 1 { "" } else { "s" },
-                    failures.join("\n  ")
-                ))
-            }
+            Err(failures) => return Err(CliError::StudyCheck(failures)),
         }
     }
     Ok(())

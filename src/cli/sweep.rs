@@ -3,6 +3,7 @@
 //! gathers the lines into `report.json`: per scene, record and criterion, the runs and the
 //! threshold bracket in the shape of the PGA search's `result.json` (docs/format.md §3).
 //! Thin: parsing and files here, the runs in `analysis`.
+use super::error::{pretty, CliError};
 use crate::analysis::pga::{met_by_summary, Criterion, PgaResult, PgaRun};
 use crate::analysis::run::{run as run_scene, RunOptions, Summary};
 use crate::motion::{self, parse_acceleration, GroundMotion};
@@ -75,32 +76,35 @@ pub struct LineResult {
     pub units: Value,
 }
 
-pub fn run(args: &SweepArgs) -> Result<(), String> {
+pub fn run(args: &SweepArgs) -> Result<(), CliError> {
     match (&args.manifest, &args.collect) {
         (Some(m), None) => run_line(args, m),
         (None, Some(dir)) => collect(args, dir),
-        _ => Err("give either MANIFEST (with --index) or --collect DIR".into()),
+        _ => Err(CliError::Usage(
+            "give either MANIFEST (with --index) or --collect DIR".into(),
+        )),
     }
 }
 
-fn index_from_env() -> Result<usize, String> {
+fn index_from_env() -> Result<usize, CliError> {
     for var in [
         "SLURM_ARRAY_TASK_ID",
         "JOB_COMPLETION_INDEX",
         "ASHLAR_SWEEP_INDEX",
     ] {
         if let Ok(v) = std::env::var(var) {
-            return v
-                .trim()
-                .parse()
-                .map_err(|_| format!("${var} = {v:?} is not a line index (0, 1, 2…)"));
+            return v.trim().parse().map_err(|_| {
+                CliError::Usage(format!("${var} = {v:?} is not a line index (0, 1, 2…)"))
+            });
         }
     }
-    Err("--index N is required (or $SLURM_ARRAY_TASK_ID / $JOB_COMPLETION_INDEX)".into())
+    Err(CliError::Usage(
+        "--index N is required (or $SLURM_ARRAY_TASK_ID / $JOB_COMPLETION_INDEX)".into(),
+    ))
 }
 
-fn read_manifest(path: &Path) -> Result<Vec<(usize, String)>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+fn read_manifest(path: &Path) -> Result<Vec<(usize, String)>, CliError> {
+    let text = std::fs::read_to_string(path).map_err(CliError::read(path))?;
     // Line numbers of non-blank lines: index k is the k-th non-blank line (from 0).
     Ok(text
         .lines()
@@ -110,7 +114,7 @@ fn read_manifest(path: &Path) -> Result<Vec<(usize, String)>, String> {
         .collect())
 }
 
-fn parse_criteria(v: &Option<Value>, at: &str) -> Result<Vec<Criterion>, String> {
+fn parse_criteria(v: &Option<Value>, at: &str) -> Result<Vec<Criterion>, CliError> {
     let texts: Vec<String> = match v {
         None | Some(Value::Null) => vec![],
         Some(Value::String(s)) => vec![s.clone()],
@@ -119,42 +123,51 @@ fn parse_criteria(v: &Option<Value>, at: &str) -> Result<Vec<Criterion>, String>
             .map(|x| {
                 x.as_str()
                     .map(str::to_string)
-                    .ok_or_else(|| format!("{at}: criterion: expected strings"))
+                    .ok_or_else(|| CliError::Usage(format!("{at}: criterion: expected strings")))
             })
             .collect::<Result<_, _>>()?,
-        Some(_) => return Err(format!("{at}: criterion: expected a string or a list")),
+        Some(_) => {
+            return Err(CliError::Usage(format!(
+                "{at}: criterion: expected a string or a list"
+            )))
+        }
     };
     texts
         .iter()
-        .map(|t| Criterion::parse(t).map_err(|e| format!("{at}: {e}")))
+        .map(|t| Criterion::parse(t).map_err(CliError::criterion(at)))
         .collect()
 }
 
-fn run_line(args: &SweepArgs, manifest: &Path) -> Result<(), String> {
+fn run_line(args: &SweepArgs, manifest: &Path) -> Result<(), CliError> {
     let index = match args.index {
         Some(i) => i,
         None => index_from_env()?,
     };
     let lines = read_manifest(manifest)?;
     let Some((line_no, text)) = lines.get(index) else {
-        return Err(format!(
+        return Err(CliError::Usage(format!(
             "--index {index}: {} has {} lines (indices 0..{})",
             manifest.display(),
             lines.len(),
             lines.len().saturating_sub(1)
-        ));
+        )));
     };
     let at = format!("{} line {line_no}", manifest.display());
-    let line: Line = serde_json::from_str(text).map_err(|e| format!("{at}: {e}"))?;
+    let line: Line = serde_json::from_str(text).map_err(CliError::json(&at))?;
     let base = manifest.parent().unwrap_or(Path::new("."));
     let scene_path = base.join(&line.scene);
     let scene_text = std::fs::read_to_string(&scene_path)
-        .map_err(|e| format!("{at}: scene {}: {e}", scene_path.display()))?;
-    let scene = parse_scene(&scene_text).map_err(|e| format!("{at}: scene {}: {e}", line.scene))?;
-    let mut gm = match &line.record {
-        Some(r) => {
-            motion::load_path(&base.join(r)).map_err(|e| format!("{at}: record {r}: {e}"))?
+        .map_err(|e| CliError::read(&scene_path)(e).at(format!("{at}: scene")))?;
+    let scene = parse_scene(&scene_text).map_err(|source| {
+        CliError::Scene {
+            path: line.scene.clone().into(),
+            source,
         }
+        .at(format!("{at}: scene"))
+    })?;
+    let mut gm = match &line.record {
+        Some(r) => motion::load_path(&base.join(r))
+            .map_err(|e| CliError::from(e).at(format!("{at}: record {r}")))?,
         None => GroundMotion::none(),
     };
     match &line.amplitude {
@@ -164,33 +177,40 @@ fn run_line(args: &SweepArgs, manifest: &Path) -> Result<(), String> {
                 .as_f64()
                 .filter(|a| a.is_finite() && *a >= 0.0)
                 .ok_or_else(|| {
-                    format!("{at}: amplitude must be a number ≥ 0 (m/s²) or a string with units like \"0.3g\"")
+                    CliError::Usage(format!("{at}: amplitude must be a number ≥ 0 (m/s²) or a string with units like \"0.3g\""))
                 })?;
             gm = gm.scaled_to_pga(a);
         }
         Some(Value::String(s)) => {
-            gm = gm
-                .scaled_to_pga(parse_acceleration(s).map_err(|e| format!("{at}: amplitude: {e}"))?)
+            let a = parse_acceleration(s).map_err(|source| {
+                CliError::Acceleration {
+                    option: "amplitude".into(),
+                    text: s.clone(),
+                    source,
+                }
+                .at(at.clone())
+            })?;
+            gm = gm.scaled_to_pga(a)
         }
         Some(_) => {
-            return Err(format!(
+            return Err(CliError::Usage(format!(
                 "{at}: amplitude must be a number (m/s²) or a string with units like \"0.3g\""
-            ))
+            )))
         }
     }
     let criteria = parse_criteria(&line.criterion, &at)?;
     for c in &criteria {
         if !scene.blocks.iter().any(|b| b.id == c.block()) {
-            return Err(format!(
+            return Err(CliError::Usage(format!(
                 "{at}: criterion {}: the scene has no block {:?}",
                 c.text(),
                 c.block()
-            ));
+            )));
         }
     }
     // Written into a scratch directory, renamed into place when complete: --collect never
     // sees half a line, and a rerun (a retried array task) replaces the old result whole.
-    std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
+    std::fs::create_dir_all(&args.out).map_err(CliError::write(&args.out))?;
     let final_dir = args.out.join(format!("{index:06}"));
     let tmp = args
         .out
@@ -200,7 +220,7 @@ fn run_line(args: &SweepArgs, manifest: &Path) -> Result<(), String> {
         no_trajectory: args.no_trajectory,
         ..Default::default()
     };
-    let outcome = run_scene(&scene, &gm, &opts).map_err(|e| format!("{at}: {e}"))?;
+    let outcome = run_scene(&scene, &gm, &opts).map_err(|e| CliError::from(e).at(at.clone()))?;
     let result = LineResult {
         index,
         scene: line.scene.clone(),
@@ -218,13 +238,12 @@ fn run_line(args: &SweepArgs, manifest: &Path) -> Result<(), String> {
         label: line.label.clone(),
         units: serde_json::json!({ "pga": "m/s2" }),
     };
-    let json = serde_json::to_string_pretty(&result).map_err(|e| e.to_string())?;
-    std::fs::write(tmp.join("line.json"), format!("{json}\n"))
-        .map_err(|e| format!("{}: {e}", tmp.display()))?;
+    let json = pretty(&result)?;
+    std::fs::write(tmp.join("line.json"), format!("{json}\n")).map_err(CliError::write(&tmp))?;
     if final_dir.exists() {
-        std::fs::remove_dir_all(&final_dir).map_err(|e| format!("{}: {e}", final_dir.display()))?;
+        std::fs::remove_dir_all(&final_dir).map_err(CliError::write(&final_dir))?;
     }
-    std::fs::rename(&tmp, &final_dir).map_err(|e| format!("{}: {e}", final_dir.display()))?;
+    std::fs::rename(&tmp, &final_dir).map_err(CliError::write(&final_dir))?;
     println!("{json}");
     Ok(())
 }
@@ -279,24 +298,24 @@ pub fn bracket(criterion: &str, runs: &[PgaRun]) -> PgaResult {
 /// Scene, record, criterion.
 type GroupKey = (String, Option<String>, Option<String>);
 
-fn collect(args: &SweepArgs, dir: &Path) -> Result<(), String> {
-    let entries =
-        std::fs::read_dir(dir).map_err(|e| format!("--collect {}: {e}", dir.display()))?;
+fn collect(args: &SweepArgs, dir: &Path) -> Result<(), CliError> {
+    let entries = std::fs::read_dir(dir).map_err(|e| CliError::read(dir)(e).at("--collect"))?;
     let mut results: Vec<(LineResult, Summary)> = Vec::new();
     for e in entries {
-        let e = e.map_err(|e| format!("--collect {}: {e}", dir.display()))?;
+        let e = e.map_err(|e| CliError::read(dir)(e).at("--collect"))?;
         let name = e.file_name().to_string_lossy().to_string();
         if name.starts_with('.') || !e.path().is_dir() {
             continue;
         }
-        let read = |f: &str| -> Result<String, String> {
+        let read = |f: &str| -> Result<String, CliError> {
             let p = e.path().join(f);
-            std::fs::read_to_string(&p).map_err(|err| format!("{}: {err}", p.display()))
+            std::fs::read_to_string(&p).map_err(CliError::read(&p))
         };
         let line: LineResult = serde_json::from_str(&read("line.json")?)
-            .map_err(|err| format!("{}/line.json: {err}", e.path().display()))?;
-        let summary: Summary = serde_json::from_str(&read("summary.json")?)
-            .map_err(|err| format!("{}/summary.json: {err}", e.path().display()))?;
+            .map_err(CliError::json(format!("{}/line.json", e.path().display())))?;
+        let summary: Summary = serde_json::from_str(&read("summary.json")?).map_err(
+            CliError::json(format!("{}/summary.json", e.path().display())),
+        )?;
         results.push((line, summary));
     }
     results.sort_by_key(|(l, _)| l.index);
@@ -307,12 +326,12 @@ fn collect(args: &SweepArgs, dir: &Path) -> Result<(), String> {
             results.iter().map(|(l, _)| l.index).collect();
         missing = (0..n).filter(|k| !have.contains(k)).collect();
         if !missing.is_empty() && !args.allow_missing {
-            return Err(format!(
+            return Err(CliError::Usage(format!(
                 "{} of {n} lines have no result in {} (first: {:?}); rerun them, or pass --allow-missing",
                 missing.len(),
                 dir.display(),
                 &missing[..missing.len().min(10)]
-            ));
+            )));
         }
     }
     let mut groups: BTreeMap<GroupKey, Vec<&LineResult>> = BTreeMap::new();
@@ -352,9 +371,9 @@ fn collect(args: &SweepArgs, dir: &Path) -> Result<(), String> {
         missing,
         groups,
     };
-    let text = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+    let text = pretty(&report)?;
     let path = dir.join("report.json");
-    std::fs::write(&path, format!("{text}\n")).map_err(|e| format!("{}: {e}", path.display()))?;
+    std::fs::write(&path, format!("{text}\n")).map_err(CliError::write(&path))?;
     println!("{text}");
     Ok(())
 }

@@ -48,7 +48,8 @@ pub struct WorkerArgs {
     pub fanout_width: Option<usize>,
 }
 
-pub fn run(args: &WorkerArgs) -> Result<(), String> {
+pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
+    use super::error::CliError;
     let _ = tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env()
@@ -58,19 +59,19 @@ pub fn run(args: &WorkerArgs) -> Result<(), String> {
         // Colour codes only for a terminal: a log written to a file or a pipe stays plain text.
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .try_init();
-    let url = match service::parse_database(&args.database)? {
+    let url = match service::parse_database(&args.database).map_err(CliError::Untyped)? {
         service::Database::Postgres(url) => url,
         service::Database::Sqlite(_) => {
-            return Err(
+            return Err(CliError::Usage(
                 "--database: `ashlar worker` needs a PostgreSQL queue (postgres://…); with the embedded store, `ashlar serve` runs the jobs itself"
                     .into(),
-            )
+            ))
         }
     };
     let mut config = ServiceConfig::new(&args.data);
     config.postgres = Some(url);
     config.artifacts = args.artifacts.clone();
-    config.lease = service::lease_params(args.lease)?;
+    config.lease = service::lease_params(args.lease).map_err(CliError::Untyped)?;
     config.limits = Limits {
         max_blocks: args.max_blocks,
         max_record_samples: args.max_record_samples,
@@ -79,22 +80,22 @@ pub fn run(args: &WorkerArgs) -> Result<(), String> {
     };
     if let Some(n) = args.workers {
         if n == 0 {
-            return Err("--workers must be at least 1".into());
+            return Err(CliError::Usage("--workers must be at least 1".into()));
         }
         config.workers.workers = n;
     }
     if !(args.idle_poll.is_finite() && args.idle_poll > 0.0 && args.idle_poll <= 3600.0) {
-        return Err(format!(
+        return Err(CliError::Usage(format!(
             "--idle-poll must be a number of seconds in (0, 3600], got {}",
             args.idle_poll
-        ));
+        )));
     }
     config.workers.idle_poll = Duration::from_secs_f64(args.idle_poll);
     if !(args.shutdown_grace.is_finite() && args.shutdown_grace >= 0.0) {
-        return Err(format!(
+        return Err(CliError::Usage(format!(
             "--shutdown-grace must be a number of seconds ≥ 0, got {}",
             args.shutdown_grace
-        ));
+        )));
     }
     if args.fake_runner_ms.is_none() {
         config.workers.fanout_width = service::fanout_width(args.fanout_width, true);
@@ -104,11 +105,11 @@ pub fn run(args: &WorkerArgs) -> Result<(), String> {
         None => service::analysis_runner(),
     };
     let workers = config.workers.workers;
-    let svc = service::Service::start(config, runner)?;
+    let svc = service::Service::start(config, runner).map_err(CliError::Untyped)?;
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
-        .map_err(|e| format!("starting the signal runtime: {e}"))?;
+        .map_err(|e| CliError::Untyped(format!("starting the signal runtime: {e}")))?;
     // Caught from here on: a SIGTERM right after the line below must stop gracefully.
     let signals = runtime.block_on(async { service::ShutdownSignals::register() });
     // One line on stdout that scripts (and the tests) wait for.

@@ -2,7 +2,11 @@
 //! Arias intensity, significant duration, CAV, mean period and the pseudo-acceleration response
 //! spectrum, plus the spectrum as a hand-written SVG. Reads `GroundMotion`; nothing reads it
 //! back but the CLI, the service and job reports.
+//!
+//! Length (over 600 lines): about a third is unit tests (closed forms, the SVG's text boxes);
+//! the drawing's pieces are `crate::plot`'s.
 use super::{GroundMotion, Signal, Units, STANDARD_GRAVITY};
+use crate::plot;
 use serde::{Deserialize, Serialize};
 
 /// Knobs of `report_with`. The defaults reproduce the docs/format.md §3 output.
@@ -500,17 +504,15 @@ pub fn spectrum_svg(im: &IntensityMeasures) -> String {
         sp.periods.first().copied().unwrap_or(0.01).max(1e-6),
         sp.periods.last().copied().unwrap_or(10.0).max(1e-5),
     );
-    let ymax = nice_ceiling(sp.psa.iter().fold(0.0_f64, |m, y| m.max(*y)).max(1e-9));
+    let ymax = plot::nice_ceiling(sp.psa.iter().fold(0.0_f64, |m, y| m.max(*y)).max(1e-9));
     let x = |p: f64| l + pw * ((p / lo).ln() / (hi / lo).ln().max(1e-12));
     let y = |a: f64| t + ph * (1.0 - a / ymax);
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
-    );
+    let mut s = plot::document(w, h, 12.0, true);
     for ((line, size), y_line) in title.iter().zip(&baselines) {
         s += &format!(
             "<text class=\"title\" x=\"{}\" y=\"{y_line:.1}\" text-anchor=\"middle\" font-size=\"{size}\">{}</text>\n",
             w / 2.0,
-            xml_escape(line)
+            plot::escape(line)
         );
     }
     // Decade grid on the period axis.
@@ -518,10 +520,7 @@ pub fn spectrum_svg(im: &IntensityMeasures) -> String {
     while dec <= hi * 1.0001 {
         if dec >= lo * 0.9999 {
             let xd = x(dec);
-            s += &format!(
-                "<line x1=\"{xd:.1}\" y1=\"{t}\" x2=\"{xd:.1}\" y2=\"{}\" stroke=\"#ddd\"/>\n",
-                t + ph
-            );
+            s += &plot::grid_line(xd, t, xd, t + ph);
             s += &format!(
                 "<text x=\"{xd:.1}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n",
                 t + ph + 16.0,
@@ -533,10 +532,7 @@ pub fn spectrum_svg(im: &IntensityMeasures) -> String {
     for i in 0..=5 {
         let a = ymax * i as f64 / 5.0;
         let yy = y(a);
-        s += &format!(
-            "<line x1=\"{l}\" y1=\"{yy:.1}\" x2=\"{}\" y2=\"{yy:.1}\" stroke=\"#ddd\"/>\n",
-            l + pw
-        );
+        s += &plot::grid_line(l, yy, l + pw, yy);
         s += &format!(
             "<text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>\n",
             l - 6.0,
@@ -550,17 +546,14 @@ pub fn spectrum_svg(im: &IntensityMeasures) -> String {
             fmt(a / STANDARD_GRAVITY)
         );
     }
-    s += &format!("<rect x=\"{l}\" y=\"{t}\" width=\"{pw}\" height=\"{ph}\" fill=\"none\" stroke=\"black\"/>\n");
-    let pts: Vec<String> = sp
+    s += &plot::frame(l, t, pw, ph);
+    let pts: Vec<(f64, f64)> = sp
         .periods
         .iter()
         .zip(&sp.psa)
-        .map(|(p, a)| format!("{:.1},{:.1}", x(*p), y(*a)))
+        .map(|(p, a)| (x(*p), y(*a)))
         .collect();
-    s += &format!(
-        "<polyline fill=\"none\" stroke=\"#c0392b\" stroke-width=\"2\" points=\"{}\"/>\n",
-        pts.join(" ")
-    );
+    s += &plot::polyline(&pts, "#c0392b", 2.0, "");
     s += &format!(
         "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">period (s)</text>\n",
         l + pw / 2.0,
@@ -575,30 +568,12 @@ pub fn spectrum_svg(im: &IntensityMeasures) -> String {
         w - 14.0,
         t + ph / 2.0
     );
-    s += "</svg>\n";
+    s += plot::END;
     s
 }
 
-/// The smallest of 1, 2, 2.5, 5 × 10ᵏ at or above x.
-fn nice_ceiling(x: f64) -> f64 {
-    let e = 10f64.powf(x.log10().floor());
-    [1.0, 2.0, 2.5, 5.0, 10.0]
-        .iter()
-        .map(|m| m * e)
-        .find(|v| *v >= x * (1.0 - 1e-12))
-        .unwrap_or(10.0 * e)
-}
-
 fn fmt(v: f64) -> String {
-    let s = format!("{v:.3}");
-    s.trim_end_matches('0').trim_end_matches('.').to_string()
-}
-
-fn xml_escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
+    plot::short(v, 3)
 }
 
 #[cfg(test)]

@@ -3,6 +3,9 @@
 //!
 //! Sign convention: horizontal acceleration positive along +x, vertical positive along +y.
 //! All values inside are SI (m/s², m/s, m); the original units are kept for reporting.
+//!
+//! Length (over 600 lines): the `GroundMotion` type, its evaluation, the loaders' dispatch and
+//! their tests; each format's reader is already its own file.
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 

@@ -36,20 +36,51 @@ fn rect(x0: f64, y0: f64, w: f64, h: f64) -> Vec<[f64; 2]> {
     vec![[x0, y0], [x0 + w, y0], [x0 + w, y0 + h], [x0, y0 + h]]
 }
 
-fn base_spec(name: &str, friction: f64) -> SceneSpec {
+/// The stones' material, named in the scene.
+#[derive(Debug, Clone, Copy)]
+pub struct Stone {
+    pub name: &'static str,
+    /// kg/m³.
+    pub density: f64,
+    /// Pa.
+    pub young_modulus: f64,
+    pub poisson_ratio: f64,
+}
+
+/// Marble (Pentelic-like): 2700 kg/m³, E = 50 GPa, ν = 0.2, values of the order used for the
+/// Parthenon's columns in the DEM literature.
+pub const MARBLE: Stone = Stone {
+    name: "marble",
+    density: 2700.0,
+    young_modulus: 5.0e10,
+    poisson_ratio: 0.2,
+};
+
+/// A medium limestone: 2500 kg/m³, E = 20 GPa, ν = 0.2 (the project's examples' stone).
+pub const LIMESTONE: Stone = Stone {
+    name: "limestone",
+    density: 2500.0,
+    young_modulus: 2.0e10,
+    poisson_ratio: 0.2,
+};
+
+/// An empty scene named `name`: one stone, the joint `dry` (friction `friction` degrees, no
+/// cohesion or tension), gravity 9.81 m/s², no blocks yet. Every generated scene and template
+/// starts from it.
+pub fn stone_scene(name: impl Into<String>, stone: Stone, friction: f64) -> SceneSpec {
     let mut materials = BTreeMap::new();
     materials.insert(
-        "limestone".into(),
+        stone.name.to_string(),
         MaterialSpec {
-            density: 2500.0,
-            young_modulus: 2.0e10,
-            poisson_ratio: 0.2,
+            density: stone.density,
+            young_modulus: stone.young_modulus,
+            poisson_ratio: stone.poisson_ratio,
             plane: PlaneKind::Stress,
         },
     );
     let mut joints = BTreeMap::new();
     joints.insert(
-        "dry".into(),
+        "dry".to_string(),
         JointSpec {
             friction_angle: friction,
             cohesion: 0.0,
@@ -72,11 +103,12 @@ fn base_spec(name: &str, friction: f64) -> SceneSpec {
 
 /// A running-bond wall: `courses` courses on a fixed foundation, joints offset by half a block.
 pub fn running_bond_wall(p: &WallParams) -> SceneSpec {
-    let mut spec = base_spec(
-        &format!(
+    let mut spec = stone_scene(
+        format!(
             "running-bond wall, {} courses × {} blocks",
             p.courses, p.blocks_per_course
         ),
+        LIMESTONE,
         p.friction_angle,
     );
     let (l, h) = (p.block_length, p.block_height);
@@ -119,7 +151,7 @@ pub fn running_bond_wall(p: &WallParams) -> SceneSpec {
 
 /// A free-standing rectangular column (half-width `b`, half-height `h`) on a fixed plinth.
 pub fn column(b: f64, h: f64, friction: f64) -> SceneSpec {
-    let mut spec = base_spec("free-standing column on a plinth", friction);
+    let mut spec = stone_scene("free-standing column on a plinth", LIMESTONE, friction);
     spec.blocks.push(BlockSpec {
         id: "plinth".into(),
         material: "limestone".into(),

@@ -1,4 +1,7 @@
 //! Turn a [`SceneSpec`] into a [`Scene`], rejecting anything the engine cannot run faithfully.
+//!
+//! Length (over 600 lines): one check per field of the format, in the order of docs/format.md
+//! §1, and their tests; splitting them would scatter the one place that says what is refused.
 use super::*;
 use crate::geometry::{inside_depth, polygon_signed_area, segments_cross, segments_touch};
 use std::collections::HashMap;

@@ -12,7 +12,7 @@ use ashlar::analysis::fragility::{
 };
 use ashlar::analysis::pga::{search_records, Combine, Criterion, PgaRequest};
 use ashlar::analysis::run::RunOptions;
-use ashlar::motion::{GroundMotion, Signal};
+use ashlar::motion::GroundMotion;
 use common::*;
 use serde_json::json;
 
@@ -217,24 +217,7 @@ fn unfittable_sets_are_named_and_the_plot_is_labelled() {
 }
 
 fn column() -> ashlar::scene::Scene {
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
-        { "id": "column", "material": "stone", "block_model": "rigid", "vertices": [[-0.2, 0.0], [0.2, 0.0], [0.2, 1.2], [-0.2, 1.2]] },
-    ]);
-    parse(&scene_json(
-        blocks,
-        75.0,
-        json!({ "duration": 3.0, "model": "dda" }),
-    ))
-}
-
-fn half_sine(period: f64) -> GroundMotion {
-    GroundMotion::horizontal(Signal::Pulse {
-        amplitude: 1.0,
-        period,
-        cycles: 0.5,
-        phase: 0.0,
-    })
+    parse(&Column::SEED.json(json!({ "duration": 3.0, "model": "dda" })))
 }
 
 /// End to end: three pulses of different periods give three capacities; the fit passes
@@ -245,7 +228,7 @@ fn multi_record_search_fits_the_records_capacities() {
     let scene = column();
     let records: Vec<(String, GroundMotion)> = [0.8, 1.0, 1.25]
         .iter()
-        .map(|&t| (format!("half-sine {t} s"), half_sine(t)))
+        .map(|&t| (format!("half-sine {t} s"), half_sine(1.0, t)))
         .collect();
     let req = PgaRequest {
         criteria: vec![Criterion::parse("toppled:column").expect("criterion")],

@@ -12,29 +12,26 @@
 use crate::common;
 use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};
 use ashlar::analysis::run::{run as run_scene, RunOptions, Summary};
-use ashlar::motion::{load_path, GroundMotion};
+use ashlar::motion::GroundMotion;
 use common::*;
 use rayon::prelude::*;
 use serde_json::json;
-use std::path::Path;
 
 const WINDOW: f64 = 9.0;
 
 /// One of the repository's recorded ground motions (data/ground-motions).
 fn record(name: &str) -> GroundMotion {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("data/ground-motions")
-        .join(name);
-    load_path(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+    ashlar::presets::record(name).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 /// A slender column (half-sizes 0.12 × 0.8 m) on a plinth.
 fn column() -> ashlar::scene::Scene {
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
-        { "id": "column", "material": "stone", "block_model": "rigid", "vertices": [[-0.12, 0.0], [0.12, 0.0], [0.12, 1.6], [-0.12, 1.6]] },
-    ]);
-    parse(&scene_json(blocks, 75.0, json!({ "duration": WINDOW })))
+    let slender = Column {
+        half_width: 0.12,
+        half_height: 0.8,
+        ..Column::SEED
+    };
+    parse(&slender.json(json!({ "duration": WINDOW })))
 }
 
 fn block_on_incline() -> ashlar::scene::Scene {

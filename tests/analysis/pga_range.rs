@@ -16,34 +16,20 @@
 //! the promise above holds vacuously; what is checked then is the observed agreement: both
 //! searches within 0.2 m/s² (3.4 % of the threshold; measured 0.13) of the brute force's lowest
 //! failure, and not below it.
-use ashlar::analysis::pga::{evaluate, search, Combine, Criterion, PgaRequest};
+use crate::common::{example_column, record, toppled_column_search};
+use ashlar::analysis::pga::{evaluate, search};
 use ashlar::analysis::run::RunOptions;
-use ashlar::motion::load_path;
-use ashlar::scene::parse_scene;
 use rayon::prelude::*;
-use std::path::Path;
 
 const G: f64 = 9.80665;
 const STEP: f64 = 0.05;
 
 #[test]
 fn two_ranges_find_the_brute_force_lowest_failing_pga() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let scene = parse_scene(
-        &std::fs::read_to_string(root.join("examples/column.json")).expect("example scene"),
-    )
-    .expect("scene");
-    let gm = load_path(&root.join("data/ground-motions/loma-prieta-1989-capitola-000.at2"))
-        .expect("record");
-    let criteria = vec![Criterion::parse("toppled:column").expect("criterion")];
-    let req = |min_g: f64| PgaRequest {
-        criteria: criteria.clone(),
-        combine: Combine::All,
-        min: min_g * G,
-        max: 2.0 * G,
-        tolerance: 0.01,
-        scan_points: 40,
-    };
+    let scene = example_column();
+    let gm = record("loma-prieta-1989-capitola-000.at2");
+    let req = toppled_column_search;
+    let criteria = req(0.05).criteria;
     let a = search(&scene, &gm, &req(0.05), &RunOptions::default()).expect("search");
     let b = search(&scene, &gm, &req(0.1), &RunOptions::default()).expect("search");
     let (fa, fb) = (a.failing_pga.expect("fails"), b.failing_pga.expect("fails"));

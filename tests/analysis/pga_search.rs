@@ -7,21 +7,17 @@
 use crate::common;
 use ashlar::analysis::pga::{evaluate, search, Combine, Criterion, PgaRequest};
 use ashlar::analysis::run::RunOptions;
-use ashlar::motion::{GroundMotion, Signal};
+use ashlar::motion::GroundMotion;
 use common::*;
 use serde_json::json;
 
 /// The column; `model` is `control.model`, None for the default.
 fn column_with(model: Option<&str>) -> ashlar::scene::Scene {
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
-        { "id": "column", "material": "stone", "block_model": "rigid", "vertices": [[-0.2, 0.0], [0.2, 0.0], [0.2, 1.2], [-0.2, 1.2]] },
-    ]);
     let mut control = json!({ "duration": 3.0 });
     if let Some(m) = model {
         control["model"] = json!(m);
     }
-    parse(&scene_json(blocks, 75.0, control))
+    parse(&Column::SEED.json(control))
 }
 
 fn column() -> ashlar::scene::Scene {
@@ -30,12 +26,7 @@ fn column() -> ashlar::scene::Scene {
 
 /// The half-sine pulse of Yagoda-Biran & Hatzor 2015, §3.3, at unit amplitude (the search rescales it).
 fn unit_pulse() -> GroundMotion {
-    GroundMotion::horizontal(Signal::Pulse {
-        amplitude: 1.0,
-        period: 1.0,
-        cycles: 0.5,
-        phase: 0.0,
-    })
+    rocking_pulse(1.0)
 }
 
 #[test]

@@ -18,7 +18,6 @@
 use crate::common;
 use ashlar::analysis::reference::{housner_rocking, HousnerColumn};
 use ashlar::analysis::run::{run, RunOptions};
-use ashlar::motion::{load_path, GroundMotion};
 use common::*;
 use serde_json::json;
 
@@ -29,27 +28,11 @@ const COLUMN: HousnerColumn = HousnerColumn {
     dt: 1e-4,
 };
 
-fn record(name: &str) -> GroundMotion {
-    load_path(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("data/ground-motions")
-            .join(name),
-    )
-    .expect("bundled record")
-}
-
 fn scene(duration: f64) -> ashlar::scene::Scene {
-    let (b, h) = (COLUMN.b, COLUMN.h);
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
-        { "id": "column", "material": "stone", "block_model": "rigid",
-          "vertices": [[-b, 0.0], [b, 0.0], [b, 2.0 * h], [-b, 2.0 * h]] },
-    ]);
-    parse(&scene_json(
-        blocks,
-        75.0,
-        json!({ "duration": duration, "model": "rocking", "output_interval": 0.01 }),
-    ))
+    parse(
+        &Column::SEED
+            .json(json!({ "duration": duration, "model": "rocking", "output_interval": 0.01 })),
+    )
 }
 
 #[test]

@@ -13,22 +13,13 @@
 use crate::common;
 use ashlar::analysis::reference::{half_sine_pulse, housner_history, HousnerColumn};
 use ashlar::analysis::run::{run, RunOptions};
-use ashlar::motion::{GroundMotion, Signal};
+use ashlar::motion::GroundMotion;
 use common::*;
 use serde_json::json;
 use std::sync::Mutex;
 
-/// The scene's column is the reference's.
-const B: f64 = HousnerColumn::SEED_000.b;
-const H: f64 = HousnerColumn::SEED_000.h;
-
 fn pulse(a: f64) -> GroundMotion {
-    GroundMotion::horizontal(Signal::Pulse {
-        amplitude: a,
-        period: 1.0,
-        cycles: 0.5,
-        phase: 0.0,
-    })
+    rocking_pulse(a)
 }
 
 /// Housner by RK4 (`ashlar::analysis::reference`): θ samples every 0.01 s, first impact
@@ -40,16 +31,10 @@ fn housner(a: f64, t_end: f64) -> (Vec<f64>, Option<f64>, bool) {
 }
 
 fn column(model: &str, duration: f64) -> ashlar::scene::Scene {
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
-        { "id": "column", "material": "stone", "block_model": "rigid",
-          "vertices": [[-B, 0.0], [B, 0.0], [B, 2.0 * H], [-B, 2.0 * H]] },
-    ]);
-    parse(&scene_json(
-        blocks,
-        75.0,
-        json!({ "duration": duration, "model": model, "output_interval": 0.01 }),
-    ))
+    parse(
+        &Column::SEED
+            .json(json!({ "duration": duration, "model": model, "output_interval": 0.01 })),
+    )
 }
 
 /// Rotation of the column at every 0.01 s frame, and the summary.

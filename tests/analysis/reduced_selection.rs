@@ -16,23 +16,11 @@ use common::*;
 use serde_json::{json, Value};
 
 fn column(control: Value) -> Value {
-    scene_json(
-        json!([
-            { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
-            { "id": "column", "material": "stone", "vertices": [[-0.2, 0.0], [0.2, 0.0], [0.2, 1.2], [-0.2, 1.2]] },
-        ]),
-        75.0,
-        control,
-    )
+    Column::SEED.default_model().json(control)
 }
 
 fn pulse(a: f64) -> GroundMotion {
-    GroundMotion::horizontal(Signal::Pulse {
-        amplitude: a,
-        period: 1.0,
-        cycles: 0.5,
-        phase: 0.0,
-    })
+    rocking_pulse(a)
 }
 
 #[test]
@@ -203,7 +191,7 @@ fn reduced_first_motion(alpha: f64, k: f64, delta: f64, phi: f64) -> Result<Mode
         GroundMotion::horizontal(Signal::Sampled(Sampled::new(0.01, vec![-k * G; 101])))
     };
     let params = ReducedParams::default();
-    let block = qualify(&scene, &params)?;
+    let block = qualify(&scene, &params).map_err(|e| e.to_string())?;
     let mut m = Reduced::new(block, &motion, params, Modes::Auto);
     // First motion, as in tests/engine/failure_modes.rs: decided once the corner slip or L·|θ|
     // exceeds 1 mm (later changes of mode are not what the chart describes).

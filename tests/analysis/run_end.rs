@@ -8,29 +8,26 @@ use ashlar::analysis::run::{run, RunOptions, Summary};
 use ashlar::analysis::run_end::RunEndParams;
 use ashlar::motion::{from_json, GroundMotion};
 use ashlar::scene::{ModelChoice, Scene};
-use common::{parse, rect, scene_json, G};
+use common::{parse, Column, G};
 use serde_json::json;
 use std::sync::Mutex;
 
 /// Half width and half height of the column (m): the 0.4 × 1.2 m column of
 /// examples/column.json, α = atan(1/3) = 18.43°.
-const B: f64 = 0.2;
-const H: f64 = 0.6;
+const B: f64 = Column::SEED.half_width;
+const H: f64 = Column::SEED.half_height;
 /// The burst: one cycle of a 1 s sine of 4.5 m/s² (0.46 g).
 const AMPLITUDE: f64 = 4.5;
 const PERIOD: f64 = 1.0;
 
-/// The column on a 2 m plinth, friction 60° (μ = 1.73, far above tan α and the friction demand
+/// The column on a 2 m base, friction 60° (μ = 1.73, far above tan α and the friction demand
 /// of the fall: the column rocks, it does not slide), run for the burst's length only.
 fn column(model: ModelChoice) -> Scene {
-    let mut scene = parse(&scene_json(
-        json!([
-            { "id": "plinth", "material": "stone", "fixed": true, "vertices": rect(-1.0, -0.5, 1.0, 0.0) },
-            { "id": "column", "material": "stone", "block_model": "rigid", "vertices": rect(-B, 0.0, B, 2.0 * H) }
-        ]),
-        60.0,
-        json!({ "duration": PERIOD }),
-    ));
+    let mut scene = parse(
+        &Column::SEED
+            .friction(60.0)
+            .json(json!({ "duration": PERIOD })),
+    );
     scene.control.model = model;
     scene
 }

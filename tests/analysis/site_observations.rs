@@ -17,7 +17,7 @@ use crate::common;
 use ashlar::analysis::observations::{site_interval, Observation};
 use ashlar::analysis::pga::{Combine, Criterion, PgaRequest};
 use ashlar::analysis::run::RunOptions;
-use ashlar::motion::{GroundMotion, Signal};
+use ashlar::motion::GroundMotion;
 use common::*;
 use serde_json::json;
 
@@ -35,12 +35,7 @@ fn site() -> ashlar::scene::Scene {
 }
 
 fn pulse() -> GroundMotion {
-    GroundMotion::horizontal(Signal::Pulse {
-        amplitude: 1.0,
-        period: 1.0,
-        cycles: 0.5,
-        phase: 0.0,
-    })
+    rocking_pulse(1.0)
 }
 
 fn obs(text: &str, observed: bool) -> Observation {

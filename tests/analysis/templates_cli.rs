@@ -3,6 +3,7 @@
 //! refused naming the parameter. `ashlar run --criterion` with a damage criterion, checked on
 //! Heyman's arch (tests/engine/templates.rs): at t/R = 0.10 the crown drops (the criterion is
 //! met), at t/R = 0.115 it does not.
+use crate::common::{listed_names, TEMPLATE_NAMES};
 use serde_json::Value;
 use std::path::PathBuf;
 use std::process::{Command, Output};
@@ -26,24 +27,7 @@ fn list_and_build_and_refuse() {
     let o = ashlar(&["scene", "--list"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let list: Value = serde_json::from_slice(&o.stdout).expect("json");
-    let names: Vec<&str> = list
-        .as_array()
-        .expect("array")
-        .iter()
-        .filter_map(|t| t["name"].as_str())
-        .collect();
-    assert_eq!(
-        names,
-        [
-            "drum-column",
-            "colonnade",
-            "arch",
-            "wall",
-            "buttressed-wall",
-            "obelisk",
-            "pyramid"
-        ]
-    );
+    assert_eq!(listed_names(&list), TEMPLATE_NAMES);
     for t in list.as_array().expect("array") {
         for p in t["parameters"].as_array().expect("parameters") {
             for k in ["name", "units", "default", "min", "max"] {

@@ -1,23 +1,12 @@
 //! Scene builders shared by the physics tests (each test writes its reference solution itself).
 #![allow(dead_code)]
-use ashlar::motion::{GroundMotion, Signal};
+use ashlar::motion::GroundMotion;
 use ashlar::scene::{parse_scene, Scene};
 use ashlar::simulation::{SimParams, Simulation};
 use serde_json::{json, Value};
 
-pub const G: f64 = 9.81;
-
-/// A scene JSON with one material and one joint.
-pub fn scene_json(blocks: Value, friction_deg: f64, control: Value) -> Value {
-    json!({
-        "format": "ashlar.scene/1",
-        "gravity": G,
-        "materials": { "stone": { "density": 2500.0, "young_modulus": 2.0e10, "poisson_ratio": 0.2 } },
-        "joints": { "j": { "friction_angle": friction_deg } },
-        "blocks": blocks,
-        "control": control,
-    })
-}
+#[allow(unused_imports)] // each test binary uses a different subset
+pub use ashlar::presets::{half_sine, incline, rect, rocking_pulse, scene_json, sine, Column, G};
 
 /// The contact solver the physics suites run with: `ASHLAR_CONTACT_SOLVER=dual cargo test
 /// --test engine incline:: …` runs the same benchmarks, against the same references and tolerances, with
@@ -44,33 +33,6 @@ pub fn parse(v: &Value) -> Scene {
     }
 }
 
-/// Block (w × h) resting on an incline of `alpha_deg` that descends towards +x, its bottom-left
-/// corner at the origin. Returns the scene and the unit down-slope direction.
-pub fn incline(alpha_deg: f64, friction_deg: f64, control: Value) -> (Value, [f64; 2]) {
-    let a = alpha_deg.to_radians();
-    let d = [a.cos(), -a.sin()];
-    let n = [a.sin(), a.cos()];
-    let (w, h) = (1.0, 0.5);
-    let l = 200.0;
-    let base = json!([
-        [-l * d[0], -l * d[1]],
-        [l * d[0], l * d[1]],
-        [l * d[0], l * d[1] - 20.0],
-        [-l * d[0], -l * d[1] - 20.0]
-    ]);
-    let blk = json!([
-        [0.0, 0.0],
-        [w * d[0], w * d[1]],
-        [w * d[0] + h * n[0], w * d[1] + h * n[1]],
-        [h * n[0], h * n[1]]
-    ]);
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": base },
-        { "id": "block", "material": "stone", "vertices": blk },
-    ]);
-    (scene_json(blocks, friction_deg, control), d)
-}
-
 /// Run to `t_end`, calling `probe(sim)` after every step.
 pub fn run(sim: &mut Simulation, t_end: f64, mut probe: impl FnMut(&Simulation)) {
     while sim.time < t_end - 1e-12 {
@@ -83,13 +45,6 @@ pub fn run(sim: &mut Simulation, t_end: f64, mut probe: impl FnMut(&Simulation))
 
 pub fn sim(scene: &Scene, motion: &GroundMotion) -> Simulation {
     Simulation::new(scene, motion, SimParams::default())
-}
-
-pub fn sine(amplitude: f64, frequency: f64) -> GroundMotion {
-    GroundMotion::horizontal(Signal::Sine {
-        amplitude,
-        frequency,
-    })
 }
 
 /// Centroid displacement of block `b` from its start, m.
@@ -116,11 +71,6 @@ pub fn run_until(
         }
     }
     false
-}
-
-/// Corners of the rectangle [x0, x1] × [y0, y1], counter-clockwise.
-pub fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Value {
-    json!([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
 }
 
 /// `columns × rows` aligned 0.4 × 0.2 m blocks in a fixed U, frictionless, under
@@ -196,4 +146,52 @@ pub fn geometric_penetration(sim: &Simulation) -> f64 {
         }
     }
     worst
+}
+
+/// `examples/column.json` as the CLI reads it (no solver override: the file's own choice), the
+/// scene of the golden digests and of the PGA-range tests.
+pub fn example_column() -> Scene {
+    parse_scene(ashlar::presets::EXAMPLE_COLUMN)
+        .unwrap_or_else(|e| panic!("examples/column.json: {e}"))
+}
+
+/// The PGA-range tests' search: `toppled:column` from `min_g` to 2 g (g = 9.80665 m/s²) with
+/// 40 scan points (the CLI's defaults but the start of the range), to 0.01 m/s².
+pub fn toppled_column_search(min_g: f64) -> ashlar::analysis::pga::PgaRequest {
+    use ashlar::analysis::pga::{Combine, Criterion, PgaRequest};
+    const G_STANDARD: f64 = 9.80665;
+    PgaRequest {
+        criteria: vec![Criterion::parse("toppled:column").expect("criterion")],
+        combine: Combine::All,
+        min: min_g * G_STANDARD,
+        max: 2.0 * G_STANDARD,
+        tolerance: 0.01,
+        scan_points: 40,
+    }
+}
+
+/// One of the repository's recorded ground motions by file name (data/ground-motions).
+pub fn record(name: &str) -> GroundMotion {
+    ashlar::presets::record(name).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// The scene templates, in the order `ashlar scene --list` and `GET /v1/templates` list them
+/// (docs/templates.md).
+pub const TEMPLATE_NAMES: [&str; 7] = [
+    "drum-column",
+    "colonnade",
+    "arch",
+    "wall",
+    "buttressed-wall",
+    "obelisk",
+    "pyramid",
+];
+
+/// The `name` of each template in a JSON list of templates.
+pub fn listed_names(list: &Value) -> Vec<&str> {
+    list.as_array()
+        .expect("a list of templates")
+        .iter()
+        .filter_map(|t| t["name"].as_str())
+        .collect()
 }

@@ -11,8 +11,9 @@
 //! and why the dual's default tolerance (1e-9 × half the block size, 3.4e-10 m a step) is
 //! visible there (docs/dual.md, "The wall").
 use ashlar::analysis::run::{run, RunOptions};
-use ashlar::analysis::study::{wall_params, wall_record, GROUND_MOTIONS_DIR};
+use ashlar::analysis::study::{wall_record, GROUND_MOTIONS_DIR};
 use ashlar::motion::GroundMotion;
+use ashlar::presets::study_wall;
 use ashlar::record::Frame;
 use ashlar::scene::generate::running_bond_wall;
 use ashlar::scene::scene_from_value;
@@ -24,7 +25,7 @@ const DURATION: f64 = 3.0;
 fn wall_and_record() -> (Value, GroundMotion) {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(GROUND_MOTIONS_DIR);
     let gm = wall_record(&dir).expect("the wall's record (data/ground-motions)");
-    let wall = running_bond_wall(&wall_params());
+    let wall = running_bond_wall(&study_wall());
     (serde_json::to_value(&wall).expect("wall scene"), gm)
 }
 

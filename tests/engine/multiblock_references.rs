@@ -52,12 +52,7 @@ fn pulse_fn(a: f64) -> impl Fn(f64) -> f64 {
 }
 
 fn pulse(a: f64) -> GroundMotion {
-    GroundMotion::horizontal(Signal::Pulse {
-        amplitude: a,
-        period: 1.0,
-        cycles: 0.5,
-        phase: 0.0,
-    })
+    rocking_pulse(a)
 }
 
 /// What the reference does under a pulse of amplitude `a`.

@@ -16,13 +16,9 @@
 //! control measured fixes both without breaking the impact references (docs/accuracy-vs-speed.md,
 //! "Records").
 use ashlar::analysis::study_records::{self as sr, RecordColumn, COLUMNS};
+use ashlar::presets::records_dir;
 use ashlar::simulation::SimParams;
 use serde_json::json;
-use std::path::PathBuf;
-
-fn records_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/ground-motions")
-}
 
 /// The engine at its defaults against Housner at one point; returns the peak error relative
 /// to Housner's peak (0 where the column falls).

@@ -14,7 +14,7 @@
 //!   ω⁺/ω⁻ = 1 − 3/2 (1 + e) sin²α, α = atan(b/h); e = 0 is Housner's 1 − 3/2 sin²α.
 use crate::common;
 use ashlar::analysis::run::{run as run_scene, RunOptions};
-use ashlar::motion::{GroundMotion, Signal};
+use ashlar::motion::GroundMotion;
 use ashlar::scene::Scene;
 use common::*;
 use serde_json::{json, Value};
@@ -217,17 +217,14 @@ fn rocking_impact_ratio_follows_the_requested_restitution_dual() {
 /// apart) extrapolated linearly to the impact instant from either side, under a half-sine
 /// pulse 1.5 × the uplift acceleration g tan α (1 Hz, half a cycle).
 fn reduced_rocking_ratio(b: f64, h: f64, control: Value) -> (f64, String) {
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": rect(-2.0, -0.5, 2.0, 0.0) },
-        { "id": "column", "material": "stone", "block_model": "rigid", "vertices": rect(-b, 0.0, b, 2.0 * h) },
-    ]);
-    let scene = parse(&scene_json(blocks, 75.0, control));
-    let pulse = GroundMotion::horizontal(Signal::Pulse {
-        amplitude: 1.5 * G * b / h,
-        period: 1.0,
-        cycles: 0.5,
-        phase: 0.0,
-    });
+    let column = Column {
+        half_width: b,
+        half_height: h,
+        base_half_width: 2.0,
+        ..Column::SEED
+    };
+    let scene = parse(&column.json(control));
+    let pulse = rocking_pulse(1.5 * G * b / h);
     let frames = Mutex::new(Vec::new());
     let on_frame = |f: &ashlar::record::Frame| {
         let c = &f.blocks[1];

@@ -7,21 +7,12 @@
 //! (`ASHLAR_CONTACT_SOLVER=dual`, no penalty stiffness to tune).
 use crate::common;
 use ashlar::analysis::reference::{half_sine_pulse, housner_history, HousnerColumn};
-use ashlar::motion::{GroundMotion, Signal};
+use ashlar::motion::GroundMotion;
 use common::*;
 use serde_json::json;
 
-/// The scene's column is the reference's.
-const B: f64 = HousnerColumn::SEED_000.b;
-const H: f64 = HousnerColumn::SEED_000.h;
-
 fn pulse(a: f64) -> GroundMotion {
-    GroundMotion::horizontal(Signal::Pulse {
-        amplitude: a,
-        period: 1.0,
-        cycles: 0.5,
-        phase: 0.0,
-    })
+    rocking_pulse(a)
 }
 
 /// Housner's equation (`ashlar::analysis::reference`, RK4 at 1e-5 s with Housner's
@@ -34,12 +25,7 @@ fn housner(a: f64, t_end: f64) -> (Vec<(f64, f64)>, Option<f64>, bool) {
 }
 
 fn column_scene(control: serde_json::Value) -> ashlar::scene::Scene {
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
-        { "id": "column", "material": "stone", "block_model": "rigid",
-          "vertices": [[-B, 0.0], [B, 0.0], [B, 2.0 * H], [-B, 2.0 * H]] },
-    ]);
-    parse(&scene_json(blocks, 75.0, control))
+    parse(&Column::SEED.json(control))
 }
 
 fn dda_overturns(a: f64) -> bool {

@@ -26,7 +26,7 @@
 //! the histories miss at every Δt tried (5.5–8.8 %).
 use crate::common;
 use ashlar::analysis::run::{run as run_scene, RunOptions};
-use ashlar::motion::{GroundMotion, Signal};
+use ashlar::motion::GroundMotion;
 use common::*;
 use serde_json::json;
 use std::sync::Mutex;
@@ -205,12 +205,7 @@ fn controls(solver: &str, duration: f64, dt: Option<f64>) -> serde_json::Value {
 }
 
 fn seed_pulse(a: f64) -> GroundMotion {
-    GroundMotion::horizontal(Signal::Pulse {
-        amplitude: a,
-        period: 1.0,
-        cycles: 0.5,
-        phase: 0.0,
-    })
+    rocking_pulse(a)
 }
 
 fn seed_pulse_fn(a: f64) -> impl Fn(f64) -> f64 {

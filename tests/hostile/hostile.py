@@ -100,6 +100,17 @@ def call(s, method, path, body=None, raw=None, headers=None, timeout=60):
         return e.code, e.headers, e.read()
 
 
+def streamed_bytes(url, timeout=120):
+    """GET `url` and count its body's bytes, read 1 MiB at a time (never held whole)."""
+    total = 0
+    with urllib.request.urlopen(urllib.request.Request(url), timeout=timeout) as r:
+        while True:
+            c = r.read(1 << 20)
+            if not c:
+                return total
+            total += len(c)
+
+
 def raw_request(s, head, body=b"", timeout=30):
     """Send raw bytes, tolerate the server closing early, return (status, headers, body)."""
     sock = socket.create_connection((s.host, s.port), timeout=timeout)
@@ -559,23 +570,9 @@ def main():
             th.join()
         check(all(r[0] == 206 and len(r[2]) == 100 for r in res),
               "8 concurrent Range: bytes=0-99 of a 300 MB trajectory: 206, 100 bytes each")
-        req = urllib.request.Request(f"{s.addr}/v1/jobs/{jid}/trajectory.mcap")
-        total = 0
-        with urllib.request.urlopen(req, timeout=120) as r:
-            while True:
-                c = r.read(1 << 20)
-                if not c:
-                    break
-                total += len(c)
+        total = streamed_bytes(f"{s.addr}/v1/jobs/{jid}/trajectory.mcap")
         check(total == 300 << 20, f"the whole 300 MB trajectory streamed ({total >> 20} MB)")
-        req = urllib.request.Request(f"{s.addr}/v1/jobs/{jid}/histories?format=csv")
-        total = 0
-        with urllib.request.urlopen(req, timeout=120) as r:
-            while True:
-                c = r.read(1 << 20)
-                if not c:
-                    break
-                total += len(c)
+        total = streamed_bytes(f"{s.addr}/v1/jobs/{jid}/histories?format=csv")
         check(total >= 200 << 20, f"a 200 MB history streamed as CSV ({total >> 20} MB)")
         st, h, b = call(s, "GET", f"/v1/jobs/{jid}/histories")
         check(st == 406, f"the same history as JSON: 406 pointing to CSV or ?every ({st})")

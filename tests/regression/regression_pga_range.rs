@@ -13,34 +13,21 @@
 //! held to 0.1 m/s² (1.5 % of the ~6 m/s² thresholds), not to the 0.01 m/s² tolerance:
 //! measured 0.001 m/s² (Loma Prieta) and 0.039 m/s² (Imperial Valley: 6.653 against 6.614,
 //! each range's refinement stepping over a different sub-island), against 2.1 m/s² before.
-use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};
+use crate::common::{example_column, record, toppled_column_search};
+use ashlar::analysis::pga::search;
 use ashlar::analysis::run::RunOptions;
-use ashlar::motion::load_path;
-use ashlar::scene::parse_scene;
-use std::path::Path;
 
 const G: f64 = 9.80665;
 
 #[test]
 fn the_start_of_the_range_does_not_move_the_lowest_failing_pga() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let scene = parse_scene(
-        &std::fs::read_to_string(root.join("examples/column.json")).expect("example scene"),
-    )
-    .expect("scene");
+    let scene = example_column();
     for name in [
         "loma-prieta-1989-capitola-000.at2",
         "imperial-valley-1979-el-centro-6-233.csv",
     ] {
-        let gm = load_path(&root.join("data/ground-motions").join(name)).expect("record");
-        let req = |min_g: f64| PgaRequest {
-            criteria: vec![Criterion::parse("toppled:column").expect("criterion")],
-            combine: Combine::All,
-            min: min_g * G,
-            max: 2.0 * G,
-            tolerance: 0.01,
-            scan_points: 40,
-        };
+        let gm = record(name);
+        let req = toppled_column_search;
         let a = search(&scene, &gm, &req(0.05), &RunOptions::default()).expect("search");
         let b = search(&scene, &gm, &req(0.1), &RunOptions::default()).expect("search");
         let (fa, fb) = (a.failing_pga.expect("fails"), b.failing_pga.expect("fails"));

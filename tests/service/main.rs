@@ -3,6 +3,8 @@
 //! One test binary for these modules (one per former file): a binary per file cost
 //! ~35 MB of disk and a link each. Run one with `cargo test --test service NAME::`.
 
+#[path = "../common/mod.rs"]
+mod common;
 mod pg_cluster;
 mod pg_tls;
 mod service_access;

@@ -2,6 +2,7 @@
 //! (`oneshot`, no socket): the list agrees with `scene::templates::list`, a built scene is the
 //! one the library builds and is accepted as a job's scene, and bad requests are problems
 //! naming the template or the parameter.
+use crate::common::{listed_names, TEMPLATE_NAMES};
 use crate::service_support;
 
 use ashlar::scene::templates;
@@ -33,21 +34,8 @@ async fn templates_are_listed_built_and_refused_with_problems() {
     let listed = r.json()["templates"].clone();
     let expected = serde_json::to_value(templates::list()).expect("list");
     assert_eq!(listed, expected);
-    let names: Vec<&str> = listed
-        .as_array()
-        .expect("array")
-        .iter()
-        .filter_map(|t| t["name"].as_str())
-        .collect();
-    for n in [
-        "drum-column",
-        "colonnade",
-        "arch",
-        "wall",
-        "buttressed-wall",
-        "obelisk",
-        "pyramid",
-    ] {
+    let names = listed_names(&listed);
+    for n in TEMPLATE_NAMES {
         assert!(names.contains(&n), "{n} missing from {names:?}");
     }
 

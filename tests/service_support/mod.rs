@@ -5,7 +5,7 @@
 use axum::body::Body;
 use axum::http::{Request, Response};
 use http_body_util::BodyExt;
-use serde_json::{json, Value};
+use serde_json::Value;
 use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::path::PathBuf;
@@ -19,24 +19,15 @@ pub fn temp_dir(tag: &str) -> PathBuf {
     d
 }
 
-/// A column on a plinth, free to rock; `duration` s of simulation.
+/// A column on a plinth, free to rock; `duration` s of simulation
+/// ([`ashlar::presets::plinth_column_json`]).
 pub fn column_scene(duration: f64) -> Value {
-    json!({
-        "format": "ashlar.scene/1",
-        "name": "column on a plinth",
-        "materials": {"limestone": {"density": 2500, "young_modulus": 2.0e10, "poisson_ratio": 0.2}},
-        "joints": {"dry": {"friction_angle": 40.0}},
-        "blocks": [
-            {"id": "plinth", "material": "limestone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]]},
-            {"id": "column", "material": "limestone", "vertices": [[-0.2, 0.0], [0.2, 0.0], [0.2, 1.2], [-0.2, 1.2]]}
-        ],
-        "control": {"duration": duration}
-    })
+    ashlar::presets::plinth_column_json(duration)
 }
 
 /// A half-sine pulse of `amplitude` m/s² and period 0.4 s.
 pub fn pulse(amplitude: f64) -> Value {
-    json!({"horizontal": {"pulse": {"shape": "sine", "amplitude": amplitude, "period": 0.4, "cycles": 0.5, "units": "m/s2"}}})
+    ashlar::presets::half_sine_json(amplitude, 0.4)
 }
 
 /// A response with its body collected.

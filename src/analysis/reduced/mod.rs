@@ -17,7 +17,7 @@ pub mod record;
 pub mod rocking;
 pub mod sliding;
 
-pub use qualify::{qualify, SingleBlock};
+pub use qualify::{qualify, NotReducible, SingleBlock};
 pub use rocking::Restitution;
 
 use crate::motion::GroundMotion;
@@ -91,7 +91,7 @@ impl Default for ReducedParams {
 ///   ([`ReducedParams::rigid_strain`], checked by [`qualify`]).
 /// - `restitution`: `"housner"` and 0 are the rocking model's Housner law; a coefficient
 ///   above 0 makes a landing corner bounce, which the reduced models do not represent.
-pub fn represented(scene: &Scene) -> Result<(), String> {
+pub fn represented(scene: &Scene) -> Result<(), NotReducible> {
     use crate::scene::Restitution;
     let c = &scene.control;
     let mut why = Vec::new();
@@ -125,7 +125,7 @@ pub fn represented(scene: &Scene) -> Result<(), String> {
     if why.is_empty() {
         Ok(())
     } else {
-        Err(why.join("; "))
+        Err(NotReducible::Controls(why))
     }
 }
 

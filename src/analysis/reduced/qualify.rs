@@ -65,25 +65,54 @@ impl SingleBlock {
     }
 }
 
+/// Why no reduced model represents a scene: its geometry ([`qualify`]) or a control they do
+/// not represent ([`super::represented`]). Its text is shown to the user in `model_reason` and
+/// in [`crate::analysis::run::RunError::ModelNotApplicable`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum NotReducible {
+    #[error("the scene has {0} free blocks; a reduced model needs exactly one")]
+    FreeBlocks(usize),
+    #[error(
+        "the scene has {0} blocks; a reduced model needs exactly two (one free block on one base)"
+    )]
+    Blocks(usize),
+    #[error("block {0:?} must be the fixed base (base_acceleration) or the driven block")]
+    Base(String),
+    #[error("joint {0:?} has cohesion or tensile strength; the reduced models take a cohesionless Coulomb joint")]
+    Cohesive(String),
+    #[error("block {block:?} is not convex (vertex {vertex}); the reduced models pivot on the corners of a convex block")]
+    NotConvex { block: String, vertex: usize },
+    #[error("block {block:?} overhangs the edge of base {base:?}; the reduced models need its whole bottom edge on the base")]
+    Overhangs { block: String, base: String },
+    #[error("block {block:?} does not rest along one of its edges on an edge of {base:?} (flat contact within {tolerance:.1e} m)")]
+    NoFlatContact {
+        block: String,
+        base: String,
+        /// m.
+        tolerance: f64,
+    },
+    #[error("block {block:?} is deformable and soft (self-weight strain ρ g H / E above {limit:.0e}); rigid behaviour is not adequate")]
+    Soft { block: String, limit: f64 },
+    #[error("block {0:?} starts with an angular or normal velocity; the reduced models start at rest or sliding")]
+    Moving(String),
+    /// Controls the reduced models do not represent, each a sentence ([`super::represented`]).
+    #[error("{}", .0.join("; "))]
+    Controls(Vec<String>),
+}
+
 fn cross(a: Vector2<f64>, b: Vector2<f64>) -> f64 {
     a.x * b.y - a.y * b.x
 }
 
 /// The single-block description of `scene`, or why the scene is not one (its geometry, or a
 /// control the reduced models do not represent: [`super::represented`]).
-pub fn qualify(scene: &Scene, params: &ReducedParams) -> Result<SingleBlock, String> {
+pub fn qualify(scene: &Scene, params: &ReducedParams) -> Result<SingleBlock, NotReducible> {
     let free: Vec<usize> = scene.free_blocks().collect();
     if free.len() != 1 {
-        return Err(format!(
-            "the scene has {} free blocks; a reduced model needs exactly one",
-            free.len()
-        ));
+        return Err(NotReducible::FreeBlocks(free.len()));
     }
     if scene.blocks.len() != 2 {
-        return Err(format!(
-            "the scene has {} blocks; a reduced model needs exactly two (one free block on one base)",
-            scene.blocks.len()
-        ));
+        return Err(NotReducible::Blocks(scene.blocks.len()));
     }
     let f = free[0];
     let b = 1 - f;
@@ -91,29 +120,21 @@ pub fn qualify(scene: &Scene, params: &ReducedParams) -> Result<SingleBlock, Str
     let driven = match (scene.excitation, bb.kind) {
         (Excitation::BaseAcceleration, BlockKind::Fixed) => false,
         (Excitation::DrivenBlock(d), BlockKind::Driven) if d == b => true,
-        _ => {
-            return Err(format!(
-                "block {:?} must be the fixed base (base_acceleration) or the driven block",
-                bb.id
-            ))
-        }
+        _ => return Err(NotReducible::Base(bb.id.clone())),
     };
     let joint = scene.joint_between(f, b);
     if joint.cohesion != 0.0 || joint.tensile_strength != 0.0 {
-        return Err(format!(
-            "joint {:?} has cohesion or tensile strength; the reduced models take a cohesionless Coulomb joint",
-            joint.name
-        ));
+        return Err(NotReducible::Cohesive(joint.name.clone()));
     }
     let v = &fb.vertices;
     let nv = v.len();
     for i in 0..nv {
         let (a, p, c) = (v[(i + nv - 1) % nv], v[i], v[(i + 1) % nv]);
         if cross(p - a, c - p) < -1e-12 * (p - a).norm() * (c - p).norm() {
-            return Err(format!(
-                "block {:?} is not convex (vertex {i}); the reduced models pivot on the corners of a convex block",
-                fb.id
-            ));
+            return Err(NotReducible::NotConvex {
+                block: fb.id.clone(),
+                vertex: i,
+            });
         }
     }
     let moments = polygon_moments(v);
@@ -143,19 +164,20 @@ pub fn qualify(scene: &Scene, params: &ReducedParams) -> Result<SingleBlock, Str
             let along = |p: Vector2<f64>| (p - q0).dot(&tq);
             let inside = |s: f64| (-tol..=lq + tol).contains(&s);
             if !inside(along(p0)) || !inside(along(p1)) {
-                return Err(format!(
-                    "block {:?} overhangs the edge of base {:?}; the reduced models need its whole bottom edge on the base",
-                    fb.id, bb.id
-                ));
+                return Err(NotReducible::Overhangs {
+                    block: fb.id.clone(),
+                    base: bb.id.clone(),
+                });
             }
             found = Some((p0, t, len));
         }
     }
     let Some((origin, t, len)) = found else {
-        return Err(format!(
-            "block {:?} does not rest along one of its edges on an edge of {:?} (flat contact within {:.1e} m)",
-            fb.id, bb.id, tol
-        ));
+        return Err(NotReducible::NoFlatContact {
+            block: fb.id.clone(),
+            base: bb.id.clone(),
+            tolerance: tol,
+        });
     };
     let n = Vector2::new(-t.y, t.x);
     let local = |p: Vector2<f64>| Vector2::new((p - origin).dot(&t), (p - origin).dot(&n));
@@ -169,19 +191,16 @@ pub fn qualify(scene: &Scene, params: &ReducedParams) -> Result<SingleBlock, Str
         }
     };
     if !rigid_ok {
-        return Err(format!(
-            "block {:?} is deformable and soft (self-weight strain ρ g H / E above {:.0e}); rigid behaviour is not adequate",
-            fb.id, params.rigid_strain
-        ));
+        return Err(NotReducible::Soft {
+            block: fb.id.clone(),
+            limit: params.rigid_strain,
+        });
     }
     let iv = scene.initial_velocity[f];
     let vt = iv[0] * t.x + iv[1] * t.y;
     let vn = iv[0] * n.x + iv[1] * n.y;
     if iv[2] != 0.0 || vn.abs() > 1e-12 {
-        return Err(format!(
-            "block {:?} starts with an angular or normal velocity; the reduced models start at rest or sliding",
-            fb.id
-        ));
+        return Err(NotReducible::Moving(fb.id.clone()));
     }
     let density = scene.materials[fb.material].density;
     // The geometry qualifies; the controls must be ones the reduced models represent too.

@@ -101,7 +101,7 @@ pub fn arch(v: &Values) -> Result<SceneSpec, TemplateError> {
             String::new()
         }
     );
-    let mut spec = skeleton(name, LIMESTONE, v.num("friction_angle"));
+    let mut spec = stone_scene(name, LIMESTONE, v.num("friction_angle"));
     let ys = pier_h;
     // The left half's centre (x) and its joints: (inner, outer) points, from the springing up.
     let left_joints: Vec<([f64; 2], [f64; 2])> = if pointed {

@@ -11,16 +11,9 @@ use crate::scene::spec::SceneSpec;
 
 pub fn params() -> Vec<Param> {
     vec![
-        number(
-            "height",
-            "m",
-            "height of the wall (rounded to whole courses)",
-            4.8,
-            0.5,
-            40.0,
-        ),
+        wall_height(4.8, 0.5, 40.0),
         number("thickness", "m", "thickness of the wall", 0.8, 0.1, 5.0),
-        number("course_height", "m", "height of a course", 0.4, 0.05, 3.0),
+        course_height(0.4, 3.0),
         number(
             "block_length",
             "m",
@@ -62,8 +55,8 @@ pub fn buttressed_wall(v: &Values) -> Result<SceneSpec, TemplateError> {
         v.num("course_height"),
         v.num("block_length"),
     );
-    let courses = (v.num("height") / h).round().max(1.0) as usize;
-    let b_courses = (v.num("buttress_height") / h).round().max(1.0) as usize;
+    let courses = whole_courses(v.num("height"), h);
+    let b_courses = whole_courses(v.num("buttress_height"), h);
     let steps = v.count("buttress_steps");
     let depth = v.num("buttress_depth");
     if b_courses > courses {
@@ -80,7 +73,7 @@ pub fn buttressed_wall(v: &Values) -> Result<SceneSpec, TemplateError> {
             format!("{steps} steps do not fit in the buttress's {b_courses} courses"),
         ));
     }
-    let mut spec = skeleton(
+    let mut spec = stone_scene(
         format!(
             "buttressed wall section: {} m high, {t} m thick, buttress {depth} m deep in {steps} steps",
             tidy(courses as f64 * h)
@@ -91,7 +84,6 @@ pub fn buttressed_wall(v: &Values) -> Result<SceneSpec, TemplateError> {
     spec.blocks
         .push(foundation(LIMESTONE.name, -0.5, t + depth + 0.5));
     for c in 0..courses {
-        let (y0, y1) = (c as f64 * h, (c + 1) as f64 * h);
         // Step k (0 at the foot) of the buttress holds this course; its depth falls linearly.
         let d = if c < b_courses {
             let k = c * steps / b_courses;
@@ -99,15 +91,15 @@ pub fn buttressed_wall(v: &Values) -> Result<SceneSpec, TemplateError> {
         } else {
             0.0
         };
-        let offset = if c % 2 == 1 { 0.5 * l } else { 0.0 };
-        for (k, [x0, x1]) in running_bond(0.0, t + d, l, offset).into_iter().enumerate() {
-            spec.blocks.push(stone(
-                format!("c{}b{}", c + 1, k + 1),
-                LIMESTONE.name,
-                rect(x0, y0, x1, y1),
-            ));
-        }
-        within_budget(&spec, "block_length")?;
+        lay_course(
+            &mut spec,
+            LIMESTONE.name,
+            c,
+            h,
+            l,
+            &[[0.0, t + d]],
+            Vec::new(),
+        )?;
     }
     Ok(spec)
 }

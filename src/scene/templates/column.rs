@@ -213,7 +213,7 @@ impl Column {
 
 pub fn drum_column(v: &Values) -> Result<SceneSpec, TemplateError> {
     let c = Column::read(v)?;
-    let mut spec = skeleton(
+    let mut spec = stone_scene(
         format!(
             "drum column: {} drums, {} m tall",
             c.drums,
@@ -246,7 +246,7 @@ pub fn colonnade(v: &Values) -> Result<SceneSpec, TemplateError> {
             ),
         ));
     }
-    let mut spec = skeleton(
+    let mut spec = stone_scene(
         format!(
             "colonnade: {n} columns of {} drums, {} m on centres",
             c.drums, spacing

@@ -1,36 +1,12 @@
-//! Pieces shared by the templates: the scene skeleton (material, joint, foundation), rectangles
-//! and polygons as block specs, and the running-bond filler that cuts a course into stones.
-use super::{Kind, Param};
+//! Pieces shared by the templates: the scene skeleton (`generate::stone_scene`: material, joint;
+//! and the foundation), rectangles and polygons as block specs, the running-bond filler that
+//! cuts a course into stones and the course builder that lays them.
+use super::{Kind, Param, TemplateError};
+/// The old name of [`stone_scene`], kept while `pyramid.rs` is being changed on another branch
+/// (rename it there after the merge).
+pub use crate::scene::generate::stone_scene as skeleton;
+pub use crate::scene::generate::{stone_scene, LIMESTONE, MARBLE};
 use crate::scene::spec::*;
-use std::collections::BTreeMap;
-
-/// The stones' material, named in the scene.
-#[derive(Debug, Clone, Copy)]
-pub struct Stone {
-    pub name: &'static str,
-    /// kg/m³.
-    pub density: f64,
-    /// Pa.
-    pub young_modulus: f64,
-    pub poisson_ratio: f64,
-}
-
-/// Marble (Pentelic-like): 2700 kg/m³, E = 50 GPa, ν = 0.2, values of the order used for the
-/// Parthenon's columns in the DEM literature.
-pub const MARBLE: Stone = Stone {
-    name: "marble",
-    density: 2700.0,
-    young_modulus: 5.0e10,
-    poisson_ratio: 0.2,
-};
-
-/// A medium limestone: 2500 kg/m³, E = 20 GPa, ν = 0.2 (the project's examples' stone).
-pub const LIMESTONE: Stone = Stone {
-    name: "limestone",
-    density: 2500.0,
-    young_modulus: 2.0e10,
-    poisson_ratio: 0.2,
-};
 
 /// The dry joint's friction angle, shared by every template. 37° (tan φ ≈ 0.75) is the middle
 /// of the 30–45° measured on dressed limestone and marble joints.
@@ -63,6 +39,35 @@ pub fn number(
     }
 }
 
+/// The `height` of a wall, m, rounded to whole courses by the template.
+pub fn wall_height(default: f64, min: f64, max: f64) -> Param {
+    number(
+        "height",
+        "m",
+        "height of the wall (rounded to whole courses)",
+        default,
+        min,
+        max,
+    )
+}
+
+/// The `course_height` of a coursed template, m (at least 5 cm).
+pub fn course_height(default: f64, max: f64) -> Param {
+    number(
+        "course_height",
+        "m",
+        "height of a course",
+        default,
+        0.05,
+        max,
+    )
+}
+
+/// How many whole courses of height `course` make `height` (at least one).
+pub fn whole_courses(height: f64, course: f64) -> usize {
+    (height / course).round().max(1.0) as usize
+}
+
 pub fn integer(
     name: &'static str,
     description: &'static str,
@@ -78,42 +83,6 @@ pub fn integer(
     }
 }
 
-/// An empty scene named `name`: one stone, the joint `dry` (friction `friction` degrees, no
-/// cohesion or tension), no blocks yet.
-pub fn skeleton(name: String, stone: Stone, friction: f64) -> SceneSpec {
-    let mut materials = BTreeMap::new();
-    materials.insert(
-        stone.name.to_string(),
-        MaterialSpec {
-            density: stone.density,
-            young_modulus: stone.young_modulus,
-            poisson_ratio: stone.poisson_ratio,
-            plane: PlaneKind::Stress,
-        },
-    );
-    let mut joints = BTreeMap::new();
-    joints.insert(
-        "dry".to_string(),
-        JointSpec {
-            friction_angle: friction,
-            cohesion: 0.0,
-            tensile_strength: 0.0,
-        },
-    );
-    SceneSpec {
-        format: "ashlar.scene/1".into(),
-        name: Some(name),
-        gravity: Some(9.81),
-        materials,
-        joints,
-        blocks: Vec::new(),
-        interfaces: None,
-        excitation: None,
-        initial: Vec::new(),
-        control: ControlSpec::default(),
-    }
-}
-
 /// The most blocks a template may build: 5000 stones is hours of engine time a second of
 /// shaking, far beyond an interactive question (and the check keeps a wild parameter, a 300 m
 /// pyramid of 5 cm stones, from allocating millions of blocks).
@@ -121,9 +90,9 @@ pub const MAX_BLOCKS: usize = 5000;
 
 /// Called after each course: refuse to go on past [`MAX_BLOCKS`], naming `param`, the
 /// parameter that most directly sets the count.
-pub fn within_budget(spec: &SceneSpec, param: &str) -> Result<(), super::TemplateError> {
+pub fn within_budget(spec: &SceneSpec, param: &str) -> Result<(), TemplateError> {
     if spec.blocks.len() > MAX_BLOCKS {
-        return Err(super::TemplateError::geometry(
+        return Err(TemplateError::geometry(
             param,
             format!("these parameters make more than {MAX_BLOCKS} stones; use larger stones or a smaller structure"),
         ));
@@ -202,6 +171,41 @@ pub fn running_bond(a: f64, b: f64, length: f64, offset: f64) -> Vec<[f64; 2]> {
         cuts.remove(n - 2);
     }
     cuts.windows(2).map(|w| [w[0], w[1]]).collect()
+}
+
+/// Lay course `c` of stones of `material` (0 at the foot, `h` high) in running bond: stones `l` long over each of
+/// `segments` (left to right), alternate courses offset by half a stone, plus the `named` whole
+/// pieces (lintels) where they fall; the stones are numbered `c{c+1}b{k}` from the left, the
+/// named pieces keep their names. Then refuses to go past [`MAX_BLOCKS`] (naming
+/// `block_length`, the parameter that most directly sets the count).
+pub fn lay_course(
+    spec: &mut SceneSpec,
+    material: &str,
+    c: usize,
+    h: f64,
+    l: f64,
+    segments: &[[f64; 2]],
+    named: Vec<([f64; 2], String)>,
+) -> Result<(), TemplateError> {
+    let (y0, y1) = (c as f64 * h, (c + 1) as f64 * h);
+    let offset = if c % 2 == 1 { 0.5 * l } else { 0.0 };
+    let mut pieces: Vec<([f64; 2], Option<String>)> = segments
+        .iter()
+        .flat_map(|&[a, b]| running_bond(a, b, l, offset))
+        .map(|p| (p, None))
+        .collect();
+    pieces.extend(named.into_iter().map(|(p, name)| (p, Some(name))));
+    // Stable: the running-bond pieces are already in order, so only the named ones move.
+    pieces.sort_by(|a, b| a.0[0].total_cmp(&b.0[0]));
+    let mut k = 0;
+    for ([x0, x1], name) in pieces {
+        let id = name.unwrap_or_else(|| {
+            k += 1;
+            format!("c{}b{k}", c + 1)
+        });
+        spec.blocks.push(stone(id, material, rect(x0, y0, x1, y1)));
+    }
+    within_budget(spec, "block_length")
 }
 
 #[cfg(test)]

@@ -100,7 +100,7 @@ pub fn obelisk(v: &Values) -> Result<SceneSpec, TemplateError> {
             ),
         ));
     }
-    let mut spec = skeleton(
+    let mut spec = stone_scene(
         format!("obelisk {height} m on a pedestal and {steps} step(s)"),
         LIMESTONE,
         v.num("friction_angle"),

@@ -12,16 +12,9 @@ use crate::scene::spec::SceneSpec;
 pub fn params() -> Vec<Param> {
     vec![
         number("length", "m", "length of the wall", 4.2, 0.5, 60.0),
-        number(
-            "height",
-            "m",
-            "height of the wall (rounded to whole courses)",
-            2.4,
-            0.1,
-            30.0,
-        ),
+        wall_height(2.4, 0.1, 30.0),
         number("block_length", "m", "length of a stone", 0.6, 0.05, 5.0),
-        number("course_height", "m", "height of a course", 0.3, 0.05, 3.0),
+        course_height(0.3, 3.0),
         integer(
             "openings",
             "number of openings (windows or doors), evenly spaced",
@@ -71,12 +64,12 @@ pub fn wall(v: &Values) -> Result<SceneSpec, TemplateError> {
         v.num("block_length"),
         v.num("course_height"),
     );
-    let courses = (v.num("height") / h).round().max(1.0) as usize;
+    let courses = whole_courses(v.num("height"), h);
     let n_open = v.count("openings");
     let (w, bearing) = (v.num("opening_width"), v.num("lintel_bearing"));
     let sill = (v.num("sill_height") / h).round() as usize;
-    let tall = (v.num("opening_height") / h).round().max(1.0) as usize;
-    let mut spec = skeleton(
+    let tall = whole_courses(v.num("opening_height"), h);
+    let mut spec = stone_scene(
         format!(
             "running-bond wall {length} m × {} m, {n_open} opening(s)",
             tidy(courses as f64 * h)
@@ -116,8 +109,6 @@ pub fn wall(v: &Values) -> Result<SceneSpec, TemplateError> {
         .push(foundation(LIMESTONE.name, -0.5, length + 0.5));
     let lintel_course = sill + tall;
     for c in 0..courses {
-        let (y0, y1) = (c as f64 * h, (c + 1) as f64 * h);
-        let offset = if c % 2 == 1 { 0.5 * l } else { 0.0 };
         // The segments of this course to fill with stones, and its lintels.
         let mut segments = vec![[0.0, length]];
         let mut lintels = Vec::new();
@@ -147,28 +138,12 @@ pub fn wall(v: &Values) -> Result<SceneSpec, TemplateError> {
                     .collect();
             }
         }
-        let mut pieces: Vec<([f64; 2], String)> = Vec::new();
-        for [a, b] in segments {
-            for p in running_bond(a, b, l, offset) {
-                pieces.push((p, String::new()));
-            }
-        }
-        for (i, g) in lintels.into_iter().enumerate() {
-            pieces.push((g, format!("lintel{}", i + 1)));
-        }
-        pieces.sort_by(|a, b| a.0[0].total_cmp(&b.0[0]));
-        let mut k = 0;
-        for ([x0, x1], name) in pieces {
-            let id = if name.is_empty() {
-                k += 1;
-                format!("c{}b{k}", c + 1)
-            } else {
-                name
-            };
-            spec.blocks
-                .push(stone(id, LIMESTONE.name, rect(x0, y0, x1, y1)));
-        }
-        within_budget(&spec, "block_length")?;
+        let lintels = lintels
+            .into_iter()
+            .enumerate()
+            .map(|(i, g)| (g, format!("lintel{}", i + 1)))
+            .collect();
+        lay_course(&mut spec, LIMESTONE.name, c, h, l, &segments, lintels)?;
     }
     Ok(spec)
 }

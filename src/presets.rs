@@ -1,0 +1,261 @@
+//! Presets: the scenes and ground motions shared by the tests, benchmarks, examples, the study
+//! and the service's tests (as box2d's shared samples), each written once. They sit beside the
+//! inputs (scene, motion): a preset is a scene JSON or a [`GroundMotion`] that then goes through
+//! the same parsing and validation as a user's file; where a scene generator builds the same
+//! structure (`scene::generate`), the preset is built from it.
+//!
+//! Units: m, s, degrees for friction angles, m/s² for accelerations (along +x).
+use crate::motion::{self, GroundMotion, MotionError, Signal};
+use crate::scene::generate::{self, WallParams};
+use crate::scene::{parse_scene, BlockModel, Scene, SceneError};
+use serde_json::{json, Value};
+use std::path::PathBuf;
+
+/// Gravity of the presets, m/s² (the scenes' `gravity`).
+pub const G: f64 = 9.81;
+
+/// A scene JSON with one stone (`stone`: 2500 kg/m³, E = 20 GPa, ν = 0.2) and one dry joint
+/// (`j`, friction `friction_deg` degrees, no cohesion or tension); `control` is the scene's
+/// `control` object (`{}` or `null` for the defaults).
+pub fn scene_json(blocks: Value, friction_deg: f64, control: Value) -> Value {
+    let mut v = json!({
+        "format": "ashlar.scene/1",
+        "gravity": G,
+        "materials": { "stone": { "density": 2500.0, "young_modulus": 2.0e10, "poisson_ratio": 0.2 } },
+        "joints": { "j": { "friction_angle": friction_deg } },
+        "blocks": blocks,
+    });
+    if !control.is_null() {
+        v["control"] = control;
+    }
+    v
+}
+
+/// Corners of the rectangle [x0, x1] × [y0, y1], counter-clockwise.
+pub fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Value {
+    json!([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+}
+
+/// A free-standing rectangular column on a fixed base 0.5 m deep (blocks `base` and `column`,
+/// in the material `stone` of [`scene_json`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Column {
+    /// Half-width b, m.
+    pub half_width: f64,
+    /// Half-height h, m.
+    pub half_height: f64,
+    /// Friction angle of the joint, degrees.
+    pub friction_angle: f64,
+    /// Half-width of the base, m (wide enough that the column never rocks off it).
+    pub base_half_width: f64,
+    /// The column's `block_model` (None: the scene's default).
+    pub block_model: Option<BlockModel>,
+}
+
+impl Column {
+    /// The rocking column of Yagoda-Biran & Hatzor 2015, §3.3: 0.4 × 1.2 m (b = 0.2, h = 0.6,
+    /// the reference column of `analysis::reference::HousnerColumn::SEED_000`), rigid, on a 2 m
+    /// base; φ = 75° (tan 75° = 3.7 ≫ the friction demand of rocking: it rocks, never slides).
+    pub const SEED: Column = Column {
+        half_width: 0.2,
+        half_height: 0.6,
+        friction_angle: 75.0,
+        base_half_width: 1.0,
+        block_model: Some(BlockModel::Rigid),
+    };
+
+    /// The same column with another friction angle, degrees.
+    pub const fn friction(self, friction_angle: f64) -> Self {
+        Column {
+            friction_angle,
+            ..self
+        }
+    }
+
+    /// The same column with the scene's default block model (no `block_model` of its own).
+    pub const fn default_model(self) -> Self {
+        Column {
+            block_model: None,
+            ..self
+        }
+    }
+
+    /// The blocks: `base` (fixed) then `column`.
+    pub fn blocks(&self) -> Value {
+        let (b, h, w) = (self.half_width, self.half_height, self.base_half_width);
+        let mut column =
+            json!({ "id": "column", "material": "stone", "vertices": rect(-b, 0.0, b, 2.0 * h) });
+        if let Some(m) = self.block_model {
+            column["block_model"] = serde_json::to_value(m).expect("a block model is a word");
+        }
+        json!([
+            { "id": "base", "material": "stone", "fixed": true, "vertices": rect(-w, -0.5, w, 0.0) },
+            column,
+        ])
+    }
+
+    /// The scene JSON with `control` (see [`scene_json`]).
+    pub fn json(&self, control: Value) -> Value {
+        scene_json(self.blocks(), self.friction_angle, control)
+    }
+
+    /// The parsed scene with `control`.
+    pub fn scene(&self, control: Value) -> Result<Scene, SceneError> {
+        parse_scene(&self.json(control).to_string())
+    }
+}
+
+/// `examples/column.json`, the repository's example column (0.4 × 1.2 m, rigid, φ = 40°, on a
+/// 2 m plinth, Δt = 1 ms), as the file's text: the file is the preset, so the golden digests
+/// (tests/record) and every test that runs "the example column" read the same bytes.
+pub const EXAMPLE_COLUMN: &str = include_str!("../examples/column.json");
+
+/// [`EXAMPLE_COLUMN`] as JSON.
+pub fn example_column() -> Value {
+    serde_json::from_str(EXAMPLE_COLUMN).expect("examples/column.json is JSON")
+}
+
+/// The column of `scene::generate::column` (plinth, limestone, joint `dry`), with the service's
+/// examples' φ = 40° and `duration` s of simulation: the job the service's tests and the load
+/// test submit. Its column has the default block model.
+pub fn plinth_column_json(duration: f64) -> Value {
+    let mut spec = generate::column(0.2, 0.6, 40.0);
+    spec.blocks[1].block_model = None;
+    spec.name = Some("column on a plinth".into());
+    let mut v = without_nulls(serde_json::to_value(&spec).expect("a scene spec is JSON"));
+    v["control"] = json!({ "duration": duration });
+    v
+}
+
+/// A block (1 × 0.5 m) resting on an incline of `alpha_deg` that descends towards +x, its
+/// bottom-left corner at the origin, on a fixed 400 m base: the blocks `base` and `block`, and
+/// the unit down-slope direction.
+pub fn incline_blocks(alpha_deg: f64) -> (Value, [f64; 2]) {
+    let a = alpha_deg.to_radians();
+    let d = [a.cos(), -a.sin()];
+    let n = [a.sin(), a.cos()];
+    let (w, h, l) = (1.0, 0.5, 200.0);
+    let base = json!([
+        [-l * d[0], -l * d[1]],
+        [l * d[0], l * d[1]],
+        [l * d[0], l * d[1] - 20.0],
+        [-l * d[0], -l * d[1] - 20.0]
+    ]);
+    let block = json!([
+        [0.0, 0.0],
+        [w * d[0], w * d[1]],
+        [w * d[0] + h * n[0], w * d[1] + h * n[1]],
+        [h * n[0], h * n[1]]
+    ]);
+    let blocks = json!([
+        { "id": "base", "material": "stone", "fixed": true, "vertices": base },
+        { "id": "block", "material": "stone", "vertices": block },
+    ]);
+    (blocks, d)
+}
+
+/// The incline of [`incline_blocks`] as a scene JSON (friction `friction_deg`, `control`), and
+/// the down-slope direction.
+pub fn incline(alpha_deg: f64, friction_deg: f64, control: Value) -> (Value, [f64; 2]) {
+    let (blocks, d) = incline_blocks(alpha_deg);
+    (scene_json(blocks, friction_deg, control), d)
+}
+
+/// The study's masonry wall: 3 courses of two 0.6 × 0.3 m deformable blocks, φ = 35° (also the
+/// scene of `tests/engine/dual_stiff_limit.rs` and `examples/wall_stiff_limit.rs`).
+pub fn study_wall() -> WallParams {
+    WallParams {
+        courses: 3,
+        blocks_per_course: 2,
+        block_length: 0.6,
+        block_height: 0.3,
+        friction_angle: 35.0,
+        block_model: BlockModel::Deformable,
+    }
+}
+
+/// A half-sine pulse: a(t) = `amplitude` sin(2πt/`period`) for 0 ≤ t ≤ `period`/2, m/s².
+pub fn half_sine(amplitude: f64, period: f64) -> GroundMotion {
+    GroundMotion::horizontal(Signal::Pulse {
+        amplitude,
+        period,
+        cycles: 0.5,
+        phase: 0.0,
+    })
+}
+
+/// Yagoda-Biran & Hatzor's half-sine pulse (2015, §3.3): a(t) = A sin(2πt) for 0 ≤ t ≤ 0.5 s.
+pub fn rocking_pulse(amplitude: f64) -> GroundMotion {
+    half_sine(amplitude, 1.0)
+}
+
+/// A half-sine pulse as the motion JSON of a request (`units` m/s²).
+pub fn half_sine_json(amplitude: f64, period: f64) -> Value {
+    json!({"horizontal": {"pulse": {"shape": "sine", "amplitude": amplitude, "period": period, "cycles": 0.5, "units": "m/s2"}}})
+}
+
+/// A sine of `amplitude` m/s² at `frequency` Hz, from t = 0.
+pub fn sine(amplitude: f64, frequency: f64) -> GroundMotion {
+    GroundMotion::horizontal(Signal::Sine {
+        amplitude,
+        frequency,
+    })
+}
+
+/// The repository's recorded ground motions (`data/ground-motions`, with their source and
+/// licence), found from the crate's own folder: for tests, benchmarks and examples run inside
+/// the repository (`ashlar study` takes the folder as an argument instead).
+pub fn records_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/ground-motions")
+}
+
+/// One of the repository's records by file name (e.g. `northridge-1994-mulholland-009.at2`).
+pub fn record(name: &str) -> Result<GroundMotion, MotionError> {
+    motion::load_path(&records_dir().join(name))
+}
+
+/// Drop the `null` members of every object (a serialized spec's unset options), so that the
+/// JSON reads as a user would write it.
+fn without_nulls(v: Value) -> Value {
+    match v {
+        Value::Object(m) => Value::Object(
+            m.into_iter()
+                .filter(|(_, x)| !x.is_null())
+                .map(|(k, x)| (k, without_nulls(x)))
+                .collect(),
+        ),
+        Value::Array(a) => Value::Array(a.into_iter().map(without_nulls).collect()),
+        x => x,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_parse() {
+        Column::SEED.scene(json!({})).expect("seed column");
+        Column::SEED
+            .default_model()
+            .friction(60.0)
+            .scene(Value::Null)
+            .expect("variant");
+        parse_scene(EXAMPLE_COLUMN).expect("example column");
+        parse_scene(&plinth_column_json(2.0).to_string()).expect("plinth column");
+        parse_scene(&incline(20.0, 30.0, json!({})).0.to_string()).expect("incline");
+    }
+
+    #[test]
+    fn the_plinth_column_is_the_service_tests_scene() {
+        let v = plinth_column_json(3.0);
+        assert_eq!(v["blocks"][0]["id"], "plinth");
+        assert_eq!(
+            v["blocks"][1]["vertices"],
+            json!([[-0.2, 0.0], [0.2, 0.0], [0.2, 1.2], [-0.2, 1.2]])
+        );
+        assert!(v["blocks"][1].get("block_model").is_none());
+        assert_eq!(v["joints"]["dry"]["friction_angle"], 40.0);
+        assert_eq!(v["control"], json!({ "duration": 3.0 }));
+    }
+}
