@@ -61,7 +61,8 @@ pub enum CliError {
     #[error("{}: {source}", path.display())]
     Import {
         path: PathBuf,
-        source: crate::scene::import::dxf::DxfImportError,
+        /// Boxed: the importer's error is large and the CLI's error is returned everywhere.
+        source: Box<crate::scene::import::dxf::DxfImportError>,
     },
     /// `ashlar motion`.
     #[error(transparent)]

@@ -92,14 +92,14 @@ fn import(args: &SceneArgs) -> Result<(), CliError> {
             let text = std::fs::read_to_string(p).map_err(CliError::read(p))?;
             ImportOptions::from_json(&text).map_err(|source| CliError::Import {
                 path: p.clone(),
-                source,
+                source: Box::new(source),
             })?
         }
     };
     let bytes = std::fs::read(path).map_err(CliError::read(path))?;
     let imported = dxf::import(&bytes, &options).map_err(|source| CliError::Import {
         path: path.clone(),
-        source,
+        source: Box::new(source),
     })?;
     for note in &imported.notes {
         eprintln!("ashlar: {}: note: {note}", path.display());
