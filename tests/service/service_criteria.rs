@@ -5,22 +5,12 @@
 //! first criterion's first block was checked there and the others failed the job later).
 use crate::service_support;
 
-use ashlar::service::fake::fake_runner;
-use ashlar::service::{app, Service, ServiceConfig, WorkerParams};
 use serde_json::json;
 use service_support::*;
 use std::time::Duration;
 
-fn start(tag: &str) -> (Service, axum::Router, std::path::PathBuf) {
-    let dir = temp_dir(tag);
-    let mut cfg = ServiceConfig::new(&dir);
-    cfg.workers = WorkerParams {
-        workers: 1,
-        ..WorkerParams::default()
-    };
-    let svc = Service::start(cfg, fake_runner(Duration::from_millis(1))).expect("start");
-    let router = app(svc.state());
-    (svc, router, dir)
+fn start(tag: &str) -> (ashlar::service::Service, axum::Router, std::path::PathBuf) {
+    service_support::start_fake(tag)
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

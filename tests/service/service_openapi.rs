@@ -3,8 +3,7 @@
 //! router to prove it is routed (answered by a handler, not by the 404 fallback or a 405).
 use crate::service_support;
 
-use ashlar::service::fake::fake_runner;
-use ashlar::service::{app, route_table, Service, ServiceConfig, WorkerParams, OPENAPI_YAML};
+use ashlar::service::{route_table, OPENAPI_YAML};
 use axum::body::Body;
 use axum::http::Request;
 use service_support::*;
@@ -97,14 +96,7 @@ async fn router_and_openapi_describe_the_same_operations() {
     }
 
     // The table is what the router serves: each operation reaches a handler.
-    let dir = temp_dir("openapi-routes");
-    let mut cfg = ServiceConfig::new(&dir);
-    cfg.workers = WorkerParams {
-        workers: 1,
-        ..WorkerParams::default()
-    };
-    let svc = Service::start(cfg, fake_runner(Duration::from_millis(1))).expect("start");
-    let router = app(svc.state());
+    let (svc, router, dir) = start_fake("openapi-routes");
     let id = uuid::Uuid::new_v4();
     for (method, path) in &spec {
         let uri = path.replace("{id}", &id.to_string());

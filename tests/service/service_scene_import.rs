@@ -5,8 +5,6 @@
 use crate::service_support;
 
 use ashlar::scene::import::dxf::{self, ImportOptions};
-use ashlar::service::fake::fake_runner;
-use ashlar::service::{app, Service, ServiceConfig, WorkerParams};
 use serde_json::{json, Value};
 use service_support::*;
 use std::time::Duration;
@@ -20,14 +18,7 @@ fn fixture(name: &str) -> String {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn dxf_drawings_import_to_scenes_and_bad_ones_are_problems() {
-    let dir = temp_dir("scene-import");
-    let mut cfg = ServiceConfig::new(&dir);
-    cfg.workers = WorkerParams {
-        workers: 1,
-        ..WorkerParams::default()
-    };
-    let svc = Service::start(cfg, fake_runner(Duration::from_millis(1))).expect("start");
-    let router = app(svc.state());
+    let (svc, router, dir) = start_fake("scene-import");
 
     // A good drawing with options: the library's scene, as JSON; accepted as a job's scene.
     let wall = fixture("wall_mm.dxf");

@@ -312,3 +312,22 @@ impl Drop for Worker {
         self.kill();
     }
 }
+
+/// A service in a fresh temporary directory with one worker and the fake runner (1 ms a job),
+/// and its router: for tests of requests and routes, not of the engine.
+pub fn start_fake(tag: &str) -> (ashlar::service::Service, axum::Router, PathBuf) {
+    use ashlar::service::{app, Service, ServiceConfig, WorkerParams};
+    let dir = temp_dir(tag);
+    let mut cfg = ServiceConfig::new(&dir);
+    cfg.workers = WorkerParams {
+        workers: 1,
+        ..WorkerParams::default()
+    };
+    let svc = Service::start(
+        cfg,
+        ashlar::service::fake::fake_runner(Duration::from_millis(1)),
+    )
+    .expect("start");
+    let router = app(svc.state());
+    (svc, router, dir)
+}
