@@ -145,8 +145,8 @@ pub(super) fn evaluate(
                     }
                 }
             };
-            let (mut safe, mut fail) = (4.0, 8.0);
-            let bracket = !overturns(safe) && overturns(fail);
+            let (mut safe, mut fail) = OVERTURN_BRACKET;
+            let bracket = widen_bracket(&mut overturns, &mut safe, &mut fail);
             while bracket && fail - safe > *tolerance {
                 let mid = 0.5 * (safe + fail);
                 if overturns(mid) {
@@ -172,7 +172,11 @@ pub(super) fn evaluate(
                     error: None,
                     value: None,
                     summary,
-                    note: "no overturning in [4, 8] m/s²".into(),
+                    note: format!(
+                        "no overturning change in [{}, {}] m/s²",
+                        OVERTURN_BRACKET.0 / WIDEN_LIMIT,
+                        OVERTURN_BRACKET.1 * WIDEN_LIMIT
+                    ),
                     wall,
                     steps,
                 });
@@ -258,4 +262,41 @@ pub(super) fn evaluate(
             })
         }
     }
+}
+
+/// m/s², the first bracket of the overturning-amplitude search: around the exact amplitudes of
+/// the study's pulses (5–6 m/s²), so a setting near the answer costs no extra runs.
+const OVERTURN_BRACKET: (f64, f64) = (4.0, 8.0);
+/// How far the bracket may widen (down by this factor from its lower end, up by it from its upper
+/// end) when a coarse setting overturns below it or not at all within it: a point far from the
+/// answer then gets its (large) error value instead of none.
+const WIDEN_LIMIT: f64 = 8.0;
+
+/// Make `[safe, fail]` a bracket (`safe` stands, `fail` overturns), doubling outwards from the
+/// first one up to [`WIDEN_LIMIT`]; false when none is found (or a run failed: `overturns` then
+/// answers false and the caller reports the failure).
+fn widen_bracket(overturns: &mut impl FnMut(f64) -> bool, safe: &mut f64, fail: &mut f64) -> bool {
+    let (low, high) = (
+        OVERTURN_BRACKET.0 / WIDEN_LIMIT,
+        OVERTURN_BRACKET.1 * WIDEN_LIMIT,
+    );
+    if overturns(*safe) {
+        *fail = *safe;
+        while *safe / 2.0 >= low {
+            *safe /= 2.0;
+            if !overturns(*safe) {
+                return true;
+            }
+            *fail = *safe;
+        }
+        return false;
+    }
+    while !overturns(*fail) {
+        *safe = *fail;
+        if *fail * 2.0 > high {
+            return false;
+        }
+        *fail *= 2.0;
+    }
+    true
 }
