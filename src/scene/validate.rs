@@ -585,7 +585,13 @@ fn overlap_depth(a: &Block, b: &Block) -> Option<f64> {
     if convex(&a.vertices) && convex(&b.vertices) {
         let common = clip_convex(&a.vertices, &b.vertices);
         if common.len() >= 3 {
-            let area = polygon_signed_area(&common).abs();
+            // About the common part's own first vertex: the shoelace sum in scene coordinates
+            // carries a rounding error of ~eps·|x|² (5e-15 m² at 5 m), which over the diameter
+            // of a corner sliver (1e-15 m) read as metres of overlap for stones of a pile
+            // touching diagonally.
+            let origin = common[0];
+            let local: Vec<Vector2<f64>> = common.iter().map(|p| p - origin).collect();
+            let area = polygon_signed_area(&local).abs();
             let mut diameter: f64 = 0.0;
             for p in &common {
                 for q in &common {
@@ -675,6 +681,30 @@ mod tests {
             .expect_err("one on the other");
         assert!(e.message.contains("overlaps"), "{e}");
         parse_scene(&two([[0.2, 0.0], [0.6, 0.0], [0.6, 1.2], [0.2, 1.2]])).expect("touching");
+    }
+
+    /// Regression (examples/pile.rs refused as "b24_12 overlaps b25_13 by about 2.828 m"): two
+    /// stones of a stacked pile meeting at one corner, 5 m from the origin, whose corners
+    /// overlap by one rounding unit (13 × 0.4 against 12 × 0.4 + 0.4). The clipped corner sliver's
+    /// area was taken in scene coordinates, all rounding error.
+    #[test]
+    fn stones_meeting_at_a_corner_far_from_the_origin_are_valid() {
+        let (w, h) = (0.4_f64, 0.2_f64);
+        let rect = |c: f64, r: f64| {
+            let (x0, y0) = (c * w, r * h);
+            json!([[x0, y0], [x0 + w, y0], [x0 + w, y0 + h], [x0, y0 + h]])
+        };
+        let text = json!({
+            "format": "ashlar.scene/1",
+            "materials": { "stone": { "density": 2500.0, "young_modulus": 1.0e10, "poisson_ratio": 0.2 } },
+            "joints": { "j": { "friction_angle": 30.0 } },
+            "blocks": [
+                { "id": "upper", "material": "stone", "vertices": rect(13.0, 25.0) },
+                { "id": "lower", "material": "stone", "vertices": rect(12.0, 24.0) }
+            ]
+        })
+        .to_string();
+        parse_scene(&text).expect("diagonal neighbours touch at a corner");
     }
 
     fn scene(control: serde_json::Value) -> String {
