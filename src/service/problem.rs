@@ -163,6 +163,16 @@ impl ApiError {
         .with_pointer(pointer)
     }
 
+    /// A body the server could not read: 413 when it ran over `limit` bytes, else 400 saying
+    /// why (cut short, not UTF-8 …).
+    pub fn unreadable_body(e: &axum::extract::rejection::BytesRejection, limit: usize) -> Self {
+        if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
+            Self::payload_too_large(limit)
+        } else {
+            Self::malformed_json(e.body_text()).with_pointer("")
+        }
+    }
+
     pub fn payload_too_large(limit: usize) -> Self {
         Self::new(
             StatusCode::PAYLOAD_TOO_LARGE,

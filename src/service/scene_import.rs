@@ -11,7 +11,7 @@ use crate::scene::import::dxf::{self, DxfImportError, ImportOptions};
 use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
 use axum::extract::State;
-use axum::http::{HeaderMap, StatusCode};
+use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 use serde_json::Value;
 
@@ -20,13 +20,7 @@ pub async fn import(
     headers: HeaderMap,
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, ApiError> {
-    let bytes = body.map_err(|e| {
-        if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
-            ApiError::payload_too_large(s.core.limits.max_body_bytes)
-        } else {
-            ApiError::malformed_json(e.body_text()).with_pointer("")
-        }
-    })?;
+    let bytes = body.map_err(|e| ApiError::unreadable_body(&e, s.core.limits.max_body_bytes))?;
     check_json_content_type(&headers)?;
     let body = json_body(&bytes)?;
     let (text, options) = parse(body)?;

@@ -358,6 +358,19 @@ const INDEX_PARENT: &str =
 const SCHEMA_OWNER: &str = "
 ALTER TABLE jobs ADD COLUMN owner TEXT;
 ";
+
+/// Add a column an older database file lacks (`ddl`: its `ALTER TABLE`), once; the schemas
+/// above add the columns later versions brought.
+fn add_column_if_missing(c: &Connection, column: &str, ddl: &str) -> rusqlite::Result<()> {
+    let present = c
+        .prepare("SELECT 1 FROM pragma_table_info('jobs') WHERE name = ?1")?
+        .exists([column])?;
+    if !present {
+        c.execute_batch(ddl)?;
+    }
+    Ok(())
+}
+
 const INDEX_OWNER: &str = "
 CREATE INDEX IF NOT EXISTS jobs_owner ON jobs(owner, seq) WHERE owner IS NOT NULL;
 CREATE INDEX IF NOT EXISTS jobs_finished ON jobs(finished_ms) WHERE parent IS NULL;
@@ -380,19 +393,9 @@ impl SqliteStore {
         };
         let writer = open()?;
         writer.execute_batch(SCHEMA)?;
-        let has_parent: bool = writer
-            .prepare("SELECT 1 FROM pragma_table_info('jobs') WHERE name = 'parent'")?
-            .exists([])?;
-        if !has_parent {
-            writer.execute_batch(SCHEMA_PARENT)?;
-        }
+        add_column_if_missing(&writer, "parent", SCHEMA_PARENT)?;
         writer.execute_batch(INDEX_PARENT)?;
-        let has_owner: bool = writer
-            .prepare("SELECT 1 FROM pragma_table_info('jobs') WHERE name = 'owner'")?
-            .exists([])?;
-        if !has_owner {
-            writer.execute_batch(SCHEMA_OWNER)?;
-        }
+        add_column_if_missing(&writer, "owner", SCHEMA_OWNER)?;
         writer.execute_batch(INDEX_OWNER)?;
         let reader = open()?;
         Ok(Self {

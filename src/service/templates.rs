@@ -8,7 +8,7 @@ use crate::scene::templates::{self, TemplateError};
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, PathRejection};
 use axum::extract::{Path, State};
-use axum::http::{HeaderMap, StatusCode};
+use axum::http::HeaderMap;
 use axum::response::{IntoResponse, Response};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -31,13 +31,7 @@ pub async fn build(
     let Path(name) = name.map_err(|e| ApiError::invalid_parameter("name", e.body_text()))?;
     let template =
         templates::find(&name).map_err(|e| ApiError::not_found_parameter("name", e.to_string()))?;
-    let bytes = body.map_err(|e| {
-        if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
-            ApiError::payload_too_large(s.core.limits.max_body_bytes)
-        } else {
-            ApiError::malformed_json(e.body_text()).with_pointer("")
-        }
-    })?;
+    let bytes = body.map_err(|e| ApiError::unreadable_body(&e, s.core.limits.max_body_bytes))?;
     let given = if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         BTreeMap::new()
     } else {

@@ -529,13 +529,7 @@ pub async fn inspect(
     let points = query_usize(&query, "points", p.series_points, p.max_series_points)?;
     check_json_content_type(&headers)?;
     let max_body = s.core.limits.max_body_bytes;
-    let bytes = body.map_err(|e| {
-        if e.status() == StatusCode::PAYLOAD_TOO_LARGE {
-            ApiError::payload_too_large(max_body)
-        } else {
-            ApiError::malformed_json(e.body_text()).with_pointer("")
-        }
-    })?;
+    let bytes = body.map_err(|e| ApiError::unreadable_body(&e, max_body))?;
     let max_samples = s.core.limits.max_record_samples;
     let out = blocking(move || inspect_motion(&json_body(&bytes)?, max_samples, points)).await??;
     Ok(axum::Json(out).into_response())
