@@ -517,20 +517,34 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
 
 /// The isolation a `serve` command line asks for.
 fn isolation(args: &ServeArgs, limits: &Limits) -> Result<runner::Isolation, String> {
-    if args.isolation == IsolationFlag::Thread || !cfg!(unix) {
+    isolation_for(
+        args.isolation,
+        args.job_memory_limit,
+        args.job_cpu_seconds,
+        limits,
+        args.fake_runner.then(|| Duration::from_millis(200)),
+    )
+}
+
+/// The isolation of `--isolation FLAG --job-memory-limit BYTES --job-cpu-seconds S` (`ashlar
+/// serve` and `ashlar worker` alike); `fake`: the fake runner's slowness, for tests.
+pub fn isolation_for(
+    flag: IsolationFlag,
+    memory_limit: u64,
+    cpu_seconds: Option<u64>,
+    limits: &Limits,
+    fake: Option<Duration>,
+) -> Result<runner::Isolation, String> {
+    if flag == IsolationFlag::Thread || !cfg!(unix) {
         return Ok(runner::Isolation::Thread);
     }
     let exe = std::env::current_exe()
         .map_err(|e| format!("--isolation process: cannot find the ashlar executable: {e}"))?;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64;
     let mut p = runner::ProcessParams::new(exe);
-    p.memory_limit = args.job_memory_limit;
-    p.cpu_seconds = args
-        .job_cpu_seconds
-        .unwrap_or_else(|| limits.max_job_seconds.saturating_mul(cores));
-    if args.fake_runner {
-        p.fake = Some(Duration::from_millis(200));
-    }
+    p.memory_limit = memory_limit;
+    p.cpu_seconds = cpu_seconds.unwrap_or_else(|| limits.max_job_seconds.saturating_mul(cores));
+    p.fake = fake;
     Ok(runner::Isolation::Process(p))
 }
 

@@ -15,7 +15,7 @@
 //! elsewhere `ashlar serve` runs jobs in-process.
 use super::request::{parse_pga, parse_run, JobInput, Limits};
 use super::store::JobKind;
-use super::worker::{RunHooks, RunnerOutcome};
+use super::worker::{ChildRequest, RunHooks, RunnerOutcome};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::io::{BufRead, Read, Write};
@@ -77,10 +77,13 @@ impl ProcessParams {
 /// The first line a child reads.
 #[derive(Debug, Serialize, Deserialize)]
 pub struct ChildSpec {
-    /// `run` or `pga_search`.
+    /// `run`, `pga_search` or `pga_run` (one amplitude of a fanned-out search).
     pub kind: String,
-    /// The stored request body.
+    /// The stored request body (of a `pga_run`: its search's).
     pub request: Value,
+    /// Of a `pga_run`: which amplitude of which record it evaluates.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pga_run: Option<ChildRequest>,
     /// The server's limits, which parsing applies (e.g. the engine's step cap).
     pub limits: Value,
     /// The job directory: artifacts go there.
@@ -162,10 +165,42 @@ pub fn run_in_child(
     limits: &Limits,
     hooks: &RunHooks<'_>,
 ) -> Result<RunnerOutcome, String> {
+    run_spec_in_child(params, kind, request, None, limits, hooks)
+}
+
+/// Run one child run (`pga_run`) of a fanned-out search in a child process: `search` is the
+/// search's stored request, `run` the amplitude and record. Its outcome is the
+/// [`super::worker::ChildResult`] the in-thread path stores.
+pub fn run_pga_run_in_child(
+    params: &ProcessParams,
+    search: &Value,
+    run: &ChildRequest,
+    limits: &Limits,
+    hooks: &RunHooks<'_>,
+) -> Result<RunnerOutcome, String> {
+    run_spec_in_child(
+        params,
+        JobKind::PgaRun,
+        search,
+        Some(run.clone()),
+        limits,
+        hooks,
+    )
+}
+
+fn run_spec_in_child(
+    params: &ProcessParams,
+    kind: JobKind,
+    request: &Value,
+    pga_run: Option<ChildRequest>,
+    limits: &Limits,
+    hooks: &RunHooks<'_>,
+) -> Result<RunnerOutcome, String> {
     use std::process::{Command, Stdio};
     let spec = ChildSpec {
         kind: kind.as_str().to_string(),
         request: request.clone(),
+        pga_run,
         limits: limits_to_value(limits),
         out_dir: hooks.out_dir.to_path_buf(),
         memory_limit: params.memory_limit,
@@ -454,6 +489,20 @@ pub fn child_main() -> Result<(), String> {
 
 fn run_spec(spec: &ChildSpec, out: &Mutex<std::io::Stdout>) -> Result<ChildMessage, String> {
     let limits = limits_from_value(&spec.limits);
+    if spec.kind == "pga_run" {
+        let run = spec
+            .pga_run
+            .as_ref()
+            .ok_or("a pga_run job's process was not told which run")?;
+        let input = parse_pga(&spec.request, &limits)
+            .map_err(|e| format!("the stored request is no longer accepted: {}", e.detail))?
+            .input;
+        test_fault(&input.scene().name);
+        return Ok(match super::worker::evaluate_child(&input, run, &CANCEL)? {
+            RunnerOutcome::Completed(value) => ChildMessage::Completed { value },
+            RunnerOutcome::Cancelled(partial) => ChildMessage::Cancelled { partial },
+        });
+    }
     let parsed = match spec.kind.as_str() {
         "run" => parse_run(&spec.request, &limits),
         "pga_search" => parse_pga(&spec.request, &limits),

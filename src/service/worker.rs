@@ -152,8 +152,8 @@ pub struct WorkerParams {
     /// that already has children is always replayed from them, whatever this says.
     pub fanout_width: Option<usize>,
     /// Where runs and in-process searches execute: on the worker thread, or in a child process
-    /// with resource limits ([`super::runner`]). Fan-out steps and `pga_run` children run on
-    /// the thread.
+    /// with resource limits ([`super::runner`]), as are a fanned-out search's `pga_run`
+    /// children; only a fan-out step (planning from the store, no engine) stays on the thread.
     pub isolation: super::runner::Isolation,
 }
 
@@ -488,7 +488,7 @@ fn run_job(core: &Core, job: JobRecord) {
     let dir = core.job_dir(id);
     // A child run writes no artifacts (its outcome goes to the store): no directory.
     let outcome = if job.kind == JobKind::PgaRun {
-        execute(core, id, &dir, &ctl, |_| run_child(core, &job, &ctl.stop)).map(Some)
+        execute(core, id, &dir, &ctl, |hooks| run_child(core, &job, hooks)).map(Some)
     } else {
         prepare_dir(&dir).and_then(|()| {
             let input = parse_stored(core, &job)?;
@@ -894,9 +894,11 @@ fn finish_search(
 }
 
 /// A child run: one amplitude of one record of its search, whose request (scene, records,
-/// criteria) is read from the search's row.
-fn run_child(core: &Core, job: &JobRecord, cancel: &AtomicBool) -> Result<RunnerOutcome, String> {
-    use crate::analysis::pga;
+/// criteria) is read from the search's row. With process isolation it runs in a child process
+/// like any job ([`super::runner::run_pga_run_in_child`]), so that a run that crashes or
+/// exhausts memory fails this child (and through it its search, with the amplitude named), never
+/// the worker.
+fn run_child(core: &Core, job: &JobRecord, hooks: &RunHooks<'_>) -> Result<RunnerOutcome, String> {
     let spec: ChildRequest = serde_json::from_value(job.request.clone())
         .map_err(|e| format!("the stored child run is corrupt: {e}"))?;
     let parent = core
@@ -904,16 +906,41 @@ fn run_child(core: &Core, job: &JobRecord, cancel: &AtomicBool) -> Result<Runner
         .get(spec.parent)
         .map_err(store_msg)?
         .ok_or("the search of this run no longer exists")?;
-    let input = parse_pga(&parent.request, &core.limits)
-        .map_err(|e| format!("the stored request is no longer accepted: {}", e.detail))?
-        .input;
+    match &core.params.isolation {
+        super::runner::Isolation::Process(p) => {
+            super::runner::run_pga_run_in_child(p, &parent.request, &spec, &core.limits, hooks)
+                .map_err(|msg| {
+                    format!(
+                        "the search's run at {} m/s² (record {}) failed: {msg}",
+                        f64::from_bits(spec.pga_bits),
+                        spec.record
+                    )
+                })
+        }
+        super::runner::Isolation::Thread => {
+            let input = parse_pga(&parent.request, &core.limits)
+                .map_err(|e| format!("the stored request is no longer accepted: {}", e.detail))?
+                .input;
+            evaluate_child(&input, &spec, hooks.cancel)
+        }
+    }
+}
+
+/// The verdict of one child run (`pga_run`) of the search `input`: on the worker thread, or in
+/// the child process of [`super::runner`].
+pub(crate) fn evaluate_child(
+    input: &JobInput,
+    spec: &ChildRequest,
+    cancel: &AtomicBool,
+) -> Result<RunnerOutcome, String> {
+    use crate::analysis::pga;
     let JobInput::PgaSearch {
         scene,
         motion,
         request,
         records,
         ..
-    } = &input
+    } = input
     else {
         return Err("the parent of a child run is not a PGA search".into());
     };

@@ -264,6 +264,17 @@ pub struct Worker {
 impl Worker {
     /// Start it and wait for its ready line; `extra` are further arguments.
     pub fn start(url: &str, data: &std::path::Path, extra: &[&str]) -> Self {
+        Self::start_env(url, data, extra, &[])
+    }
+
+    /// [`Worker::start`] with extra environment variables (e.g. the isolation tests' fault
+    /// trigger, which the worker's job processes inherit).
+    pub fn start_env(
+        url: &str,
+        data: &std::path::Path,
+        extra: &[&str],
+        env: &[(&str, &str)],
+    ) -> Self {
         use std::io::BufRead;
         std::fs::create_dir_all(data).expect("data dir");
         let log = std::fs::File::create(data.join("worker.log")).expect("log file");
@@ -271,6 +282,7 @@ impl Worker {
             .args(["worker", "--database", url, "--data"])
             .arg(data)
             .args(extra)
+            .envs(env.iter().copied())
             .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::from(log))
             .spawn()
@@ -289,6 +301,11 @@ impl Worker {
 
     pub fn pid(&self) -> u32 {
         self.child.id()
+    }
+
+    /// The process has not exited.
+    pub fn alive(&mut self) -> bool {
+        matches!(self.child.try_wait(), Ok(None))
     }
 
     /// SIGKILL: no chance to clean up.
