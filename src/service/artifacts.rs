@@ -90,6 +90,18 @@ impl ArtifactStore {
         }
         let (store, prefix) = if parsed.scheme() == "s3" {
             object_store::parse_url_opts(&parsed, s3_options(&shown, options)?)
+        } else if parsed.scheme() == "file" {
+            // Rooted at the directory, with empty directories removed after a delete: a deleted
+            // job leaves no `jobs/<uuid>/` behind, and the cleanup stops at the root (which the
+            // processes must agree exists) instead of walking up to `/`.
+            let dir = parsed
+                .to_file_path()
+                .map_err(|()| format!("--artifacts {shown}: not a local directory"))?;
+            object_store::local::LocalFileSystem::new_with_prefix(dir)
+                .map(|fs| {
+                    let fs: Box<dyn ObjectStore> = Box::new(fs.with_automatic_cleanup(true));
+                    (fs, StorePath::default())
+                })
         } else {
             object_store::parse_url(&parsed)
         }
@@ -160,6 +172,20 @@ impl ArtifactStore {
                     tracing::error!(url = %self.url, error = %e, "publishing an artifact");
                     "the server could not publish the job's artifacts to shared storage".to_string()
                 })?;
+        }
+        Ok(())
+    }
+
+    /// Remove a deleted job's published artifacts (blocking: not on an async runtime's
+    /// thread). Absent files are fine: a job that failed early published nothing.
+    pub fn remove(&self, id: Uuid) -> Result<(), String> {
+        let rt = runtime()?;
+        for name in ARTIFACT_NAMES {
+            let loc = self.location(id, name);
+            match rt.block_on(self.store.delete(&loc)) {
+                Ok(()) | Err(object_store::Error::NotFound { .. }) => {}
+                Err(e) => return Err(format!("{}: {e}", self.url)),
+            }
         }
         Ok(())
     }
@@ -278,6 +304,16 @@ mod tests {
                 .join("unrelated.txt")
                 .exists(),
             "only artifact names are published"
+        );
+        // A deleted job's files go, with its directory; the root stays; twice is fine.
+        store.remove(id).expect("remove");
+        store.remove(id).expect("remove again");
+        assert!(!root.join("shared/jobs").join(id.to_string()).exists());
+        assert!(root.join("shared").is_dir());
+        assert_eq!(
+            rt.block_on(store.fetch(id, "histories.csv"))
+                .expect("fetch"),
+            None
         );
         std::fs::remove_dir_all(root).ok();
     }

@@ -568,14 +568,22 @@ async fn delete_kind(
             st.as_str()
         ))),
         DeleteOutcome::Deleted => {
-            remove_artifacts(&s.core, id);
+            // Off the async threads: removing published artifacts blocks on the object store.
+            let core = s.core.clone();
+            blocking(move || remove_artifacts(&core, id)).await?;
             Ok(StatusCode::NO_CONTENT.into_response())
         }
     }
 }
 
-/// Remove a deleted job's artifact directory (also used by the retention sweeper).
+/// Remove a deleted job's artifacts: its local directory and, with `--artifacts`, what was
+/// published to shared storage (also used by the retention sweeper). Blocking.
 pub(super) fn remove_artifacts(core: &Core, id: Uuid) {
+    if let Some(a) = &core.artifacts {
+        if let Err(e) = a.remove(id) {
+            tracing::warn!(%id, error = %e, "removing a deleted job's published artifacts");
+        }
+    }
     let dir = core.job_dir(id);
     if let Err(e) = std::fs::remove_dir_all(&dir) {
         if e.kind() != std::io::ErrorKind::NotFound {
@@ -605,7 +613,7 @@ async fn delete_pga(
 async fn get_limits(State(s): State<AppState>) -> ApiResult {
     let l = &s.core.limits;
     let p = &s.core.server;
-    let body = json!({
+    let mut body = json!({
         "max_body_bytes": l.max_body_bytes,
         "max_json_values": l.max_json_values,
         "max_blocks": l.max_blocks,
@@ -632,7 +640,35 @@ async fn get_limits(State(s): State<AppState>) -> ApiResult {
         "max_headers": p.max_headers,
         "ranges": super::budget::ranges_json(),
     });
+    if let Some(o) = body.as_object_mut() {
+        o.extend(process_limits(&s.core));
+    }
     Ok(axum::Json(body).into_response())
+}
+
+/// The limits of this process's job runs and of its request handling not in `Limits`: where
+/// jobs run and the resource limits of a job's process (`--isolation`, `--job-memory-limit`,
+/// `--job-cpu-seconds`; null with threads), crash retries, large bodies parsed at once, the
+/// signed links' validity (null without `--tokens`).
+fn process_limits(core: &Core) -> serde_json::Map<String, Value> {
+    use super::runner::Isolation;
+    let (mode, memory, cpu) = match &core.params.isolation {
+        Isolation::Thread => ("thread", None, None),
+        Isolation::Process(p) => ("process", Some(p.memory_limit), Some(p.cpu_seconds)),
+    };
+    let v = json!({
+        "isolation": mode,
+        "job_memory_limit_bytes": memory,
+        "job_cpu_seconds": cpu,
+        "max_job_attempts": core.params.max_attempts,
+        "max_large_bodies": super::worker::LARGE_BODIES,
+        "large_body_bytes": super::worker::LARGE_BODY_BYTES,
+        "signed_url_seconds": core.server.signing.as_ref().map(|k| k.validity.as_secs()),
+    });
+    match v {
+        Value::Object(m) => m,
+        _ => serde_json::Map::new(),
+    }
 }
 
 /// Links of a job that a browser or Foxglove opens without headers, signed for

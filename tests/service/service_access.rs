@@ -394,3 +394,98 @@ async fn motion_values_outside_their_ranges_are_refused_with_their_pointer() {
     svc.shutdown(Duration::from_secs(5));
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// Published artifacts (`--artifacts file:///DIR`, shared storage) go with their job: on
+/// `DELETE /v1/jobs/{id}` and when the retention policy sweeps it, not only the local copy.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn deleting_a_job_removes_its_published_artifacts() {
+    let dir = temp_dir("access-published");
+    let shared = dir.join("shared");
+    let mut cfg = ServiceConfig::new(dir.join("data"));
+    cfg.artifacts = Some(format!("file://{}", shared.display()));
+    cfg.workers = WorkerParams {
+        workers: 1,
+        idle_poll: Duration::from_millis(50),
+        ..WorkerParams::default()
+    };
+    let svc = Service::start(cfg, fake_runner(Duration::from_millis(1))).expect("start");
+    let app = ashlar::service::app(svc.state());
+    let body = json!({"scene": column_scene(1.0), "motion": pulse(3.0)});
+    let done = |id: String| {
+        let app = app.clone();
+        async move {
+            let j = wait_for(
+                &app,
+                &format!("/v1/jobs/{id}"),
+                Duration::from_secs(30),
+                is_terminal,
+            )
+            .await;
+            assert_eq!(j["status"], "succeeded", "{j}");
+            id
+        }
+    };
+    let submit = |b: Value| {
+        let app = app.clone();
+        async move {
+            let r = call(&app, post_json("/v1/jobs", &b)).await;
+            assert_eq!(r.status, 202, "{}", r.text());
+            r.json()["id"].as_str().expect("id").to_string()
+        }
+    };
+    let id = done(submit(body.clone()).await).await;
+    let published = shared.join("jobs").join(&id);
+    for f in ["summary.json", "histories.csv", "trajectory.mcap"] {
+        assert!(published.join(f).is_file(), "{f} was not published");
+    }
+    let delete = Request::builder()
+        .method("DELETE")
+        .uri(format!("/v1/jobs/{id}"))
+        .body(Body::empty())
+        .expect("request");
+    let r = call(&app, delete).await;
+    assert_eq!(r.status, 204, "{}", r.text());
+    assert!(!published.exists(), "published artifacts outlive DELETE");
+    assert!(!dir.join("data/jobs").join(&id).exists());
+    assert_eq!(
+        call(&app, get(&format!("/v1/jobs/{id}/histories")))
+            .await
+            .status,
+        404
+    );
+    assert!(shared.is_dir(), "the shared root stays");
+    svc.shutdown(Duration::from_secs(5));
+
+    // The retention sweeper removes them too (1 s policy, swept within about 2 s).
+    let mut cfg = ServiceConfig::new(dir.join("data"));
+    cfg.artifacts = Some(format!("file://{}", shared.display()));
+    cfg.limits.retain_finished = Some(Duration::from_secs(1));
+    cfg.workers = WorkerParams {
+        workers: 1,
+        idle_poll: Duration::from_millis(50),
+        ..WorkerParams::default()
+    };
+    let svc = Service::start(cfg, fake_runner(Duration::from_millis(1))).expect("start");
+    let router = ashlar::service::app(svc.state());
+    let r = call(&router, post_json("/v1/jobs", &body)).await;
+    assert_eq!(r.status, 202, "{}", r.text());
+    let id = r.json()["id"].as_str().expect("id").to_string();
+    let published = shared.join("jobs").join(&id);
+    let start = std::time::Instant::now();
+    let mut seen = false;
+    loop {
+        seen |= published.join("summary.json").is_file();
+        if call(&router, get(&format!("/v1/jobs/{id}"))).await.status == 404 {
+            break;
+        }
+        assert!(start.elapsed() < Duration::from_secs(20), "not swept");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    assert!(seen, "the job's artifacts were never published");
+    assert!(
+        !published.exists(),
+        "published artifacts outlive the retention"
+    );
+    svc.shutdown(Duration::from_secs(5));
+    std::fs::remove_dir_all(dir).ok();
+}

@@ -143,3 +143,58 @@ async fn progress_and_cancel_reach_the_child() {
     assert!(j["summary"]["blocks"].is_array(), "{j}");
     svc.shutdown(Duration::from_secs(5));
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn limits_report_the_isolation_and_its_resource_limits() {
+    // Process isolation: the flags' values as the server applies them.
+    let (svc, app) = start("isolation-limits", 1, |p| {
+        p.memory_limit = 512 << 20;
+        p.cpu_seconds = 77;
+    });
+    let r = call(&app, get("/v1/limits")).await;
+    assert_eq!(r.status, 200, "{}", r.text());
+    let l = r.json();
+    assert_eq!(l["isolation"], "process", "{l}");
+    assert_eq!(l["job_memory_limit_bytes"], json!(512u64 << 20), "{l}");
+    assert_eq!(l["job_cpu_seconds"], 77, "{l}");
+    assert_eq!(l["max_job_attempts"], 3, "{l}");
+    assert_eq!(l["max_large_bodies"], 2, "{l}");
+    assert_eq!(l["large_body_bytes"], json!(1u64 << 20), "{l}");
+    // No --tokens: no signed links.
+    assert!(l["signed_url_seconds"].is_null(), "{l}");
+    // Every field the schema requires is there (the contract test checks types and values).
+    // (The spec is hand-written with the list on one line: `required: [a, b, …]`.)
+    let yaml = ashlar::service::OPENAPI_YAML;
+    let at = yaml
+        .find("\n  /v1/limits:")
+        .expect("/v1/limits in openapi.yaml");
+    let line = yaml[at..]
+        .lines()
+        .find(|l| l.trim_start().starts_with("required: ["))
+        .expect("its required list");
+    let required: Vec<Value> = line
+        .trim()
+        .trim_start_matches("required: [")
+        .trim_end_matches(']')
+        .split(',')
+        .map(|k| json!(k.trim()))
+        .collect();
+    for k in &required {
+        let k = k.as_str().expect("name");
+        assert!(l.get(k).is_some(), "GET /v1/limits lacks {k}: {l}");
+    }
+    for k in ["isolation", "job_memory_limit_bytes", "job_cpu_seconds"] {
+        assert!(
+            required.contains(&json!(k)),
+            "openapi.yaml does not require {k}"
+        );
+    }
+    svc.shutdown(Duration::from_secs(5));
+    // Threads: no process, so no process limits.
+    let (svc, app, _dir) = start_fake("isolation-limits-thread");
+    let l = call(&app, get("/v1/limits")).await.json();
+    assert_eq!(l["isolation"], "thread", "{l}");
+    assert!(l["job_memory_limit_bytes"].is_null(), "{l}");
+    assert!(l["job_cpu_seconds"].is_null(), "{l}");
+    svc.shutdown(Duration::from_secs(5));
+}
