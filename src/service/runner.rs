@@ -1,6 +1,7 @@
-//! Job isolation: service::worker hands a job here, which runs it in a child `ashlar
-//! internal-run-job` process (→ analysis) under resource limits, so that a run that panics,
-//! crashes or exhausts memory fails its own job only and never the server or other jobs.
+//! Job isolation: service::worker hands a job here (a run, an in-process search, or one
+//! `pga_run` child of a fanned-out search), which runs it in a child `ashlar internal-run-job`
+//! process (→ analysis) under resource limits, so that a run that panics, crashes or exhausts
+//! memory fails its own job only and never the server, an `ashlar worker`, or other jobs.
 //!
 //! Protocol: the worker writes one JSON line ([`ChildSpec`]) to the child's stdin and keeps stdin
 //! open; a later line `cancel` asks the child to stop at its next step (as the in-process stop
