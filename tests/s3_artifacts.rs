@@ -9,7 +9,8 @@
 //!   wrote locally (what the local backend serves);
 //! - a second `ashlar serve` on the same job store but its own empty `--data`, configured by
 //!   `AWS_ENDPOINT`/`AWS_ALLOW_HTTP` instead of URL options, serves the job's trajectory with
-//!   the same SHA-256 and the same histories as the process that ran it;
+//!   the same SHA-256 and the same histories as the process that ran it; deleting the job there
+//!   leaves no object of it in the bucket;
 //! - a missing bucket and an unknown URL option stop start-up with a message naming them.
 mod service_support;
 
@@ -270,6 +271,11 @@ fn artifacts_round_trip_through_s3() {
     assert_eq!(st, 200);
     let (st, b_csv) = get_bytes(&b_addr, &format!("/v1/jobs/{id}/histories?format=csv"));
     assert_eq!(st, 200);
+    // Deleting the job (on B, which never ran it) removes its objects from the bucket.
+    let (st, text) = http(&b_addr, "DELETE", &format!("/v1/jobs/{id}"), None).expect("DELETE");
+    assert_eq!(st, 204, "{text}");
+    let left = bucket_listing(&s3, &prefix);
+    assert!(left.is_empty(), "objects outlive DELETE: {left:?}");
     stop(b);
     assert_eq!(
         sha256(&b_mcap),

@@ -120,6 +120,9 @@ pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
     if args.fake_runner_ms.is_none() {
         config.workers.fanout_width = service::fanout_width(args.fanout_width, true);
     }
+    // Published artifacts are served by the API processes from shared storage: the local
+    // copy is scratch, removed once the job ends (else it would fill this machine's disk).
+    config.workers.discard_local_artifacts = config.artifacts.is_some();
     config.workers.isolation = service::isolation_for(
         args.isolation,
         args.job_memory_limit,

@@ -155,6 +155,10 @@ pub struct WorkerParams {
     /// with resource limits ([`super::runner`]), as are a fanned-out search's `pga_run`
     /// children; only a fan-out step (planning from the store, no engine) stays on the thread.
     pub isolation: super::runner::Isolation,
+    /// Remove a job's local directory once its outcome is recorded, when its artifacts go to
+    /// shared `--artifacts` storage. `ashlar worker` sets it (it serves nothing from that
+    /// directory); an API process keeps its copies to serve them, and DELETE removes them.
+    pub discard_local_artifacts: bool,
 }
 
 impl Default for WorkerParams {
@@ -168,6 +172,7 @@ impl Default for WorkerParams {
             max_attempts: 3,
             fanout_width: None,
             isolation: super::runner::Isolation::Thread,
+            discard_local_artifacts: false,
         }
     }
 }
@@ -545,6 +550,19 @@ fn run_job(core: &Core, job: JobRecord) {
         }
         (o, _) => o,
     };
+    if core.params.discard_local_artifacts
+        && core.artifacts.is_some()
+        && job.kind != JobKind::PgaRun
+    {
+        // A worker-only process with shared storage: its directory is scratch (what is served
+        // was published; API processes fetch it from there). Left behind, every job's files
+        // would stay on this worker's disk forever, out of reach of DELETE and retention.
+        if let Err(e) = std::fs::remove_dir_all(&dir) {
+            if e.kind() != std::io::ErrorKind::NotFound {
+                tracing::warn!(dir = %dir.display(), error = %e, "removing a job's scratch directory");
+            }
+        }
+    }
     let reason = ctl.reason.load(Ordering::SeqCst);
     core.unregister(id);
     let finish = match outcome {

@@ -406,6 +406,7 @@ async fn deleting_a_job_removes_its_published_artifacts() {
     cfg.workers = WorkerParams {
         workers: 1,
         idle_poll: Duration::from_millis(50),
+        discard_local_artifacts: true,
         ..WorkerParams::default()
     };
     let svc = Service::start(cfg, fake_runner(Duration::from_millis(1))).expect("start");
@@ -438,6 +439,16 @@ async fn deleting_a_job_removes_its_published_artifacts() {
     for f in ["summary.json", "histories.csv", "trajectory.mcap"] {
         assert!(published.join(f).is_file(), "{f} was not published");
     }
+    // The worker's local copy was scratch: gone once published; served back from the shared
+    // copy (and cached), which DELETE removes below with the cache.
+    assert!(!dir.join("data/jobs").join(&id).exists(), "scratch kept");
+    let r = call(&app, get(&format!("/v1/jobs/{id}/trajectory.mcap"))).await;
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert!(dir
+        .join("data/jobs")
+        .join(&id)
+        .join("trajectory.mcap")
+        .is_file());
     let delete = Request::builder()
         .method("DELETE")
         .uri(format!("/v1/jobs/{id}"))
