@@ -176,6 +176,25 @@ impl ArtifactStore {
         Ok(())
     }
 
+    /// Bytes of every job's published artifacts (one listing of `<prefix>/jobs/`; blocking).
+    pub fn total_bytes(&self) -> Result<u64, String> {
+        use futures_util::TryStreamExt;
+        let mut parts: Vec<String> = self
+            .prefix
+            .parts()
+            .map(|p| p.as_ref().to_string())
+            .collect();
+        parts.push("jobs".into());
+        let jobs = StorePath::from_iter(parts);
+        runtime()?
+            .block_on(
+                self.store
+                    .list(Some(&jobs))
+                    .try_fold(0u64, |n, m| async move { Ok(n.saturating_add(m.size)) }),
+            )
+            .map_err(|e| format!("{}: {e}", self.url))
+    }
+
     /// Remove a deleted job's published artifacts (blocking: not on an async runtime's
     /// thread). Absent files are fine: a job that failed early published nothing.
     pub fn remove(&self, id: Uuid) -> Result<(), String> {
@@ -305,11 +324,14 @@ mod tests {
                 .exists(),
             "only artifact names are published"
         );
+        // The quota's count: the published files, not the unrelated one.
+        assert_eq!(store.total_bytes().expect("listing"), 13);
         // A deleted job's files go, with its directory; the root stays; twice is fine.
         store.remove(id).expect("remove");
         store.remove(id).expect("remove again");
         assert!(!root.join("shared/jobs").join(id.to_string()).exists());
         assert!(root.join("shared").is_dir());
+        assert_eq!(store.total_bytes().expect("listing"), 0);
         assert_eq!(
             rt.block_on(store.fetch(id, "histories.csv"))
                 .expect("fetch"),

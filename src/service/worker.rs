@@ -255,8 +255,9 @@ impl Core {
         }
     }
 
-    /// Bytes of all jobs' artifacts under `<data>/jobs`, counted at most every 10 s (the
-    /// disk quota is a guard against filling the disk, not an exact account).
+    /// Bytes of all jobs' artifacts under `<data>/jobs` (with `--artifacts`, in the shared
+    /// storage), counted at most every 10 s (the disk quota is a guard against filling the
+    /// disk, not an exact account).
     pub fn artifact_bytes(&self) -> u64 {
         let fresh = self
             .disk_used
@@ -268,13 +269,24 @@ impl Core {
             return b;
         }
         let jobs = self.data_dir.join("jobs");
-        let total = std::fs::read_dir(&jobs)
-            .map(|rd| {
-                rd.filter_map(Result::ok)
-                    .map(|e| dir_bytes(&e.path()))
-                    .sum()
-            })
-            .unwrap_or(0);
+        let local = || {
+            std::fs::read_dir(&jobs)
+                .map(|rd| {
+                    rd.filter_map(Result::ok)
+                        .map(|e| dir_bytes(&e.path()))
+                        .sum()
+                })
+                .unwrap_or(0)
+        };
+        // With shared storage the published files are the artifacts (the local directory only
+        // caches them, and workers elsewhere keep none): count those.
+        let total = match &self.artifacts {
+            Some(a) => a.total_bytes().unwrap_or_else(|e| {
+                tracing::warn!(error = %e, "counting published artifacts; counting the local ones");
+                local()
+            }),
+            None => local(),
+        };
         if let Ok(mut g) = self.disk_used.lock() {
             *g = Some((Instant::now(), total));
         }
