@@ -407,7 +407,9 @@ pub fn site_analysis(
     opts: &RunOptions,
 ) -> Result<SiteAnalysis, RunError> {
     if records.is_empty() {
-        return Err(RunError::Invalid("records: at least one is required".into()));
+        return Err(RunError::Invalid(
+            "records: at least one is required".into(),
+        ));
     }
     let parts = std::sync::Mutex::new(vec![0.0f64; records.len()]);
     let intervals: Vec<RecordInterval> = records

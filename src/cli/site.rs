@@ -69,8 +69,14 @@ pub fn run(args: &SiteArgs) -> Result<(), CliError> {
         .into_iter()
         .map(|(p, gm)| (record_name(&p), gm))
         .collect();
-    let out = site_analysis(&scene, &records, &observations, &base, &RunOptions::default())
-        .map_err(CliError::from)?;
+    let out = site_analysis(
+        &scene,
+        &records,
+        &observations,
+        &base,
+        &RunOptions::default(),
+    )
+    .map_err(CliError::from)?;
     println!("{}", pretty(&out)?);
     Ok(())
 }

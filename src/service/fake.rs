@@ -28,7 +28,13 @@ pub fn fake_runner(wall_per_simulated_second: Duration) -> JobRunner {
             observations,
             request,
             ..
-        } => fake_site(records, observations, request, hooks, wall_per_simulated_second),
+        } => fake_site(
+            records,
+            observations,
+            request,
+            hooks,
+            wall_per_simulated_second,
+        ),
         JobInput::PgaSearch {
             request, criterion, ..
         } => {

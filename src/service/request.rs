@@ -765,12 +765,10 @@ pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
     let (scene, records) = parse_records(&b.scene, &b.motions, limits)?;
     let items = match &b.observations {
         Value::Array(v) if !v.is_empty() => v,
-        _ => {
-            return Err(ApiError::invalid_field(
-                "/observations",
-                "/observations: give a non-empty array of {\"criterion\": …, \"observed\": true|false}",
-            ))
-        }
+        _ => return Err(ApiError::invalid_field(
+            "/observations",
+            "/observations: give a non-empty array of {\"criterion\": …, \"observed\": true|false}",
+        )),
     };
     if items.len() > MAX_OBSERVATIONS {
         return Err(ApiError::limit_exceeded(
