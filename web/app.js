@@ -701,6 +701,28 @@ function addObservation(observed) {
   renderObservations();
 }
 
+// docs/observations.md's worked example: the two columns, A fell and B stands, under the
+// bundled half-sine pulse scaled over 2–12 m/s² (its answer there: [5.64, 8.60] m/s²).
+async function fillSiteExample() {
+  $("scene-example").value = "two-columns";
+  await onSceneExample();
+  $("duration").value = "";
+  $("model").value = "";
+  state.observations = [
+    { criterion: '{"kind": "fallen", "blocks": ["A"]}', observed: true },
+    { criterion: "toppled:B", observed: false },
+  ];
+  renderObservations();
+  document.querySelector('input[name="motion-source"][value="example"]').checked = true;
+  $("range-min").value = "2";
+  $("range-max").value = "12";
+  $("range-units").value = "m/s2";
+  $("tolerance").value = "0.02";
+  $("scan-points").value = "6";
+  syncVisibility();
+  scheduleInspect();
+}
+
 function renderObservations() {
   const rows = state.observations.map((o, k) => {
     const pick = el("select", { "aria-label": `What is seen of observation ${k + 1}`, "data-obs": String(k) },
@@ -1329,6 +1351,7 @@ async function init() {
   $("job-form").addEventListener("submit", onSubmit);
   $("obs-add-fell").addEventListener("click", () => addObservation(true));
   $("obs-add-stood").addEventListener("click", () => addObservation(false));
+  $("site-example").addEventListener("click", fillSiteExample);
   $("play").addEventListener("click", togglePlay);
   $("time-slider").addEventListener("input", () => { stopPlaying(); drawFrame(Number($("time-slider").value)); });
   let resizing = 0;

@@ -678,6 +678,18 @@ try {
     assert((await colouredPixels(page, "plot-site")) > 100, "the distribution is not drawn");
     console.log(`     ${recs.join(" | ").slice(0, 200)}`);
     console.log(`     ${dist.slice(0, 200)}`);
+    // The page's worked example is docs/observations.md's: A fell, B stands, under the bundled
+    // pulse; the interval there is [5.64, 8.60] m/s² (A's threshold is Housner's overturning
+    // amplitude, checked by an independent RK4 in tests/engine/rocking.rs).
+    await page.click("#site-example");
+    await page.waitForFunction(() => document.querySelectorAll("#obs-body tr").length === 2 && document.querySelectorAll("#scene-svg polygon").length === 3, null, { timeout: 10000 });
+    await page.click("#submit-button");
+    await page.waitForFunction((prev) => { const m = document.getElementById("submit-status").textContent.match(/Queued site analysis (\w+)/); return m && m[1] !== prev; }, id, { timeout: 20000 });
+    const id2 = (await page.textContent("#submit-status")).match(/Queued site analysis (\w+)/)[1];
+    await page.waitForFunction((id) => new RegExp(`Site analysis ${id}: succeeded`).test(document.getElementById("result-head").textContent) && !document.getElementById("site-view").hidden, id2, { timeout: 300000 });
+    const worked = await page.textContent("#site-records");
+    assert(worked.includes("5.64 m/s²") && worked.includes("8.6 m/s²"), `worked example: ${worked}`);
+    console.log(`     worked example: ${worked.slice(0, 160)}`);
     await page.selectOption("#criterion-kind", "toppled");
     await page.check('input[name="analysis"][value="run"]');
     await page.fill("#duration", "");
