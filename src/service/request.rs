@@ -102,6 +102,8 @@ pub enum JobInput {
     Run {
         scene: Scene,
         motion: GroundMotion,
+        /// Damage criteria judged on the finished run's summary (`"criterion"`, optional).
+        criteria: Vec<Criterion>,
     },
     PgaSearch {
         scene: Scene,
@@ -191,6 +193,9 @@ struct RunBody {
     scene: Value,
     #[serde(default)]
     motion: Option<Value>,
+    /// Damage criteria to judge on the finished run (as a search's `criterion`).
+    #[serde(default)]
+    criterion: Option<Value>,
 }
 
 /// Criteria of a request at JSON pointer `pointer`: a string (`toppled:B`, …), a damage object
@@ -608,9 +613,20 @@ pub fn parse_run(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
     }
     let b: RunBody = typed("", body)?;
     let (scene, motion) = scene_and_motion(&b.scene, b.motion.as_ref(), limits)?;
+    let criteria = match b.criterion.as_ref().filter(|c| !c.is_null()) {
+        None => Vec::new(),
+        Some(c) => parse_criteria(c, "/criterion", &scene)?
+            .into_iter()
+            .map(|(_, c)| c)
+            .collect(),
+    };
     let motion_summary = motion_summary(&motion);
     Ok(Parsed {
-        input: JobInput::Run { scene, motion },
+        input: JobInput::Run {
+            scene,
+            motion,
+            criteria,
+        },
         motion_summary,
     })
 }

@@ -46,10 +46,19 @@ pub fn analysis_runner() -> JobRunner {
             ..Default::default()
         };
         match input {
-            JobInput::Run { scene, motion } => {
+            JobInput::Run {
+                scene,
+                motion,
+                criteria,
+            } => {
                 let out =
                     crate::analysis::run::run(scene, motion, &opts).map_err(|e| e.to_string())?;
-                let summary = serde_json::to_value(&out.summary).map_err(|e| e.to_string())?;
+                let mut summary = serde_json::to_value(&out.summary).map_err(|e| e.to_string())?;
+                // The request's damage criteria, judged on the finished run (`run --criterion`).
+                if !criteria.is_empty() && !out.cancelled {
+                    let v = crate::analysis::pga::verdicts(criteria, &out.summary);
+                    summary["criteria"] = serde_json::to_value(v).map_err(|e| e.to_string())?;
+                }
                 Ok(if out.cancelled {
                     RunnerOutcome::Cancelled(Some(summary))
                 } else {
