@@ -506,7 +506,9 @@ try {
       assert(listed.includes(name), `${name} not listed: ${listed}`);
       const scene = JSON.parse(readFileSync(new URL(`../../examples/${name}.json`, import.meta.url), "utf8"));
       await page.selectOption("#scene-example", name);
-      await page.waitForFunction((want) => document.querySelectorAll("#scene-svg polygon").length === want && /^Example/.test(document.getElementById("scene-info").textContent), scene.blocks.length, { timeout: 10000 });
+      // The drawing of this scene, not of the one before (column and incline both have two
+      // blocks: counting alone passed on the old drawing once).
+      await page.waitForFunction((ids) => JSON.stringify([...document.querySelectorAll("#scene-svg polygon")].map((p) => p.dataset.id)) === JSON.stringify(ids) && /^Example/.test(document.getElementById("scene-info").textContent), scene.blocks.map((b) => b.id), { timeout: 10000 });
       const held = await page.$$eval("#scene-svg polygon.held", (ps) => ps.map((p) => p.dataset.id));
       const want = scene.blocks.filter((b) => b.fixed || (scene.excitation && scene.excitation.block === b.id)).map((b) => b.id);
       assert(JSON.stringify(held) === JSON.stringify(want), `${name}: shaded ${held}, fixed ${want}`);
