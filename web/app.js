@@ -27,7 +27,11 @@ const state = {
   inspectSeq: 0,
   showSeq: 0, // bumped by every show(): an older show() still waiting on the server gives up
   view: null, // the run being animated
+  observations: [], // [{criterion, observed}] of the site analysis being prepared
 };
+
+// What a job is called on the page.
+const KIND_LABEL = { run: "run", pga_search: "PGA search", site_analysis: "site analysis" };
 
 // ---------- helpers ----------
 
@@ -231,6 +235,7 @@ const POINTER_SLOTS = [
   ["/motions", "motion"],
   ["/motion", "motion"],
   ["/criterion", "criterion"],
+  ["/observations", "observations"],
   ["/range/min", "range-min"],
   ["/range/max", "range-max"],
   ["/range", "range-min"],
@@ -246,6 +251,7 @@ function slotInput(slot) {
     case "scale": return $("scale-value");
     case "motion": return radio("motion-source") === "pulse" ? $("pulse-amplitude") : $("record-file");
     case "criterion": return $("criterion-kind").value === "json" ? $("criterion-json") : $("criterion-kind");
+    case "observations": return $("obs-add-fell");
     case "template": return $("template");
     case "dxf": return $("dxf-file");
     case "range-min": return $("range-min");
@@ -663,6 +669,75 @@ function showMeasures(im) {
 
 // ---------- submit ----------
 
+function rangeSpec() {
+  return { min: Number($("range-min").value), max: Number($("range-max").value), units: $("range-units").value };
+}
+
+// The criterion of the form (docs/format.md §3), or null after showing why it is not valid.
+function currentCriterion() {
+  const block = $("criterion-block").value;
+  const ck = $("criterion-kind").value;
+  if (ck !== "json") return ck === "toppled" ? `toppled:${block}` : `${ck}:${block}:${$("criterion-value").value}`;
+  // Sent as the JSON text the service parses; checked here for syntax only, the server names
+  // unknown kinds, fields and blocks.
+  const criterion = $("criterion-json").value.trim();
+  try {
+    const v = JSON.parse(criterion);
+    if (!v || typeof v !== "object" || Array.isArray(v)) throw new Error("expected a JSON object with a \"kind\"");
+  } catch (e) {
+    showFieldError("criterion", `The criterion is not valid JSON: ${e.message}`);
+    return null;
+  }
+  return criterion;
+}
+
+// ---------- site observations ----------
+
+function addObservation(observed) {
+  clearErrors(["criterion", "observations"]);
+  const criterion = currentCriterion();
+  if (criterion === null) return;
+  state.observations.push({ criterion, observed });
+  renderObservations();
+}
+
+// docs/observations.md's worked example: the two columns, A fell and B stands, under the
+// bundled half-sine pulse scaled over 2–12 m/s² (its answer there: [5.64, 8.60] m/s²).
+async function fillSiteExample() {
+  $("scene-example").value = "two-columns";
+  await onSceneExample();
+  $("duration").value = "";
+  $("model").value = "";
+  state.observations = [
+    { criterion: '{"kind": "fallen", "blocks": ["A"]}', observed: true },
+    { criterion: "toppled:B", observed: false },
+  ];
+  renderObservations();
+  document.querySelector('input[name="motion-source"][value="example"]').checked = true;
+  $("range-min").value = "2";
+  $("range-max").value = "12";
+  $("range-units").value = "m/s2";
+  $("tolerance").value = "0.02";
+  $("scan-points").value = "6";
+  syncVisibility();
+  scheduleInspect();
+}
+
+function renderObservations() {
+  const rows = state.observations.map((o, k) => {
+    const pick = el("select", { "aria-label": `What is seen of observation ${k + 1}`, "data-obs": String(k) },
+      el("option", { value: "seen", text: "seen (fell)" }), el("option", { value: "not", text: "not seen (stands)" }));
+    pick.value = o.observed ? "seen" : "not";
+    pick.addEventListener("change", () => { o.observed = pick.value === "seen"; });
+    return el("tr", { class: "obs" },
+      el("td", {}, el("code", { text: o.criterion })),
+      el("td", {}, pick),
+      el("td", { class: "actions" }, el("button", { type: "button", class: "secondary", "aria-label": `Remove observation ${k + 1}`, text: "Remove", onclick: () => { state.observations.splice(k, 1); renderObservations(); } })));
+  });
+  $("obs-body").replaceChildren(...rows);
+  $("obs-table").hidden = rows.length === 0;
+}
+
 async function onSubmit(ev) {
   ev.preventDefault();
   clearErrors();
@@ -689,28 +764,24 @@ async function onSubmit(ev) {
   const model = $("model").value;
   if (model !== "") scene.control = Object.assign({}, scene.control || {}, { model });
   let url, body;
-  if (kind === "run") {
+  if (kind === "site") {
+    url = "/v1/site-analyses";
+    if (!state.observations.length) { showFieldError("observations", "Add at least one observation: what fell (seen) or what stands (not seen)."); return; }
+    if (!motions[0]) { showFieldError("motion", "A site analysis needs records to scale."); return; }
+    // Named by their files, so that the result's rows say which record is which.
+    if (radio("motion-source") === "record") motions = motions.map((m, i) => (state.records[i] ? Object.assign({ name: state.records[i].name }, m) : m));
+    body = { scene, motions, observations: state.observations.map((o) => ({ criterion: o.criterion, observed: o.observed })), range: rangeSpec() };
+    if ($("tolerance").value !== "") body.tolerance = Number($("tolerance").value);
+    if ($("scan-points").value !== "") body.scan_points = Number($("scan-points").value);
+  } else if (kind === "run") {
     url = "/v1/jobs";
     body = { scene };
     if (motions[0]) body.motion = motions[0];
   } else {
     url = "/v1/pga-searches";
-    const block = $("criterion-block").value;
-    const ck = $("criterion-kind").value;
-    let criterion = ck === "toppled" ? `toppled:${block}` : `${ck}:${block}:${$("criterion-value").value}`;
-    if (ck === "json") {
-      // Sent as the JSON text the service parses (docs/format.md §3); checked here for syntax
-      // only, the server names unknown kinds, fields and blocks.
-      criterion = $("criterion-json").value.trim();
-      try {
-        const v = JSON.parse(criterion);
-        if (!v || typeof v !== "object" || Array.isArray(v)) throw new Error("expected a JSON object with a \"kind\"");
-      } catch (e) {
-        showFieldError("criterion", `The criterion is not valid JSON: ${e.message}`);
-        return;
-      }
-    }
-    body = { scene, criterion, range: { min: Number($("range-min").value), max: Number($("range-max").value), units: $("range-units").value } };
+    const criterion = currentCriterion();
+    if (criterion === null) return;
+    body = { scene, criterion, range: rangeSpec() };
     if ($("tolerance").value !== "") body.tolerance = Number($("tolerance").value);
     if ($("scan-points").value !== "") body.scan_points = Number($("scan-points").value);
     if (!motions[0]) { showFieldError("motion", "A PGA search needs a ground motion to scale."); return; }
@@ -721,7 +792,7 @@ async function onSubmit(ev) {
   $("submit-status").textContent = "Submitting…";
   try {
     const acc = await api("POST", url, body);
-    $("submit-status").textContent = `Queued ${acc.kind === "run" ? "run" : "PGA search"} ${acc.id.slice(0, 8)}.`;
+    $("submit-status").textContent = `Queued ${KIND_LABEL[acc.kind] || acc.kind} ${acc.id.slice(0, 8)}.`;
     // Only the latest submission takes the result panel when it finishes: an earlier job
     // that ends later (a cancelled run writing its outputs) must not replace it.
     state.autoShow = acc.id;
@@ -865,7 +936,7 @@ function renderJobRow(id) {
 function jobRow(j) {
   if (!j) return null;
   const pct = Math.round((j.progress || 0) * 100);
-  const label = j.kind === "run" ? "run" : "PGA search";
+  const label = KIND_LABEL[j.kind] || j.kind;
   const actions = el("td", { class: "actions" });
   const viewable = j.status === "succeeded" || (j.kind === "run" && j.status === "cancelled" && j.started_at) || j.status === "failed";
   if (viewable) actions.append(el("button", { type: "button", class: "secondary", "data-action": "view", "aria-label": `View ${label} ${j.id.slice(0, 8)}`, onclick: () => show(j.id), text: "View" }));
@@ -906,8 +977,10 @@ async function show(id) {
   $("result").hidden = false;
   $("run-view").hidden = true;
   $("pga-view").hidden = true;
+  $("site-view").hidden = true;
   const head = $("result-head");
-  const kind = j.kind === "run" ? "Run" : "PGA search";
+  const label = KIND_LABEL[j.kind] || j.kind;
+  const kind = label.charAt(0).toUpperCase() + label.slice(1);
   head.textContent = `${kind} ${j.id.slice(0, 8)}: ${j.status}` + (j.motion ? ` · motion: ${j.motion.provenance}, PGA ${fmt(j.motion.pga)} m/s² (${fmt(j.motion.pga / G)} g)` : "");
   if (j.status === "failed") {
     head.textContent += ` · ${j.error || "failed"}`;
@@ -915,6 +988,7 @@ async function show(id) {
   }
   try {
     if (j.kind === "run") await showRun(j, current);
+    else if (j.kind === "site_analysis") showSite(j);
     else showPga(j);
   } catch (e) {
     if (!current()) return;
@@ -1182,6 +1256,41 @@ function showPga(j) {
   });
 }
 
+// A site analysis: each record's interval, and the distribution of the site's PGA over the
+// records with what it assumes (docs/observations.md).
+function showSite(j) {
+  $("site-view").hidden = false;
+  const r = j.result;
+  const box = $("site-summary");
+  if (!r) { box.replaceChildren(el("p", { class: "info", text: "No result was recorded." })); $("site-assumes").textContent = ""; return; }
+  const both = (v) => (v === null || v === undefined ? "–" : `${fmt(v)} m/s² (${fmt(v / G)} g)`);
+  const head = el("tr", {}, ...["Record", "PGA from", "PGA to", "consistent"].map((t) => el("th", { scope: "col", text: t })));
+  const rows = r.records.map((rec) => el("tr", {}, el("th", { scope: "row", text: rec.record }), el("td", { text: both(rec.lower) }), el("td", { text: both(rec.upper) }), el("td", { text: rec.consistent ? "yes" : "no: no scaling of this record reproduces every observation" })));
+  const d = r.distribution;
+  const obs = d.criteria.map((c) => `${c.criterion} ${c.observed ? "seen" : "not seen"}`).join("; ");
+  const post = (name, p, err) => el("tr", {}, el("th", { scope: "row", text: name }),
+    ...(p ? [el("td", { text: both(p.median) }), el("td", { text: `${fmt(p.p16_p84[0])}–${fmt(p.p16_p84[1])} m/s²` }), el("td", { text: `${fmt(p.p05_p95[0])}–${fmt(p.p05_p95[1])} m/s²` })]
+      : [el("td", { colspan: "3", text: err || "none" })]));
+  box.replaceChildren(
+    el("p", {}, `Observations: ${obs}`),
+    el("h3", { text: "Per record: the PGA consistent with every observation" }),
+    el("table", { id: "site-records" }, el("thead", {}, head), el("tbody", {}, ...rows)),
+    el("h3", { text: "Over the records: the site's PGA" }),
+    el("table", { id: "site-distribution" },
+      el("thead", {}, el("tr", {}, ...["fragilities", "median", "16–84 %", "5–95 %"].map((t) => el("th", { scope: "col", text: t })))),
+      el("tbody", {}, post("lognormal", d.lognormal, d.lognormal_error), post("empirical", d.empirical, d.empirical_error))));
+  $("site-assumes").textContent = `Prior: ${d.prior}. Likelihood: ${d.likelihood}. Assumes: ${d.assumes}`;
+  const series = [];
+  if (d.lognormal) series.push({ x: d.lognormal.pga, y: d.lognormal.density, label: "lognormal fragilities", color: "#1f6fd1", width: 2 });
+  if (d.empirical) series.push({ x: d.empirical.pga, y: d.empirical.density, label: "empirical fragilities", color: "#e0a000", width: 2 });
+  const canvas = $("plot-site");
+  canvas.hidden = series.length === 0;
+  if (series.length) {
+    window.ashlarPlot.plot(canvas, { title: "Distribution of the site's PGA given the observations", xlabel: "PGA (m/s²)", ylabel: "density (1/(m/s²))", series,
+      bands: r.records.filter((rec) => rec.consistent).map((rec) => ({ x0: rec.lower, x1: rec.upper, color: "rgba(46,125,50,0.10)" })) });
+  }
+}
+
 // ---------- wiring ----------
 
 function syncVisibility() {
@@ -1193,8 +1302,10 @@ function syncVisibility() {
   $("scale-label").textContent = mode === "pga" ? "Target PGA" : "Factor";
   $("scale-units").hidden = mode !== "pga";
   document.querySelector('label[for="scale-units"]').hidden = mode !== "pga";
-  const pga = radio("analysis") === "pga";
+  const site = radio("analysis") === "site";
+  const pga = radio("analysis") === "pga" || site;
   $("pga-fields").hidden = !pga;
+  $("site-box").hidden = !site;
   // A PGA search scales the record itself: no scale of its own.
   $("scale-mode-row").hidden = pga;
   if (pga) $("scale-row").hidden = true;
@@ -1238,6 +1349,9 @@ async function init() {
   }
   $("criterion-kind").addEventListener("change", syncVisibility);
   $("job-form").addEventListener("submit", onSubmit);
+  $("obs-add-fell").addEventListener("click", () => addObservation(true));
+  $("obs-add-stood").addEventListener("click", () => addObservation(false));
+  $("site-example").addEventListener("click", fillSiteExample);
   $("play").addEventListener("click", togglePlay);
   $("time-slider").addEventListener("input", () => { stopPlaying(); drawFrame(Number($("time-slider").value)); });
   let resizing = 0;

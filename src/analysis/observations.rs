@@ -17,10 +17,11 @@
 //! searched range under a uniform prior. The product assumes the observations independent given
 //! the PGA (not one record shared by every structure); the per-record intervals assume that.
 use super::fragility::{fit_interval, probability, Capacity, FitParams, Fragility};
-use super::pga::{search, Combine, Criterion, PgaRequest};
+use super::pga::{record_error, search, Combine, Criterion, PgaRequest};
 use super::run::{RunError, RunOptions};
 use crate::motion::GroundMotion;
 use crate::scene::Scene;
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// One field observation: the criterion and whether the damage it describes was seen.
@@ -72,13 +73,26 @@ pub fn site_interval(
     }
     let (mut lower, mut upper) = (base.min, base.max);
     let mut results = Vec::new();
-    for o in observations {
+    let n = observations.len() as f64;
+    for (k, o) in observations.iter().enumerate() {
         let req = PgaRequest {
             criteria: vec![o.criterion.clone()],
             combine: Combine::All,
             ..base.clone()
         };
-        let r = search(scene, motion, &req, opts)?;
+        // Each search reports 0..1 of itself: the k-th of n covers (k..k+1)/n of the whole.
+        let progress = |p: f64| {
+            if let Some(report) = opts.progress {
+                report((k as f64 + p) / n);
+            }
+        };
+        // `search` reads only these two of the options.
+        let sub = RunOptions {
+            cancel: opts.cancel,
+            progress: Some(&progress),
+            ..Default::default()
+        };
+        let r = search(scene, motion, &req, &sub)?;
         if o.observed {
             // Failed at the site: the PGA reached this threshold, above safe_pga (or the whole
             // range, when even max is safe).
@@ -363,4 +377,74 @@ pub fn criterion_records(
                 .collect(),
         })
         .collect()
+}
+
+/// One record's interval, named.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RecordInterval {
+    pub record: String,
+    #[serde(flatten)]
+    pub interval: SiteInterval,
+}
+
+/// The whole site analysis over a set of records (`ashlar site`, `POST /v1/site-analyses`):
+/// each record's interval and the distribution over the records.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SiteAnalysis {
+    pub units: &'static str,
+    pub records: Vec<RecordInterval>,
+    pub distribution: SiteDistribution,
+}
+
+/// Every record's [`site_interval`] (records in parallel, as `pga::search_records` runs them),
+/// then the [`distribution`] over them. Progress is the mean of the records' progress; a
+/// record's error names the record.
+pub fn site_analysis(
+    scene: &Scene,
+    records: &[(String, GroundMotion)],
+    observations: &[Observation],
+    base: &PgaRequest,
+    opts: &RunOptions,
+) -> Result<SiteAnalysis, RunError> {
+    if records.is_empty() {
+        return Err(RunError::Invalid(
+            "records: at least one is required".into(),
+        ));
+    }
+    let parts = std::sync::Mutex::new(vec![0.0f64; records.len()]);
+    let intervals: Vec<RecordInterval> = records
+        .par_iter()
+        .enumerate()
+        .map(|(i, (name, gm))| {
+            let progress = |p: f64| {
+                if let (Some(report), Ok(mut parts)) = (opts.progress, parts.lock()) {
+                    parts[i] = p;
+                    report(parts.iter().sum::<f64>() / parts.len() as f64);
+                }
+            };
+            let sub = RunOptions {
+                cancel: opts.cancel,
+                progress: Some(&progress),
+                ..Default::default()
+            };
+            site_interval(scene, gm, observations, base, &sub)
+                .map(|interval| RecordInterval {
+                    record: name.clone(),
+                    interval,
+                })
+                .map_err(|e| record_error(name, e))
+        })
+        .collect::<Result<_, _>>()?;
+    let plain: Vec<SiteInterval> = intervals.iter().map(|r| r.interval.clone()).collect();
+    let distribution = distribution(
+        &criterion_records(observations, &plain),
+        base.min,
+        base.max,
+        &DistributionParams::default(),
+    );
+    Ok(SiteAnalysis {
+        units: "m/s2",
+        records: intervals,
+        distribution,
+    })
 }

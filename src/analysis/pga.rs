@@ -776,6 +776,29 @@ pub fn met_by_summary(criteria: &[Criterion], summary: &super::run::Summary) -> 
     Combine::All.verdict(criteria.iter().map(|c| c.met(&tr)))
 }
 
+/// One criterion's verdict on a finished run (`run --criterion`, a job's `criterion`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Verdict {
+    pub criterion: String,
+    pub met: bool,
+}
+
+/// Each criterion's verdict on a finished run's summary, one by one: a damage criterion on the
+/// final state (`criteria::FinalState`), the `pga` forms as [`met_by_summary`] tests them.
+pub fn verdicts(criteria: &[Criterion], summary: &super::run::Summary) -> Vec<Verdict> {
+    let state = super::criteria::FinalState::from_summary(summary);
+    criteria
+        .iter()
+        .map(|c| Verdict {
+            criterion: c.text(),
+            met: match c {
+                Criterion::Damage { damage } => damage.met(&state),
+                other => met_by_summary(std::slice::from_ref(other), summary),
+            },
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

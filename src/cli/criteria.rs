@@ -2,8 +2,7 @@
 //! forms) on a finished run's summary; verdicts to OUT/criteria.json and one line each on
 //! standard error (standard output keeps the summary alone).
 use super::error::{pretty, CliError};
-use crate::analysis::criteria::{Damage, FinalState};
-use crate::analysis::pga::{met_by_summary, Criterion};
+use crate::analysis::pga::Criterion;
 use crate::analysis::run::Summary;
 use crate::scene::{BlockKind, Scene};
 use std::path::Path;
@@ -38,22 +37,14 @@ pub fn report(criteria: &[Criterion], summary: &Summary, out: &Path) -> Result<(
     if criteria.is_empty() {
         return Ok(());
     }
-    let state = FinalState::from_summary(summary);
-    let verdicts: Vec<serde_json::Value> = criteria
-        .iter()
-        .map(|c| {
-            let met = match c {
-                Criterion::Damage { damage } => Damage::met(damage, &state),
-                other => met_by_summary(std::slice::from_ref(other), summary),
-            };
-            eprintln!(
-                "criterion {}: {}",
-                c.text(),
-                if met { "met" } else { "not met" }
-            );
-            serde_json::json!({ "criterion": c.text(), "met": met })
-        })
-        .collect();
+    let verdicts = crate::analysis::pga::verdicts(criteria, summary);
+    for v in &verdicts {
+        eprintln!(
+            "criterion {}: {}",
+            v.criterion,
+            if v.met { "met" } else { "not met" }
+        );
+    }
     let text = pretty(&verdicts)?;
     std::fs::create_dir_all(out).map_err(CliError::write(out))?;
     let path = out.join("criteria.json");

@@ -4,9 +4,7 @@
 use super::error::{pretty, CliError};
 use super::load::{load_records, load_scene, record_name, RangeArgs};
 use super::run::apply_duration;
-use crate::analysis::observations::{
-    criterion_records, distribution, site_interval, DistributionParams, Observation,
-};
+use crate::analysis::observations::{site_analysis, Observation};
 use crate::analysis::pga::{Combine, Criterion};
 use crate::analysis::run::RunOptions;
 use crate::motion::UnitsArg;
@@ -67,23 +65,18 @@ pub fn run(args: &SiteArgs) -> Result<(), CliError> {
     for m in &args.motion {
         loaded.extend(load_records(m, &params)?.0);
     }
-    let mut records = Vec::new();
-    let mut intervals = Vec::new();
-    for (p, gm) in &loaded {
-        let interval = site_interval(&scene, gm, &observations, &base, &RunOptions::default())
-            .map_err(|e| CliError::from(e).at(p.display().to_string()))?;
-        let mut v = serde_json::to_value(&interval).map_err(CliError::json("output"))?;
-        v["record"] = serde_json::Value::from(record_name(p));
-        records.push(v);
-        intervals.push(interval);
-    }
-    let dist = distribution(
-        &criterion_records(&observations, &intervals),
-        base.min,
-        base.max,
-        &DistributionParams::default(),
-    );
-    let out = serde_json::json!({ "units": "m/s2", "records": records, "distribution": dist });
+    let records: Vec<(String, crate::motion::GroundMotion)> = loaded
+        .into_iter()
+        .map(|(p, gm)| (record_name(&p), gm))
+        .collect();
+    let out = site_analysis(
+        &scene,
+        &records,
+        &observations,
+        &base,
+        &RunOptions::default(),
+    )
+    .map_err(CliError::from)?;
     println!("{}", pretty(&out)?);
     Ok(())
 }

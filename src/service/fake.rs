@@ -23,6 +23,18 @@ pub const FAKE_TRAJECTORY_LEN: usize = 10_000;
 pub fn fake_runner(wall_per_simulated_second: Duration) -> JobRunner {
     Arc::new(move |input: &JobInput, hooks: &RunHooks<'_>| match input {
         JobInput::Run { .. } => fake_run(input, hooks, wall_per_simulated_second),
+        JobInput::SiteAnalysis {
+            records,
+            observations,
+            request,
+            ..
+        } => fake_site(
+            records,
+            observations,
+            request,
+            hooks,
+            wall_per_simulated_second,
+        ),
         JobInput::PgaSearch {
             request, criterion, ..
         } => {
@@ -163,4 +175,70 @@ fn fake_run(
     } else {
         RunnerOutcome::Completed(value)
     })
+}
+
+/// A fake site analysis: every observation's threshold is pretended to lie at the middle of the
+/// range under every record (bracketed to the tolerance), one sleep per record; the distribution
+/// over the records is the real [`distribution`] of those thresholds.
+fn fake_site(
+    records: &[(String, crate::motion::GroundMotion)],
+    observations: &[crate::analysis::observations::Observation],
+    request: &crate::analysis::pga::PgaRequest,
+    hooks: &RunHooks<'_>,
+    slowness: Duration,
+) -> Result<RunnerOutcome, String> {
+    use crate::analysis::observations::{
+        criterion_records, distribution, DistributionParams, ObservationResult, RecordInterval,
+        SiteAnalysis, SiteInterval,
+    };
+    let mid = 0.5 * (request.min + request.max);
+    let (safe, failing) = (mid - 0.5 * request.tolerance, mid + 0.5 * request.tolerance);
+    let mut out = Vec::new();
+    for (i, (name, _)) in records.iter().enumerate() {
+        if hooks.cancel.load(Ordering::SeqCst) {
+            return Ok(RunnerOutcome::Cancelled(None));
+        }
+        std::thread::sleep(slowness / 10);
+        let seen = observations.iter().any(|o| o.observed);
+        let unseen = observations.iter().any(|o| !o.observed);
+        let (lower, upper) = (
+            if seen { safe } else { request.min },
+            if unseen { failing } else { request.max },
+        );
+        out.push(RecordInterval {
+            record: name.clone(),
+            interval: SiteInterval {
+                lower,
+                upper,
+                consistent: lower < upper,
+                units: "m/s2",
+                observations: observations
+                    .iter()
+                    .map(|o| ObservationResult {
+                        criterion: o.criterion.text(),
+                        observed: o.observed,
+                        safe_pga: Some(safe),
+                        failing_pga: Some(failing),
+                        monotonic: true,
+                    })
+                    .collect(),
+            },
+        });
+        (hooks.progress)((i + 1) as f64 / records.len() as f64);
+    }
+    let plain: Vec<SiteInterval> = out.iter().map(|r| r.interval.clone()).collect();
+    let result = SiteAnalysis {
+        units: "m/s2",
+        distribution: distribution(
+            &criterion_records(observations, &plain),
+            request.min,
+            request.max,
+            &DistributionParams::default(),
+        ),
+        records: out,
+    };
+    let value = serde_json::to_value(&result).map_err(|e| e.to_string())?;
+    std::fs::write(hooks.out_dir.join("result.json"), value.to_string())
+        .map_err(|e| e.to_string())?;
+    Ok(RunnerOutcome::Completed(value))
 }

@@ -148,6 +148,7 @@ fn parse_kind(s: &str) -> Result<JobKind, StoreError> {
         "run" => Ok(JobKind::Run),
         "pga_search" => Ok(JobKind::PgaSearch),
         "pga_run" => Ok(JobKind::PgaRun),
+        "site_analysis" => Ok(JobKind::SiteAnalysis),
         other => Err(StoreError(format!(
             "unknown job kind {other:?} in the store"
         ))),

@@ -102,6 +102,8 @@ pub enum JobInput {
     Run {
         scene: Scene,
         motion: GroundMotion,
+        /// Damage criteria judged on the finished run's summary (`"criterion"`, optional).
+        criteria: Vec<Criterion>,
     },
     PgaSearch {
         scene: Scene,
@@ -114,17 +116,33 @@ pub enum JobInput {
         records: Vec<(String, GroundMotion)>,
         fit: Method,
     },
+    /// Several observations at one site over a set of records (`POST /v1/site-analyses`,
+    /// `analysis::observations`).
+    SiteAnalysis {
+        scene: Scene,
+        /// The first record (what `motion()` answers).
+        motion: GroundMotion,
+        records: Vec<(String, GroundMotion)>,
+        observations: Vec<crate::analysis::observations::Observation>,
+        /// The searched range, tolerance and scan points (its criteria are empty: each
+        /// observation's search takes its own).
+        request: PgaRequest,
+    },
 }
 
 impl JobInput {
     pub fn scene(&self) -> &Scene {
         match self {
-            JobInput::Run { scene, .. } | JobInput::PgaSearch { scene, .. } => scene,
+            JobInput::Run { scene, .. }
+            | JobInput::PgaSearch { scene, .. }
+            | JobInput::SiteAnalysis { scene, .. } => scene,
         }
     }
     pub fn motion(&self) -> &GroundMotion {
         match self {
-            JobInput::Run { motion, .. } | JobInput::PgaSearch { motion, .. } => motion,
+            JobInput::Run { motion, .. }
+            | JobInput::PgaSearch { motion, .. }
+            | JobInput::SiteAnalysis { motion, .. } => motion,
         }
     }
 }
@@ -175,6 +193,9 @@ struct RunBody {
     scene: Value,
     #[serde(default)]
     motion: Option<Value>,
+    /// Damage criteria to judge on the finished run (as a search's `criterion`).
+    #[serde(default)]
+    criterion: Option<Value>,
 }
 
 /// Criteria of a request at JSON pointer `pointer`: a string (`toppled:B`, …), a damage object
@@ -592,9 +613,20 @@ pub fn parse_run(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
     }
     let b: RunBody = typed("", body)?;
     let (scene, motion) = scene_and_motion(&b.scene, b.motion.as_ref(), limits)?;
+    let criteria = match b.criterion.as_ref().filter(|c| !c.is_null()) {
+        None => Vec::new(),
+        Some(c) => parse_criteria(c, "/criterion", &scene)?
+            .into_iter()
+            .map(|(_, c)| c)
+            .collect(),
+    };
     let motion_summary = motion_summary(&motion);
     Ok(Parsed {
-        input: JobInput::Run { scene, motion },
+        input: JobInput::Run {
+            scene,
+            motion,
+            criteria,
+        },
         motion_summary,
     })
 }
@@ -658,45 +690,8 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
         parse_criteria(&b.criterion, "/criterion", &scene)?
             .into_iter()
             .unzip();
-    // Amplitudes in m/s² from here on.
-    let units = b.range.units;
-    let amplitude = |a: &Amplitude, p: &str| {
-        a.to_si(units)
-            .map_err(|e| ApiError::invalid_field(p, format!("{p}: {e}")))
-    };
-    let min = amplitude(&b.range.min, "/range/min")?;
-    let max = amplitude(&b.range.max, "/range/max")?;
-    if !(max.is_finite() && max > min) {
-        return Err(ApiError::invalid_field(
-            "/range/max",
-            format!(
-                "/range/max: must be finite and > range.min, got {} m/s² ≤ {} m/s²",
-                crate::quantity::sig(max),
-                crate::quantity::sig(min)
-            ),
-        ));
-    }
-    // Default resolution: 1 % of the searched range.
-    let tolerance = match &b.tolerance {
-        Some(t) => amplitude(t, "/tolerance")?,
-        None => (max - min) / 100.0,
-    };
-    if !(tolerance.is_finite() && tolerance > 0.0) {
-        return Err(ApiError::invalid_field(
-            "/tolerance",
-            "/tolerance: must be a finite amplitude > 0",
-        ));
-    }
-    let scan_points = b.scan_points.unwrap_or(DEFAULT_SCAN_POINTS);
-    if !(2..=limits.max_scan_points).contains(&scan_points) {
-        return Err(ApiError::invalid_field(
-            "/scan_points",
-            format!(
-                "/scan_points: must lie in 2..={}, got {scan_points}",
-                limits.max_scan_points
-            ),
-        ));
-    }
+    let (min, max, tolerance, scan_points) =
+        search_range(&b.range, b.tolerance.as_ref(), b.scan_points, limits)?;
     let runs = super::budget::search_runs(records.len(), scan_points, max - min, tolerance);
     // The longest record sets the length of every run (a scene's own duration overrides it).
     let duration = scene.control.duration.unwrap_or_else(|| {
@@ -744,6 +739,174 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
         },
         motion_summary,
     })
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SiteBody {
+    scene: Value,
+    /// The records (each a ground motion, optionally named), as a multi-record search's.
+    motions: Vec<Value>,
+    observations: Value,
+    range: RangeSpec,
+    #[serde(default)]
+    tolerance: Option<Amplitude>,
+    #[serde(default)]
+    scan_points: Option<usize>,
+}
+
+/// One observation of a site analysis: a criterion and whether its damage was seen.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObservationSpec {
+    criterion: Value,
+    /// `true`: the damage is there (a lower bound on the PGA); `false`: it is not (an upper one).
+    observed: bool,
+}
+
+/// Observations of one site analysis: a site's field observations number a handful (docs/
+/// observations.md), and each one is a search per record, so 50 bounds one job to 50 × 100
+/// searches while the work budget bounds their runs.
+pub const MAX_OBSERVATIONS: usize = 50;
+
+/// `POST /v1/site-analyses` body → site analysis input (amplitudes converted to m/s²).
+pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
+    if !body.is_object() {
+        return Err(ApiError::invalid_field(
+            "",
+            "the body must be a JSON object {\"scene\", \"motions\", \"observations\", \"range\"}",
+        ));
+    }
+    let b: SiteBody = typed("", body)?;
+    let (scene, records) = parse_records(&b.scene, &b.motions, limits)?;
+    let items = match &b.observations {
+        Value::Array(v) if !v.is_empty() => v,
+        _ => return Err(ApiError::invalid_field(
+            "/observations",
+            "/observations: give a non-empty array of {\"criterion\": …, \"observed\": true|false}",
+        )),
+    };
+    if items.len() > MAX_OBSERVATIONS {
+        return Err(ApiError::limit_exceeded(
+            "/observations",
+            format!(
+                "/observations: {} observations exceed the limit of {MAX_OBSERVATIONS} per analysis",
+                items.len()
+            ),
+        ));
+    }
+    let mut observations = Vec::new();
+    for (i, item) in items.iter().enumerate() {
+        let p = format!("/observations/{i}");
+        let spec: ObservationSpec = typed(&p, item)?;
+        let cp = format!("{p}/criterion");
+        if spec.criterion.is_array() {
+            return Err(ApiError::invalid_field(
+                cp.clone(),
+                format!(
+                    "{cp}: an observation is one criterion; combine several with a damage object \
+                     ({{\"kind\": \"all\" | \"any\", \"of\": […]}}, docs/format.md §3)"
+                ),
+            ));
+        }
+        let mut parsed = parse_criteria(&spec.criterion, &cp, &scene)?;
+        let (_, criterion) = parsed.remove(0);
+        observations.push(crate::analysis::observations::Observation {
+            criterion,
+            observed: spec.observed,
+        });
+    }
+    let (min, max, tolerance, scan_points) =
+        search_range(&b.range, b.tolerance.as_ref(), b.scan_points, limits)?;
+    // Each observation is one search per record.
+    let runs = observations.len() as f64
+        * super::budget::search_runs(records.len(), scan_points, max - min, tolerance);
+    let duration = scene.control.duration.unwrap_or_else(|| {
+        records
+            .iter()
+            .filter_map(|(_, m)| m.duration().map(|d| d + 2.0))
+            .fold(0.0, f64::max)
+    });
+    let steps = (duration / scene.control.time_step).ceil();
+    super::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
+    let motion = records[0].1.clone();
+    let mut motion_summary = motion_summary(&motion);
+    if let Some(obj) = motion_summary.as_object_mut() {
+        let list: Vec<Value> = records
+            .iter()
+            .map(|(name, m)| {
+                serde_json::json!({"name": name, "pga": m.pga(), "duration": m.duration(), "provenance": m.provenance})
+            })
+            .collect();
+        obj.insert("records".into(), Value::Array(list));
+    }
+    Ok(Parsed {
+        input: JobInput::SiteAnalysis {
+            scene,
+            motion,
+            records,
+            observations,
+            request: PgaRequest {
+                criteria: Vec::new(),
+                combine: Combine::All,
+                min,
+                max,
+                tolerance,
+                scan_points,
+            },
+        },
+        motion_summary,
+    })
+}
+
+/// The searched range of a request (`range`, `tolerance`, `scan_points`), amplitudes in m/s²:
+/// (min, max, tolerance, scan points), each error naming its field.
+fn search_range(
+    range: &RangeSpec,
+    tolerance: Option<&Amplitude>,
+    scan_points: Option<usize>,
+    limits: &Limits,
+) -> Result<(f64, f64, f64, usize), ApiError> {
+    // Amplitudes in m/s² from here on.
+    let units = range.units;
+    let amplitude = |a: &Amplitude, p: &str| {
+        a.to_si(units)
+            .map_err(|e| ApiError::invalid_field(p, format!("{p}: {e}")))
+    };
+    let min = amplitude(&range.min, "/range/min")?;
+    let max = amplitude(&range.max, "/range/max")?;
+    if !(max.is_finite() && max > min) {
+        return Err(ApiError::invalid_field(
+            "/range/max",
+            format!(
+                "/range/max: must be finite and > range.min, got {} m/s² ≤ {} m/s²",
+                crate::quantity::sig(max),
+                crate::quantity::sig(min)
+            ),
+        ));
+    }
+    // Default resolution: 1 % of the searched range.
+    let tolerance = match tolerance {
+        Some(t) => amplitude(t, "/tolerance")?,
+        None => (max - min) / 100.0,
+    };
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(ApiError::invalid_field(
+            "/tolerance",
+            "/tolerance: must be a finite amplitude > 0",
+        ));
+    }
+    let scan_points = scan_points.unwrap_or(DEFAULT_SCAN_POINTS);
+    if !(2..=limits.max_scan_points).contains(&scan_points) {
+        return Err(ApiError::invalid_field(
+            "/scan_points",
+            format!(
+                "/scan_points: must lie in 2..={}, got {scan_points}",
+                limits.max_scan_points
+            ),
+        ));
+    }
+    Ok((min, max, tolerance, scan_points))
 }
 
 #[cfg(test)]

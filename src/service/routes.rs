@@ -4,7 +4,7 @@ use super::auth::Access;
 use super::events::{job_stream, EventParams, JobEvent};
 use super::histories::Histories;
 use super::problem::ApiError;
-use super::request::{json_body, parse_pga, parse_run};
+use super::request::{json_body, parse_pga, parse_run, parse_site};
 use super::store::{
     rfc3339, CancelOutcome, DeleteOutcome, JobKind, JobRecord, JobStatus, NewJob, QueueFull,
 };
@@ -64,6 +64,23 @@ pub fn route_table() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
             Method::POST,
             "/v1/pga-searches/{id}/cancel",
             post(cancel_pga),
+        ),
+        (Method::POST, "/v1/site-analyses", post(submit_site)),
+        (Method::GET, "/v1/site-analyses/{id}", get(get_site)),
+        (
+            Method::GET,
+            "/v1/site-analyses/{id}/events",
+            get(site_events),
+        ),
+        (
+            Method::POST,
+            "/v1/site-analyses/{id}/cancel",
+            post(cancel_site),
+        ),
+        (
+            Method::DELETE,
+            "/v1/site-analyses/{id}",
+            delete(delete_site),
         ),
         (Method::GET, "/healthz", get(healthz)),
         (Method::GET, "/openapi.yaml", get(openapi)),
@@ -235,6 +252,7 @@ fn signable(path: &str) -> bool {
         segs.as_slice(),
         ["", "v1", "jobs", id, "trajectory.mcap" | "histories" | "events"]
             | ["", "v1", "pga-searches", id, "events" | "fragility.svg"]
+            | ["", "v1", "site-analyses", id, "events"]
             if !id.is_empty()
     )
 }
@@ -337,10 +355,10 @@ pub(super) async fn load(
     let job = blocking(move || store.get(id))
         .await?
         .map_err(ApiError::internal)?;
-    let what = if kind == JobKind::Run {
-        "job"
-    } else {
-        "PGA search"
+    let what = match kind {
+        JobKind::Run => "job",
+        JobKind::SiteAnalysis => "site analysis",
+        JobKind::PgaSearch | JobKind::PgaRun => "PGA search",
     };
     match job {
         Some(j) if j.kind == kind && access.may_see(j.owner.as_deref()) => Ok(j),
@@ -373,6 +391,7 @@ fn base(kind: JobKind) -> &'static str {
         JobKind::Run => "/v1/jobs",
         // Child runs are not served over HTTP; they belong to their search.
         JobKind::PgaSearch | JobKind::PgaRun => "/v1/pga-searches",
+        JobKind::SiteAnalysis => "/v1/site-analyses",
     }
 }
 
@@ -383,7 +402,7 @@ fn links(kind: JobKind, id: Uuid) -> Value {
             "self": b, "events": format!("{b}/events"), "cancel": format!("{b}/cancel"),
             "histories": format!("{b}/histories"), "trajectory": format!("{b}/trajectory.mcap"),
         }),
-        JobKind::PgaSearch | JobKind::PgaRun => {
+        JobKind::PgaSearch | JobKind::PgaRun | JobKind::SiteAnalysis => {
             json!({"self": b, "events": format!("{b}/events"), "cancel": format!("{b}/cancel")})
         }
     }
@@ -461,6 +480,7 @@ async fn submit(
         let parsed = match kind {
             JobKind::Run => parse_run(&value, &limits)?,
             JobKind::PgaSearch | JobKind::PgaRun => parse_pga(&value, &limits)?,
+            JobKind::SiteAnalysis => parse_site(&value, &limits)?,
         };
         Ok::<_, ApiError>((value, parsed.motion_summary))
     })
@@ -495,6 +515,12 @@ async fn submit(
         JobKind::PgaSearch | JobKind::PgaRun => (
             core.limits.max_queued_searches_per_token,
             "PGA searches",
+            "--max-queued-searches-per-token",
+        ),
+        // A site analysis is searches too (one per observation and record); its own count.
+        JobKind::SiteAnalysis => (
+            core.limits.max_queued_searches_per_token,
+            "site analyses",
             "--max-queued-searches-per-token",
         ),
     };
@@ -537,6 +563,50 @@ async fn submit_job(
     req: axum::extract::Request,
 ) -> ApiResult {
     submit(s, access, req, JobKind::Run).await
+}
+
+async fn submit_site(
+    State(s): State<AppState>,
+    access: Access,
+    req: axum::extract::Request,
+) -> ApiResult {
+    submit(s, access, req, JobKind::SiteAnalysis).await
+}
+
+async fn get_site(
+    State(s): State<AppState>,
+    access: Access,
+    id: Result<Path<String>, PathRejection>,
+) -> ApiResult {
+    let j = load(&s, &access, parse_id(id)?, JobKind::SiteAnalysis).await?;
+    Ok(json_response(
+        StatusCode::OK,
+        job_json_signed(&j, s.core.server.signing.as_ref()),
+    ))
+}
+
+async fn site_events(
+    State(s): State<AppState>,
+    access: Access,
+    id: Result<Path<String>, PathRejection>,
+) -> ApiResult {
+    events(s, access, id, JobKind::SiteAnalysis).await
+}
+
+async fn cancel_site(
+    State(s): State<AppState>,
+    access: Access,
+    id: Result<Path<String>, PathRejection>,
+) -> ApiResult {
+    cancel(s, access, id, JobKind::SiteAnalysis).await
+}
+
+async fn delete_site(
+    State(s): State<AppState>,
+    access: Access,
+    id: Result<Path<String>, PathRejection>,
+) -> ApiResult {
+    delete_kind(s, access, id, JobKind::SiteAnalysis).await
 }
 
 async fn submit_pga(
@@ -685,6 +755,7 @@ fn signed_links(kind: JobKind, id: Uuid, key: &super::auth::SigningKey) -> Value
         JobKind::PgaSearch | JobKind::PgaRun => {
             json!({"events": sign("events"), "fragility": sign("fragility.svg")})
         }
+        JobKind::SiteAnalysis => json!({"events": sign("events")}),
     };
     v["expires_at"] = json!(rfc3339(
         i64::try_from(now + key.validity.as_secs()).unwrap_or(i64::MAX / 1000) * 1000

@@ -14,7 +14,7 @@
 //! RLIMIT_FSIZE), asks the kernel to kill it when the worker thread that started it dies
 //! (PR_SET_PDEATHSIG, Linux), and checks its parent is still the server (else exits). Unix only;
 //! elsewhere `ashlar serve` runs jobs in-process.
-use super::request::{parse_pga, parse_run, JobInput, Limits};
+use super::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
 use super::store::JobKind;
 use super::worker::{ChildRequest, RunHooks, RunnerOutcome};
 use serde::{Deserialize, Serialize};
@@ -507,6 +507,7 @@ fn run_spec(spec: &ChildSpec, out: &Mutex<std::io::Stdout>) -> Result<ChildMessa
     let parsed = match spec.kind.as_str() {
         "run" => parse_run(&spec.request, &limits),
         "pga_search" => parse_pga(&spec.request, &limits),
+        "site_analysis" => parse_site(&spec.request, &limits),
         k => return Err(format!("a job of kind {k} does not run in a child process")),
     }
     .map_err(|e| format!("the stored request is no longer accepted: {}", e.detail))?;

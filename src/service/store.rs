@@ -18,6 +18,8 @@ pub enum JobKind {
     Run,
     /// A PGA threshold search (`POST /v1/pga-searches`).
     PgaSearch,
+    /// Several observations at one site over a set of records (`POST /v1/site-analyses`).
+    SiteAnalysis,
     /// One run of a fanned-out PGA search at one amplitude: a child job (`parent` = the
     /// search), never submitted over HTTP nor listed by `GET /v1/jobs`.
     PgaRun,
@@ -29,6 +31,7 @@ impl JobKind {
             JobKind::Run => "run",
             JobKind::PgaSearch => "pga_search",
             JobKind::PgaRun => "pga_run",
+            JobKind::SiteAnalysis => "site_analysis",
         }
     }
     pub(crate) fn parse(s: &str) -> Result<Self, StoreError> {
@@ -36,6 +39,7 @@ impl JobKind {
             "run" => Ok(JobKind::Run),
             "pga_search" => Ok(JobKind::PgaSearch),
             "pga_run" => Ok(JobKind::PgaRun),
+            "site_analysis" => Ok(JobKind::SiteAnalysis),
             other => Err(StoreError(format!(
                 "unknown job kind {other:?} in the store"
             ))),

@@ -189,7 +189,7 @@ fn query_usize(
     }
 }
 
-/// `GET /v1/jobs?limit=N&kind=run|pga_search`: recent jobs and searches, newest first, each as
+/// `GET /v1/jobs?limit=N&kind=run|pga_search|site_analysis`: recent jobs and searches, newest first, each as
 /// `GET /v1/jobs/{id}` (or `/v1/pga-searches/{id}`) answers.
 pub async fn list_jobs(
     State(s): State<AppState>,
@@ -204,10 +204,11 @@ pub async fn list_jobs(
         Some((_, v)) => Some(match v.as_str() {
             "run" => JobKind::Run,
             "pga_search" => JobKind::PgaSearch,
+            "site_analysis" => JobKind::SiteAnalysis,
             other => {
                 return Err(ApiError::invalid_parameter(
                     "kind",
-                    format!("?kind={other:?}: expected run or pga_search"),
+                    format!("?kind={other:?}: expected run, pga_search or site_analysis"),
                 ))
             }
         }),

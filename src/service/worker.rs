@@ -2,7 +2,7 @@
 //! [`JobRunner`] (the physics never runs on the async runtime). Also the shared core the routes
 //! see ([`Core`]): store, limits, progress hub, the stop switches of running jobs.
 use super::events::{Hub, JobEvent};
-use super::request::{parse_pga, parse_run, JobInput, Limits};
+use super::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
 use super::store::{Finish, JobKind, JobRecord, JobStatus, JobStore, NewJob};
 use serde_json::Value;
 use std::collections::HashMap;
@@ -46,10 +46,19 @@ pub fn analysis_runner() -> JobRunner {
             ..Default::default()
         };
         match input {
-            JobInput::Run { scene, motion } => {
+            JobInput::Run {
+                scene,
+                motion,
+                criteria,
+            } => {
                 let out =
                     crate::analysis::run::run(scene, motion, &opts).map_err(|e| e.to_string())?;
-                let summary = serde_json::to_value(&out.summary).map_err(|e| e.to_string())?;
+                let mut summary = serde_json::to_value(&out.summary).map_err(|e| e.to_string())?;
+                // The request's damage criteria, judged on the finished run (`run --criterion`).
+                if !criteria.is_empty() && !out.cancelled {
+                    let v = crate::analysis::pga::verdicts(criteria, &out.summary);
+                    summary["criteria"] = serde_json::to_value(v).map_err(|e| e.to_string())?;
+                }
                 Ok(if out.cancelled {
                     RunnerOutcome::Cancelled(Some(summary))
                 } else {
@@ -76,6 +85,31 @@ pub fn analysis_runner() -> JobRunner {
                     std::fs::write(hooks.out_dir.join("fragility.svg"), svg)
                         .map_err(|e| format!("writing fragility.svg: {e}"))?;
                 }
+                let text = serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?;
+                std::fs::write(hooks.out_dir.join("result.json"), text)
+                    .map_err(|e| format!("writing result.json: {e}"))?;
+                Ok(RunnerOutcome::Completed(value))
+            }
+            JobInput::SiteAnalysis {
+                scene,
+                records,
+                observations,
+                request,
+                ..
+            } => {
+                // Per record the interval, over them the distribution (docs/observations.md).
+                let res = crate::analysis::observations::site_analysis(
+                    scene,
+                    records,
+                    observations,
+                    request,
+                    &opts,
+                );
+                if hooks.cancel.load(Ordering::Relaxed) {
+                    return Ok(RunnerOutcome::Cancelled(None));
+                }
+                let res = res.map_err(|e| e.to_string())?;
+                let value = serde_json::to_value(&res).map_err(|e| e.to_string())?;
                 let text = serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?;
                 std::fs::write(hooks.out_dir.join("result.json"), text)
                     .map_err(|e| format!("writing result.json: {e}"))?;
@@ -474,6 +508,7 @@ fn parse_stored(core: &Core, job: &JobRecord) -> Result<JobInput, String> {
     let parsed = match job.kind {
         JobKind::Run => parse_run(&job.request, &core.limits),
         JobKind::PgaSearch => parse_pga(&job.request, &core.limits),
+        JobKind::SiteAnalysis => parse_site(&job.request, &core.limits),
         JobKind::PgaRun => return Err("a child run has no request of its own".into()),
     };
     parsed

@@ -15,6 +15,7 @@ mod service_openapi;
 mod service_pga;
 mod service_routes;
 mod service_scene_import;
+mod service_site;
 #[path = "../service_support/mod.rs"]
 mod service_support;
 mod service_templates;

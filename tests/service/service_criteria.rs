@@ -1,4 +1,4 @@
-//! Damage criteria in `POST /v1/pga-searches` (docs/format.md §3 "Damage criteria";
+//! Damage criteria in `POST /v1/pga-searches` and `POST /v1/jobs` (docs/format.md §3 "Damage criteria";
 //! docs/service.md): a criterion is a string or a damage object, in single-record searches and
 //! in fragility studies (`motions`), and a submission naming blocks that are not free blocks of
 //! the scene is refused at once with one 422 that names every such block (before, only the
@@ -73,6 +73,95 @@ async fn site_criteria_as_objects_are_accepted_and_every_missing_block_is_named(
     call(&router, post_json("/v1/pga-searches", &bad))
         .await
         .problem(422);
+    svc.shutdown(Duration::ZERO);
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// A run's `criterion` (`POST /v1/jobs`, as `ashlar run --criterion`), judged on the finished
+/// run by the real engine. Reference: docs/observations.md's two columns under the half-sine
+/// pulse of period 1 s, whose thresholds were searched to 0.02 m/s² (A falls from 5.64 m/s², B
+/// from 8.60 m/s², both monotonic; A's is Housner's amplitude, checked by an independent RK4 in
+/// tests/engine/rocking.rs): at 7 m/s², 1.4 m/s² clear of both, A falls and B stands.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_runs_criteria_are_judged_on_its_summary() {
+    use ashlar::service::{analysis_runner, app, Service, ServiceConfig, WorkerParams};
+    let dir = temp_dir("run-criteria");
+    let mut cfg = ServiceConfig::new(&dir);
+    cfg.workers = WorkerParams {
+        workers: 1,
+        idle_poll: Duration::from_millis(50),
+        ..WorkerParams::default()
+    };
+    let svc = Service::start(cfg, analysis_runner()).expect("start");
+    let router = app(svc.state());
+    let read = |name: &str| -> serde_json::Value {
+        let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(name);
+        serde_json::from_str(&std::fs::read_to_string(p).expect("read")).expect("json")
+    };
+    let mut motion = read("examples/half-sine-pulse.json");
+    motion["scale"] = json!({"target_pga": 7.0});
+    let criteria = json!([
+        "toppled:A",
+        {"kind": "fallen", "blocks": ["B"]},
+        {"kind": "not", "of": {"kind": "fallen", "blocks": ["B"]}}
+    ]);
+    let body = json!({"scene": read("examples/two-columns.json"), "motion": motion, "criterion": criteria});
+    let r = call(&router, post_json("/v1/jobs", &body)).await;
+    assert_eq!(r.status, 202, "{}", r.text());
+    let id = r.json()["id"].as_str().expect("id").to_string();
+    let j = wait_for(
+        &router,
+        &format!("/v1/jobs/{id}"),
+        Duration::from_secs(300),
+        is_terminal,
+    )
+    .await;
+    assert_eq!(j["status"], "succeeded", "{j}");
+    let got: Vec<(String, bool)> = j["summary"]["criteria"]
+        .as_array()
+        .expect("summary.criteria")
+        .iter()
+        .map(|v| {
+            (
+                v["criterion"].as_str().expect("c").to_string(),
+                v["met"].as_bool().expect("met"),
+            )
+        })
+        .collect();
+    assert_eq!(
+        got,
+        vec![
+            ("toppled:A".to_string(), true),
+            (r#"{"kind":"fallen","blocks":["B"]}"#.to_string(), false),
+            (
+                r#"{"kind":"not","of":{"kind":"fallen","blocks":["B"]}}"#.to_string(),
+                true
+            ),
+        ],
+        "{}",
+        j["summary"]
+    );
+    // Without a criterion the summary has none; a block that is not free is a 422 at once.
+    let mut plain = body.clone();
+    plain.as_object_mut().expect("o").remove("criterion");
+    plain["scene"]["control"]["duration"] = json!(0.1);
+    let r = call(&router, post_json("/v1/jobs", &plain)).await;
+    assert_eq!(r.status, 202, "{}", r.text());
+    let id = r.json()["id"].as_str().expect("id").to_string();
+    let j = wait_for(
+        &router,
+        &format!("/v1/jobs/{id}"),
+        Duration::from_secs(120),
+        is_terminal,
+    )
+    .await;
+    assert!(j["summary"].get("criteria").is_none(), "{j}");
+    let mut bad = body;
+    bad["criterion"] = json!(["toppled:A", "toppled:base"]);
+    let p = call(&router, post_json("/v1/jobs", &bad))
+        .await
+        .problem(422);
+    assert_eq!(p["pointer"], "/criterion/1", "{p}");
     svc.shutdown(Duration::ZERO);
     std::fs::remove_dir_all(dir).ok();
 }

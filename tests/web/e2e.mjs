@@ -506,7 +506,9 @@ try {
       assert(listed.includes(name), `${name} not listed: ${listed}`);
       const scene = JSON.parse(readFileSync(new URL(`../../examples/${name}.json`, import.meta.url), "utf8"));
       await page.selectOption("#scene-example", name);
-      await page.waitForFunction((want) => document.querySelectorAll("#scene-svg polygon").length === want && /^Example/.test(document.getElementById("scene-info").textContent), scene.blocks.length, { timeout: 10000 });
+      // The drawing of this scene, not of the one before (column and incline both have two
+      // blocks: counting alone passed on the old drawing once).
+      await page.waitForFunction((ids) => JSON.stringify([...document.querySelectorAll("#scene-svg polygon")].map((p) => p.dataset.id)) === JSON.stringify(ids) && /^Example/.test(document.getElementById("scene-info").textContent), scene.blocks.map((b) => b.id), { timeout: 10000 });
       const held = await page.$$eval("#scene-svg polygon.held", (ps) => ps.map((p) => p.dataset.id));
       const want = scene.blocks.filter((b) => b.fixed || (scene.excitation && scene.excitation.block === b.id)).map((b) => b.id);
       assert(JSON.stringify(held) === JSON.stringify(want), `${name}: shaded ${held}, fixed ${want}`);
@@ -595,6 +597,104 @@ try {
     await page.setInputFiles("#dxf-file", { name: "any.dxf", mimeType: "application/dxf", buffer: Buffer.from(dxf) });
     await page.waitForFunction(() => /cannot import DXF/.test(document.getElementById("dxf-error").textContent), null, { timeout: 10000 });
     await page.unroute("**/v1/scenes/import");
+  });
+
+  await check("DXF upload against the real POST /v1/scenes/import: an ezdxf drawing (tests/fixtures/dxf) becomes its scene, every vertex within 1e-9 m; a bad drawing's 422 names the entity", async () => {
+    const fixture = (name) => readFileSync(new URL(`../fixtures/dxf/${name}`, import.meta.url));
+    const want = JSON.parse(fixture("wall_mm.json").toString("utf8"));
+    const calls = [];
+    const onResponse = (r) => { if (r.url().endsWith("/v1/scenes/import")) calls.push(r.status()); };
+    page.on("response", onResponse);
+    try {
+      await page.setInputFiles("#dxf-file", { name: "wall_mm.dxf", mimeType: "application/dxf", buffer: fixture("wall_mm.dxf") });
+      await page.waitForFunction((n) => /^wall_mm\.dxf: /.test(document.getElementById("scene-info").textContent) && document.querySelectorAll("#scene-svg polygon").length === n, want.blocks.length, { timeout: 20000 });
+      const got = await page.evaluate(() => state.scene);
+      assert(got.blocks.length === want.blocks.length, `${got.blocks.length} blocks, the drawing has ${want.blocks.length}`);
+      let worst = 0;
+      want.blocks.forEach((w, k) => {
+        const b = got.blocks[k];
+        assert(b.id === `${w.layer}-${w.handle}` && Boolean(b.fixed) === w.fixed, `block ${k}: ${b.id} fixed=${b.fixed}, want ${w.layer}-${w.handle} fixed=${w.fixed}`);
+        assert(b.vertices.length === w.vertices.length, `${b.id}: ${b.vertices.length} vertices, want ${w.vertices.length}`);
+        b.vertices.forEach((v, i) => { for (const c of [0, 1]) worst = Math.max(worst, Math.abs(v[c] - w.vertices[i][c])); });
+      });
+      // 1e-9 m: the issue's target for DXF import (the conversion is exact to rounding).
+      assert(worst <= 1e-9, `largest vertex error ${worst} m`);
+      const bad = JSON.parse(fixture("bad_open.json").toString("utf8"));
+      await page.setInputFiles("#dxf-file", { name: "bad_open.dxf", mimeType: "application/dxf", buffer: fixture("bad_open.dxf") });
+      await page.waitForFunction(() => document.getElementById("dxf-error").textContent.length > 0, null, { timeout: 20000 });
+      const text = await page.textContent("#dxf-error");
+      assert(text.includes("bad_open.dxf") && text.includes(`entity ${bad.handle} on layer "${bad.layer}"`), text);
+      assert(calls.length === 2 && calls[0] === 200 && calls[1] === 422, `the real route answered ${calls}`);
+      console.log(`     ${want.blocks.length} blocks, largest vertex error ${worst.toExponential(2)} m; ${text.slice(0, 120)}`);
+    } finally {
+      page.off("response", onResponse);
+    }
+  });
+
+  await check("site analysis: observations entered (fell / stands), records picked, submitted, intervals and the distribution shown", async () => {
+    const scene = readFileSync(new URL("../../examples/two-columns.json", import.meta.url));
+    await page.setInputFiles("#scene-file", { name: "two-columns.json", mimeType: "application/json", buffer: scene });
+    await page.waitForFunction(() => /^two-columns\.json: .*\(2 free\)/.test(document.getElementById("scene-info").textContent), null, { timeout: 10000 });
+    await page.fill("#duration", "1.5");
+    await page.check('input[name="analysis"][value="site"]');
+    assert(!(await page.isHidden("#site-box")) && !(await page.isHidden("#pga-fields")), "the observations are not offered");
+    // No observation yet: refused on the page, next to the observations.
+    await page.click("#submit-button");
+    await page.waitForFunction(() => /at least one observation/.test(document.getElementById("observations-error").textContent), null, { timeout: 5000 });
+    // A fell (clicked on the drawing), B stands (a JSON criterion).
+    await page.selectOption("#criterion-kind", "toppled");
+    await page.click('#scene-svg polygon[data-id="A"]');
+    await page.click("#obs-add-fell");
+    await page.selectOption("#criterion-kind", "json");
+    await page.fill("#criterion-json", '{"kind": "fallen", "blocks": ["B"]}');
+    await page.click("#obs-add-stood");
+    const rows = await page.$$eval("#obs-body tr", (rs) => rs.map((r) => [r.querySelector("code").textContent, r.querySelector("select").value]));
+    assert(JSON.stringify(rows) === JSON.stringify([["toppled:A", "seen"], ['{"kind": "fallen", "blocks": ["B"]}', "not"]]), JSON.stringify(rows));
+    // Two records: two half-sine pulses as record files (JSON ground motions).
+    const pulseFile = (period) => ({ name: `pulse-${period}s.json`, mimeType: "application/json", buffer: Buffer.from(JSON.stringify({ horizontal: { pulse: { amplitude: 1, period, cycles: 0.5, units: "m/s2" } } })) });
+    await page.check('input[name="motion-source"][value="record"]');
+    await page.setInputFiles("#record-file", [pulseFile(0.5), pulseFile(0.7)]);
+    await page.fill("#range-min", "2");
+    await page.fill("#range-max", "14");
+    await page.selectOption("#range-units", "m/s2");
+    await page.fill("#tolerance", "0.5");
+    await page.fill("#scan-points", "4");
+    const sent = page.waitForRequest((r) => r.url().endsWith("/v1/site-analyses") && r.method() === "POST", { timeout: 20000 });
+    await page.click("#submit-button");
+    const body = (await sent).postDataJSON();
+    assert(body.motions.length === 2 && body.observations.length === 2 && body.observations[0].observed === true && body.observations[1].observed === false, JSON.stringify(body).slice(0, 300));
+    await page.waitForFunction(() => /Queued site analysis/.test(document.getElementById("submit-status").textContent), null, { timeout: 20000 });
+    const id = (await page.textContent("#submit-status")).match(/Queued site analysis (\w+)/)[1];
+    await page.waitForFunction((id) => new RegExp(`Site analysis ${id}: succeeded`).test(document.getElementById("result-head").textContent) && !document.getElementById("site-view").hidden, id, { timeout: 300000 });
+    // What the page shows is the stored result.
+    const job = await (await fetch(`${base}/v1/jobs?kind=site_analysis&limit=1`)).json();
+    const r = job.jobs[0].result;
+    const recs = await page.$$eval("#site-records tbody tr", (rs) => rs.map((x) => x.textContent));
+    assert(recs.length === 2 && recs[0].startsWith("pulse-0.5s.json") && recs[1].startsWith("pulse-0.7s.json"), JSON.stringify(recs));
+    const dist = await page.textContent("#site-distribution");
+    const d = r.distribution;
+    const shown = (v) => dist.includes(String(Number(Number(v).toPrecision(3)))); // the page's fmt()
+    assert(d.lognormal || d.empirical, `no distribution: ${JSON.stringify(d).slice(0, 300)}`);
+    for (const p of [d.lognormal, d.empirical]) if (p) assert(shown(p.median), `median ${p.median} not in: ${dist}`);
+    assert(/independent given the PGA/.test(await page.textContent("#site-assumes")), "the assumption is not stated");
+    assert((await colouredPixels(page, "plot-site")) > 100, "the distribution is not drawn");
+    console.log(`     ${recs.join(" | ").slice(0, 200)}`);
+    console.log(`     ${dist.slice(0, 200)}`);
+    // The page's worked example is docs/observations.md's: A fell, B stands, under the bundled
+    // pulse; the interval there is [5.64, 8.60] m/s² (A's threshold is Housner's overturning
+    // amplitude, checked by an independent RK4 in tests/engine/rocking.rs).
+    await page.click("#site-example");
+    await page.waitForFunction(() => document.querySelectorAll("#obs-body tr").length === 2 && document.querySelectorAll("#scene-svg polygon").length === 3, null, { timeout: 10000 });
+    await page.click("#submit-button");
+    await page.waitForFunction((prev) => { const m = document.getElementById("submit-status").textContent.match(/Queued site analysis (\w+)/); return m && m[1] !== prev; }, id, { timeout: 20000 });
+    const id2 = (await page.textContent("#submit-status")).match(/Queued site analysis (\w+)/)[1];
+    await page.waitForFunction((id) => new RegExp(`Site analysis ${id}: succeeded`).test(document.getElementById("result-head").textContent) && !document.getElementById("site-view").hidden, id2, { timeout: 300000 });
+    const worked = await page.textContent("#site-records");
+    assert(worked.includes("5.64 m/s²") && worked.includes("8.6 m/s²"), `worked example: ${worked}`);
+    console.log(`     worked example: ${worked.slice(0, 160)}`);
+    await page.selectOption("#criterion-kind", "toppled");
+    await page.check('input[name="analysis"][value="run"]');
+    await page.fill("#duration", "");
   });
 
   if (baseTokens && token) {
