@@ -208,24 +208,12 @@ fn frame_p2(gamma: f64) -> f64 {
     3.0 * G / (4.0 * r) * (1.0 + 2.0 * gamma) / (1.0 + 3.0 * gamma)
 }
 
-/// Two columns centred at x = ±0.8 m on a fixed base, the cap spanning their outer faces
-/// (x ∈ [−1, 1]) with the thickness that makes its mass γ × the columns'.
+/// The frame of `ashlar::presets::RockingFrame::SEED` (columns b = B, h = H centred at
+/// x = ±0.8 m, the cap spanning their outer faces, φ = 75°) with cap mass ratio γ.
 fn frame_scene(gamma: f64, solver: &str) -> ashlar::scene::Scene {
-    let column_area = 2.0 * (2.0 * B) * (2.0 * H);
-    let (x0, x1) = (-0.8 - B, 0.8 + B);
-    let t = gamma * column_area / (x1 - x0);
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": rect(-3.0, -0.5, 3.0, 0.0) },
-        { "id": "left", "material": "stone", "block_model": "rigid", "vertices": rect(-0.8 - B, 0.0, -0.8 + B, 2.0 * H) },
-        { "id": "right", "material": "stone", "block_model": "rigid", "vertices": rect(0.8 - B, 0.0, 0.8 + B, 2.0 * H) },
-        { "id": "cap", "material": "stone", "block_model": "rigid", "vertices": rect(x0, 2.0 * H, x1, 2.0 * H + t) },
-    ]);
-    // φ = 75° everywhere: no joint slips (the rocking frame's model has none).
-    parse(&scene_json(
-        blocks,
-        75.0,
-        json!({ "model": "dda", "duration": 4.0, "contact_solver": solver }),
-    ))
+    let frame = ashlar::presets::RockingFrame::SEED.gamma(gamma);
+    assert_eq!((frame.half_width, frame.half_height), (B, H));
+    parse(&frame.json(json!({ "model": "dda", "duration": 4.0, "contact_solver": solver })))
 }
 
 /// Tolerance 2 % on the overturning amplitude (docs/verification.md). The reference overturns without an
@@ -485,23 +473,14 @@ fn joint_margins(s: f64, th: f64, w: f64, acc: f64, ag: f64) -> (f64, f64) {
 }
 
 fn pier_scene(solver: &str) -> ashlar::scene::Scene {
-    let course = 2.0 * H / COURSES as f64;
-    let mut blocks = vec![
-        json!({ "id": "base", "material": "stone", "fixed": true, "vertices": rect(-2.0, -0.5, 2.0, 0.0) }),
-    ];
-    for k in 0..COURSES {
-        let y = k as f64 * course;
-        blocks.push(
-            json!({ "id": format!("course{k}"), "material": "stone", "block_model": "rigid",
-                            "vertices": rect(-B, y, B, y + course) }),
-        );
-    }
-    // φ = 75° (μ = 3.7): far above the friction demand found along the reference (asserted).
-    parse(&scene_json(
-        json!(blocks),
-        75.0,
-        json!({ "model": "dda", "duration": 4.0, "contact_solver": solver }),
-    ))
+    // `ashlar::presets::Pier::SEED`: φ = 75° (μ = 3.7), far above the friction demand found
+    // along the reference (asserted).
+    let pier = ashlar::presets::Pier::SEED;
+    assert_eq!(
+        (pier.half_width, pier.half_height, pier.courses),
+        (B, H, COURSES)
+    );
+    parse(&pier.json(json!({ "model": "dda", "duration": 4.0, "contact_solver": solver })))
 }
 
 /// Tolerance 2 % on the overturning amplitude (docs/verification.md, as for the monolithic column in
