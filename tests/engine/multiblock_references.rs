@@ -327,8 +327,13 @@ fn rocking_frame_history_to_first_impact_dual() {
 /// either side (the frame is one degree of freedom with the column's potential shape, so
 /// r² = (cos(α − θ1) − cos α)/(cos(α − θ0) − cos α) as for one column).
 fn frame_restitution(gamma: f64, solver: &str, dt: Option<f64>) -> f64 {
+    frame_restitution_from(gamma, solver, dt, 0.5)
+}
+
+/// `frame_restitution` released from θ0 = `fraction` × α.
+fn frame_restitution_from(gamma: f64, solver: &str, dt: Option<f64>, fraction: f64) -> f64 {
     let alpha = (B / H).atan();
-    let theta0 = 0.5 * alpha;
+    let theta0 = fraction * alpha;
     let (co, si) = (theta0.cos(), theta0.sin());
     let column = |xc: f64| {
         let pivot = xc + B;
@@ -410,6 +415,24 @@ fn rocking_frame_restitution_makris_vassiliou() {
         }
     }
     assert!(worst < 0.01, "{worst}");
+}
+
+/// Diagnosis of the Loma Prieta miss (prints; ignored): the frame's restitution from small
+/// releases, as in the record's small rocking before the engine leaves the reference.
+#[test]
+#[ignore = "diagnosis: prints the frame's restitution from small releases against Makris–Vassiliou's"]
+fn frame_restitution_small_releases() {
+    let alpha = (B / H).atan();
+    let mv = frame_restitution_law(1.0, alpha);
+    for fraction in [0.5, 0.2, 0.1, 0.05, 0.025] {
+        for dt in [None, Some(2e-4)] {
+            let r = frame_restitution_from(1.0, "penalty", dt, fraction);
+            eprintln!(
+                "frame γ = 1, penalty, Δt {dt:?}, θ0 = {fraction} α: r = {r:.5} against {mv:.5} ({:+.3} %)",
+                100.0 * (r / mv - 1.0)
+            );
+        }
+    }
 }
 
 /// The dual solver at the frame's impact with a shorter step: it must complete.
@@ -978,12 +1001,81 @@ fn frame_peak_rotation_kobe_seven_tenths_g_dual() {
 /// α), while the columns still move together (mismatch 6e-4 rad); at Δt = 2e-4 s it leaves at
 /// 7.2 s after 16 impacts (mismatch 3e-5 rad). The columns then separate (mismatch 0.096 rad at
 /// 1 ms, 0.019 rad at 2e-4 s; cap rotation up to 0.018 rad), so the engine's frame is no longer
-/// the one-degree-of-freedom frame of the reference. Suspects: the frame's small, frequent
-/// impacts (the restitution test measures one impact from α/2), and the frame's own
-/// kinematics after they separate. With the dual solver the run fails (no convergence at the
-/// right column–cap contact at 7.26 s).
+/// the one-degree-of-freedom frame of the reference. Cause found (`frame_loma_prieta_slip`,
+/// ignored, prints): at 6.198 s, at a landing (θ = 4.4e-4 rad, ω = 0.177 rad/s), both base
+/// contacts of the left column are open: it leaves the ground and comes down 0.1 mm away; its
+/// grounded corners drift 1 mm by 6.5 s and 3.0 cm by 12 s. The reference has neither flight
+/// nor sliding. Not settled: whether the lift-off is physical (the cap's momentum at the
+/// impact) or the e = 0 impact law applied to three coupled bodies. Not the frame's free
+/// restitution: from releases of 0.025–0.5 α it is within −0.06 … −0.22 % of the law
+/// (`frame_restitution_small_releases`, ignored, prints). With the dual solver the run fails
+/// (no convergence at the right column–cap contact at 7.26 s).
 #[test]
 #[ignore = "FAILS: peak +26.85 % at Δt = 1 ms (0.24756 vs 0.19515 rad), +24.3 % at 2e-4 s (0.24252); the columns separate (see the doc comment)"]
 fn frame_peak_rotation_loma_prieta_six_tenths_g_penalty() {
     frame_record_point(1.0, "penalty", LOMA_PRIETA, 0.6, 0.05);
+}
+
+/// Diagnosis of the Loma Prieta miss (prints; ignored): do the columns slide on the base
+/// (the pivot corner's horizontal drift) or the cap on the columns?
+#[test]
+#[ignore = "diagnosis: prints the pivots' slip of the frame under Loma Prieta 0.6 g"]
+fn frame_loma_prieta_slip() {
+    let m = frame_record(LOMA_PRIETA, 0.6);
+    let scene = frame_scene(1.0, "penalty");
+    let mut s = sim(&scene, &m);
+    let corner = |s: &ashlar::simulation::Simulation, b: usize, local: [f64; 2]| {
+        let g = &s.geoms[b];
+        let (c, sn) = (g.rotation.cos(), g.rotation.sin());
+        let (dx, dy) = (
+            local[0] - g.initial_centroid.x,
+            local[1] - g.initial_centroid.y,
+        );
+        [
+            g.centroid.x + c * dx - sn * dy,
+            g.centroid.y + sn * dx + c * dy,
+        ]
+    };
+    let (mut slip, mut slip_before, mut cap_slip) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut first_mm, mut first_tenth) = (f64::NAN, f64::NAN);
+    run(&mut s, 12.0, |s| {
+        for (b, xc) in [(1usize, -0.8), (2, 0.8)] {
+            for x0 in [xc - B, xc + B] {
+                let p = corner(s, b, [x0, 0.0]);
+                if p[1] < 1e-4 {
+                    slip = slip.max((p[0] - x0).abs());
+                    if s.time < 6.2 {
+                        slip_before = slip_before.max((p[0] - x0).abs());
+                    }
+                    if first_tenth.is_nan() && (p[0] - x0).abs() > 1e-4 {
+                        first_tenth = s.time;
+                        let states: Vec<String> = s
+                            .contacts
+                            .contacts
+                            .iter()
+                            .filter(|c| (c.vertex_block == 0) != (c.edge_block == 0))
+                            .map(|c| format!("{}-{}: {:?}", c.vertex_block, c.edge_block, c.state))
+                            .collect();
+                        eprintln!(
+                            "t = {:.4} s, θ = {:.5} / {:.5} rad, ω = {:.4} rad/s; base contacts {states:?}",
+                            s.time,
+                            s.geoms[1].rotation,
+                            s.geoms[2].rotation,
+                            s.block_velocity(1)[2]
+                        );
+                    }
+                    if first_mm.is_nan() && (p[0] - x0).abs() > 1e-3 {
+                        first_mm = s.time;
+                    }
+                }
+            }
+        }
+        // The cap against the left column's top-left corner (it translates with it in the model).
+        let top = corner(s, 1, [-0.8 - B, 2.0 * H]);
+        let cap = corner(s, 3, [-0.8 - B, 2.0 * H]);
+        cap_slip = cap_slip.max((cap[0] - top[0]).abs());
+    });
+    eprintln!(
+        "Loma Prieta 0.6 g, penalty, to 12 s: largest horizontal drift of a grounded bottom corner {slip:.2e} m ({slip_before:.2e} m before 6.2 s); cap against the left column's top-left corner {cap_slip:.2e} m; drift first above 0.1 mm at {first_tenth:.3} s, above 1 mm at {first_mm:.3} s"
+    );
 }
