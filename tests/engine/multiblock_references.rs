@@ -1005,8 +1005,10 @@ fn frame_peak_rotation_kobe_seven_tenths_g_dual() {
 /// ignored, prints): at 6.198 s, at a landing (θ = 4.4e-4 rad, ω = 0.177 rad/s), both base
 /// contacts of the left column are open: it leaves the ground and comes down 0.1 mm away; its
 /// grounded corners drift 1 mm by 6.5 s and 3.0 cm by 12 s. The reference has neither flight
-/// nor sliding. Not settled: whether the lift-off is physical (the cap's momentum at the
-/// impact) or the e = 0 impact law applied to three coupled bodies. Not the frame's free
+/// nor sliding. At that instant the columns' angular velocities already differ (0.177 and
+/// 0.286 rad/s) and the cap rotates (0.070 rad/s): likely (not proven) the two columns land a
+/// fraction of a step apart and the e = 0 law stops each separately, splitting the frame's one
+/// degree of freedom. Not the frame's free
 /// restitution: from releases of 0.025–0.5 α it is within −0.06 … −0.22 % of the law
 /// (`frame_restitution_small_releases`, ignored, prints). With the dual solver the run fails
 /// (no convergence at the right column–cap contact at 7.26 s).
@@ -1057,11 +1059,13 @@ fn frame_loma_prieta_slip() {
                             .map(|c| format!("{}-{}: {:?}", c.vertex_block, c.edge_block, c.state))
                             .collect();
                         eprintln!(
-                            "t = {:.4} s, θ = {:.5} / {:.5} rad, ω = {:.4} rad/s; base contacts {states:?}",
+                            "t = {:.4} s, θ = {:.5} / {:.5} rad, velocities (vx, vy, ω) left {:.4?}, right {:.4?}, cap {:.4?}; base contacts {states:?}",
                             s.time,
                             s.geoms[1].rotation,
                             s.geoms[2].rotation,
-                            s.block_velocity(1)[2]
+                            s.block_velocity(1),
+                            s.block_velocity(2),
+                            s.block_velocity(3)
                         );
                     }
                     if first_mm.is_nan() && (p[0] - x0).abs() > 1e-3 {
