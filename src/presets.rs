@@ -105,6 +105,128 @@ impl Column {
     }
 }
 
+/// The rocking frame of Makris & Vassiliou (2013): two equal free-standing rigid columns
+/// (half-width b, half-height h) centred at x = ±`column_offset` on a fixed base 0.5 m deep,
+/// carrying a free rigid cap beam that spans their outer faces, its thickness chosen so that
+/// its mass is γ × both columns' (blocks `base`, `left`, `right`, `cap`, in the material
+/// `stone` of [`scene_json`]). It rocks as one column of slenderness atan(b/h) with Housner's
+/// p² scaled by (1 + 2γ)/(1 + 3γ) (tests/engine/multiblock_references.rs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RockingFrame {
+    /// Half-width b of each column, m.
+    pub half_width: f64,
+    /// Half-height h of each column, m.
+    pub half_height: f64,
+    /// Distance of each column's centre from x = 0, m.
+    pub column_offset: f64,
+    /// Cap mass / total mass of the columns, γ (dimensionless, ≥ 0).
+    pub gamma: f64,
+    /// Friction angle of every joint, degrees.
+    pub friction_angle: f64,
+    /// Half-width of the base, m.
+    pub base_half_width: f64,
+}
+
+impl RockingFrame {
+    /// Yagoda-Biran & Hatzor's column (b = 0.2, h = 0.6 m) twice, 1.6 m apart, under a cap as
+    /// heavy as both (γ = 1), on a 6 m base; φ = 75° everywhere: no joint slips (the frame's
+    /// model has none).
+    pub const SEED: RockingFrame = RockingFrame {
+        half_width: 0.2,
+        half_height: 0.6,
+        column_offset: 0.8,
+        gamma: 1.0,
+        friction_angle: 75.0,
+        base_half_width: 3.0,
+    };
+
+    /// The same frame with another cap mass ratio γ.
+    pub const fn gamma(self, gamma: f64) -> Self {
+        RockingFrame { gamma, ..self }
+    }
+
+    /// The cap's thickness, m: mass γ × both columns' over the span of their outer faces.
+    pub fn cap_thickness(&self) -> f64 {
+        let (b, h, x) = (self.half_width, self.half_height, self.column_offset);
+        let column_area = 2.0 * (2.0 * b) * (2.0 * h);
+        self.gamma * column_area / (2.0 * (x + b))
+    }
+
+    /// The blocks: `base` (fixed), `left`, `right`, `cap`, all free blocks rigid.
+    pub fn blocks(&self) -> Value {
+        let (b, h, x, w) = (
+            self.half_width,
+            self.half_height,
+            self.column_offset,
+            self.base_half_width,
+        );
+        let t = self.cap_thickness();
+        json!([
+            { "id": "base", "material": "stone", "fixed": true, "vertices": rect(-w, -0.5, w, 0.0) },
+            { "id": "left", "material": "stone", "block_model": "rigid", "vertices": rect(-x - b, 0.0, -x + b, 2.0 * h) },
+            { "id": "right", "material": "stone", "block_model": "rigid", "vertices": rect(x - b, 0.0, x + b, 2.0 * h) },
+            { "id": "cap", "material": "stone", "block_model": "rigid", "vertices": rect(-x - b, 2.0 * h, x + b, 2.0 * h + t) },
+        ])
+    }
+
+    /// The scene JSON with `control` (see [`scene_json`]).
+    pub fn json(&self, control: Value) -> Value {
+        scene_json(self.blocks(), self.friction_angle, control)
+    }
+}
+
+/// A pier: `courses` equal rigid blocks stacked into a column of half-width b and half-height h
+/// on a fixed base 0.5 m deep (blocks `base`, `course0` … bottom up, material `stone` of
+/// [`scene_json`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pier {
+    /// Half-width b, m.
+    pub half_width: f64,
+    /// Half-height h of the whole pier, m.
+    pub half_height: f64,
+    /// Number of blocks.
+    pub courses: usize,
+    /// Friction angle of every joint, degrees.
+    pub friction_angle: f64,
+    /// Half-width of the base, m.
+    pub base_half_width: f64,
+}
+
+impl Pier {
+    /// Yagoda-Biran & Hatzor's column (b = 0.2, h = 0.6 m) cut into three 0.4 × 0.4 m blocks,
+    /// on a 4 m base; φ = 75° (μ = 3.7): the joints neither slip nor, below tipping, open, so it
+    /// moves as the monolithic column (tests/engine/multiblock_references.rs checks that).
+    pub const SEED: Pier = Pier {
+        half_width: 0.2,
+        half_height: 0.6,
+        courses: 3,
+        friction_angle: 75.0,
+        base_half_width: 2.0,
+    };
+
+    /// The blocks: `base` (fixed), then `course0` … `course{n−1}` bottom up.
+    pub fn blocks(&self) -> Value {
+        let (b, w) = (self.half_width, self.base_half_width);
+        let course = 2.0 * self.half_height / self.courses as f64;
+        let mut blocks = vec![
+            json!({ "id": "base", "material": "stone", "fixed": true, "vertices": rect(-w, -0.5, w, 0.0) }),
+        ];
+        for k in 0..self.courses {
+            let y = k as f64 * course;
+            blocks.push(
+                json!({ "id": format!("course{k}"), "material": "stone", "block_model": "rigid",
+                                "vertices": rect(-b, y, b, y + course) }),
+            );
+        }
+        Value::Array(blocks)
+    }
+
+    /// The scene JSON with `control` (see [`scene_json`]).
+    pub fn json(&self, control: Value) -> Value {
+        scene_json(self.blocks(), self.friction_angle, control)
+    }
+}
+
 /// `examples/column.json`, the repository's example column (0.4 × 1.2 m, rigid, φ = 40°, on a
 /// 2 m plinth, Δt = 1 ms), as the file's text: the file is the preset, so the golden digests
 /// (tests/record) and every test that runs "the example column" read the same bytes.

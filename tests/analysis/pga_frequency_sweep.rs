@@ -303,6 +303,10 @@ fn check(c: Column, f: f64) -> usize {
     );
     eprintln!("{line}");
     assert!(err.abs() < 0.03, "{line}");
+    assert!(
+        err.abs() < REGRESSION_SWEEP,
+        "within 3 % but beyond the regression bound {REGRESSION_SWEEP} (find what changed): {line}"
+    );
     assert_eq!(
         h_impacts == 0,
         d_impacts == 0,
@@ -326,3 +330,10 @@ fn slender_column_frequency_sweep() {
         check(c, f);
     }
 }
+
+/// Regression bound on the engine's lowest overturning amplitude against Housner's, every
+/// frequency and column: 5× the largest error measured 2026-11-25, +0.22 % (stocky column at
+/// 0.5 and 1 Hz; the others −0.09 … +0.17 %). The engine's bracket is ~0.4 % wide, so a bound
+/// much tighter would test the bisection. The impact law is being changed on another branch:
+/// re-measure after the merge (`cargo test --test analysis -- pga_frequency_sweep --nocapture`).
+const REGRESSION_SWEEP: f64 = 0.011;

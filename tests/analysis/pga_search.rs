@@ -66,6 +66,11 @@ fn bracket_contains_housner_and_is_honest(scene: &ashlar::scene::Scene) {
         safe <= housner * 1.02 && fail >= housner * 0.98,
         "bracket [{safe}, {fail}] vs {housner}"
     );
+    let mid = 0.5 * (safe + fail) / housner - 1.0;
+    assert!(
+        mid.abs() < REGRESSION_PGA_SEARCH,
+        "bracket midpoint {mid:+.2e} from {housner}: beyond the regression bound {REGRESSION_PGA_SEARCH} (find what changed)"
+    );
     assert!(!evaluate(scene, &pulse, &criteria, safe, None).expect("run"));
     assert!(evaluate(scene, &pulse, &criteria, fail, None).expect("run"));
 }
@@ -90,3 +95,8 @@ fn negated_criterion_bounds_from_above_and_bad_requests_are_named() {
     assert!(Criterion::parse("displacement:column:-1").is_err());
     assert!(Criterion::parse("sideways:column").is_err());
 }
+
+/// Regression bound on the bracket's midpoint against 5.64 m/s²: measured 2026-11-25 −0.04 %
+/// (the default reduced model, [5.6355, 5.6402]) and +0.04 % (the engine, [5.6402, 5.6449]);
+/// ~7× that (the bracket is 0.08 % wide).
+const REGRESSION_PGA_SEARCH: f64 = 0.003;

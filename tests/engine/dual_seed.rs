@@ -76,6 +76,12 @@ fn two_equal_blocks_exchange_velocities_on_a_frictionless_table() {
     assert_eq!(s.stats.steps, 160);
     assert!(ea < 1e-4, "A keeps {ea} m/s");
     assert!(eb < 1e-4, "B moves at 0.5 ± {eb} m/s");
+    // Regression bound: 5× the 1.74e-5 m/s measured 2026-11-25 (the paper: 1.73e-5).
+    assert!(
+        ea.max(eb) < 8.7e-5,
+        "speeds off by {} m/s: within 1e-4 but beyond the regression bound 8.7e-5",
+        ea.max(eb)
+    );
     assert!(worst_momentum < 1e-9, "momentum drift {worst_momentum}");
     // The blocks never overlap: B's left side stays right of A's right side.
     let gap = s.geoms[2].bounds().0.x - s.geoms[1].bounds().1.x;
@@ -120,6 +126,11 @@ fn block_on_30_degree_ramp_at_a_hundredth_of_a_second() {
         );
     }
     assert!(dual < 0.005, "dual relative error {dual}");
+    // Regression bound: 5× the 3.9e-6 measured 2026-11-25 (docs/verification.md).
+    assert!(
+        dual < 2e-5,
+        "dual relative error {dual}: within 0.5 % but beyond the regression bound 2e-5"
+    );
 }
 
 /// Bao and Zhao's vertex–vertex example (Zheng et al. 2016, Figs. 9–10), reduced to its contact: the

@@ -6,7 +6,9 @@
 //!   Vassiliou (2013) show that it rocks as one column of the same slenderness α with Housner's
 //!   frequency parameter scaled, p̂² = p² (1 + 2γ)/(1 + 3γ), γ = cap mass / total column mass
 //!   (derived again in `frame_p2`). Overturning amplitude under Yagoda-Biran & Hatzor's half-sine pulse,
-//!   within 2 % (docs/verification.md's tolerance).
+//!   within 2 % (docs/verification.md's tolerance); and its peak rotation under the shared
+//!   records (data/ground-motions) against the equivalent column integrated by RK4 with the
+//!   frame's impact law, within 5 % (issue 25).
 //! - **Pier of three stacked blocks** with friction high enough that it moves as one body: its
 //!   overturning amplitude equals the monolithic column's (Housner), within 2 %; the test first
 //!   checks along the reference motion that every bed joint stays closed and does not slip (the
@@ -18,10 +20,12 @@
 //! Every block is `"block_model": "rigid"` (the references are rigid-body models); numerical
 //! controls are at their defaults.
 //!
-//! Found when this file was written (ignored tests, numbers in their reasons): the engine's
-//! restitution of the rocking frame follows no law (−1.0 … −4.6 % from Makris & Vassiliou's at
-//! the default Δt, and it moves with the solver and Δt), and the dual solver does not converge
-//! at the frame's impact at Δt = 5e-4 s (γ = 1) and 1e-4 s (γ = 0.5).
+//! Found when this file was written: the engine's restitution of the rocking frame followed no
+//! law (−1.0 … −4.6 % from Makris & Vassiliou's) and the dual solver did not converge at the
+//! frame's impact at short steps; both pass since the e = 0 impact law (docs/restitution.md).
+//! Ignored today, with their numbers in their reasons: the frame under Loma Prieta 0.6 g
+//! (+26.85 %, the columns separate) and the dual solver on Kobe 0.7 g (no convergence at the
+//! cap contact); `frame_records_scan` is an exploration that prints the reference's peaks.
 use crate::common;
 use ashlar::motion::{GroundMotion, Signal};
 use common::*;
@@ -204,24 +208,12 @@ fn frame_p2(gamma: f64) -> f64 {
     3.0 * G / (4.0 * r) * (1.0 + 2.0 * gamma) / (1.0 + 3.0 * gamma)
 }
 
-/// Two columns centred at x = ±0.8 m on a fixed base, the cap spanning their outer faces
-/// (x ∈ [−1, 1]) with the thickness that makes its mass γ × the columns'.
+/// The frame of `ashlar::presets::RockingFrame::SEED` (columns b = B, h = H centred at
+/// x = ±0.8 m, the cap spanning their outer faces, φ = 75°) with cap mass ratio γ.
 fn frame_scene(gamma: f64, solver: &str) -> ashlar::scene::Scene {
-    let column_area = 2.0 * (2.0 * B) * (2.0 * H);
-    let (x0, x1) = (-0.8 - B, 0.8 + B);
-    let t = gamma * column_area / (x1 - x0);
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": rect(-3.0, -0.5, 3.0, 0.0) },
-        { "id": "left", "material": "stone", "block_model": "rigid", "vertices": rect(-0.8 - B, 0.0, -0.8 + B, 2.0 * H) },
-        { "id": "right", "material": "stone", "block_model": "rigid", "vertices": rect(0.8 - B, 0.0, 0.8 + B, 2.0 * H) },
-        { "id": "cap", "material": "stone", "block_model": "rigid", "vertices": rect(x0, 2.0 * H, x1, 2.0 * H + t) },
-    ]);
-    // φ = 75° everywhere: no joint slips (the rocking frame's model has none).
-    parse(&scene_json(
-        blocks,
-        75.0,
-        json!({ "model": "dda", "duration": 4.0, "contact_solver": solver }),
-    ))
+    let frame = ashlar::presets::RockingFrame::SEED.gamma(gamma);
+    assert_eq!((frame.half_width, frame.half_height), (B, H));
+    parse(&frame.json(json!({ "model": "dda", "duration": 4.0, "contact_solver": solver })))
 }
 
 /// Tolerance 2 % on the overturning amplitude (docs/verification.md). The reference overturns without an
@@ -335,8 +327,13 @@ fn rocking_frame_history_to_first_impact_dual() {
 /// either side (the frame is one degree of freedom with the column's potential shape, so
 /// r² = (cos(α − θ1) − cos α)/(cos(α − θ0) − cos α) as for one column).
 fn frame_restitution(gamma: f64, solver: &str, dt: Option<f64>) -> f64 {
+    frame_restitution_from(gamma, solver, dt, 0.5)
+}
+
+/// `frame_restitution` released from θ0 = `fraction` × α.
+fn frame_restitution_from(gamma: f64, solver: &str, dt: Option<f64>, fraction: f64) -> f64 {
     let alpha = (B / H).atan();
-    let theta0 = 0.5 * alpha;
+    let theta0 = fraction * alpha;
     let (co, si) = (theta0.cos(), theta0.sin());
     let column = |xc: f64| {
         let pivot = xc + B;
@@ -420,6 +417,24 @@ fn rocking_frame_restitution_makris_vassiliou() {
     assert!(worst < 0.01, "{worst}");
 }
 
+/// Diagnosis of the Loma Prieta miss (prints; ignored): the frame's restitution from small
+/// releases, as in the record's small rocking before the engine leaves the reference.
+#[test]
+#[ignore = "diagnosis: prints the frame's restitution from small releases against Makris–Vassiliou's"]
+fn frame_restitution_small_releases() {
+    let alpha = (B / H).atan();
+    let mv = frame_restitution_law(1.0, alpha);
+    for fraction in [0.5, 0.2, 0.1, 0.05, 0.025] {
+        for dt in [None, Some(2e-4)] {
+            let r = frame_restitution_from(1.0, "penalty", dt, fraction);
+            eprintln!(
+                "frame γ = 1, penalty, Δt {dt:?}, θ0 = {fraction} α: r = {r:.5} against {mv:.5} ({:+.3} %)",
+                100.0 * (r / mv - 1.0)
+            );
+        }
+    }
+}
+
 /// The dual solver at the frame's impact with a shorter step: it must complete.
 #[test]
 fn rocking_frame_impact_dual_short_step() {
@@ -481,23 +496,14 @@ fn joint_margins(s: f64, th: f64, w: f64, acc: f64, ag: f64) -> (f64, f64) {
 }
 
 fn pier_scene(solver: &str) -> ashlar::scene::Scene {
-    let course = 2.0 * H / COURSES as f64;
-    let mut blocks = vec![
-        json!({ "id": "base", "material": "stone", "fixed": true, "vertices": rect(-2.0, -0.5, 2.0, 0.0) }),
-    ];
-    for k in 0..COURSES {
-        let y = k as f64 * course;
-        blocks.push(
-            json!({ "id": format!("course{k}"), "material": "stone", "block_model": "rigid",
-                            "vertices": rect(-B, y, B, y + course) }),
-        );
-    }
-    // φ = 75° (μ = 3.7): far above the friction demand found along the reference (asserted).
-    parse(&scene_json(
-        json!(blocks),
-        75.0,
-        json!({ "model": "dda", "duration": 4.0, "contact_solver": solver }),
-    ))
+    // `ashlar::presets::Pier::SEED`: φ = 75° (μ = 3.7), far above the friction demand found
+    // along the reference (asserted).
+    let pier = ashlar::presets::Pier::SEED;
+    assert_eq!(
+        (pier.half_width, pier.half_height, pier.courses),
+        (B, H, COURSES)
+    );
+    parse(&pier.json(json!({ "model": "dda", "duration": 4.0, "contact_solver": solver })))
 }
 
 /// Tolerance 2 % on the overturning amplitude (docs/verification.md, as for the monolithic column in
@@ -752,4 +758,328 @@ fn sliding_stack_penalty() {
 #[test]
 fn sliding_stack_dual() {
     check_stack("dual", 3.2e-4);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rocking frame under recorded ground motions
+// ---------------------------------------------------------------------------------------------
+
+/// Makris & Vassiliou's (2013) ratio of angular velocities across an impact of the rocking
+/// frame, r = (1 − 1.5 sin²α + 3γ cos 2α)/(1 + 3γ) (γ = 0: Housner's column).
+fn frame_restitution_law(gamma: f64, alpha: f64) -> f64 {
+    (1.0 - 1.5 * alpha.sin().powi(2) + 3.0 * gamma * (2.0 * alpha).cos()) / (1.0 + 3.0 * gamma)
+}
+
+/// Rotation (rad) past which the frame counts as fallen, in the reference and in the engine
+/// (as `analysis::study_records::FALLEN` for the single column).
+const FRAME_FALLEN: f64 = 1.0;
+
+/// The equivalent single column of the frame (slenderness α, p̂² = `frame_p2`) under the
+/// ground acceleration `ag` (m/s², +x), RK4 at `REF_DT` from rest to `t_end`: at rest until
+/// |a_g| > g tan α (the frame's uplift condition is the column's: p̂² multiplies both terms),
+/// tipping with the sign of a_g; when θ crosses zero the step ends at θ = 0 with θ̇ scaled by
+/// the frame's impact law (`frame_restitution_law`), and the frame rests again below 1e-6 rad/s.
+/// Impacts are located only to the step (1e-5 s), so an impact's timing error is below 1e-5 s.
+/// Returns (peak |θ|, fallen).
+fn frame_record_reference(
+    gamma: f64,
+    ag: impl Fn(f64) -> f64,
+    t_end: f64,
+    visit: impl FnMut(f64, f64),
+) -> (f64, bool) {
+    let r = frame_restitution_law(gamma, (B / H).atan());
+    column_record_reference(frame_p2(gamma), r, ag, t_end, visit)
+}
+
+/// The RK4 of `frame_record_reference` for any p² (s⁻²) and ratio of angular velocities `r`
+/// across an impact.
+fn column_record_reference(
+    p2: f64,
+    r: f64,
+    ag: impl Fn(f64) -> f64,
+    t_end: f64,
+    mut visit: impl FnMut(f64, f64),
+) -> (f64, bool) {
+    let alpha = (B / H).atan();
+    let h = REF_DT;
+    let (mut th, mut w, mut s) = (0.0f64, 0.0f64, 0.0f64);
+    let mut peak = 0.0f64;
+    let n = (t_end / h).round() as usize;
+    for i in 0..n {
+        let t = i as f64 * h;
+        if s == 0.0 {
+            let a = ag(t);
+            if a.abs() > G * alpha.tan() {
+                s = a.signum();
+            } else {
+                continue;
+            }
+        }
+        let f = |t: f64, th: f64| rocking_acc(p2, alpha, s, th, ag(t));
+        let (k1t, k1w) = (w, f(t, th));
+        let (k2t, k2w) = (w + 0.5 * h * k1w, f(t + 0.5 * h, th + 0.5 * h * k1t));
+        let (k3t, k3w) = (w + 0.5 * h * k2w, f(t + 0.5 * h, th + 0.5 * h * k2t));
+        let (k4t, k4w) = (w + h * k3w, f(t + h, th + h * k3t));
+        let nth = th + h / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t);
+        let nw = w + h / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
+        if nth * s < 0.0 {
+            th = 0.0;
+            w = nw * r;
+            s = w.signum();
+            if w.abs() < 1e-6 {
+                (w, s) = (0.0, 0.0);
+            }
+        } else {
+            (th, w) = (nth, nw);
+        }
+        peak = peak.max(th.abs());
+        visit(t + h, th);
+        if peak > FRAME_FALLEN {
+            return (peak, true);
+        }
+    }
+    (peak, false)
+}
+
+/// A shared record (data/ground-motions) scaled to `pga` g.
+fn frame_record(name: &str, pga: f64) -> GroundMotion {
+    ashlar::analysis::study_records::load_record(&ashlar::presets::records_dir(), name, pga)
+        .expect("record")
+}
+
+/// The engine's frame (`frame_scene`: `"model": "dda"`, rigid blocks, default controls) under
+/// the record to `t_end` or until a column passes `FRAME_FALLEN`; returns (peak |θ| of the left
+/// column, fallen, largest column mismatch or cap rotation while |θ| < 0.3 rad).
+fn frame_record_engine(
+    gamma: f64,
+    solver: &str,
+    motion: &GroundMotion,
+    t_end: f64,
+) -> (f64, bool, f64) {
+    let scene = frame_scene(gamma, solver);
+    let mut s = sim(&scene, motion);
+    let (mut peak, mut sync) = (0.0f64, 0.0f64);
+    let fell = run_until(&mut s, t_end, |s| {
+        let (l, r, c) = (
+            s.geoms[1].rotation,
+            s.geoms[2].rotation,
+            s.geoms[3].rotation,
+        );
+        peak = peak.max(l.abs());
+        if l.abs().max(r.abs()) < 0.3 {
+            sync = sync.max((l - r).abs()).max(c.abs());
+        }
+        l.abs().max(r.abs()) > FRAME_FALLEN
+    });
+    (peak, fell, sync)
+}
+
+/// Scan (ignored; prints): the reference's peak rotation of the γ = 1 frame on every shared
+/// record at 0.1–1.0 g, and its change at ±1 % of the PGA, to choose the test's points.
+#[test]
+#[ignore = "exploration: prints the reference's peaks to choose the points of frame_peak_rotation_under_records"]
+fn frame_records_scan() {
+    for rec in ashlar::analysis::study_records::RECORDS {
+        for k in 1..=10 {
+            let pga = 0.1 * k as f64;
+            let at = |f: f64| {
+                let m = frame_record(rec, pga * f);
+                let t_end = m.duration().unwrap_or(10.0) + 2.0;
+                frame_record_reference(1.0, |t| m.acceleration(t)[0], t_end, |_, _| {})
+            };
+            let (mid, lo, hi) = (at(1.0), at(0.99), at(1.01));
+            eprintln!(
+                "{rec} {pga:.1} g: peak {:.4} fallen {} | -1 %: {:.4} {} | +1 %: {:.4} {}",
+                mid.0, mid.1, lo.0, lo.1, hi.0, hi.1
+            );
+        }
+    }
+}
+
+/// The frame's peak rotation under a record at `pga` g against the equivalent column with the
+/// frame's impact law; returns the relative error of the peak. Tolerance 5 % (issue 25: peak
+/// rotations through impacts; the single column's `tests/engine/records_housner.rs` uses the
+/// same figure). The points are chosen where the reference is well conditioned (asserted): the
+/// frame survives with a peak above 0.02 rad, and its peak moves by at most 3 % for ±1 % of
+/// the PGA and for ±1 % of the impact law's r (the tolerance of the frame's restitution test
+/// above), so a 5 % miss is the engine's and not the record's sensitivity. Friuli 0.9 g fails
+/// that (r × 0.99 moves the peak −17.8 %) and is left out although the engine meets it (−0.75 %).
+fn frame_record_point(gamma: f64, solver: &str, record: &str, pga: f64, regression: f64) -> f64 {
+    let law = frame_restitution_law(gamma, (B / H).atan());
+    let reference_at = |f_pga: f64, f_r: f64| {
+        let m = frame_record(record, pga * f_pga);
+        let t_end = m.duration().unwrap_or(10.0) + 2.0;
+        column_record_reference(
+            frame_p2(gamma),
+            law * f_r,
+            |t| m.acceleration(t)[0],
+            t_end,
+            |_, _| {},
+        )
+    };
+    let (reference, fallen) = reference_at(1.0, 1.0);
+    assert!(
+        !fallen && reference > 0.02,
+        "{record} {pga} g: the frame must survive beyond 0.02 rad ({reference})"
+    );
+    for (f_pga, f_r) in [(0.99, 1.0), (1.01, 1.0), (1.0, 0.99), (1.0, 1.01)] {
+        let (p, fl) = reference_at(f_pga, f_r);
+        assert!(
+            !fl && (p / reference - 1.0).abs() <= 0.03,
+            "{record} {pga} g: the reference is ill-conditioned here ({p} rad at {f_pga} × PGA, {f_r} × r)"
+        );
+    }
+    let m = frame_record(record, pga);
+    let t_end = m.duration().unwrap_or(10.0) + 2.0;
+    let (peak, fell, sync) = frame_record_engine(gamma, solver, &m, t_end);
+    let err = peak / reference - 1.0;
+    eprintln!(
+        "rocking frame γ = {gamma}, {solver}, {record} {pga} g: reference peak {reference:.5} rad, engine {peak:.5} rad ({:+.2} %), fallen {fell}; column mismatch or cap rotation {sync:.1e} rad",
+        100.0 * err
+    );
+    assert!(
+        !fell,
+        "the engine's frame fell where the reference survives"
+    );
+    assert!(err.abs() <= 0.05, "peak off the reference by {err}");
+    assert!(
+        err.abs() <= regression,
+        "peak error {err} beyond the regression bound {regression} (find what changed)"
+    );
+    err
+}
+
+const FRIULI: &str = "friuli-1976-tolmezzo-000.at2";
+const KOBE: &str = "kobe-1995-nishi-akashi-000.csv";
+const LOMA_PRIETA: &str = "loma-prieta-1989-capitola-000.at2";
+
+// Regression bounds of the frame's peak under records: 5× the error measured 2026-11-25 (dev
+// test profile, default Δt = 1 ms, rigid blocks, e = 0 default impacts). The impact law
+// (src/assembly/restitution.rs) and the contact solve are being changed on other branches:
+// re-measure after the merge (`cargo test --test engine -- frame_peak_rotation --nocapture`).
+
+/// Penalty, Friuli 0.7 g: measured +0.41 %.
+const REGRESSION_FRAME_FRIULI_07_PENALTY: f64 = 0.021;
+/// Penalty, Kobe 0.5 g: measured −0.48 %.
+const REGRESSION_FRAME_KOBE_05_PENALTY: f64 = 0.024;
+/// Penalty, Kobe 0.7 g: measured +0.10 %.
+const REGRESSION_FRAME_KOBE_07_PENALTY: f64 = 0.005;
+/// Dual, Friuli 0.7 g: measured +0.55 %.
+const REGRESSION_FRAME_FRIULI_07_DUAL: f64 = 0.028;
+/// Dual, Kobe 0.5 g: measured −0.31 %.
+const REGRESSION_FRAME_KOBE_05_DUAL: f64 = 0.016;
+
+#[test]
+fn frame_peak_rotation_under_records_penalty() {
+    frame_record_point(
+        1.0,
+        "penalty",
+        FRIULI,
+        0.7,
+        REGRESSION_FRAME_FRIULI_07_PENALTY,
+    );
+    frame_record_point(1.0, "penalty", KOBE, 0.5, REGRESSION_FRAME_KOBE_05_PENALTY);
+    frame_record_point(1.0, "penalty", KOBE, 0.7, REGRESSION_FRAME_KOBE_07_PENALTY);
+}
+
+#[test]
+fn frame_peak_rotation_under_records_dual() {
+    frame_record_point(1.0, "dual", FRIULI, 0.7, REGRESSION_FRAME_FRIULI_07_DUAL);
+    frame_record_point(1.0, "dual", KOBE, 0.5, REGRESSION_FRAME_KOBE_05_DUAL);
+}
+
+#[test]
+#[ignore = "FAILS: the dual solver does not converge at the left column–cap contact at t = 11.589 s (after 1 Δt cut to 1.3e-9 s, 20000 iterations, violation 2.7e-8 m); penalty meets this point (+0.10 %)"]
+fn frame_peak_rotation_kobe_seven_tenths_g_dual() {
+    frame_record_point(1.0, "dual", KOBE, 0.7, 0.05);
+}
+
+/// Loma Prieta 0.6 g: the reference is well conditioned (±1 % of PGA: −0.02 / −0.03 %; ±1 %
+/// of r: −2.3 / +2.2 %), and the engine misses it and does not converge to it as Δt shrinks.
+/// Diagnosis (2026-11-25): the engine's history leaves the reference by more than 5 % of the
+/// running peak at 6.2 s, after 9 impacts of small rocking (running peak 0.0084 rad = 2.6 % of
+/// α), while the columns still move together (mismatch 6e-4 rad); at Δt = 2e-4 s it leaves at
+/// 7.2 s after 16 impacts (mismatch 3e-5 rad). The columns then separate (mismatch 0.096 rad at
+/// 1 ms, 0.019 rad at 2e-4 s; cap rotation up to 0.018 rad), so the engine's frame is no longer
+/// the one-degree-of-freedom frame of the reference. Cause found (`frame_loma_prieta_slip`,
+/// ignored, prints): at 6.198 s, at a landing (θ = 4.4e-4 rad, ω = 0.177 rad/s), both base
+/// contacts of the left column are open: it leaves the ground and comes down 0.1 mm away; its
+/// grounded corners drift 1 mm by 6.5 s and 3.0 cm by 12 s. The reference has neither flight
+/// nor sliding. At that instant the columns' angular velocities already differ (0.177 and
+/// 0.286 rad/s) and the cap rotates (0.070 rad/s): likely (not proven) the two columns land a
+/// fraction of a step apart and the e = 0 law stops each separately, splitting the frame's one
+/// degree of freedom. Not the frame's free
+/// restitution: from releases of 0.025–0.5 α it is within −0.06 … −0.22 % of the law
+/// (`frame_restitution_small_releases`, ignored, prints). With the dual solver the run fails
+/// (no convergence at the right column–cap contact at 7.26 s).
+#[test]
+#[ignore = "FAILS: peak +26.85 % at Δt = 1 ms (0.24756 vs 0.19515 rad), +24.3 % at 2e-4 s (0.24252); the columns separate (see the doc comment)"]
+fn frame_peak_rotation_loma_prieta_six_tenths_g_penalty() {
+    frame_record_point(1.0, "penalty", LOMA_PRIETA, 0.6, 0.05);
+}
+
+/// Diagnosis of the Loma Prieta miss (prints; ignored): do the columns slide on the base
+/// (the pivot corner's horizontal drift) or the cap on the columns?
+#[test]
+#[ignore = "diagnosis: prints the pivots' slip of the frame under Loma Prieta 0.6 g"]
+fn frame_loma_prieta_slip() {
+    let m = frame_record(LOMA_PRIETA, 0.6);
+    let scene = frame_scene(1.0, "penalty");
+    let mut s = sim(&scene, &m);
+    let corner = |s: &ashlar::simulation::Simulation, b: usize, local: [f64; 2]| {
+        let g = &s.geoms[b];
+        let (c, sn) = (g.rotation.cos(), g.rotation.sin());
+        let (dx, dy) = (
+            local[0] - g.initial_centroid.x,
+            local[1] - g.initial_centroid.y,
+        );
+        [
+            g.centroid.x + c * dx - sn * dy,
+            g.centroid.y + sn * dx + c * dy,
+        ]
+    };
+    let (mut slip, mut slip_before, mut cap_slip) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut first_mm, mut first_tenth) = (f64::NAN, f64::NAN);
+    run(&mut s, 12.0, |s| {
+        for (b, xc) in [(1usize, -0.8), (2, 0.8)] {
+            for x0 in [xc - B, xc + B] {
+                let p = corner(s, b, [x0, 0.0]);
+                if p[1] < 1e-4 {
+                    slip = slip.max((p[0] - x0).abs());
+                    if s.time < 6.2 {
+                        slip_before = slip_before.max((p[0] - x0).abs());
+                    }
+                    if first_tenth.is_nan() && (p[0] - x0).abs() > 1e-4 {
+                        first_tenth = s.time;
+                        let states: Vec<String> = s
+                            .contacts
+                            .contacts
+                            .iter()
+                            .filter(|c| (c.vertex_block == 0) != (c.edge_block == 0))
+                            .map(|c| format!("{}-{}: {:?}", c.vertex_block, c.edge_block, c.state))
+                            .collect();
+                        eprintln!(
+                            "t = {:.4} s, θ = {:.5} / {:.5} rad, velocities (vx, vy, ω) left {:.4?}, right {:.4?}, cap {:.4?}; base contacts {states:?}",
+                            s.time,
+                            s.geoms[1].rotation,
+                            s.geoms[2].rotation,
+                            s.block_velocity(1),
+                            s.block_velocity(2),
+                            s.block_velocity(3)
+                        );
+                    }
+                    if first_mm.is_nan() && (p[0] - x0).abs() > 1e-3 {
+                        first_mm = s.time;
+                    }
+                }
+            }
+        }
+        // The cap against the left column's top-left corner (it translates with it in the model).
+        let top = corner(s, 1, [-0.8 - B, 2.0 * H]);
+        let cap = corner(s, 3, [-0.8 - B, 2.0 * H]);
+        cap_slip = cap_slip.max((cap[0] - top[0]).abs());
+    });
+    eprintln!(
+        "Loma Prieta 0.6 g, penalty, to 12 s: largest horizontal drift of a grounded bottom corner {slip:.2e} m ({slip_before:.2e} m before 6.2 s); cap against the left column's top-left corner {cap_slip:.2e} m; drift first above 0.1 mm at {first_tenth:.3} s, above 1 mm at {first_mm:.3} s"
+    );
 }

@@ -72,15 +72,23 @@ fn impact(integrator: &str) -> (f64, f64, f64) {
 fn normal_impact_contact_duration_and_rebound() {
     for integrator in ["dda", "trapezoidal"] {
         let (duration, rebound, expected) = impact(integrator);
-        eprintln!("{integrator}: contact {duration:.5} s (π√(m/k) = {expected:.5} s), rebound {rebound:.5} m/s");
+        eprintln!("{integrator}: contact {duration:.5} s (π√(m/k) = {expected:.5} s, {:+.2e}), rebound {rebound:.7} m/s ({:+.2e})", duration / expected - 1.0, rebound / 0.5 - 1.0);
         assert!(
             (duration - expected).abs() < 0.01 * expected,
             "{integrator}: duration {duration} vs {expected}"
+        );
+        assert!(
+            (duration - expected).abs() < REGRESSION_IMPACT_DURATION * expected,
+            "{integrator}: duration {duration} vs {expected}: within 1 % but beyond the regression bound"
         );
         if integrator == "trapezoidal" {
             assert!(
                 (rebound - 0.5).abs() < 0.005 * 0.5,
                 "rebound speed {rebound}"
+            );
+            assert!(
+                (rebound - 0.5).abs() < REGRESSION_REBOUND * 0.5,
+                "rebound speed {rebound}: within 0.5 % but beyond the regression bound"
             );
         }
     }
@@ -137,9 +145,13 @@ fn shear_stick_slide_restick() {
     });
     let x_end = displacement(&s, 1)[0] - x_start;
     let (slip_at, restick_at) = (slip_at.expect("slid"), restick_at.expect("re-stuck"));
-    eprintln!("slip at {slip_at:.5} s (ref {ts1:.5}), re-stick at {restick_at:.5} s (ref {ts4:.5}), mean position after {x_end:.4e} m (ref b = {b:.4e} m)");
+    eprintln!("slip at {slip_at:.5} s (ref {ts1:.5}, {:+.2e}), re-stick at {restick_at:.5} s (ref {ts4:.5}, {:+.2e}), mean position after {x_end:.4e} m (ref b = {b:.4e} m)", slip_at / ts1 - 1.0, restick_at / ts4 - 1.0);
     assert!((slip_at - ts1).abs() < 0.02 * ts1);
     assert!((restick_at - ts4).abs() < 0.02 * ts4);
+    assert!(
+        (restick_at - ts4).abs() < REGRESSION_RESTICK * ts4,
+        "re-stick at {restick_at} vs {ts4}: within 2 % but beyond the regression bound"
+    );
     // After re-sticking the block oscillates about b with amplitude x1; sample the mean over
     // whole periods through the equilibrium position.
     let period = 2.0 * std::f64::consts::PI / w;
@@ -151,9 +163,29 @@ fn shear_stick_slide_restick() {
         n += 1.0;
     });
     let mean = sum / n;
-    eprintln!("mean position after re-stick {mean:.5e} m vs b = {b:.5e} m");
+    eprintln!(
+        "mean position after re-stick {mean:.5e} m vs b = {b:.5e} m ({:+.2e})",
+        mean / b - 1.0
+    );
     assert!(
         (mean - b).abs() < 0.02 * b,
         "sliding distance {mean} vs {b}"
     );
+    assert!(
+        (mean - b).abs() < REGRESSION_SLIDE_DISTANCE * b,
+        "sliding distance {mean} vs {b}: within 2 % but beyond the regression bound"
+    );
 }
+
+// Regression bounds (5× the error measured 2026-11-25; the contact solve is being changed on
+// another branch: re-measure after the merge with `cargo test --test engine -- single_contact::
+// --nocapture`). The slip instant has none: its measured error, +0.475 %, is within 5× of the
+// 2 % tolerance, which binds.
+/// Contact duration against π√(m/k), both integrators: measured −6.85e-4 (one step of 1e-5 s), both.
+const REGRESSION_IMPACT_DURATION: f64 = 0.0036;
+/// Trapezoidal rebound speed against 0.5 m/s: measured +1.1e-13 (round-off; ~9×).
+const REGRESSION_REBOUND: f64 = 1e-12;
+/// Re-stick instant against Eq. 20: measured +6.4e-4.
+const REGRESSION_RESTICK: f64 = 0.0032;
+/// Mean position after re-stick against b: measured −3.36e-3.
+const REGRESSION_SLIDE_DISTANCE: f64 = 0.017;
