@@ -16,8 +16,9 @@
 //!   block settling on its springs, is the contact's own), or open and closing within
 //!   the first `window` × Δt of the step (g0 + ġ·t + ½·g̈·t² = 0, g̈ from the blocks'
 //!   accelerations at the step start);
-//! - an impact later in the step ends the step at its instant ([`next_impact`], the step is
-//!   shortened, never refused): the impulse then acts at the configuration of the impact, not
+//! - an impact later in the step ends the step at its instant, one within the next step
+//!   splits the time to it into two equal steps ([`located_step`], the step is shortened,
+//!   never refused): the impulse then acts at the configuration of the impact, not
 //!   at the step start. Applied at the step start, a rocking column's impulse was taken a
 //!   fraction of a step early, before the fall to the impact, and the height still to fall
 //!   was lost in a second, slow landing: five impacts at Δt = 1 ms were 7.6–9.4 % of the
@@ -150,7 +151,7 @@ fn motion_of(input: &ImpactInput, b: usize, states: &[BlockState]) -> (Vec6, Vec
 }
 
 /// When contact `c` impacts, s from the step start: 0 for a contact closed within the last step
-/// still approaching faster than `v_min`, the first root within the step of g0 + ġ·t + ½·g̈·t² for an open one
+/// still approaching faster than `v_min`, the first root within two steps of g0 + ġ·t + ½·g̈·t² for an open one
 /// approaching that fast, `None` otherwise (not approaching, settling, or not closing within
 /// the step: an approach decelerating before contact has no root).
 fn impact_time(
