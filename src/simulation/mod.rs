@@ -9,7 +9,7 @@ pub use energy::Energy;
 pub use params::{resolve_penalty, SimParams, IMPACT_APPROACH_RATIO};
 
 use crate::assembly::contact_springs::{JointLaw, Prescribed, SpringParams};
-use crate::assembly::restitution::{apply_impacts, next_impact, ImpactInput};
+use crate::assembly::restitution::{apply_impacts, located_step, ImpactInput};
 use crate::assembly::{elasticity, BlockState, BlockSystem, BodyLoads, Dofs, Newmark};
 use crate::contact::{Contact, ContactSet, ContactState, Mobility};
 use crate::geometry::{displacement_matrix, BlockGeometry, Vec6};
@@ -547,13 +547,12 @@ impl Simulation {
             &self.params.impact,
         );
         self.stats.impacts += n as u64;
-        let next = next_impact(
+        located_step(
             &input,
             &self.contacts.contacts,
             &self.states,
             &self.params.impact,
-        );
-        next.map_or(dt, |t| t - self.params.impact.margin * dt)
+        )
     }
 
     /// Kinetic damping, loads at the step end, prescribed motion, block terms.
