@@ -162,6 +162,7 @@ pub fn resolve(
     let params = AutoBlockModelParams::default();
     let measures = strain_measures(blocks, materials, joints, gravity, &params);
     let mut reasons = Vec::with_capacity(blocks.len());
+    let mut auto = Vec::new();
     for (i, b) in blocks.iter_mut().enumerate() {
         if !matches!(b.kind, BlockKind::Free(_)) {
             reasons.push(String::new());
@@ -181,36 +182,71 @@ pub fn resolve(
             ),
             (None, BlockModelChoice::Auto) => {
                 let m = measures[i];
-                let bound = params.strain_bound;
-                let rigid = m.measure <= bound;
-                let reason = format!(
-                    "auto: strain {:.2e} (loads of {:.3} m of structure above its bed, friction- and strength-bounded shear, up to 1 g vertical) × slenderness {:.3} = {:.2e} {} {:.0e}: {}",
-                    m.strain,
-                    m.load_height,
-                    m.slenderness,
-                    m.measure,
-                    if rigid { "≤" } else { ">" },
-                    bound,
-                    if rigid {
-                        "elastic strain moves the lever arms that decide toppling by less than 0.01 % of themselves"
-                    } else {
-                        "elastic strain can move the lever arms that decide toppling by more than 0.01 %"
-                    }
-                );
-                (
-                    if rigid {
-                        BlockModel::Rigid
-                    } else {
-                        BlockModel::Deformable
-                    },
-                    reason,
-                )
+                let rigid = m.measure <= params.strain_bound;
+                auto.push(i);
+                let model = if rigid {
+                    BlockModel::Rigid
+                } else {
+                    BlockModel::Deformable
+                };
+                (model, auto_reason(&b.id, &m, params.strain_bound, false))
             }
         };
         b.kind = BlockKind::Free(model);
         reasons.push(reason);
     }
+    // Every block the rule chose got the same model: one reason for the scene, that of the
+    // block that decides it (the most strained when rigid, the least when deformable).
+    let model_of = |i: usize| match blocks[i].kind {
+        BlockKind::Free(m) => Some(m),
+        _ => None,
+    };
+    if let Some(&first) = auto.first() {
+        let m0 = model_of(first);
+        if auto.iter().all(|&i| model_of(i) == m0) && auto.len() > 1 {
+            let rigid = m0 == Some(BlockModel::Rigid);
+            let key = |i: &usize| measures[*i].measure;
+            let governing = if rigid {
+                auto.iter()
+                    .copied()
+                    .max_by(|a, b| key(a).total_cmp(&key(b)))
+            } else {
+                auto.iter()
+                    .copied()
+                    .min_by(|a, b| key(a).total_cmp(&key(b)))
+            };
+            if let Some(g) = governing {
+                let r = auto_reason(&blocks[g].id, &measures[g], params.strain_bound, true);
+                for &i in &auto {
+                    reasons[i] = r.clone();
+                }
+            }
+        }
+    }
     reasons
+}
+
+fn auto_reason(id: &str, m: &StrainMeasure, bound: f64, every: bool) -> String {
+    let rigid = m.measure <= bound;
+    format!(
+        "auto: {}strain {:.2e} (loads of {:.3} m of structure above its bed, shear bounded by the joints, vertical ground acceleration up to 1 g) × slenderness {:.3} = {:.2e} {} {:.0e}: {}",
+        match (every, rigid) {
+            (true, true) => format!("every block within the bound; the most strained, {id:?}: "),
+            (true, false) => format!("every block beyond the bound; the least strained, {id:?}: "),
+            (false, _) => String::new(),
+        },
+        m.strain,
+        m.load_height,
+        m.slenderness,
+        m.measure,
+        if rigid { "≤" } else { ">" },
+        bound,
+        if rigid {
+            "elastic strain moves the lever arms that decide toppling by less than 0.01 % of themselves, so rigid"
+        } else {
+            "elastic strain can move the lever arms that decide toppling by more than 0.01 %, so deformable"
+        }
+    )
 }
 
 fn name(m: BlockModel) -> &'static str {
