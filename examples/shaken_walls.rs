@@ -8,7 +8,7 @@
 //! iterated (`ChangeCounts`), why steps were refused and the time per stage.
 //!
 //! `cargo run --release --example shaken_walls -- [--sizes 100,400,1600] [--steps 300]
-//!  [--motions rest,sine,record] [--diag] [--tight] [--block-model rigid|deformable]`
+//!  [--motions rest,sine,record] [--diag] [--tight] [--block-model rigid|deformable] [--poisson V]`
 //!
 //! `--tight`: the reference configuration of docs/contact-solve.md (Δt = 1e-4 s, the open–close
 //! loop run to convergence with the previous defaults of `OpenCloseParams::legacy`).
@@ -135,6 +135,12 @@ fn main() {
                 ..Default::default()
             });
             spec.control.time_step = Some(if tight { 1e-4 } else { 1e-3 });
+            // `--poisson V`: the stones' Poisson ratio (deformable walls: docs/contact-solve.md §6).
+            if let Some(v) = arg("--poisson") {
+                for m in spec.materials.values_mut() {
+                    m.poisson_ratio = v.parse().expect("--poisson");
+                }
+            }
             let scene = validate(&spec).expect("wall");
             let (gm, start) = match m {
                 "rest" => (GroundMotion::none(), 0.0),

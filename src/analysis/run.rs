@@ -40,6 +40,13 @@ pub struct BlockSummary {
     pub toppled: bool,
     /// m, accumulated slip of the block's sliding contacts.
     pub sliding_distance: f64,
+    /// The block's model (`"rigid"`, `"deformable"`), only when the free blocks' models or
+    /// reasons differ (the summary's `block_model_reason` is then absent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub block_model: Option<String>,
+    /// Why this block got its model (`scene::block_model`), with `block_model`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub block_model_reason: Option<String>,
 }
 
 /// Solver diagnostics reported with every run.
@@ -102,6 +109,11 @@ pub struct Summary {
     pub diagnostics: Diagnostics,
     pub model: String,
     pub model_reason: String,
+    /// Why the free blocks have the model `control.block_model` reports (`scene::block_model`;
+    /// the reduced models: they are rigid-block models). Absent when the free blocks differ:
+    /// each block then reports its own (`blocks[].block_model_reason`).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub block_model_reason: String,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopped_reason: Option<String>,
     /// The controls that ran ([`reported_control`]).
@@ -873,8 +885,25 @@ fn summarize(
             final_rotation: tr.final_rotation[k],
             toppled: tr.final_rotation[k].abs() > failure.toppled_rotation,
             sliding_distance: tr.sliding_distance[k],
+            block_model: None,
+            block_model_reason: None,
         })
         .collect();
+    let mut blocks = blocks;
+    let scene = &sim.scene;
+    let common =
+        crate::scene::block_model::scene_summary(&scene.blocks, &scene.block_model_reasons);
+    if common.is_none() {
+        for (b, &i) in blocks.iter_mut().zip(&tr.free) {
+            if let crate::scene::BlockKind::Free(m) = scene.blocks[i].kind {
+                b.block_model = serde_json::to_value(m)
+                    .ok()
+                    .and_then(|v| v.as_str().map(String::from));
+                b.block_model_reason = Some(scene.block_model_reasons[i].clone());
+            }
+        }
+    }
+    let block_model_reason = common.map(|(_, r)| r).unwrap_or_default();
     let st = &sim.stats;
     let dual = sim.scene.control.contact_solver == ContactSolver::Dual;
     Summary {
@@ -903,6 +932,7 @@ fn summarize(
         },
         model,
         model_reason,
+        block_model_reason,
         stopped_reason,
         control: reported_control(&sim.scene, Ran::Engine),
         units: summary_units(),

@@ -3,6 +3,7 @@
 //!
 //! Conventions fixed here for the whole engine: SI units, y up, gravity along −y,
 //! polygons stored counter-clockwise, rotations counter-clockwise positive (radians).
+pub mod block_model;
 pub mod generate;
 pub mod import;
 pub mod spec;
@@ -126,7 +127,8 @@ pub struct Control {
     pub kinetic_damping_rate: f64,
     pub integrator: Integrator,
     pub contact_solver: ContactSolver,
-    pub block_model: BlockModel,
+    /// The model of free blocks that do not name their own (`"auto"`: chosen per block).
+    pub block_model: BlockModelChoice,
     pub model: ModelChoice,
     /// s.
     pub output_interval: f64,
@@ -196,7 +198,12 @@ impl Default for Control {
             kinetic_damping_rate: 0.0,
             integrator: Integrator::Dda,
             contact_solver: ContactSolver::Penalty,
-            block_model: BlockModel::Deformable,
+            // Chosen from the scene: rigid where strain cannot change the answer by more than
+            // the rule's bound (1e-4 of the lever arms that decide toppling), deformable
+            // elsewhere. The study (docs/accuracy-vs-speed.md) finds deformable stone within
+            // 0.006 % of rigid at 17–23 % more time on its benchmarks and 23–31× per step on a
+            // 410-stone wall (issue 21), so stone gains nothing from deformable blocks.
+            block_model: BlockModelChoice::Auto,
             // The lightest model that represents the scene: the speed/accuracy study
             // (docs/accuracy-vs-speed.md) finds the reduced rocking/sliding models within
             // 0.063 % of the independent references on every single-block benchmark, never less
@@ -243,6 +250,9 @@ pub struct Scene {
     /// Per block: (vx, vy, ω) initial velocity.
     pub initial_velocity: Vec<[f64; 3]>,
     pub control: Control,
+    /// Per block: why its block model was chosen (`summary.json`'s `block_model_reason`);
+    /// empty for fixed and driven blocks.
+    pub block_model_reasons: Vec<String>,
     /// The spec as given (kept for provenance in recordings and job records).
     pub spec: SceneSpec,
 }

@@ -69,6 +69,18 @@ pub enum BlockModel {
     Rigid,
 }
 
+/// `control.block_model`: a model for every free block that does not name its own, or
+/// `"auto"`: chosen per block from the scene (`scene::block_model`, docs/format.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BlockModelChoice {
+    /// Rigid where strain cannot change the answer by more than the stated bound, else
+    /// deformable ([`crate::scene::block_model::AutoBlockModelParams`]).
+    Auto,
+    Deformable,
+    Rigid,
+}
+
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct BlockSpec {
@@ -167,7 +179,7 @@ pub struct ControlSpec {
     pub kinetic_damping_rate: Option<f64>,
     pub integrator: Option<Integrator>,
     pub contact_solver: Option<ContactSolver>,
-    pub block_model: Option<BlockModel>,
+    pub block_model: Option<BlockModelChoice>,
     pub model: Option<ModelChoice>,
     pub output_interval: Option<f64>,
     /// Extension: hard cap on the number of steps (protects against runaway runs).

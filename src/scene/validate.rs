@@ -54,7 +54,7 @@ pub fn validate(spec: &SceneSpec) -> Result<Scene, SceneError> {
     let (materials, mat_index) = materials(spec)?;
     let (joints, joint_index) = joints(spec)?;
     let control = control(&spec.control)?;
-    let blocks = blocks(spec, &mat_index, &control)?;
+    let blocks = blocks(spec, &mat_index)?;
     let ids: Vec<String> = blocks.iter().map(|b| b.id.clone()).collect();
     let by_id: HashMap<&str, usize> = ids
         .iter()
@@ -106,6 +106,16 @@ pub fn validate(spec: &SceneSpec) -> Result<Scene, SceneError> {
         initial_velocity[i] = [init.velocity[0], init.velocity[1], init.angular_velocity];
     }
     check_overlaps(&blocks)?;
+    let explicit: Vec<Option<BlockModel>> = spec.blocks.iter().map(|b| b.block_model).collect();
+    let block_model_reasons = super::block_model::resolve(
+        &mut blocks,
+        &explicit,
+        &materials,
+        &joints,
+        gravity,
+        control.block_model,
+        control.restitution,
+    );
     Ok(Scene {
         name: spec.name.clone().unwrap_or_else(|| "unnamed scene".into()),
         gravity,
@@ -117,6 +127,7 @@ pub fn validate(spec: &SceneSpec) -> Result<Scene, SceneError> {
         excitation,
         initial_velocity,
         control,
+        block_model_reasons,
         spec: spec.clone(),
     })
 }
@@ -178,11 +189,7 @@ fn joints(spec: &SceneSpec) -> Result<(Vec<Joint>, HashMap<String, usize>), Scen
     Ok((out, idx))
 }
 
-fn blocks(
-    spec: &SceneSpec,
-    mat_index: &HashMap<String, usize>,
-    control: &Control,
-) -> Result<Vec<Block>, SceneError> {
+fn blocks(spec: &SceneSpec, mat_index: &HashMap<String, usize>) -> Result<Vec<Block>, SceneError> {
     if spec.blocks.is_empty() {
         return err("blocks", "at least one block is required");
     }
@@ -209,7 +216,8 @@ fn blocks(
         let kind = if b.fixed {
             BlockKind::Fixed
         } else {
-            BlockKind::Free(b.block_model.unwrap_or(control.block_model))
+            // Placeholder: resolved once the driven block is known (`block_model::resolve`).
+            BlockKind::Free(b.block_model.unwrap_or(BlockModel::Rigid))
         };
         out.push(Block {
             id: b.id.clone(),

@@ -84,7 +84,8 @@ fn running_bond_wall_stays_at_rest_for_10_s() {
     let scene = parse(&scene_json(
         wall_blocks(5, 6, 0.4, 0.2),
         30.0,
-        json!({ "time_step": 1e-3, "duration": 10.0 }),
+        // Deformable by name: the claim is about deformable blocks (the default is "auto").
+        json!({ "time_step": 1e-3, "duration": 10.0, "block_model": "deformable" }),
     ));
     let mut s = sim(&scene, &GroundMotion::none());
     let start: Vec<_> = s.geoms.iter().map(|g| g.vertices.clone()).collect();
@@ -321,14 +322,16 @@ fn mixed_states() -> Vec<Simulation> {
         wall_blocks(5, 6, 0.4, 0.2),
         30.0,
         // Penalty by name (also in the suite's dual rerun): the springs are what this checks.
-        json!({ "time_step": 1e-3, "duration": 1.0, "contact_solver": "penalty" }),
+        // Deformable by name: the states carry 6 unknowns a block (the default is "auto").
+        json!({ "time_step": 1e-3, "duration": 1.0, "contact_solver": "penalty", "block_model": "deformable" }),
     ));
     let mut w = Simulation::new(&wall, &GroundMotion::none(), SimParams::default());
     run(&mut w, 0.05, |_| {});
     let (v, _) = incline(
         45.0,
         20.0,
-        json!({ "time_step": 1e-3, "duration": 1.0, "contact_solver": "penalty" }),
+        // Deformable by name: the states carry 6 unknowns a block (the default is "auto").
+        json!({ "time_step": 1e-3, "duration": 1.0, "contact_solver": "penalty", "block_model": "deformable" }),
     );
     let mut i = Simulation::new(&parse(&v), &GroundMotion::none(), SimParams::default());
     run(&mut i, 0.2, |_| {});

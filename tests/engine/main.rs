@@ -3,6 +3,7 @@
 //! One test binary for these modules (one per former file): a binary per file cost
 //! ~35 MB of disk and a link each. Run one with `cargo test --test engine NAME::`.
 
+mod block_model_auto;
 #[path = "../common/mod.rs"]
 mod common;
 mod damping;

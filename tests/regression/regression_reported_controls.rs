@@ -84,7 +84,8 @@ fn the_engine_reports_the_block_model_the_blocks_used() {
     assert_eq!(s["simulated_time"], json!(3.0));
     // A free block without its own model takes control.block_model; two different models are
     // "mixed".
-    let mut two = column(json!({"model": "dda", "duration": 0.02}));
+    // (deformable by name: "auto", the default, would make this stone cap rigid too).
+    let mut two = column(json!({"model": "dda", "duration": 0.02, "block_model": "deformable"}));
     let mut cap = two["blocks"][1].clone();
     cap["id"] = json!("cap");
     cap.as_object_mut().expect("block").remove("block_model");

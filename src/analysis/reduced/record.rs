@@ -334,6 +334,8 @@ pub fn run(
         final_rotation: tr.final_rotation[0],
         toppled: tr.final_rotation[0].abs() > failure.toppled_rotation,
         sliding_distance: tr.sliding_distance[0],
+        block_model: None,
+        block_model_reason: None,
     }];
     let st = &m.stats;
     let restitution = super::rocking::restitution(&m.block, 0, params.restitution);
@@ -359,6 +361,7 @@ pub fn run(
         },
         model: model.into(),
         model_reason: why,
+        block_model_reason: "the reduced models are rigid-block models".into(),
         stopped_reason,
         control: reported_control(scene, Ran::Reduced),
         units: summary_units(),
