@@ -1,0 +1,227 @@
+//! Anderson acceleration of the open–close loop's friction fixed point (solve stage, inside
+//! `open_close::iterate`): while no contact changes state, the normal forces N_in that the
+//! sliding contacts' Coulomb friction μ·N_in is computed from map *linearly* to the normal
+//! forces N_out the solve gives back (the states fix the matrix; friction is a load linear in
+//! N_in). Plain substitution N_in ← N_out converges at the map's spectral radius and is
+//! relaxed by ½ after a few iterations (`OpenCloseParams::relax_after`); Anderson's mixing over
+//! the last m iterates is GMRES on that linear map, so it converges in about as many solves as
+//! the map has strongly coupled directions, not as many as its contraction needs
+//! (docs/contact-solve.md §6). The stopping test is unchanged (each contact's own residual
+//! |N_out − N_in|), so the converged answer is the same fixed point.
+use crate::contact::ContactState;
+
+/// The history of one run of iterations with unchanged contact states.
+#[derive(Debug, Default, Clone)]
+pub struct FrictionAnderson {
+    /// Contacts taking part (sliding, friction, in the same direction for the whole history),
+    /// with their slip direction: the key of the history.
+    set: Vec<(usize, f64)>,
+    /// Inputs N_in (N) and residuals N_out − N_in (N) of the last iterates, oldest first.
+    inputs: Vec<Vec<f64>>,
+    residuals: Vec<Vec<f64>>,
+    /// Scratch: the difference columns and the QR factor of the residual differences.
+    dx: Vec<Vec<f64>>,
+    df: Vec<Vec<f64>>,
+    r: Vec<f64>,
+    gamma: Vec<f64>,
+    weight: Vec<f64>,
+    /// Candidate set of the current iteration (reused buffer).
+    next_set: Vec<(usize, f64)>,
+    next_in: Vec<f64>,
+    next_out: Vec<f64>,
+}
+
+impl FrictionAnderson {
+    /// Forget the history (a contact changed state: the map changed).
+    pub fn clear(&mut self) {
+        self.set.clear();
+        self.inputs.clear();
+        self.residuals.clear();
+    }
+
+    /// Carry the history over to a changed set of participants (`FrictionAnderson::step` with
+    /// `keep` on): a contact that left is dropped from every past point; one that joined is
+    /// entered into every past point with its current value, so its difference rows are zero,
+    /// it does not move γ, and its own update is plain substitution until it has a history.
+    fn remap(&mut self) {
+        let mut inputs: Vec<Vec<f64>> =
+            vec![Vec::with_capacity(self.next_set.len()); self.inputs.len()];
+        let mut residuals = inputs.clone();
+        let mut old = 0;
+        for (i, key) in self.next_set.iter().enumerate() {
+            while old < self.set.len() && self.set[old].0 < key.0 {
+                old += 1;
+            }
+            let kept = old < self.set.len() && self.set[old] == *key;
+            for p in 0..self.inputs.len() {
+                if kept {
+                    inputs[p].push(self.inputs[p][old]);
+                    residuals[p].push(self.residuals[p][old]);
+                } else {
+                    inputs[p].push(self.next_in[i]);
+                    residuals[p].push(self.next_out[i] - self.next_in[i]);
+                }
+            }
+        }
+        self.inputs = inputs;
+        self.residuals = residuals;
+        self.set.clone_from(&self.next_set);
+    }
+
+    /// Start collecting this iteration's participants.
+    pub fn begin(&mut self) {
+        self.next_set.clear();
+        self.next_in.clear();
+        self.next_out.clear();
+    }
+
+    /// A sliding contact `k` whose friction used `n_in` and whose solve gave `n_out` (N).
+    pub fn note(&mut self, k: usize, state: ContactState, n_in: f64, n_out: f64) {
+        if let ContactState::Sliding { dir } = state {
+            self.next_set.push((k, dir));
+            self.next_in.push(n_in);
+            self.next_out.push(n_out);
+        }
+    }
+
+    /// Add this iteration's point and return, for each participant in the order noted, the next
+    /// input, or `None` when there is no history to mix with (the caller keeps its plain or
+    /// relaxed update). `depth` is the number of differences mixed, `floor` (N) is added to a
+    /// contact's force in its weight, as in the loop's stopping test.
+    pub fn step(&mut self, depth: usize, floor: f64) -> Option<Vec<(usize, f64)>> {
+        if self.next_set != self.set {
+            if self.inputs.is_empty() {
+                self.clear();
+                std::mem::swap(&mut self.set, &mut self.next_set);
+            } else {
+                self.remap();
+            }
+        }
+        let n = self.set.len();
+        if n == 0 || depth == 0 {
+            return None;
+        }
+        let res: Vec<f64> = self
+            .next_in
+            .iter()
+            .zip(&self.next_out)
+            .map(|(a, b)| b - a)
+            .collect();
+        self.inputs.push(self.next_in.clone());
+        self.residuals.push(res);
+        while self.inputs.len() > depth + 1 {
+            self.inputs.remove(0);
+            self.residuals.remove(0);
+        }
+        let points = self.inputs.len();
+        if points < 2 {
+            return None;
+        }
+        let last_x = &self.inputs[points - 1];
+        let last_f = &self.residuals[points - 1];
+        // Each contact's residual relative to its own force, as the stopping test measures it.
+        self.weight.clear();
+        self.weight.extend(
+            last_x
+                .iter()
+                .zip(last_f)
+                .map(|(x, f)| 1.0 / (x.abs().max((x + f).abs()) + floor)),
+        );
+        // A mix gone wrong (the map changed under a kept history): restart from this point.
+        let norm = |f: &[f64]| -> f64 {
+            f.iter()
+                .zip(&self.weight)
+                .map(|(f, w)| (f * w) * (f * w))
+                .sum::<f64>()
+        };
+        if norm(last_f) > 100.0 * norm(&self.residuals[points - 2]) {
+            self.inputs.drain(..points - 1);
+            self.residuals.drain(..points - 1);
+            return None;
+        }
+        let m = points - 1;
+        self.dx.resize(m, Vec::new());
+        self.df.resize(m, Vec::new());
+        for j in 0..m {
+            let (dx, df) = (&mut self.dx[j], &mut self.df[j]);
+            dx.clear();
+            df.clear();
+            for i in 0..n {
+                dx.push(self.inputs[j + 1][i] - self.inputs[j][i]);
+                df.push((self.residuals[j + 1][i] - self.residuals[j][i]) * self.weight[i]);
+            }
+        }
+        // Modified Gram–Schmidt on the weighted residual differences; a column nearly in the
+        // span of the earlier ones is dropped (its γ = 0), which keeps the mix well posed.
+        let mut keep = vec![true; m];
+        self.r.clear();
+        self.r.resize(m * m, 0.0);
+        let mut q: Vec<Vec<f64>> = self.df.clone();
+        for j in 0..m {
+            let norm0 = dot(&q[j], &q[j]).sqrt();
+            for i in 0..j {
+                if !keep[i] {
+                    continue;
+                }
+                let rij = dot(&q[i], &q[j]);
+                self.r[i * m + j] = rij;
+                let (qi, qj) = if i < j {
+                    let (a, b) = q.split_at_mut(j);
+                    (&a[i], &mut b[0])
+                } else {
+                    unreachable!()
+                };
+                for (b, a) in qj.iter_mut().zip(qi) {
+                    *b -= rij * a;
+                }
+            }
+            let norm = dot(&q[j], &q[j]).sqrt();
+            if !(norm > 1e-10 * norm0) || norm == 0.0 {
+                keep[j] = false;
+                continue;
+            }
+            self.r[j * m + j] = norm;
+            for v in q[j].iter_mut() {
+                *v /= norm;
+            }
+        }
+        // γ = R⁻¹ Qᵀ f (weighted).
+        let wf: Vec<f64> = last_f
+            .iter()
+            .zip(&self.weight)
+            .map(|(f, w)| f * w)
+            .collect();
+        self.gamma.clear();
+        self.gamma.resize(m, 0.0);
+        for j in (0..m).rev() {
+            if !keep[j] {
+                continue;
+            }
+            let mut s = dot(&q[j], &wf);
+            for i in j + 1..m {
+                if keep[i] {
+                    s -= self.r[j * m + i] * self.gamma[i];
+                }
+            }
+            self.gamma[j] = s / self.r[j * m + j];
+        }
+        if self.gamma.iter().any(|g| !g.is_finite()) {
+            self.clear();
+            return None;
+        }
+        // x⁺ = x + f − Σ γ_j (Δx_j + Δf_j), in unweighted forces.
+        let mut out = Vec::with_capacity(n);
+        for i in 0..n {
+            let mut v = last_x[i] + last_f[i];
+            for j in 0..m {
+                v -= self.gamma[j] * (self.dx[j][i] + self.df[j][i] / self.weight[i]);
+            }
+            out.push((self.set[i].0, v.max(0.0)));
+        }
+        Some(out)
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
