@@ -29,14 +29,27 @@ pub struct FrictionAnderson {
     next_set: Vec<(usize, f64)>,
     next_in: Vec<f64>,
     next_out: Vec<f64>,
+    /// Scratch of `step`: the orthonormalised columns, which columns are kept, the weighted
+    /// residual, the answer, and retired history rows for reuse.
+    q: Vec<Vec<f64>>,
+    keep: Vec<bool>,
+    wf: Vec<f64>,
+    out: Vec<(usize, f64)>,
+    spare: Vec<Vec<f64>>,
 }
 
 impl FrictionAnderson {
     /// Forget the history (a contact changed state: the map changed).
     pub fn clear(&mut self) {
         self.set.clear();
-        self.inputs.clear();
-        self.residuals.clear();
+        self.spare.append(&mut self.inputs);
+        self.spare.append(&mut self.residuals);
+    }
+
+    fn take_row(&mut self) -> Vec<f64> {
+        let mut v = self.spare.pop().unwrap_or_default();
+        v.clear();
+        v
     }
 
     /// Carry the history over to a changed set of participants (`FrictionAnderson::step` with
@@ -88,7 +101,7 @@ impl FrictionAnderson {
     /// input, or `None` when there is no history to mix with (the caller keeps its plain or
     /// relaxed update). `depth` is the number of differences mixed, `floor` (N) is added to a
     /// contact's force in its weight, as in the loop's stopping test.
-    pub fn step(&mut self, depth: usize, floor: f64) -> Option<Vec<(usize, f64)>> {
+    pub fn step(&mut self, depth: usize, floor: f64) -> Option<&[(usize, f64)]> {
         if self.next_set != self.set {
             if self.inputs.is_empty() {
                 self.clear();
@@ -101,17 +114,17 @@ impl FrictionAnderson {
         if n == 0 || depth == 0 {
             return None;
         }
-        let res: Vec<f64> = self
-            .next_in
-            .iter()
-            .zip(&self.next_out)
-            .map(|(a, b)| b - a)
-            .collect();
-        self.inputs.push(self.next_in.clone());
+        let mut res = self.take_row();
+        res.extend(self.next_in.iter().zip(&self.next_out).map(|(a, b)| b - a));
+        let mut input = self.take_row();
+        input.extend_from_slice(&self.next_in);
+        self.inputs.push(input);
         self.residuals.push(res);
         while self.inputs.len() > depth + 1 {
-            self.inputs.remove(0);
-            self.residuals.remove(0);
+            let a = self.inputs.remove(0);
+            let b = self.residuals.remove(0);
+            self.spare.push(a);
+            self.spare.push(b);
         }
         let points = self.inputs.len();
         if points < 2 {
@@ -135,8 +148,12 @@ impl FrictionAnderson {
                 .sum::<f64>()
         };
         if norm(last_f) > 100.0 * norm(&self.residuals[points - 2]) {
-            self.inputs.drain(..points - 1);
-            self.residuals.drain(..points - 1);
+            let old: Vec<Vec<f64>> = self
+                .inputs
+                .drain(..points - 1)
+                .chain(self.residuals.drain(..points - 1))
+                .collect();
+            self.spare.extend(old);
             return None;
         }
         let m = points - 1;
@@ -153,10 +170,16 @@ impl FrictionAnderson {
         }
         // Modified Gram–Schmidt on the weighted residual differences; a column nearly in the
         // span of the earlier ones is dropped (its γ = 0), which keeps the mix well posed.
-        let mut keep = vec![true; m];
+        let keep = &mut self.keep;
+        keep.clear();
+        keep.resize(m, true);
         self.r.clear();
         self.r.resize(m * m, 0.0);
-        let mut q: Vec<Vec<f64>> = self.df.clone();
+        let q = &mut self.q;
+        q.resize(m, Vec::new());
+        for (qj, dfj) in q.iter_mut().zip(&self.df) {
+            qj.clone_from(dfj);
+        }
         for j in 0..m {
             let norm0 = dot(&q[j], &q[j]).sqrt();
             for i in 0..j {
@@ -165,12 +188,9 @@ impl FrictionAnderson {
                 }
                 let rij = dot(&q[i], &q[j]);
                 self.r[i * m + j] = rij;
-                let (qi, qj) = if i < j {
-                    let (a, b) = q.split_at_mut(j);
-                    (&a[i], &mut b[0])
-                } else {
-                    unreachable!()
-                };
+                // i < j: the earlier column is in the first half.
+                let (a, b) = q.split_at_mut(j);
+                let (qi, qj) = (&a[i], &mut b[0]);
                 for (b, a) in qj.iter_mut().zip(qi) {
                     *b -= rij * a;
                 }
@@ -186,18 +206,16 @@ impl FrictionAnderson {
             }
         }
         // γ = R⁻¹ Qᵀ f (weighted).
-        let wf: Vec<f64> = last_f
-            .iter()
-            .zip(&self.weight)
-            .map(|(f, w)| f * w)
-            .collect();
+        let wf = &mut self.wf;
+        wf.clear();
+        wf.extend(last_f.iter().zip(&self.weight).map(|(f, w)| f * w));
         self.gamma.clear();
         self.gamma.resize(m, 0.0);
         for j in (0..m).rev() {
             if !keep[j] {
                 continue;
             }
-            let mut s = dot(&q[j], &wf);
+            let mut s = dot(&q[j], wf);
             for i in j + 1..m {
                 if keep[i] {
                     s -= self.r[j * m + i] * self.gamma[i];
@@ -210,7 +228,8 @@ impl FrictionAnderson {
             return None;
         }
         // x⁺ = x + f − Σ γ_j (Δx_j + Δf_j), in unweighted forces.
-        let mut out = Vec::with_capacity(n);
+        let out = &mut self.out;
+        out.clear();
         for i in 0..n {
             let mut v = last_x[i] + last_f[i];
             for j in 0..m {
@@ -218,10 +237,82 @@ impl FrictionAnderson {
             }
             out.push((self.set[i].0, v.max(0.0)));
         }
-        Some(out)
+        Some(&self.out)
     }
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// On an affine map N ↦ A·N + b (what the loop's solve is for fixed contact states) the
+    /// mix converges like GMRES: within n + 2 maps for n contacts, where plain substitution at
+    /// spectral radius 0.95 needs about 450 for the same 1e-10.
+    #[test]
+    fn converges_on_an_affine_map_in_about_n_iterations() {
+        let a = [[0.9, 0.04, 0.0], [0.04, -0.7, 0.1], [0.0, 0.1, 0.5]];
+        let b = [10.0, 200.0, 3.0];
+        let map = |x: &[f64; 3]| -> [f64; 3] {
+            let mut y = b;
+            for i in 0..3 {
+                for j in 0..3 {
+                    y[i] += a[i][j] * x[j];
+                }
+            }
+            y
+        };
+        let mut acc = FrictionAnderson::default();
+        let mut x = [1.0, 1.0, 1.0];
+        let mut iterations = 0;
+        for it in 1..=20 {
+            let y = map(&x);
+            let err = (0..3)
+                .map(|i| (y[i] - x[i]).abs() / y[i].abs())
+                .fold(0.0, f64::max);
+            if err < 1e-10 {
+                iterations = it;
+                break;
+            }
+            acc.begin();
+            for i in 0..3 {
+                acc.note(i, ContactState::Sliding { dir: 1.0 }, x[i], y[i]);
+            }
+            match acc.step(5, 1e-9) {
+                Some(next) => {
+                    for &(k, v) in next {
+                        x[k] = v;
+                    }
+                }
+                None => x = y,
+            }
+        }
+        assert!(
+            (1..=5).contains(&iterations),
+            "took {iterations} maps (0 = not converged in 20)"
+        );
+    }
+
+    /// A contact that changes its slip direction leaves the history; the others keep theirs.
+    #[test]
+    fn a_contact_that_changes_direction_restarts_alone() {
+        let mut acc = FrictionAnderson::default();
+        for (n_in, n_out) in [(1.0, 2.0), (2.0, 2.5)] {
+            acc.begin();
+            acc.note(0, ContactState::Sliding { dir: 1.0 }, n_in, n_out);
+            acc.note(1, ContactState::Sliding { dir: 1.0 }, n_in, n_out);
+            acc.step(5, 1e-9);
+        }
+        acc.begin();
+        acc.note(0, ContactState::Sliding { dir: 1.0 }, 2.5, 2.75);
+        acc.note(1, ContactState::Sliding { dir: -1.0 }, 2.5, 7.0);
+        let next = acc.step(5, 1e-9).expect("contact 0 has a history").to_vec();
+        // Contact 1 entered with zero differences: plain substitution.
+        assert_eq!(next[1], (1, 7.0));
+        // Contact 0's map N ↦ 1.5 + N/2 has its fixed point at 3.
+        assert!((next[0].1 - 3.0).abs() < 1e-9, "{next:?}");
+    }
 }

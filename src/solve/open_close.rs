@@ -258,7 +258,7 @@ pub fn iterate(
                 params.anderson_depth,
                 springs.normal * springs.gap_tolerance,
             ) {
-                for (k, n) in next {
+                for &(k, n) in next {
                     contacts[k].friction_normal = n;
                 }
             }
