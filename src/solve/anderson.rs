@@ -196,7 +196,7 @@ impl FrictionAnderson {
                 }
             }
             let norm = dot(&q[j], &q[j]).sqrt();
-            if !(norm > 1e-10 * norm0) || norm == 0.0 {
+            if norm.is_nan() || norm <= 1e-10 * norm0 || norm == 0.0 {
                 keep[j] = false;
                 continue;
             }
