@@ -8,7 +8,11 @@
 //! iterated (`ChangeCounts`), why steps were refused and the time per stage.
 //!
 //! `cargo run --release --example shaken_walls -- [--sizes 100,400,1600] [--steps 300]
-//!  [--motions rest,sine,record] [--diag] [--tight] [--block-model rigid|deformable] [--poisson V]`
+//!  [--motions rest,sine,record] [--diag] [--tight] [--block-model rigid|deformable] [--poisson V]
+//!  [--anderson DEPTH] [--anderson-restart] [--legacy] [--reference]`
+//!
+//! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
+//! fixed-point loop); `--anderson-restart` restarts its history whenever a contact changes state.
 //!
 //! `--tight`: the reference configuration of docs/contact-solve.md (Δt = 1e-4 s, the open–close
 //! loop run to convergence with the previous defaults of `OpenCloseParams::legacy`).
@@ -175,6 +179,12 @@ fn main() {
             }
             if let Some(v) = arg("--relax-after") {
                 params.open_close.relax_after = v.parse().expect("--relax-after");
+            }
+            if let Some(v) = arg("--anderson") {
+                params.open_close.anderson_depth = v.parse().expect("--anderson");
+            }
+            if std::env::args().any(|a| a == "--anderson-restart") {
+                params.open_close.anderson_keep = false;
             }
             if let Some(v) = arg("--friction-tol") {
                 params.open_close.friction_tolerance = v.parse().expect("--friction-tol");

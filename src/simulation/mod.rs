@@ -216,6 +216,8 @@ pub struct Simulation {
     pub profile: StepProfile,
     /// Why the open–close loop iterated (diagnostics).
     pub changes: open_close::ChangeCounts,
+    /// Buffers of the open–close loop kept across steps.
+    open_close_scratch: open_close::OpenCloseScratch,
     /// Step attempts refused, by reason: [contact solve not converged, a block moved beyond
     /// the step limit, a contact overshot, a step-control bound (impact location or local
     /// error)]; each led to a time-step cut or the run's end.
@@ -341,6 +343,7 @@ impl Simulation {
             },
             profile: StepProfile::default(),
             changes: Default::default(),
+            open_close_scratch: Default::default(),
             refusals: [0; 4],
             retired: vec![false; scene.blocks.len()],
             params,
@@ -608,6 +611,7 @@ impl Simulation {
             &mut self.x,
             &self.params.open_close,
             &mut self.changes,
+            &mut self.open_close_scratch,
         );
         match r {
             Ok(o) => {

@@ -2,6 +2,7 @@
 //! Fifth stage of the flow (after `assembly`, before `integrate`). All factorizations live
 //! behind [`LinearSolver`]: a dense Cholesky for small systems, faer's sparse Cholesky with a
 //! reused symbolic factorization for large ones.
+mod anderson;
 mod dense_cholesky;
 pub mod dual;
 pub mod open_close;

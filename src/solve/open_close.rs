@@ -1,6 +1,7 @@
 //! Shi's open–close iteration: assume contact states, solve, check the states against the
 //! solution, repeat until no contact changes state. Called once per step attempt after
 //! `BlockSystem::assemble_blocks`; on non-convergence the caller cuts the time step.
+use super::anderson::FrictionAnderson;
 use super::{LinearSolver, SolveError};
 use crate::assembly::contact_springs::{
     add_contacts, constants, shear_limit, JointLaw, Prescribed, SpringParams,
@@ -57,6 +58,15 @@ pub struct OpenCloseParams {
     /// docs/contact-solve.md), since the contacts still iterating there are coupled through
     /// their neighbours' stick–slip changes, which a per-contact secant does not see.
     pub secant_friction: bool,
+    /// Differences of past iterates mixed by the Anderson acceleration of the sliding contacts'
+    /// friction fixed point while no contact changes state (`solve::anderson`); 0 = off (plain
+    /// substitution, relaxed after `relax_after`). Default 5: measured in docs/contact-solve.md
+    /// §6 on the shaken wall under the record.
+    pub anderson_depth: usize,
+    /// Keep Anderson's history when contacts change state (the map changes a little; contacts
+    /// that leave the sliding set are dropped from it, those that join enter with zero
+    /// differences) instead of restarting it. Measured in docs/contact-solve.md §6.
+    pub anderson_keep: bool,
 }
 
 impl Default for OpenCloseParams {
@@ -71,6 +81,8 @@ impl Default for OpenCloseParams {
             force_tolerance: 1e-3,
             light_load: 0.1,
             secant_friction: false,
+            anderson_depth: 5,
+            anderson_keep: true,
         }
     }
 }
@@ -122,6 +134,7 @@ impl OpenCloseParams {
         Self {
             force_tolerance: 0.0,
             secant_friction: false,
+            anderson_depth: 0,
             ..Self::default()
         }
     }
@@ -161,6 +174,13 @@ pub fn measures(c: &Contact, x: &[f64], dofs: &Dofs, prescribed: &[Prescribed]) 
     (g, s)
 }
 
+/// Buffers of the loop kept across steps.
+#[derive(Debug, Default, Clone)]
+pub struct OpenCloseScratch {
+    block_force: Vec<f64>,
+    anderson: FrictionAnderson,
+}
+
 /// Run the loop; `x` holds the converged solution on return.
 pub fn iterate(
     sys: &mut BlockSystem,
@@ -173,6 +193,7 @@ pub fn iterate(
     x: &mut Vec<f64>,
     params: &OpenCloseParams,
     counts: &mut ChangeCounts,
+    scratch: &mut OpenCloseScratch,
 ) -> Result<OpenClose, SolveError> {
     let mut last_changed = None;
     // Largest contact normal force on each block at the step start (the last step's converged
@@ -180,7 +201,11 @@ pub fn iterate(
     // of this step's iterations: an iterate with a wrong contact state can carry forces 10⁴×
     // the stone's weight (measured on the incline at 1 m/s), which would let real friction
     // changes pass as small.
-    let mut block_force = vec![0.0_f64; dofs.free_index.len()];
+    let block_force = &mut scratch.block_force;
+    block_force.clear();
+    block_force.resize(dofs.free_index.len(), 0.0);
+    let anderson = &mut scratch.anderson;
+    anderson.clear();
     for (c, law) in contacts.iter_mut().zip(laws) {
         c.flips = 0;
         c.friction_secant = None;
@@ -195,24 +220,48 @@ pub fn iterate(
             0.0
         };
         c.release_factor = 1.0;
-        note_force(&mut block_force, c, c.start_normal_force);
+        note_force(block_force, c, c.start_normal_force);
     }
     for it in 1..=params.max_iterations {
         sys.reset_to_blocks();
         add_contacts(sys, dofs, contacts, laws, springs, prescribed);
         solver.solve(sys, dofs, x)?;
         let mut changed = 0;
+        // Whether a contact changed state or load (the friction map changed: Anderson's
+        // history no longer applies).
+        let mut structural = false;
+        anderson.begin();
         for (k, (c, law)) in contacts.iter_mut().zip(laws).enumerate() {
-            let scale = force_scale(&block_force, c, dofs);
+            let scale = force_scale(block_force, c, dofs);
+            let (old_state, n_in, old_release) = (c.state, c.friction_normal, c.release_factor);
             if update_state(
                 c, law, springs, x, dofs, prescribed, params, it, scale, counts,
             ) {
                 changed += 1;
                 last_changed = Some(k);
             }
+            if c.state != old_state
+                || (c.release_factor - old_release).abs() > params.release_tolerance
+            {
+                structural = true;
+            } else if law.tan_phi != 0.0 && params.anderson_depth > 0 {
+                anderson.note(k, c.state, n_in, c.normal_force.max(0.0));
+            }
         }
         if changed == 0 {
             return Ok(OpenClose::Converged { iterations: it });
+        }
+        if params.anderson_depth > 0 {
+            if structural && !params.anderson_keep {
+                anderson.clear();
+            } else if let Some(next) = anderson.step(
+                params.anderson_depth,
+                springs.normal * springs.gap_tolerance,
+            ) {
+                for &(k, n) in next {
+                    contacts[k].friction_normal = n;
+                }
+            }
         }
     }
     Ok(OpenClose::NotConverged {
