@@ -139,7 +139,7 @@ fn main() {
                 ..Default::default()
             });
             spec.control.time_step = Some(if tight { 1e-4 } else { 1e-3 });
-            // `--poisson V`: the stones' Poisson ratio (deformable walls: docs/contact-solve.md §6).
+            // `--poisson V`: the stones' Poisson ratio (deformable walls: docs/contact-solve.md §7).
             if let Some(v) = arg("--poisson") {
                 for m in spec.materials.values_mut() {
                     m.poisson_ratio = v.parse().expect("--poisson");
