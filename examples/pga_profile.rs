@@ -12,6 +12,8 @@ use ashlar::analysis::run_end::{self, RunEndParams, SettleWatch};
 use ashlar::simulation::{SimParams, Simulation};
 use std::time::Duration;
 
+/// CPU seconds of this process (user time); 0 where `getrusage` is not available.
+#[cfg(unix)]
 fn cpu() -> f64 {
     nix::sys::resource::getrusage(nix::sys::resource::UsageWho::RUSAGE_SELF)
         .map(|u| {
@@ -19,6 +21,11 @@ fn cpu() -> f64 {
             t.tv_sec() as f64 + t.tv_usec() as f64 * 1e-6
         })
         .unwrap_or(0.0)
+}
+
+#[cfg(not(unix))]
+fn cpu() -> f64 {
+    0.0
 }
 
 /// Counters at a moment of the run.

@@ -3,12 +3,12 @@
 //! Overturning is not monotonic in amplitude (rocking has safe regions above the first
 //! overturning amplitude), so the search first scans a grid of amplitudes in parallel (its
 //! spacing is the search's `resolution`: every failing interval wider than it holds a scan
-//! point), then narrows *every* change of outcome between neighbouring amplitudes to the
-//! tolerance, evaluating as many interior points per round as there are cores. The lowest
-//! failing amplitude therefore does not depend on where the range starts, as long as the
-//! failing interval that holds it is wider than the resolution.
+//! point), then narrows the *lowest* change of outcome between neighbouring amplitudes (the
+//! threshold) to the tolerance; the other changes (islands' edges) are reported at the
+//! resolution. The lowest failing amplitude therefore does not depend on where the range
+//! starts, as long as the failing interval that holds it is wider than the resolution.
 //!
-//! Length (over 600 lines): the criteria, the planner (scan, refinement of every change of
+//! Length (over 600 lines): the criteria, the planner (scan, refinement of the lowest change of
 //! outcome) and the single- and multi-record searches share the request and the run tracker;
 //! about a quarter of the file is their unit tests.
 use super::fragility::{fit_binary, fit_interval, Capacity, FitParams, Fragility, Method, Point};
@@ -276,8 +276,8 @@ pub struct PgaResult {
     #[serde(default)]
     pub resolution: f64,
     /// m/s², every failing interval found, lowest first: `[lowest, highest]` failing amplitude
-    /// of each run of consecutive failing amplitudes (both ends refined to the tolerance where
-    /// the outcome changes inside the range).
+    /// of each run of consecutive failing amplitudes (the lowest change of outcome refined to
+    /// the tolerance, every other end known to the `resolution`).
     #[serde(default)]
     pub failing_intervals: Vec<[f64; 2]>,
     pub runs: Vec<PgaRun>,
