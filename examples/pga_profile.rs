@@ -96,11 +96,7 @@ fn main() {
                 break;
             }
             run_end::retire_fallen(&mut sim, floor);
-            let settled = watch.update(
-                sim.time,
-                run_end::all_quiet(&sim, &end),
-                end.settle_window,
-            );
+            let settled = watch.update(sim.time, run_end::all_quiet(&sim, &end), end.settle_window);
             if at_record.is_none() && sim.time >= record_end {
                 at_record = Some(mark(&sim, cpu0));
             }
