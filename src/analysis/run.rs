@@ -335,14 +335,14 @@ pub struct Tracker {
 
 impl Tracker {
     fn new(sim: &Simulation) -> Self {
-        let free: Vec<usize> = (0..sim.geoms.len())
-            .filter(|&b| sim.mobility[b] == Mobility::Free)
+        let free: Vec<usize> = (0..sim.geoms().len())
+            .filter(|&b| sim.mobility()[b] == Mobility::Free)
             .collect();
         let n = free.len();
         Self {
             ids: free
                 .iter()
-                .map(|&b| sim.scene.blocks[b].id.clone())
+                .map(|&b| sim.scene().blocks[b].id.clone())
                 .collect(),
             free,
             max_displacement: vec![0.0; n],
@@ -355,7 +355,7 @@ impl Tracker {
 
     fn update(&mut self, sim: &Simulation) {
         for (k, &b) in self.free.iter().enumerate() {
-            let g = &sim.geoms[b];
+            let g = &sim.geoms()[b];
             let d = g.centroid - g.initial_centroid;
             self.final_displacement[k] = [d.x, d.y];
             self.final_rotation[k] = g.rotation;
@@ -364,8 +364,8 @@ impl Tracker {
         }
         // Slip of sliding contacts, charged to the block(s) that carry unknowns; the largest
         // slip of a block's contacts in the step (contacts of one face slide together).
-        let mut step_slip = vec![0.0f64; sim.geoms.len()];
-        for c in &sim.contacts.contacts {
+        let mut step_slip = vec![0.0f64; sim.geoms().len()];
+        for c in &sim.contacts().contacts {
             if let ContactState::Sliding { .. } = c.state {
                 let s = c.slip.abs();
                 step_slip[c.vertex_block] = step_slip[c.vertex_block].max(s);
@@ -622,13 +622,13 @@ fn run_dda(
     let mut stopped_reason = None;
     let mut cancelled = false;
     let mut sim_error = None;
-    while sim.time < cap - 1e-12 {
+    while sim.time() < cap - 1e-12 {
         if opts.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             cancelled = true;
             stopped_reason = Some("cancelled".to_string());
             break;
         }
-        if sim.stats.steps >= scene.control.max_steps {
+        if sim.stats().steps >= scene.control.max_steps {
             stopped_reason = Some(format!(
                 "step budget of {} steps reached (control.max_steps)",
                 scene.control.max_steps
@@ -636,18 +636,22 @@ fn run_dda(
             break;
         }
         let next_frame =
-            ((frame_index + 1) as f64 * interval).min(run_end::horizon(sim.time, duration, cap));
-        if let Err(e) = sim.step(next_frame - sim.time) {
+            ((frame_index + 1) as f64 * interval).min(run_end::horizon(sim.time(), duration, cap));
+        if let Err(e) = sim.step(next_frame - sim.time()) {
             sim_error = Some(e);
             break;
         }
         events.extend(run_end::retire_fallen(&mut sim, floor));
         tracker.update(&sim);
-        settled = watch.update(sim.time, run_end::all_quiet(&sim, &end), end.settle_window);
-        if sim.time >= next_frame - 1e-9 * interval {
+        settled = watch.update(
+            sim.time(),
+            run_end::all_quiet(&sim, &end),
+            end.settle_window,
+        );
+        if sim.time() >= next_frame - 1e-9 * interval {
             frame_index += 1;
-            writers.emit(&frame(&sim, &failure), opts, Some(sim.time / duration))?;
-            if run_end::may_end(sim.time, duration, settled) {
+            writers.emit(&frame(&sim, &failure), opts, Some(sim.time() / duration))?;
+            if run_end::may_end(sim.time(), duration, settled) {
                 break;
             }
         }
@@ -690,17 +694,17 @@ fn header(
     motion: &GroundMotion,
     opts: &RunOptions,
 ) -> Result<RecordHeader, RunError> {
-    let scene = &sim.scene;
+    let scene = &sim.scene();
     let history_blocks = match &opts.history_blocks {
         None => (0..scene.blocks.len())
-            .filter(|&b| sim.mobility[b] == Mobility::Free)
+            .filter(|&b| sim.mobility()[b] == Mobility::Free)
             .collect(),
         Some(ids) => ids
             .iter()
             .map(|id| {
                 scene
                     .block_index(id)
-                    .filter(|&b| sim.mobility[b] == Mobility::Free)
+                    .filter(|&b| sim.mobility()[b] == Mobility::Free)
                     .ok_or_else(|| {
                         RunError::Invalid(format!(
                             "history block {id:?}: no free block with that id"
@@ -726,14 +730,14 @@ fn header(
     if scene.control.contact_solver != ContactSolver::Dual {
         metadata.insert(
             "penalty_stiffness".into(),
-            format!("{}", sim.springs.normal),
+            format!("{}", sim.springs().normal),
         );
     }
     metadata.insert("code_version".into(), env!("CARGO_PKG_VERSION").into());
     Ok(RecordHeader {
         block_ids: scene.blocks.iter().map(|b| b.id.clone()).collect(),
         block_kinds: sim
-            .mobility
+            .mobility()
             .iter()
             .map(|m| match m {
                 Mobility::Fixed => FrameBlockKind::Fixed,
@@ -747,21 +751,21 @@ fn header(
 }
 
 fn frame(sim: &Simulation, failure: &FailureParams) -> Frame {
-    let mut sliding = vec![false; sim.geoms.len()];
-    for c in &sim.contacts.contacts {
+    let mut sliding = vec![false; sim.geoms().len()];
+    for c in &sim.contacts().contacts {
         if let ContactState::Sliding { .. } = c.state {
             sliding[c.vertex_block] = true;
             sliding[c.edge_block] = true;
         }
     }
     let blocks = sim
-        .geoms
+        .geoms()
         .iter()
         .enumerate()
         .map(|(b, g)| {
             let d = g.centroid - g.initial_centroid;
             let v = sim.block_velocity(b);
-            let state = if sim.mobility[b] != Mobility::Free {
+            let state = if sim.mobility()[b] != Mobility::Free {
                 BlockMotionState::AtRest
             } else if g.rotation.abs() > failure.toppled_rotation {
                 BlockMotionState::Toppled
@@ -784,9 +788,9 @@ fn frame(sim: &Simulation, failure: &FailureParams) -> Frame {
             }
         })
         .collect();
-    let gs = sim.motion.state(sim.time);
+    let gs = sim.motion().state(sim.time());
     Frame {
-        time: sim.time,
+        time: sim.time(),
         blocks,
         ground: GroundFrame {
             acceleration: gs[0],
@@ -875,19 +879,19 @@ fn summarize(
             sliding_distance: tr.sliding_distance[k],
         })
         .collect();
-    let st = &sim.stats;
-    let dual = sim.scene.control.contact_solver == ContactSolver::Dual;
+    let st = &sim.stats();
+    let dual = sim.scene().control.contact_solver == ContactSolver::Dual;
     Summary {
         format: RUN_OUTPUTS_FORMAT.into(),
-        completed: stopped_reason.is_none() && sim.time >= duration - 1e-9,
-        simulated_time: round_time(sim.time),
+        completed: stopped_reason.is_none() && sim.time() >= duration - 1e-9,
+        simulated_time: round_time(sim.time()),
         steps: st.steps,
         wall_time_s: wall,
         pga: motion.pga(),
         failure_mode: failure_mode(&blocks, failure).into(),
         blocks,
         diagnostics: Diagnostics {
-            penalty_stiffness: (!dual).then_some(sim.springs.normal),
+            penalty_stiffness: (!dual).then_some(sim.springs().normal),
             time_step_cuts: st.time_step_cuts,
             max_penetration: st.max_penetration,
             open_close_iterations_mean: (!dual).then_some(if st.steps > 0 {
@@ -904,7 +908,7 @@ fn summarize(
         model,
         model_reason,
         stopped_reason,
-        control: reported_control(&sim.scene, Ran::Engine),
+        control: reported_control(&sim.scene(), Ran::Engine),
         units: summary_units(),
         settled: false,
         events: Vec::new(),

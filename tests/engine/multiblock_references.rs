@@ -170,13 +170,13 @@ fn engine_overturns(
     let mut fell = false;
     run_until(&mut s, 4.0, |s| {
         each_step(s);
-        if watched.iter().any(|&b| s.geoms[b].rotation.abs() > 0.6) {
+        if watched.iter().any(|&b| s.geoms()[b].rotation.abs() > 0.6) {
             fell = true;
             return true;
         }
-        let th = s.geoms[watched[0]].rotation;
+        let th = s.geoms()[watched[0]].rotation;
         if th.abs() > 1e-4 {
-            if s.time > 0.5 && sign != 0.0 && th.signum() != sign {
+            if s.time() > 0.5 && sign != 0.0 && th.signum() != sign {
                 return true;
             }
             sign = th.signum();
@@ -236,9 +236,9 @@ fn check_frame(gamma: f64, solver: &str, regression: f64) {
         engine_overturns(&scene, a, &[1, 2], |s| {
             // The columns rock together and the cap stays level, as the model assumes.
             let (l, r, c) = (
-                s.geoms[1].rotation,
-                s.geoms[2].rotation,
-                s.geoms[3].rotation,
+                s.geoms()[1].rotation,
+                s.geoms()[2].rotation,
+                s.geoms()[3].rotation,
             );
             if l.abs().max(r.abs()) < 0.3 {
                 worst_sync = worst_sync.max((l - r).abs()).max(c.abs());
@@ -299,10 +299,10 @@ fn frame_history(solver: &str) {
     let mut worst: f64 = 0.0;
     let mut engine_peak: f64 = 0.0;
     run(&mut s, landing - 0.01, |s| {
-        let th = s.geoms[1].rotation;
+        let th = s.geoms()[1].rotation;
         // Reference samples every REF_DT from its onset; before it the column is at rest.
         let k = reference
-            .partition_point(|p| p.0 < s.time)
+            .partition_point(|p| p.0 < s.time())
             .min(reference.len() - 1);
         worst = worst.max((th - reference[k].1).abs());
         engine_peak = engine_peak.max(th.abs());
@@ -378,7 +378,7 @@ fn frame_restitution(gamma: f64, solver: &str, dt: Option<f64>) -> f64 {
     let mut s = sim(&scene, &GroundMotion::none());
     let (mut hit, mut peak) = (false, f64::NEG_INFINITY);
     let done = run_until(&mut s, 3.0, |s| {
-        let th = s.geoms[1].rotation;
+        let th = s.geoms()[1].rotation;
         let w = s.block_velocity(1)[2];
         if !hit {
             hit = th >= theta0;
@@ -530,9 +530,9 @@ fn check_pier(solver: &str, regression: f64) {
     let mut opening: f64 = 0.0;
     let (lo, hi) = engine_threshold(reference, |a| {
         engine_overturns(&scene, a, &[1], |s| {
-            if s.geoms[1].rotation.abs() < alpha {
+            if s.geoms()[1].rotation.abs() < alpha {
                 for k in 2..=COURSES {
-                    opening = opening.max((s.geoms[k].rotation - s.geoms[1].rotation).abs());
+                    opening = opening.max((s.geoms()[k].rotation - s.geoms()[1].rotation).abs());
                 }
             }
         })
@@ -726,8 +726,8 @@ fn check_stack(solver: &str, regression: f64) {
         l[0],
         u[0],
         err,
-        s.geoms[1].rotation,
-        s.geoms[2].rotation
+        s.geoms()[1].rotation,
+        s.geoms()[2].rotation
     );
     assert!(reference.abs() > 0.01, "the case must slide");
     assert!(err.abs() < 0.02, "{solver}: {err}");
