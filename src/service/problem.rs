@@ -7,6 +7,7 @@
 use crate::analysis::run::RunError;
 use crate::motion::MotionError;
 use crate::scene::SceneError;
+use crate::service::store::StoreError;
 use axum::http::{header, HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Response};
 use serde::Serialize;
@@ -313,6 +314,19 @@ impl ApiError {
             "Request header fields too large",
             detail,
         )
+    }
+
+    /// A job-store failure, logged in full; the client gets a problem per cause without
+    /// internals: a busy or unreachable database is `unavailable` (503, retry after 1 s),
+    /// every other cause (a database error, corrupt data, schema, a poisoned lock) `internal`.
+    pub fn store(e: StoreError) -> Self {
+        match e {
+            StoreError::Busy { .. } => {
+                tracing::error!(cause = %e, "job store unavailable");
+                Self::unavailable("the job store is busy or unreachable; retry shortly", 1)
+            }
+            other => Self::internal(other),
+        }
     }
 
     /// An internal failure: `cause` goes to the log, the client gets a generic message.
