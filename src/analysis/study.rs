@@ -13,6 +13,7 @@
 //! `evaluation.rs` (a setting on a scene), `pareto.rs` (front and convergence order),
 //! `svg.rs` (plots), `report.rs` (Markdown). This file keeps the types, the restitution fit,
 //! the driver `run_study`, `check` and `write_outputs`, and the tests (a third of it).
+//! Length (over 600 lines): those tests, which check the driver end to end on the quick grid.
 use super::reduced::ode::Tolerance;
 use super::reduced::ReducedParams;
 use super::reference;
