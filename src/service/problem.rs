@@ -434,6 +434,29 @@ pub fn dotted_to_pointer(prefix: &str, path: &str) -> String {
 mod tests {
     use super::*;
 
+    /// One problem per store cause: a busy or unreachable database is 503 with a retry, the
+    /// other causes 500; neither shows the database's text to the client.
+    #[test]
+    fn store_errors_become_a_problem_per_cause() {
+        use crate::service::store::Backend;
+        let busy = ApiError::store(StoreError::Busy {
+            database: Backend::Sqlite,
+            detail: "database is locked".into(),
+        });
+        assert_eq!(
+            (busy.status, busy.kind),
+            (StatusCode::SERVICE_UNAVAILABLE, "unavailable")
+        );
+        assert_eq!(busy.retry_after, Some(1));
+        assert!(!busy.detail.contains("locked"), "{}", busy.detail);
+        let corrupt = ApiError::store(StoreError::corrupt("job status", "\"lost\""));
+        assert_eq!(
+            (corrupt.status, corrupt.kind),
+            (StatusCode::INTERNAL_SERVER_ERROR, "internal")
+        );
+        assert!(!corrupt.detail.contains("lost"), "{}", corrupt.detail);
+    }
+
     #[test]
     fn pointers_from_dotted_paths() {
         assert_eq!(

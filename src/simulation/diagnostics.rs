@@ -6,6 +6,7 @@ use super::control::Refusal;
 use super::{SimError, Simulation};
 use crate::contact::Contact;
 use crate::scene::ContactSolver;
+use crate::solve::SolveError;
 use std::time::Duration;
 
 /// Wall time spent in each stage (accumulated over steps).
@@ -43,6 +44,20 @@ pub struct Stats {
 }
 
 impl Simulation {
+    /// The typed error of a failed linear solve (open–close or the dual solver's
+    /// flexibilities), naming the block of the degree of freedom it failed at.
+    pub(super) fn solve_failed(&self, error: SolveError) -> SimError {
+        let dof = match error {
+            SolveError::NotPositiveDefinite { dof } | SolveError::NonFinite { dof } => dof,
+            SolveError::Backend(_) => 0,
+        };
+        SimError::Solve {
+            time: self.state.time,
+            error,
+            block: self.block_of_dof(dof),
+        }
+    }
+
     pub(super) fn block_of_dof(&self, dof: usize) -> String {
         for f in 0..self.state.dofs.block_of.len() {
             if dof >= self.state.dofs.offset[f]

@@ -11,7 +11,6 @@ use crate::integrate;
 use crate::scene::Excitation;
 use crate::solve::dual::{DualInput, DualOutcome};
 use crate::solve::open_close::{self, OpenClose};
-use crate::solve::SolveError;
 use std::time::Instant;
 
 impl Simulation {
@@ -175,17 +174,7 @@ impl Simulation {
                 self.stepper.stats.open_close_iterations += iterations as u64;
                 Ok(o)
             }
-            Err(error) => {
-                let dof = match error {
-                    SolveError::NotPositiveDefinite { dof } | SolveError::NonFinite { dof } => dof,
-                    SolveError::Backend(_) => 0,
-                };
-                Err(SimError::Solve {
-                    time: self.state.time,
-                    error,
-                    block: self.block_of_dof(dof),
-                })
-            }
+            Err(error) => Err(self.solve_failed(error)),
         }
     }
 
@@ -216,17 +205,7 @@ impl Simulation {
                 self.stepper.last_dual = Some(o);
                 Ok(o)
             }
-            Err(error) => {
-                let dof = match error {
-                    SolveError::NotPositiveDefinite { dof } | SolveError::NonFinite { dof } => dof,
-                    SolveError::Backend(_) => 0,
-                };
-                Err(SimError::Solve {
-                    time: self.state.time,
-                    error,
-                    block: self.block_of_dof(dof),
-                })
-            }
+            Err(error) => Err(self.solve_failed(error)),
         }
     }
 
