@@ -505,7 +505,7 @@ fn header(
     motion: &GroundMotion,
     opts: &RunOptions,
 ) -> Result<RecordHeader, RunError> {
-    let scene = &sim.scene();
+    let scene = sim.scene();
     let history_blocks = match &opts.history_blocks {
         None => (0..scene.blocks.len())
             .filter(|&b| sim.mobility()[b] == Mobility::Free)
@@ -719,7 +719,7 @@ fn summarize(
         model,
         model_reason,
         stopped_reason,
-        control: reported_control(&sim.scene(), Ran::Engine),
+        control: reported_control(sim.scene(), Ran::Engine),
         units: summary_units(),
         settled: false,
         events: Vec::new(),

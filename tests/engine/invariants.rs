@@ -423,7 +423,7 @@ fn check_symmetry(s: &mut Simulation) {
         for &j in &probes {
             set_unit_rhs(&mut unit, s, j);
             let mut x = Vec::new();
-            if let Err(e) = solver.solve(&unit, &s.dofs(), &mut x) {
+            if let Err(e) = solver.solve(&unit, s.dofs(), &mut x) {
                 panic!("solve failed: {e}");
             }
             let xnorm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
