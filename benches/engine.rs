@@ -31,7 +31,7 @@ fn rocking_column(c: &mut Criterion) {
         b.iter(|| {
             let mut sim = Simulation::new(&scene, &pulse, SimParams::default());
             steps(&mut sim, 1000);
-            black_box(sim.geoms[1].rotation)
+            black_box(sim.geoms()[1].rotation)
         })
     });
 }
@@ -52,7 +52,7 @@ fn wall(c: &mut Criterion) {
         b.iter(|| {
             let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
             steps(&mut sim, 1000);
-            black_box(sim.time)
+            black_box(sim.time())
         })
     });
     // The same wall with both shortcuts off (detection every step, a factorization every
@@ -64,7 +64,7 @@ fn wall(c: &mut Criterion) {
         b.iter(|| {
             let mut sim = Simulation::new(&scene, &GroundMotion::none(), plain);
             steps(&mut sim, 1000);
-            black_box(sim.time)
+            black_box(sim.time())
         })
     });
     group.finish();

@@ -39,18 +39,18 @@ fn main() {
         println!(
             "| {} | {} | {} | {} | {:.3e} | {} |",
             blocks,
-            sim.dofs.n,
-            sim.contacts.contacts.len(),
+            sim.dofs().n,
+            sim.contacts().contacts.len(),
             n,
             per_step,
             exp
         );
         eprintln!(
             "  profile {:?} iterations/step {:.2} {:?} detections {}",
-            sim.profile,
-            sim.stats.open_close_iterations as f64 / sim.stats.steps as f64,
+            sim.profile(),
+            sim.stats().open_close_iterations as f64 / sim.stats().steps as f64,
             sim.solver_counts(),
-            sim.contacts.detections
+            sim.contacts().detections
         );
         prev = Some((blocks, per_step));
     }

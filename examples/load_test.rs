@@ -109,7 +109,7 @@ fn main() -> Result<(), String> {
             } else {
                 ashlar::service::analysis_runner()
             };
-            let svc = ashlar::service::Service::start(cfg, runner)?;
+            let svc = ashlar::service::Service::start(cfg, runner).map_err(|e| e.to_string())?;
             let state = svc.state();
             let rt = tokio::runtime::Builder::new_multi_thread()
                 .enable_all()

@@ -40,10 +40,10 @@ struct Mark {
 
 fn mark(sim: &Simulation, cpu0: f64) -> Mark {
     Mark {
-        time: sim.time,
-        steps: sim.stats.steps,
-        cuts: sim.stats.time_step_cuts,
-        solves: sim.stats.open_close_iterations,
+        time: sim.time(),
+        steps: sim.stats().steps,
+        cuts: sim.stats().time_step_cuts,
+        solves: sim.stats().open_close_iterations,
         cpu: cpu() - cpu0,
     }
 }
@@ -87,21 +87,25 @@ fn main() {
             .ok()
             .and_then(|s| s.parse().ok());
         let mut next_line = every.unwrap_or(f64::INFINITY);
-        while sim.time < cap - 1e-12 {
+        while sim.time() < cap - 1e-12 {
             let next =
-                ((frame_index + 1) as f64 * interval).min(run_end::horizon(sim.time, dur, cap));
-            if let Err(e) = sim.step(next - sim.time) {
+                ((frame_index + 1) as f64 * interval).min(run_end::horizon(sim.time(), dur, cap));
+            if let Err(e) = sim.step(next - sim.time()) {
                 outcome = "error";
                 eprintln!("{pga}: {e}");
                 break;
             }
             run_end::retire_fallen(&mut sim, floor);
-            let settled = watch.update(sim.time, run_end::all_quiet(&sim, &end), end.settle_window);
-            if at_record.is_none() && sim.time >= record_end {
+            let settled = watch.update(
+                sim.time(),
+                run_end::all_quiet(&sim, &end),
+                end.settle_window,
+            );
+            if at_record.is_none() && sim.time() >= record_end {
                 at_record = Some(mark(&sim, cpu0));
             }
-            let rot = sim.geoms[block].rotation.abs();
-            if sim.time >= next_line {
+            let rot = sim.geoms()[block].rotation.abs();
+            if sim.time() >= next_line {
                 let m = mark(&sim, cpu0);
                 println!(
                     "  t {:.1} s: {} steps, {} cuts, {:.2} solves/step so far, {:.2} cpu s, rotation {:.4}",
@@ -117,9 +121,9 @@ fn main() {
             if at_fallen.is_none() && rot > 30f64.to_radians() {
                 at_fallen = Some(mark(&sim, cpu0));
             }
-            if sim.time >= next - 1e-9 * interval {
+            if sim.time() >= next - 1e-9 * interval {
                 frame_index += 1;
-                if run_end::may_end(sim.time, dur, settled) {
+                if run_end::may_end(sim.time(), dur, settled) {
                     break;
                 }
             }
@@ -127,7 +131,7 @@ fn main() {
                 break;
             }
         }
-        if sim.geoms[block].rotation.abs() > 30f64.to_radians() {
+        if sim.geoms()[block].rotation.abs() > 30f64.to_radians() {
             outcome = "fell";
         }
         let m = mark(&sim, cpu0);
@@ -140,7 +144,7 @@ fn main() {
             ),
             None => "-".into(),
         };
-        let p = sim.profile;
+        let p = sim.profile();
         let s = |d: Duration| d.as_secs_f64();
         println!(
             "{pga:.4} | {outcome} | {:.2} | {} | {} | {:.2} | {:.2} | {} | {} | {} | {:.2}/{:.2}/{:.2}/{:.2}",
@@ -161,15 +165,15 @@ fn main() {
             s(p.solve),
             s(p.integrate),
         );
-        let fallen: Vec<String> = (0..sim.geoms.len())
-            .filter(|&b| sim.dofs.free_index[b].is_some())
-            .filter(|&b| sim.retired[b] || sim.geoms[b].rotation.abs() > 30f64.to_radians())
+        let fallen: Vec<String> = (0..sim.geoms().len())
+            .filter(|&b| sim.dofs().free_index[b].is_some())
+            .filter(|&b| sim.retired()[b] || sim.geoms()[b].rotation.abs() > 30f64.to_radians())
             .map(|b| {
-                let g = &sim.geoms[b];
+                let g = &sim.geoms()[b];
                 format!(
                     "{}{} ({:.0}°, dy {:.2} m)",
-                    sim.scene.blocks[b].id,
-                    if sim.retired[b] { " retired" } else { "" },
+                    sim.scene().blocks[b].id,
+                    if sim.retired()[b] { " retired" } else { "" },
                     g.rotation.to_degrees(),
                     g.centroid.y - g.initial_centroid.y
                 )

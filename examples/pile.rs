@@ -127,7 +127,8 @@ fn time_run(solver: &str, cli: &Cli) -> Result<(f64, Simulation), String> {
         println!("step  dt(s)      cuts  oc  numeric  symbolic  cg  mprgp  pc  loose  detect  contacts  closed  ms");
     }
     for k in 0..steps {
-        let (stats, counts, detections) = (sim.stats, sim.solver_counts(), sim.contacts.detections);
+        let (stats, counts, detections) =
+            (sim.stats(), sim.solver_counts(), sim.contacts().detections);
         let ts = Instant::now();
         let dt = match sim.step(1.0) {
             Ok(dt) => dt,
@@ -141,23 +142,23 @@ fn time_run(solver: &str, cli: &Cli) -> Result<(f64, Simulation), String> {
         if trace {
             let c = sim.solver_counts();
             let closed = sim
-                .contacts
+                .contacts()
                 .contacts
                 .iter()
                 .filter(|c| c.state.is_closed())
                 .count();
             println!(
                 "{k:4}  {dt:.3e}  {:4}  {:2}  {:7}  {:8}  {:2}  {:6}  {:5}  {:5}  {:6}  {:8}  {:6}  {:.0}",
-                sim.stats.time_step_cuts - stats.time_step_cuts,
-                sim.stats.open_close_iterations - stats.open_close_iterations,
+                sim.stats().time_step_cuts - stats.time_step_cuts,
+                sim.stats().open_close_iterations - stats.open_close_iterations,
                 c.numeric - counts.numeric,
                 c.symbolic - counts.symbolic,
                 c.reuse_iterations - counts.reuse_iterations,
-                sim.stats.dual_cg_products - stats.dual_cg_products,
-                sim.stats.dual_iterations - stats.dual_iterations,
-                sim.stats.dual_loose_solves - stats.dual_loose_solves,
-                sim.contacts.detections - detections,
-                sim.contacts.contacts.len(),
+                sim.stats().dual_cg_products - stats.dual_cg_products,
+                sim.stats().dual_iterations - stats.dual_iterations,
+                sim.stats().dual_loose_solves - stats.dual_loose_solves,
+                sim.contacts().detections - detections,
+                sim.contacts().contacts.len(),
                 closed,
                 ts.elapsed().as_secs_f64() * 1e3,
             );
@@ -247,24 +248,24 @@ fn main() -> std::process::ExitCode {
                 continue;
             }
         };
-        let tip = sim.geoms[blocks - 1].bounds().0.y;
+        let tip = sim.geoms()[blocks - 1].bounds().0.y;
         println!(
             "{solver:>7}: {secs:.2} s for {steps} steps (simulated {:.4} s), {} contacts at the end, \
              projectile tip at y = {tip:.3} m, max penetration {:.2e} m, cuts {}, \
              open–close iterations {}, MPRGP products with W {}, projection–contraction iterations {}, switches {}, \
              loosely accepted dual solves {} (largest violation {:.2e} m)",
-            sim.time,
-            sim.contacts.contacts.len(),
-            sim.stats.max_penetration,
-            sim.stats.time_step_cuts,
-            sim.stats.open_close_iterations,
-            sim.stats.dual_cg_products,
-            sim.stats.dual_iterations,
-            sim.stats.dual_switches,
-            sim.stats.dual_loose_solves,
-            sim.stats.dual_loose_residual,
+            sim.time(),
+            sim.contacts().contacts.len(),
+            sim.stats().max_penetration,
+            sim.stats().time_step_cuts,
+            sim.stats().open_close_iterations,
+            sim.stats().dual_cg_products,
+            sim.stats().dual_iterations,
+            sim.stats().dual_switches,
+            sim.stats().dual_loose_solves,
+            sim.stats().dual_loose_residual,
         );
-        println!("         profile: {:?}", sim.profile);
+        println!("         profile: {:?}", sim.profile());
     }
     code
 }

@@ -1,4 +1,4 @@
-//! Measures the full engine's Δt error on real records (issue 20 §2): the two columns of
+//! Measures the full engine's Δt error on real records (docs/accuracy-vs-speed.md, "Records"): the two columns of
 //! `analysis::study_records` under the repository's records scaled to several PGAs, the engine
 //! at a list of step controls against Housner's equation (independent RK4) and against the
 //! engine at a fixed-step ceiling of 1e-4 s without the impact location (a converged run).
@@ -25,8 +25,8 @@ fn main() {
         .filter_map(|s| s.parse().ok())
         .collect();
     let block = std::env::var("ASHLAR_BLOCK").unwrap_or_else(|_| "deformable".into());
-    // ASHLAR_VARIANTS: comma-separated list of `old` (the step control before issue 20: no
-    // impact location), `new` (the defaults), `imp:R` (impact_approach_ratio R), `rot:R`
+    // ASHLAR_VARIANTS: comma-separated list of `old` (the step control before the
+    // impact location existed), `new` (the defaults), `imp:R` (impact_approach_ratio R), `rot:R`
     // (max_rotation_step R rad, no impact location), `dt:S` (time_step S, no impact location).
     let spec = std::env::var("ASHLAR_VARIANTS").unwrap_or_else(|_| "old,new".into());
     let no_impact = SimParams {

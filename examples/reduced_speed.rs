@@ -1,5 +1,5 @@
-//! Cost of the reduced rocking model against the full engine on the bundled records (issue 20
-//! §3), measured in one run of this program: `examples/column.json` (0.4 × 1.2 m column) under
+//! Cost of the reduced rocking model against the full engine on the bundled records
+//! (docs/accuracy-vs-speed.md, "Reduced models on records"), measured in one run of this program: `examples/column.json` (0.4 × 1.2 m column) under
 //! every record in `data/ground-motions/` scaled to 0.3, 0.5, 0.7 and 1.0 g, once with the
 //! reduced rocking model (`"model": "rocking"`) and once with the full engine (`"model": "dda"`,
 //! the scene's controls); and which model the default (`auto`) runs there (it falls back to the

@@ -38,9 +38,9 @@ fn measure(b: f64, h: f64, theta0: f64, dt: Option<f64>) -> (f64, f64) {
     // free of the gravity torque that acts while ω is sampled.
     let mut hit = false;
     let mut peak = f64::NEG_INFINITY;
-    while sim.time < 3.0 {
+    while sim.time() < 3.0 {
         sim.step(f64::INFINITY).expect("step");
-        let th = sim.geoms[1].rotation;
+        let th = sim.geoms()[1].rotation;
         let w = sim.block_velocity(1)[2];
         if !hit {
             hit = th >= theta0;

@@ -79,17 +79,17 @@ fn compare_with_reference(
     scene.control.time_step = 1e-4;
     scene.control.adaptive_time_step = false;
     let mut reference = Simulation::new(&scene, gm, params);
-    reference.time = start;
-    while reference.time < sim.time - 1e-12 {
-        let left = sim.time - reference.time;
+    reference.set_time(start);
+    while reference.time() < sim.time() - 1e-12 {
+        let left = sim.time() - reference.time();
         if let Err(e) = reference.step(left) {
-            eprintln!("  reference stopped at t = {:.4} s: {e}", reference.time);
+            eprintln!("  reference stopped at t = {:.4} s: {e}", reference.time());
             return;
         }
     }
     let mut worst: f64 = 0.0;
     let mut moved: f64 = 0.0;
-    for (b, (g, r)) in sim.geoms.iter().zip(&reference.geoms).enumerate() {
+    for (b, (g, r)) in sim.geoms().iter().zip(reference.geoms()).enumerate() {
         let s0 = &scene.blocks[b].vertices;
         for ((v, w), v0) in g.vertices.iter().zip(&r.vertices).zip(s0) {
             worst = worst.max((v - w).norm());
@@ -98,12 +98,12 @@ fn compare_with_reference(
     }
     println!(
         "  reference (Δt 1e-4 s, {} steps, {:.2} iterations/step): largest vertex difference {:.3e} m; largest vertex displacement in the reference {:.3e} m; max penetration {:.2e} m (reference) vs {:.2e} m",
-        reference.stats.steps,
-        reference.stats.open_close_iterations as f64 / reference.stats.steps as f64,
+        reference.stats().steps,
+        reference.stats().open_close_iterations as f64 / reference.stats().steps as f64,
         worst,
         moved,
-        reference.stats.max_penetration,
-        sim.stats.max_penetration
+        reference.stats().max_penetration,
+        sim.stats().max_penetration
     );
 }
 
@@ -194,7 +194,7 @@ fn main() {
                 params.open_close.max_iterations = 200;
             }
             let mut sim = Simulation::new(&scene, &gm, params);
-            sim.time = start;
+            sim.set_time(start);
             let t = Instant::now();
             let mut done = 0;
             for _ in 0..steps {
@@ -209,7 +209,7 @@ fn main() {
                 compare_with_reference(&sim, &scene, &gm, start);
             }
             let c = sim.solver_counts();
-            let solves = sim.stats.open_close_iterations as f64;
+            let solves = sim.stats().open_close_iterations as f64;
             println!(
                 "| {} | {} | {} | {:.3e} | {:.2} | {:.2} | {} | {:.1e} | {:.2e} |",
                 scene.blocks.len() - 1,
@@ -217,21 +217,21 @@ fn main() {
                 done,
                 wall / done.max(1) as f64,
                 solves / done.max(1) as f64,
-                sim.stats.open_close_iterations as f64 / done.max(1) as f64,
-                sim.stats.time_step_cuts,
-                sim.stats.min_dt,
-                sim.stats.max_penetration
+                sim.stats().open_close_iterations as f64 / done.max(1) as f64,
+                sim.stats().time_step_cuts,
+                sim.stats().min_dt,
+                sim.stats().max_penetration
             );
             if diag {
                 eprintln!(
                     "  {} stones, {m}: contacts {}, factorizations {}, reuse CG iterations {}, detections {}",
                     scene.blocks.len() - 1,
-                    sim.contacts.contacts.len(),
+                    sim.contacts().contacts.len(),
                     c.numeric,
                     c.reuse_iterations,
-                    sim.contacts.detections
+                    sim.contacts().detections
                 );
-                let p = sim.profile;
+                let p = sim.profile();
                 eprintln!(
                     "  time: detect {:.3} s, assemble {:.3} s, solve {:.3} s, integrate {:.3} s",
                     p.detect.as_secs_f64(),
@@ -241,9 +241,11 @@ fn main() {
                 );
                 eprintln!(
                     "  refusals: unconverged {}, moved too far {}, overshot {}",
-                    sim.refusals[0], sim.refusals[1], sim.refusals[2]
+                    sim.refusals()[0],
+                    sim.refusals()[1],
+                    sim.refusals()[2]
                 );
-                let ch = sim.changes;
+                let ch = sim.changes();
                 for (k, name) in CHANGE_KINDS.iter().enumerate() {
                     eprintln!(
                         "  {name:>22}: bed {:>7} head {:>7}",

@@ -36,9 +36,9 @@ fn main() {
     println!(
         "{:.3} s/200 steps; {:?}; {:?}; detections {}; t {}",
         t.elapsed().as_secs_f64(),
-        sim.stats,
+        sim.stats(),
         sim.solver_counts(),
-        sim.contacts.detections,
-        sim.time
+        sim.contacts().detections,
+        sim.time()
     );
 }

@@ -21,7 +21,7 @@ type Setting = (&'static str, Option<f64>, f64, Option<f64>);
 fn history(s: Setting, duration: f64) -> Result<(Vec<(f64, f64)>, f64), String> {
     let (solver, k, dt, tol) = s;
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(GROUND_MOTIONS_DIR);
-    let gm = wall_record(&dir)?;
+    let gm = wall_record(&dir).map_err(|e| e.to_string())?;
     let wall = running_bond_wall(&study_wall());
     let mut v = serde_json::to_value(&wall).map_err(|e| e.to_string())?;
     let top = v["blocks"].as_array().map_or(0, |b| b.len() - 1);

@@ -54,7 +54,7 @@ pub struct Column {
 
 impl Column {
     /// The rocking column of Yagoda-Biran & Hatzor 2015, §3.3: 0.4 × 1.2 m (b = 0.2, h = 0.6,
-    /// the reference column of `analysis::reference::HousnerColumn::SEED_000`), rigid, on a 2 m
+    /// the reference column of `analysis::reference::HousnerColumn::YAGODA_BIRAN_2015`), rigid, on a 2 m
     /// base; φ = 75° (tan 75° = 3.7 ≫ the friction demand of rocking: it rocks, never slides).
     pub const SEED: Column = Column {
         half_width: 0.2,

@@ -8,5 +8,6 @@ pub mod reduced;
 pub mod reference;
 pub mod run;
 pub mod run_end;
+pub mod run_summary;
 pub mod study;
 pub mod study_records;

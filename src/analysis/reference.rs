@@ -25,7 +25,7 @@ pub struct HousnerColumn {
 
 impl HousnerColumn {
     /// The rocking column of Yagoda-Biran & Hatzor 2015, §3.3 (b = 0.2 m, h = 0.6 m, g = 9.81 m/s²) at an RK4 step of 1e-5 s.
-    pub const SEED_000: Self = Self {
+    pub const YAGODA_BIRAN_2015: Self = Self {
         b: 0.2,
         h: 0.6,
         g: 9.81,

@@ -1,13 +1,13 @@
 //! One run of a scene under a ground motion: drives the simulation to the end, records frames
 //! (histories, trajectory), classifies the outcome and writes `summary.json` (docs/format.md §3).
 //!
-//! Length (over 600 lines): one run's stages (model choice, the engine loop with its frames,
-//! the summary and its units) read in order here; the end of a run is already `run_end.rs`,
-//! the reduced models `reduced/`. A split along those stages is the next step.
+//! Length (over 600 lines): one run from start to end reads in order here (the model choice,
+//! the engine loop with its frames and their writers, the summary filled from the tracker);
+//! what a run reports is `run_summary.rs`, its end `run_end.rs`, the reduced models `reduced/`.
 use crate::analysis::reduced::{
     self, record::ReducedError, Modes, ReducedParams, Restitution, SingleBlock,
 };
-use crate::analysis::run_end::{self, RecordTruncated, RunEndParams, RunEvent, SettleWatch};
+use crate::analysis::run_end::{self, RunEndParams, RunEvent, SettleWatch};
 use crate::contact::{ContactState, Mobility};
 use crate::motion::GroundMotion;
 pub use crate::record::histories::round_time;
@@ -19,214 +19,13 @@ use crate::record::{
 };
 use crate::scene::{ContactSolver, ModelChoice, Scene};
 use crate::simulation::{SimError, SimParams, Simulation};
-use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-/// Per-block results (docs/format.md §3).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct BlockSummary {
-    pub id: String,
-    /// m, largest centroid displacement magnitude over the run.
-    pub max_displacement: f64,
-    /// m, [x, y] centroid displacement at the end.
-    pub final_displacement: [f64; 2],
-    /// rad, largest |rotation|.
-    pub max_rotation: f64,
-    /// rad, counter-clockwise positive.
-    pub final_rotation: f64,
-    /// |final rotation| > 30°.
-    pub toppled: bool,
-    /// m, accumulated slip of the block's sliding contacts.
-    pub sliding_distance: f64,
-    /// The block's model (`"rigid"`, `"deformable"`), only when the free blocks' models or
-    /// reasons differ (the summary's `block_model_reason` is then absent).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub block_model: Option<String>,
-    /// Why this block got its model (`scene::block_model`), with `block_model`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub block_model_reason: Option<String>,
-}
-
-/// Solver diagnostics reported with every run.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
-pub struct Diagnostics {
-    /// N/m, the value used (resolved when "auto"); absent when no penalty springs ran (a
-    /// reduced model, or the dual contact solver).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub penalty_stiffness: Option<f64>,
-    pub time_step_cuts: u64,
-    /// m, deepest penetration seen after a converged step.
-    pub max_penetration: f64,
-    /// Open–close iterations per step; absent when the open–close iteration did not run (a
-    /// reduced model, or the dual contact solver).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub open_close_iterations_mean: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub min_time_step: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub max_time_step: Option<f64>,
-    /// Rocking model only: the ratio of angular velocities after/before an impact used.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub restitution: Option<f64>,
-    /// Rocking model only: number of impacts (changes of pivot).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub impacts: Option<u64>,
-    /// Dual contact solver only: stalled solves accepted under
-    /// `control.dual_stall_acceptance` (0 with the default, which accepts none).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub dual_loose_solves: Option<u64>,
-    /// Dual contact solver only: m, the largest remaining violation of an accepted stalled
-    /// solve (0 when none was accepted).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub dual_loose_residual: Option<f64>,
-    /// The run's duration stopped before the end of the record (docs/run-end.md).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub record_truncated: Option<RecordTruncated>,
-}
-
-/// The layout of a run's outputs, `summary.json`'s `format`: version 2 added the `units`
-/// objects and the unit suffixes of the `histories.csv` header (`time_s`, `<id>.x_m`, ...).
-/// A summary without `format` is version 1 (header `time,<id>.x,<id>.y,<id>.rotation`).
-pub const RUN_OUTPUTS_FORMAT: &str = "ashlar.run/2";
-
-/// `summary.json` (docs/format.md §3, with the unit of every field).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Summary {
-    /// [`RUN_OUTPUTS_FORMAT`]; empty when read from a version-1 summary.
-    #[serde(default)]
-    pub format: String,
-    pub completed: bool,
-    /// s, rounded to the nanosecond (the accumulated steps carry float noise below that).
-    pub simulated_time: f64,
-    pub steps: u64,
-    pub wall_time_s: f64,
-    /// m/s², peak horizontal ground acceleration applied.
-    pub pga: f64,
-    pub failure_mode: String,
-    pub blocks: Vec<BlockSummary>,
-    pub diagnostics: Diagnostics,
-    pub model: String,
-    pub model_reason: String,
-    /// Why the free blocks have the model `control.block_model` reports (`scene::block_model`;
-    /// the reduced models: they are rigid-block models). Absent when the free blocks differ:
-    /// each block then reports its own (`blocks[].block_model_reason`).
-    #[serde(default, skip_serializing_if = "String::is_empty")]
-    pub block_model_reason: String,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub stopped_reason: Option<String>,
-    /// The controls that ran ([`reported_control`]).
-    #[serde(default)]
-    pub control: serde_json::Value,
-    /// The unit of every numeric field, mirroring the summary's nesting ([`summary_units`]).
-    #[serde(default)]
-    pub units: serde_json::Value,
-    /// Every free block was at rest (or had left the scene) at the end: the outcome cannot
-    /// change any more (docs/run-end.md).
-    #[serde(default)]
-    pub settled: bool,
-    /// Blocks retired during the run (docs/run-end.md).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub events: Vec<RunEvent>,
-}
-
-/// The `units` object of `summary.json`: each numeric field's unit, nested as the summary is
-/// ("1" for a ratio, "count" for a number of events). `pga` is the horizontal peak applied.
-pub fn summary_units() -> serde_json::Value {
-    serde_json::json!({
-        "simulated_time": "s",
-        "steps": "count",
-        "wall_time_s": "s",
-        "pga": "m/s2",
-        "blocks": {
-            "max_displacement": "m",
-            "final_displacement": "m",
-            "max_rotation": "rad",
-            "final_rotation": "rad",
-            "sliding_distance": "m",
-        },
-        "diagnostics": {
-            "penalty_stiffness": "N/m",
-            "time_step_cuts": "count",
-            "max_penetration": "m",
-            "open_close_iterations_mean": "1",
-            "min_time_step": "s",
-            "max_time_step": "s",
-            "restitution": "1",
-            "impacts": "count",
-            "dual_loose_solves": "count",
-            "dual_loose_residual": "m",
-            "record_truncated": { "record_duration": "s", "run_duration": "s" },
-        },
-        "events": { "time": "s" },
-        "control": {
-            "duration": "s",
-            "time_step": "s",
-            "max_displacement_ratio": "1",
-            "penalty_stiffness": "N/m",
-            "dynamic_factor": "1",
-            "kinetic_damping_rate": "1/s",
-            "output_interval": "s",
-            "max_steps": "count",
-            "dual_tolerance": "1",
-            "dual_stall_acceptance": "1",
-            "restitution": "1",
-        },
-    })
-}
-
-/// What ran, for [`reported_control`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Ran {
-    /// The full DDA engine.
-    Engine,
-    /// A reduced (rigid rocking/sliding) model.
-    Reduced,
-}
-
-/// The controls a run reports: those that ran. The scene's `control.block_model` is only the
-/// default for blocks that do not name their own, so the reported `block_model` is the one the
-/// free blocks used (`"mixed"` when they differ); the dual solver has no penalty springs, the
-/// penalty solver no dual tolerances; a reduced model treats its block as rigid and uses none
-/// of the engine's controls (only `duration`, `output_interval`, `model` and `restitution`).
-pub fn reported_control(scene: &Scene, ran: Ran) -> serde_json::Value {
-    let mut v = serde_json::to_value(&scene.control).unwrap_or_default();
-    let Some(obj) = v.as_object_mut() else {
-        return v;
-    };
-    match ran {
-        Ran::Reduced => {
-            obj.retain(|k, _| {
-                matches!(
-                    k.as_str(),
-                    "duration" | "output_interval" | "model" | "restitution"
-                )
-            });
-            obj.insert("block_model".into(), "rigid".into());
-        }
-        Ran::Engine => {
-            let mut models = scene.blocks.iter().filter_map(|b| match b.kind {
-                crate::scene::BlockKind::Free(m) => Some(m),
-                _ => None,
-            });
-            let first = models.next();
-            let name = match first {
-                Some(m) if models.all(|x| x == m) => serde_json::to_value(m).unwrap_or_default(),
-                Some(_) => "mixed".into(),
-                None => serde_json::to_value(scene.control.block_model).unwrap_or_default(),
-            };
-            obj.insert("block_model".into(), name);
-            if scene.control.contact_solver == ContactSolver::Dual {
-                obj.remove("penalty_stiffness");
-            } else {
-                obj.remove("dual_tolerance");
-                obj.remove("dual_stall_acceptance");
-            }
-        }
-    }
-    v
-}
+pub use crate::analysis::run_summary::{
+    reported_control, summary_units, BlockSummary, Diagnostics, Ran, Summary, RUN_OUTPUTS_FORMAT,
+};
 
 /// Hooks a caller (CLI, service worker, PGA search) passes to a run.
 #[derive(Default)]
@@ -347,14 +146,14 @@ pub struct Tracker {
 
 impl Tracker {
     fn new(sim: &Simulation) -> Self {
-        let free: Vec<usize> = (0..sim.geoms.len())
-            .filter(|&b| sim.mobility[b] == Mobility::Free)
+        let free: Vec<usize> = (0..sim.geoms().len())
+            .filter(|&b| sim.mobility()[b] == Mobility::Free)
             .collect();
         let n = free.len();
         Self {
             ids: free
                 .iter()
-                .map(|&b| sim.scene.blocks[b].id.clone())
+                .map(|&b| sim.scene().blocks[b].id.clone())
                 .collect(),
             free,
             max_displacement: vec![0.0; n],
@@ -367,7 +166,7 @@ impl Tracker {
 
     fn update(&mut self, sim: &Simulation) {
         for (k, &b) in self.free.iter().enumerate() {
-            let g = &sim.geoms[b];
+            let g = &sim.geoms()[b];
             let d = g.centroid - g.initial_centroid;
             self.final_displacement[k] = [d.x, d.y];
             self.final_rotation[k] = g.rotation;
@@ -376,8 +175,8 @@ impl Tracker {
         }
         // Slip of sliding contacts, charged to the block(s) that carry unknowns; the largest
         // slip of a block's contacts in the step (contacts of one face slide together).
-        let mut step_slip = vec![0.0f64; sim.geoms.len()];
-        for c in &sim.contacts.contacts {
+        let mut step_slip = vec![0.0f64; sim.geoms().len()];
+        for c in &sim.contacts().contacts {
             if let ContactState::Sliding { .. } = c.state {
                 let s = c.slip.abs();
                 step_slip[c.vertex_block] = step_slip[c.vertex_block].max(s);
@@ -634,13 +433,13 @@ fn run_dda(
     let mut stopped_reason = None;
     let mut cancelled = false;
     let mut sim_error = None;
-    while sim.time < cap - 1e-12 {
+    while sim.time() < cap - 1e-12 {
         if opts.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             cancelled = true;
             stopped_reason = Some("cancelled".to_string());
             break;
         }
-        if sim.stats.steps >= scene.control.max_steps {
+        if sim.stats().steps >= scene.control.max_steps {
             stopped_reason = Some(format!(
                 "step budget of {} steps reached (control.max_steps)",
                 scene.control.max_steps
@@ -648,18 +447,22 @@ fn run_dda(
             break;
         }
         let next_frame =
-            ((frame_index + 1) as f64 * interval).min(run_end::horizon(sim.time, duration, cap));
-        if let Err(e) = sim.step(next_frame - sim.time) {
+            ((frame_index + 1) as f64 * interval).min(run_end::horizon(sim.time(), duration, cap));
+        if let Err(e) = sim.step(next_frame - sim.time()) {
             sim_error = Some(e);
             break;
         }
         events.extend(run_end::retire_fallen(&mut sim, floor));
         tracker.update(&sim);
-        settled = watch.update(sim.time, run_end::all_quiet(&sim, &end), end.settle_window);
-        if sim.time >= next_frame - 1e-9 * interval {
+        settled = watch.update(
+            sim.time(),
+            run_end::all_quiet(&sim, &end),
+            end.settle_window,
+        );
+        if sim.time() >= next_frame - 1e-9 * interval {
             frame_index += 1;
-            writers.emit(&frame(&sim, &failure), opts, Some(sim.time / duration))?;
-            if run_end::may_end(sim.time, duration, settled) {
+            writers.emit(&frame(&sim, &failure), opts, Some(sim.time() / duration))?;
+            if run_end::may_end(sim.time(), duration, settled) {
                 break;
             }
         }
@@ -702,17 +505,17 @@ fn header(
     motion: &GroundMotion,
     opts: &RunOptions,
 ) -> Result<RecordHeader, RunError> {
-    let scene = &sim.scene;
+    let scene = sim.scene();
     let history_blocks = match &opts.history_blocks {
         None => (0..scene.blocks.len())
-            .filter(|&b| sim.mobility[b] == Mobility::Free)
+            .filter(|&b| sim.mobility()[b] == Mobility::Free)
             .collect(),
         Some(ids) => ids
             .iter()
             .map(|id| {
                 scene
                     .block_index(id)
-                    .filter(|&b| sim.mobility[b] == Mobility::Free)
+                    .filter(|&b| sim.mobility()[b] == Mobility::Free)
                     .ok_or_else(|| {
                         RunError::Invalid(format!(
                             "history block {id:?}: no free block with that id"
@@ -738,14 +541,14 @@ fn header(
     if scene.control.contact_solver != ContactSolver::Dual {
         metadata.insert(
             "penalty_stiffness".into(),
-            format!("{}", sim.springs.normal),
+            format!("{}", sim.springs().normal),
         );
     }
     metadata.insert("code_version".into(), env!("CARGO_PKG_VERSION").into());
     Ok(RecordHeader {
         block_ids: scene.blocks.iter().map(|b| b.id.clone()).collect(),
         block_kinds: sim
-            .mobility
+            .mobility()
             .iter()
             .map(|m| match m {
                 Mobility::Fixed => FrameBlockKind::Fixed,
@@ -759,21 +562,21 @@ fn header(
 }
 
 fn frame(sim: &Simulation, failure: &FailureParams) -> Frame {
-    let mut sliding = vec![false; sim.geoms.len()];
-    for c in &sim.contacts.contacts {
+    let mut sliding = vec![false; sim.geoms().len()];
+    for c in &sim.contacts().contacts {
         if let ContactState::Sliding { .. } = c.state {
             sliding[c.vertex_block] = true;
             sliding[c.edge_block] = true;
         }
     }
     let blocks = sim
-        .geoms
+        .geoms()
         .iter()
         .enumerate()
         .map(|(b, g)| {
             let d = g.centroid - g.initial_centroid;
             let v = sim.block_velocity(b);
-            let state = if sim.mobility[b] != Mobility::Free {
+            let state = if sim.mobility()[b] != Mobility::Free {
                 BlockMotionState::AtRest
             } else if g.rotation.abs() > failure.toppled_rotation {
                 BlockMotionState::Toppled
@@ -796,9 +599,9 @@ fn frame(sim: &Simulation, failure: &FailureParams) -> Frame {
             }
         })
         .collect();
-    let gs = sim.motion.state(sim.time);
+    let gs = sim.motion().state(sim.time());
     Frame {
-        time: sim.time,
+        time: sim.time(),
         blocks,
         ground: GroundFrame {
             acceleration: gs[0],
@@ -890,7 +693,7 @@ fn summarize(
         })
         .collect();
     let mut blocks = blocks;
-    let scene = &sim.scene;
+    let scene = sim.scene();
     let common =
         crate::scene::block_model::scene_summary(&scene.blocks, &scene.block_model_reasons);
     if common.is_none() {
@@ -904,19 +707,19 @@ fn summarize(
         }
     }
     let block_model_reason = common.map(|(_, r)| r).unwrap_or_default();
-    let st = &sim.stats;
-    let dual = sim.scene.control.contact_solver == ContactSolver::Dual;
+    let st = &sim.stats();
+    let dual = sim.scene().control.contact_solver == ContactSolver::Dual;
     Summary {
         format: RUN_OUTPUTS_FORMAT.into(),
-        completed: stopped_reason.is_none() && sim.time >= duration - 1e-9,
-        simulated_time: round_time(sim.time),
+        completed: stopped_reason.is_none() && sim.time() >= duration - 1e-9,
+        simulated_time: round_time(sim.time()),
         steps: st.steps,
         wall_time_s: wall,
         pga: motion.pga(),
         failure_mode: failure_mode(&blocks, failure).into(),
         blocks,
         diagnostics: Diagnostics {
-            penalty_stiffness: (!dual).then_some(sim.springs.normal),
+            penalty_stiffness: (!dual).then_some(sim.springs().normal),
             time_step_cuts: st.time_step_cuts,
             max_penetration: st.max_penetration,
             open_close_iterations_mean: (!dual).then_some(if st.steps > 0 {
@@ -934,7 +737,7 @@ fn summarize(
         model_reason,
         block_model_reason,
         stopped_reason,
-        control: reported_control(&sim.scene, Ran::Engine),
+        control: reported_control(sim.scene(), Ran::Engine),
         units: summary_units(),
         settled: false,
         events: Vec::new(),

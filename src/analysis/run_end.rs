@@ -172,15 +172,15 @@ pub fn retire_fallen(sim: &mut Simulation, floor: Option<f64>) -> Vec<RunEvent> 
         return Vec::new();
     };
     let mut events = Vec::new();
-    for b in 0..sim.geoms.len() {
-        if sim.mobility[b] != Mobility::Free || sim.retired[b] {
+    for b in 0..sim.geoms().len() {
+        if sim.mobility()[b] != Mobility::Free || sim.retired()[b] {
             continue;
         }
-        if sim.geoms[b].centroid.y < floor {
+        if sim.geoms()[b].centroid.y < floor {
             sim.retire(b);
             events.push(RunEvent {
-                time: sim.time,
-                block: sim.scene.blocks[b].id.clone(),
+                time: sim.time(),
+                block: sim.scene().blocks[b].id.clone(),
                 kind: "retired".into(),
             });
         }
@@ -192,14 +192,14 @@ pub fn retire_fallen(sim: &mut Simulation, floor: Option<f64>) -> Vec<RunEvent> 
 /// relative to the ground (the ground moves only under a driven block; base-acceleration
 /// scenes are solved relative to it already).
 pub fn kinetic_energy(sim: &Simulation, b: usize) -> f64 {
-    let Some(f) = sim.dofs.free_index[b] else {
+    let Some(f) = sim.dofs().free_index[b] else {
         return 0.0;
     };
-    let g = &sim.geoms[b];
-    let rho = sim.scene.materials[sim.scene.blocks[b].material].density;
-    let mut v = sim.states[f].vel;
-    if let Excitation::DrivenBlock(_) = sim.scene.excitation {
-        let gv = sim.motion.state(sim.time)[1];
+    let g = &sim.geoms()[b];
+    let rho = sim.scene().materials[sim.scene().blocks[b].material].density;
+    let mut v = sim.states()[f].vel;
+    if let Excitation::DrivenBlock(_) = sim.scene().excitation {
+        let gv = sim.motion().state(sim.time())[1];
         v[0] -= gv[0];
         v[1] -= gv[1];
     }
@@ -212,13 +212,13 @@ pub fn kinetic_energy(sim: &Simulation, b: usize) -> f64 {
 /// Full engine: is every free block that is still in the scene quiet (kinetic energy below
 /// `settle_energy_ratio`·m·g·L)?
 pub fn all_quiet(sim: &Simulation, params: &RunEndParams) -> bool {
-    (0..sim.geoms.len())
-        .filter(|&b| sim.mobility[b] == Mobility::Free && !sim.retired[b])
+    (0..sim.geoms().len())
+        .filter(|&b| sim.mobility()[b] == Mobility::Free && !sim.retired()[b])
         .all(|b| {
-            let g = &sim.geoms[b];
-            let rho = sim.scene.materials[sim.scene.blocks[b].material].density;
+            let g = &sim.geoms()[b];
+            let rho = sim.scene().materials[sim.scene().blocks[b].material].density;
             let m = rho * g.moments.area;
-            let bound = params.settle_energy_ratio * m * sim.scene.gravity.abs() * g.half_size;
+            let bound = params.settle_energy_ratio * m * sim.scene().gravity.abs() * g.half_size;
             kinetic_energy(sim, b) <= bound
         })
 }

@@ -13,6 +13,7 @@
 //! `evaluation.rs` (a setting on a scene), `pareto.rs` (front and convergence order),
 //! `svg.rs` (plots), `report.rs` (Markdown). This file keeps the types, the restitution fit,
 //! the driver `run_study`, `check` and `write_outputs`, and the tests (a third of it).
+//! Length (over 600 lines): those tests, which check the driver end to end on the quick grid.
 use super::reduced::ode::Tolerance;
 use super::reduced::ReducedParams;
 use super::reference;
@@ -28,6 +29,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Instant;
 
+mod error;
 mod evaluation;
 mod grid;
 mod pareto;
@@ -35,6 +37,7 @@ mod report;
 mod scenes;
 mod svg;
 
+pub use error::StudyError;
 use evaluation::*;
 use grid::*;
 pub use pareto::{convergence_order, dt_series, pareto};
@@ -203,10 +206,10 @@ pub struct RestitutionFit {
 /// The constant restitution coefficient with which the reduced rocking model best reproduces
 /// `theta` (rotation at 0.01 s frames of the column under the 5 m/s² pulse): a scan of e in
 /// steps of 0.0025 over [0.5, 1].
-fn fit_restitution(theta: &[f64], duration: f64) -> Result<(f64, f64), String> {
+fn fit_restitution(theta: &[f64], duration: f64) -> Result<(f64, f64), StudyError> {
     let mut v = column_scene();
     v["control"] = json!({ "duration": duration, "model": "rocking", "output_interval": 0.01 });
-    let scene = scene_from_value(&v).map_err(|e| e.to_string())?;
+    let scene = scene_from_value(&v)?;
     let mut best = (f64::NAN, f64::INFINITY);
     for i in 0..=200 {
         let e = 0.5 + 0.0025 * i as f64;
@@ -224,7 +227,7 @@ fn fit_restitution(theta: &[f64], duration: f64) -> Result<(f64, f64), String> {
             }),
             ..Default::default()
         };
-        run(&scene, &pulse(5.0), &opts).map_err(|e| e.to_string())?;
+        run(&scene, &pulse(5.0), &opts)?;
         let red = frames.into_inner().unwrap_or_default();
         let n = red.len().min(theta.len()).max(1);
         let rms = (red
@@ -241,7 +244,7 @@ fn fit_restitution(theta: &[f64], duration: f64) -> Result<(f64, f64), String> {
     Ok(best)
 }
 
-fn restitution_study(quick: bool) -> Result<Vec<RestitutionFit>, String> {
+fn restitution_study(quick: bool) -> Result<Vec<RestitutionFit>, StudyError> {
     let alpha = (COL_B / COL_H).atan();
     let mut out = vec![RestitutionFit {
         source: "Housner's law, 1 − 1.5 sin²α (the reduced model's default)".into(),
@@ -256,7 +259,7 @@ fn restitution_study(quick: bool) -> Result<Vec<RestitutionFit>, String> {
             }
             let mut v = column_scene();
             v["control"] = json!({ "duration": duration, "model": "dda", "integrator": integ, "block_model": block_model, "output_interval": 0.01 });
-            let scene = scene_from_value(&v).map_err(|e| e.to_string())?;
+            let scene = scene_from_value(&v)?;
             let frames = Mutex::new(Vec::new());
             let record = |f: &Frame| {
                 if let Ok(mut fr) = frames.lock() {
@@ -267,7 +270,7 @@ fn restitution_study(quick: bool) -> Result<Vec<RestitutionFit>, String> {
                 on_frame: Some(&record),
                 ..Default::default()
             };
-            run(&scene, &pulse(5.0), &opts).map_err(|e| e.to_string())?;
+            run(&scene, &pulse(5.0), &opts)?;
             let theta = frames.into_inner().unwrap_or_default();
             let (e, rms) = fit_restitution(&theta, duration)?;
             out.push(RestitutionFit {
@@ -355,7 +358,7 @@ struct Bench {
 }
 
 /// Run the study.
-pub fn run_study(opts: &StudyOptions) -> Result<StudyResult, String> {
+pub fn run_study(opts: &StudyOptions) -> Result<StudyResult, StudyError> {
     let benches = benches(opts)?;
     let mut points = Vec::new();
     let mut scenes = Vec::new();
@@ -562,12 +565,11 @@ pub fn check(result: &StudyResult) -> Result<Vec<String>, Vec<String>> {
 }
 
 /// Write `points.json`, `points.csv` and the SVG plots into `dir`.
-pub fn write_outputs(result: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>, String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let io =
-        |p: &Path, text: &str| std::fs::write(p, text).map_err(|e| format!("{}: {e}", p.display()));
+pub fn write_outputs(result: &StudyResult, dir: &Path) -> Result<Vec<PathBuf>, StudyError> {
+    std::fs::create_dir_all(dir).map_err(|e| StudyError::io(dir, e))?;
+    let io = |p: &Path, text: &str| std::fs::write(p, text).map_err(|e| StudyError::io(p, e));
     let mut written = Vec::new();
-    let json = serde_json::to_string_pretty(result).map_err(|e| e.to_string())?;
+    let json = serde_json::to_string_pretty(result)?;
     let p = dir.join("points.json");
     io(&p, &(json + "\n"))?;
     written.push(p);

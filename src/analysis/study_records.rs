@@ -7,6 +7,7 @@
 //! Units: m, s, rad; accelerations m/s². Rotation counter-clockwise positive (a ground
 //! accelerating to +x tips the column back, θ > 0), as in the reference.
 use super::reference::{housner_rocking, HousnerColumn};
+use super::study::StudyError;
 use crate::motion::{self, GroundMotion};
 use crate::presets;
 use crate::scene::scene_from_value;
@@ -72,9 +73,13 @@ pub fn column_scene(col: &RecordColumn, control: &Value) -> Value {
 }
 
 /// A record from `dir`, scaled to the PGA `pga_g` (in g, 9.80665 m/s²).
-pub fn load_record(dir: &Path, file: &str, pga_g: f64) -> Result<GroundMotion, String> {
+pub fn load_record(dir: &Path, file: &str, pga_g: f64) -> Result<GroundMotion, StudyError> {
     let path = dir.join(file);
-    let gm = motion::load_path(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let gm = motion::load_path(&path).map_err(|source| StudyError::Motion {
+        path: path.clone(),
+        source,
+        hint: String::new(),
+    })?;
     Ok(gm.scaled_to_pga(pga_g * motion::STANDARD_GRAVITY))
 }
 
@@ -139,18 +144,18 @@ pub fn engine(
     t_end: f64,
     control: &Value,
     params: SimParams,
-) -> Result<EngineRun, String> {
-    let scene = scene_from_value(&column_scene(col, control)).map_err(|e| e.to_string())?;
+) -> Result<EngineRun, StudyError> {
+    let scene = scene_from_value(&column_scene(col, control))?;
     let start = Instant::now();
     let mut sim = Simulation::new(&scene, motion, params);
     let mut peak = 0.0f64;
     let mut failed = None;
-    while sim.time < t_end - 1e-12 {
-        if let Err(e) = sim.step(t_end - sim.time) {
+    while sim.time() < t_end - 1e-12 {
+        if let Err(e) = sim.step(t_end - sim.time()) {
             failed = Some(e.to_string());
             break;
         }
-        peak = peak.max(sim.geoms[1].rotation.abs());
+        peak = peak.max(sim.geoms()[1].rotation.abs());
         if peak > FALLEN {
             break;
         }
@@ -160,8 +165,8 @@ pub fn engine(
             peak,
             fallen: peak > FALLEN,
         },
-        steps: sim.stats.steps,
-        cuts: sim.stats.time_step_cuts,
+        steps: sim.stats().steps,
+        cuts: sim.stats().time_step_cuts,
         wall: start.elapsed().as_secs_f64(),
         failed,
     })
@@ -174,8 +179,8 @@ pub fn robust_verdict(
     dir: &Path,
     file: &str,
     pga_g: f64,
-) -> Result<(Response, bool), String> {
-    let at = |f: f64| -> Result<Response, String> {
+) -> Result<(Response, bool), StudyError> {
+    let at = |f: f64| -> Result<Response, StudyError> {
         let m = load_record(dir, file, pga_g * f)?;
         Ok(housner(col, &m, run_length(&m), HOUSNER_DT))
     };
@@ -230,7 +235,7 @@ pub fn sweep(
     block_model: &str,
     params: SimParams,
     mut progress: impl FnMut(&RecordPoint),
-) -> Result<Vec<RecordPoint>, String> {
+) -> Result<Vec<RecordPoint>, StudyError> {
     let mut out = Vec::new();
     for col in &COLUMNS {
         for rec in records {
@@ -331,7 +336,7 @@ pub fn report(points: &[RecordPoint], command: &str) -> String {
 /// `ashlar study --records FILE`: the sweep over every shared record at 0.3–1.0 g (with
 /// `quick`: Friuli and Northridge at 0.4, 0.6, 0.8 g), deformable blocks (the scenes' default),
 /// default engine parameters; the table is written to `out`.
-pub fn run_cli(dir: &Path, out: &Path, quick: bool, verbose: bool) -> Result<(), String> {
+pub fn run_cli(dir: &Path, out: &Path, quick: bool, verbose: bool) -> Result<(), StudyError> {
     let (records, levels): (Vec<&str>, Vec<f64>) = if quick {
         (RECORDS[..2].to_vec(), vec![0.4, 0.6, 0.8])
     } else {
@@ -360,8 +365,7 @@ pub fn run_cli(dir: &Path, out: &Path, quick: bool, verbose: bool) -> Result<(),
         if quick { " --quick" } else { "" },
         out.display()
     );
-    std::fs::write(out, report(&points, &command))
-        .map_err(|e| format!("{}: {e}", out.display()))?;
+    std::fs::write(out, report(&points, &command)).map_err(|e| StudyError::io(out, e))?;
     println!("{} points; wrote {}", points.len(), out.display());
     Ok(())
 }

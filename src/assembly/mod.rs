@@ -12,7 +12,7 @@ pub mod contact_springs;
 pub mod restitution;
 
 use crate::geometry::{BlockGeometry, Mat6, Vec6};
-use crate::scene::{Integrator, Material, PlaneKind};
+use crate::scene::{BlockKind, BlockModel, Integrator, Material, PlaneKind, Scene};
 use nalgebra::{Matrix3, Vector3};
 
 /// Newmark constants of an integrator.
@@ -50,6 +50,28 @@ pub struct Dofs {
     pub offset: Vec<usize>,
     /// Total unknowns.
     pub n: usize,
+}
+
+impl Dofs {
+    /// Number the unknowns of `scene`: its free blocks in scene order, 3 for a rigid block
+    /// (u0, v0, r0), 6 for a deformable one (+ εx, εy, γxy), consecutive.
+    pub fn number(scene: &Scene) -> Self {
+        let mut dofs = Dofs {
+            free_index: vec![None; scene.blocks.len()],
+            ..Default::default()
+        };
+        for (b, blk) in scene.blocks.iter().enumerate() {
+            if let BlockKind::Free(model) = blk.kind {
+                let nd = if model == BlockModel::Rigid { 3 } else { 6 };
+                dofs.free_index[b] = Some(dofs.block_of.len());
+                dofs.block_of.push(b);
+                dofs.ndof.push(nd);
+                dofs.offset.push(dofs.n);
+                dofs.n += nd;
+            }
+        }
+        dofs
+    }
 }
 
 /// Dynamic state of a free block.

@@ -6,6 +6,7 @@
 use crate::analysis::criteria::CriterionError;
 use crate::analysis::pga::CriterionParseError;
 use crate::analysis::run::RunError;
+use crate::analysis::study::StudyError;
 use crate::motion::{AccelerationError, MotionError, RecordOptionError};
 use crate::scene::templates::TemplateError;
 use crate::scene::SceneError;
@@ -83,8 +84,20 @@ pub enum CliError {
     /// `ashlar study --check`: the points that missed their targets, one line each.
     #[error("study check failed ({} failure{}):\n  {}", .0.len(), if .0.len() == 1 { "" } else { "s" }, .0.join("\n  "))]
     StudyCheck(Vec<String>),
-    /// A layer that still reports its failure as text: `ashlar serve`'s and `ashlar worker`'s
-    /// start-up (the service's errors) and `ashlar study`'s stages (docs/architecture.md, "What
+    /// `ashlar worker`: the service did not start.
+    #[error(transparent)]
+    ServiceStart(#[from] crate::service::StartError),
+    /// An async runtime the command needs could not start (`what` it was for).
+    #[error("starting {what}: {source}")]
+    Runtime {
+        what: &'static str,
+        source: std::io::Error,
+    },
+    /// `ashlar study` (the sweep, the records study, their outputs).
+    #[error(transparent)]
+    Study(#[from] StudyError),
+    /// A layer that still reports its failure as text: `ashlar serve`'s and
+    /// `ashlar internal-run-job`'s start-up (the service's errors; docs/architecture.md, "What
     /// is still a string").
     #[error("{0}")]
     Untyped(String),

@@ -66,7 +66,7 @@ pub fn run(args: &StudyArgs) -> Result<(), super::error::CliError> {
             args.quick,
             args.verbose,
         )
-        .map_err(CliError::Untyped);
+        .map_err(CliError::from);
     }
     let opts = StudyOptions {
         quick: args.quick,
@@ -74,8 +74,8 @@ pub fn run(args: &StudyArgs) -> Result<(), super::error::CliError> {
         point_budget_s: budget,
         verbose: args.verbose,
     };
-    let result = run_study(&opts).map_err(CliError::Untyped)?;
-    let written = write_outputs(&result, &args.out).map_err(CliError::Untyped)?;
+    let result = run_study(&opts)?;
+    let written = write_outputs(&result, &args.out)?;
     if let Some(path) = &args.report {
         let base = path.parent().unwrap_or(std::path::Path::new("."));
         let rel = pathdiff(&args.out, base);

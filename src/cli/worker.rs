@@ -77,7 +77,7 @@ pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
         // Colour codes only for a terminal: a log written to a file or a pipe stays plain text.
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .try_init();
-    let url = match service::parse_database(&args.database).map_err(CliError::Untyped)? {
+    let url = match service::parse_database(&args.database).map_err(CliError::Usage)? {
         service::Database::Postgres(url) => url,
         service::Database::Sqlite(_) => {
             return Err(CliError::Usage(
@@ -89,7 +89,7 @@ pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
     let mut config = ServiceConfig::new(&args.data);
     config.postgres = Some(url);
     config.artifacts = args.artifacts.clone();
-    config.lease = service::lease_params(args.lease).map_err(CliError::Untyped)?;
+    config.lease = service::lease_params(args.lease).map_err(CliError::Usage)?;
     config.limits = Limits {
         max_blocks: args.max_blocks,
         max_record_samples: args.max_record_samples,
@@ -136,11 +136,14 @@ pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
         None => service::analysis_runner(),
     };
     let workers = config.workers.workers;
-    let svc = service::Service::start(config, runner).map_err(CliError::Untyped)?;
+    let svc = service::Service::start(config, runner)?;
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
-        .map_err(|e| CliError::Untyped(format!("starting the signal runtime: {e}")))?;
+        .map_err(|source| CliError::Runtime {
+            what: "the signal runtime",
+            source,
+        })?;
     // Caught from here on: a SIGTERM right after the line below must stop gracefully.
     let signals = runtime.block_on(async { service::ShutdownSignals::register() });
     // One line on stdout that scripts (and the tests) wait for.

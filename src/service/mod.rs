@@ -26,7 +26,7 @@ pub mod worker;
 pub use problem::ApiError;
 pub use request::Limits;
 pub use routes::{app, route_table, AppState, OPENAPI_YAML};
-pub use store::{JobStore, SqliteStore};
+pub use store::{JobStore, SqliteStore, StoreError};
 pub use worker::{analysis_runner, JobRunner, RunHooks, RunnerOutcome, WorkerParams};
 
 use std::path::PathBuf;
@@ -222,6 +222,24 @@ impl ServiceConfig {
 }
 
 /// A started service: the state for the router, and the worker pool behind it.
+/// Why [`Service::start`] failed.
+#[derive(Debug, thiserror::Error)]
+pub enum StartError {
+    /// The `--data` folder could not be created.
+    #[error("--data {}: {source}", path.display())]
+    Data {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// The job store could not be opened or recovered.
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    /// A part the service starts (the artifact store, the worker pool, the cluster's threads,
+    /// the retention sweeper) failed; its layer still reports text.
+    #[error("{0}")]
+    Component(String),
+}
+
 pub struct Service {
     state: AppState,
     pool: worker::Pool,
@@ -231,7 +249,7 @@ pub struct Service {
 
 impl Service {
     /// Open the store (recovering jobs a dead server left running) and start the workers.
-    pub fn start(config: ServiceConfig, runner: JobRunner) -> Result<Self, String> {
+    pub fn start(config: ServiceConfig, runner: JobRunner) -> Result<Self, StartError> {
         Self::start_with(config, runner, server::ServerParams::default())
     }
 
@@ -240,17 +258,16 @@ impl Service {
         config: ServiceConfig,
         runner: JobRunner,
         server_params: server::ServerParams,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, StartError> {
         let jobs_dir = config.data_dir.join("jobs");
-        std::fs::create_dir_all(&jobs_dir)
-            .map_err(|e| format!("--data {}: {e}", config.data_dir.display()))?;
+        std::fs::create_dir_all(&jobs_dir).map_err(|source| StartError::Data {
+            path: config.data_dir.clone(),
+            source,
+        })?;
         let (store, pg): (Arc<dyn JobStore>, Option<Arc<pg_store::PgStore>>) =
             match &config.postgres {
                 Some(url) => {
-                    let pg = Arc::new(
-                        pg_store::PgStore::open(url, config.lease.clone())
-                            .map_err(|e| e.to_string())?,
-                    );
+                    let pg = Arc::new(pg_store::PgStore::open(url, config.lease.clone())?);
                     (pg.clone(), Some(pg))
                 }
                 None => {
@@ -258,17 +275,12 @@ impl Service {
                         .database
                         .clone()
                         .unwrap_or_else(|| config.data_dir.join("jobs.sqlite"));
-                    (
-                        Arc::new(SqliteStore::open(&db).map_err(|e| e.to_string())?),
-                        None,
-                    )
+                    (Arc::new(SqliteStore::open(&db)?), None)
                 }
             };
         // Embedded store: every job left running belongs to a dead server. Cluster store:
         // only those whose lease expired (the reaper keeps doing this while we run).
-        let (requeued, failed) = store
-            .recover(config.workers.max_attempts)
-            .map_err(|e| e.to_string())?;
+        let (requeued, failed) = store.recover(config.workers.max_attempts)?;
         if requeued + failed > 0 {
             tracing::info!(
                 requeued,
@@ -285,21 +297,26 @@ impl Service {
         );
         core.server = server_params;
         if let Some(url) = &config.artifacts {
-            core.artifacts = Some(Arc::new(artifacts::ArtifactStore::open(url)?));
+            core.artifacts = Some(Arc::new(
+                artifacts::ArtifactStore::open(url).map_err(StartError::Component)?,
+            ));
         }
         core.remote_workers
             .store(pg.is_some(), std::sync::atomic::Ordering::SeqCst);
         let core = Arc::new(core);
         let cluster = match pg {
-            Some(pg) => Some(pg_store::ClusterThreads::start(core.clone(), pg)?),
+            Some(pg) => Some(
+                pg_store::ClusterThreads::start(core.clone(), pg).map_err(StartError::Component)?,
+            ),
             None => None,
         };
-        let pool = worker::Pool::start(core.clone())?;
+        let pool = worker::Pool::start(core.clone()).map_err(StartError::Component)?;
         let sweeper = core
             .limits
             .retain_finished
             .map(|keep| retention::Sweeper::start(core.clone(), keep))
-            .transpose()?;
+            .transpose()
+            .map_err(StartError::Component)?;
         Ok(Self {
             state: AppState { core },
             pool,
@@ -491,7 +508,8 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
              on a network you trust"
         ));
     }
-    let service = Service::start_with(config, runner, server_params.clone())?;
+    let service =
+        Service::start_with(config, runner, server_params.clone()).map_err(|e| e.to_string())?;
     let state = service.state();
     let signals = runtime.block_on(async { ShutdownSignals::register() });
     // One line on stdout that scripts (and the tests) read to find the port.

@@ -19,8 +19,8 @@
 //! The sync `postgres` client fits the sync [`JobStore`] trait, which is called from worker
 //! threads and `spawn_blocking` (never from the async runtime's own threads).
 use super::store::{
-    now_ms, CancelOutcome, Counts, Finish, JobKind, JobRecord, JobStatus, JobStore, NewJob,
-    StoreError,
+    now_ms, Backend, CancelOutcome, Counts, Finish, JobKind, JobRecord, JobStatus, JobStore,
+    NewJob, StoreError,
 };
 use super::worker::Core;
 use postgres::fallible_iterator::FallibleIterator;
@@ -107,9 +107,25 @@ pub struct PgStore {
 impl From<postgres::Error> for StoreError {
     fn from(e: postgres::Error) -> Self {
         // `Display` of a server error is terse; the source carries the server's message.
+        let database = Backend::Postgres;
         match e.as_db_error() {
-            Some(db) => StoreError(format!("postgres: {}", db.message())),
-            None => StoreError(format!("postgres: {e}")),
+            Some(db) => StoreError::Database {
+                database,
+                detail: db.message().to_string(),
+            },
+            // The connection closed or its I/O failed: the server may be back on a retry.
+            None if e.is_closed()
+                || std::error::Error::source(&e).is_some_and(|s| s.is::<std::io::Error>()) =>
+            {
+                StoreError::Busy {
+                    database,
+                    detail: e.to_string(),
+                }
+            }
+            None => StoreError::Database {
+                database,
+                detail: e.to_string(),
+            },
         }
     }
 }
@@ -119,7 +135,7 @@ const COLUMNS: &str = "id, kind, status, request, motion, progress, result, erro
 fn row_to_record(row: &Row) -> Result<JobRecord, StoreError> {
     let json = |k: usize, what: &str| -> Result<serde_json::Value, StoreError> {
         let s: String = row.try_get(k)?;
-        serde_json::from_str(&s).map_err(|e| StoreError(format!("corrupt {what} column: {e}")))
+        serde_json::from_str(&s).map_err(|e| StoreError::corrupt(format!("{what} column"), e))
     };
     let kind: String = row.try_get(1)?;
     let status: String = row.try_get(2)?;
@@ -149,9 +165,7 @@ fn parse_kind(s: &str) -> Result<JobKind, StoreError> {
         "pga_search" => Ok(JobKind::PgaSearch),
         "pga_run" => Ok(JobKind::PgaRun),
         "site_analysis" => Ok(JobKind::SiteAnalysis),
-        other => Err(StoreError(format!(
-            "unknown job kind {other:?} in the store"
-        ))),
+        other => Err(StoreError::corrupt("job kind", format!("{other:?}"))),
     }
 }
 
@@ -163,11 +177,7 @@ fn parse_status(s: &str) -> Result<JobStatus, StoreError> {
         "failed" => JobStatus::Failed,
         "cancelled" => JobStatus::Cancelled,
         "waiting" => JobStatus::Waiting,
-        other => {
-            return Err(StoreError(format!(
-                "unknown job status {other:?} in the store"
-            )))
-        }
+        other => return Err(StoreError::corrupt("job status", format!("{other:?}"))),
     })
 }
 
@@ -183,7 +193,7 @@ pub fn parse_url(url: &str) -> Result<super::pg_tls::PgTarget, String> {
 impl PgStore {
     /// Connect, create or upgrade the schema, and return the store.
     pub fn open(url: &str, params: LeaseParams) -> Result<Self, StoreError> {
-        let target = parse_url(url).map_err(StoreError)?;
+        let target = parse_url(url).map_err(StoreError::Config)?;
         let host = std::env::var("HOSTNAME")
             .ok()
             .or_else(|| {
@@ -215,7 +225,10 @@ impl PgStore {
 
     /// A new connection (also used for `LISTEN`).
     pub fn connect(&self) -> Result<Client, StoreError> {
-        self.target.connect().map_err(StoreError)
+        self.target.connect().map_err(|detail| StoreError::Busy {
+            database: Backend::Postgres,
+            detail,
+        })
     }
 
     /// Run `f` on a pooled connection; a connection that broke is dropped, not returned.
@@ -347,16 +360,16 @@ fn migrate(c: &mut Client) -> Result<(), StoreError> {
         .try_get(0)?;
     let v = v.unwrap_or(0);
     if v > SCHEMA_VERSION {
-        return Err(StoreError(format!(
+        return Err(StoreError::Schema(format!(
             "the database schema is version {v}, newer than this ashlar understands ({SCHEMA_VERSION}); upgrade ashlar"
         )));
     }
     for &(version, sql) in MIGRATIONS.iter().filter(|(k, _)| *k > v) {
         tx.batch_execute(sql).map_err(|e| {
-            StoreError(format!(
-                "schema migration {version}: {}",
-                StoreError::from(e).0
-            ))
+            let detail = e
+                .as_db_error()
+                .map_or_else(|| e.to_string(), |db| db.message().to_string());
+            StoreError::Schema(format!("schema migration {version}: postgres: {detail}"))
         })?;
         tx.execute(
             "INSERT INTO ashlar_schema_version (version) VALUES ($1)",

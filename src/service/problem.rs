@@ -7,6 +7,7 @@
 use crate::analysis::run::RunError;
 use crate::motion::MotionError;
 use crate::scene::SceneError;
+use crate::service::store::StoreError;
 use axum::http::{header, HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Response};
 use serde::Serialize;
@@ -315,6 +316,19 @@ impl ApiError {
         )
     }
 
+    /// A job-store failure, logged in full; the client gets a problem per cause without
+    /// internals: a busy or unreachable database is `unavailable` (503, retry after 1 s),
+    /// every other cause (a database error, corrupt data, schema, a poisoned lock) `internal`.
+    pub fn store(e: StoreError) -> Self {
+        match e {
+            StoreError::Busy { .. } => {
+                tracing::error!(cause = %e, "job store unavailable");
+                Self::unavailable("the job store is busy or unreachable; retry shortly", 1)
+            }
+            other => Self::internal(other),
+        }
+    }
+
     /// An internal failure: `cause` goes to the log, the client gets a generic message.
     pub fn internal(cause: impl std::fmt::Display) -> Self {
         tracing::error!(%cause, "internal error");
@@ -419,6 +433,29 @@ pub fn dotted_to_pointer(prefix: &str, path: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// One problem per store cause: a busy or unreachable database is 503 with a retry, the
+    /// other causes 500; neither shows the database's text to the client.
+    #[test]
+    fn store_errors_become_a_problem_per_cause() {
+        use crate::service::store::Backend;
+        let busy = ApiError::store(StoreError::Busy {
+            database: Backend::Sqlite,
+            detail: "database is locked".into(),
+        });
+        assert_eq!(
+            (busy.status, busy.kind),
+            (StatusCode::SERVICE_UNAVAILABLE, "unavailable")
+        );
+        assert_eq!(busy.retry_after, Some(1));
+        assert!(!busy.detail.contains("locked"), "{}", busy.detail);
+        let corrupt = ApiError::store(StoreError::corrupt("job status", "\"lost\""));
+        assert_eq!(
+            (corrupt.status, corrupt.kind),
+            (StatusCode::INTERNAL_SERVER_ERROR, "internal")
+        );
+        assert!(!corrupt.detail.contains("lost"), "{}", corrupt.detail);
+    }
 
     #[test]
     fn pointers_from_dotted_paths() {

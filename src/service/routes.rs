@@ -354,7 +354,7 @@ pub(super) async fn load(
     let store = state.core.store.clone();
     let job = blocking(move || store.get(id))
         .await?
-        .map_err(ApiError::internal)?;
+        .map_err(ApiError::store)?;
     let what = match kind {
         JobKind::Run => "job",
         JobKind::SiteAnalysis => "site analysis",
@@ -526,7 +526,7 @@ async fn submit(
     };
     let refused = blocking(move || store.insert_quota(&job, max_queued, max_owner))
         .await?
-        .map_err(ApiError::internal)?;
+        .map_err(ApiError::store)?;
     match refused {
         None => {}
         Some(QueueFull::Server(queued)) => {
@@ -630,7 +630,7 @@ async fn delete_kind(
     let store = s.core.store.clone();
     let outcome = blocking(move || store.delete(id))
         .await?
-        .map_err(ApiError::internal)?;
+        .map_err(ApiError::store)?;
     match outcome {
         DeleteOutcome::NotFound => Err(ApiError::not_found("job", id)),
         DeleteOutcome::NotFinished(st) => Err(ApiError::conflict(format!(
@@ -848,7 +848,7 @@ async fn cancel(
     let store = s.core.store.clone();
     let outcome = blocking(move || store.request_cancel(id))
         .await?
-        .map_err(ApiError::internal)?;
+        .map_err(ApiError::store)?;
     let status = match outcome {
         CancelOutcome::NotFound => return Err(ApiError::not_found("job", id)),
         CancelOutcome::CancelledQueued => {

@@ -40,9 +40,7 @@ impl JobKind {
             "pga_search" => Ok(JobKind::PgaSearch),
             "pga_run" => Ok(JobKind::PgaRun),
             "site_analysis" => Ok(JobKind::SiteAnalysis),
-            other => Err(StoreError(format!(
-                "unknown job kind {other:?} in the store"
-            ))),
+            other => Err(StoreError::corrupt("job kind", format!("{other:?}"))),
         }
     }
 }
@@ -82,11 +80,7 @@ impl JobStatus {
             "failed" => JobStatus::Failed,
             "cancelled" => JobStatus::Cancelled,
             "waiting" => JobStatus::Waiting,
-            other => {
-                return Err(StoreError(format!(
-                    "unknown job status {other:?} in the store"
-                )))
-            }
+            other => return Err(StoreError::corrupt("job status", format!("{other:?}"))),
         })
     }
     /// No further change can happen.
@@ -193,14 +187,76 @@ pub struct Counts {
     pub waiting: u64,
 }
 
-/// A store failure (I/O, corruption). Logged in full; clients see a generic 500/503.
+/// Which database a [`StoreError`] came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Backend {
+    Sqlite,
+    Postgres,
+}
+
+impl std::fmt::Display for Backend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Backend::Sqlite => "sqlite",
+            Backend::Postgres => "postgres",
+        })
+    }
+}
+
+/// A store failure, by cause, over both databases. Logged in full; the HTTP edge
+/// (`ApiError::store`) gives clients a problem per cause without internals: `Busy` is
+/// `unavailable` (503, retry), every other cause `internal` (500).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("job store: {0}")]
-pub struct StoreError(pub String);
+pub enum StoreError {
+    /// The database is busy or unreachable (SQLite locked past its busy timeout; PostgreSQL's
+    /// connection lost or refused): a retry may succeed.
+    #[error("job store: {database}: busy or unreachable: {detail}")]
+    Busy { database: Backend, detail: String },
+    /// Any other failure the database reported (I/O, a constraint, a server error).
+    #[error("job store: {database}: {detail}")]
+    Database { database: Backend, detail: String },
+    /// The database URL or its TLS settings (`--database postgres://…`) are not usable.
+    #[error("job store: {0}")]
+    Config(String),
+    /// The store file could not be opened.
+    #[error("job store: {path}: {detail}")]
+    Open { path: String, detail: String },
+    /// A stored value this ashlar cannot read (`what`: a column, an id, a kind, a status).
+    #[error("job store: corrupt {what}: {detail}")]
+    Corrupt { what: String, detail: String },
+    /// The database's schema is newer than this ashlar, or a numbered migration failed.
+    #[error("job store: {0}")]
+    Schema(String),
+    /// This store does not implement the operation (`what`, e.g. "delete jobs").
+    #[error("job store: this job store cannot {0}")]
+    Unsupported(&'static str),
+    /// A thread panicked holding the store's connection (`which`: "reader" or "writer").
+    #[error("job store: {0} lock poisoned")]
+    Poisoned(&'static str),
+}
+
+impl StoreError {
+    /// A stored value that does not parse.
+    pub(crate) fn corrupt(what: impl Into<String>, detail: impl std::fmt::Display) -> Self {
+        StoreError::Corrupt {
+            what: what.into(),
+            detail: detail.to_string(),
+        }
+    }
+}
 
 impl From<rusqlite::Error> for StoreError {
     fn from(e: rusqlite::Error) -> Self {
-        StoreError(e.to_string())
+        let busy = matches!(
+            e.sqlite_error_code(),
+            Some(rusqlite::ErrorCode::DatabaseBusy | rusqlite::ErrorCode::DatabaseLocked)
+        );
+        let (database, detail) = (Backend::Sqlite, e.to_string());
+        if busy {
+            StoreError::Busy { database, detail }
+        } else {
+            StoreError::Database { database, detail }
+        }
     }
 }
 
@@ -235,7 +291,7 @@ pub trait JobStore: Send + Sync {
     /// its artifacts.
     fn delete(&self, id: Uuid) -> Result<DeleteOutcome, StoreError> {
         let _ = id;
-        Err(StoreError("this job store cannot delete jobs".into()))
+        Err(StoreError::Unsupported("delete jobs"))
     }
     fn get(&self, id: Uuid) -> Result<Option<JobRecord>, StoreError>;
     /// Atomically move the oldest queued job to `running` (attempts + 1) and return it.
@@ -270,7 +326,7 @@ pub trait JobStore: Send + Sync {
         owner: Option<&str>,
     ) -> Result<Vec<JobRecord>, StoreError> {
         let _ = (limit, kind, owner);
-        Err(StoreError("this job store cannot list jobs".into()))
+        Err(StoreError::Unsupported("list jobs"))
     }
     /// Fan a running job out, in one transaction: insert `children` (queued, `parent` = `id`)
     /// and park the job in `waiting`, giving its claim back (attempts − 1: waiting is not a
@@ -281,7 +337,7 @@ pub trait JobStore: Send + Sync {
     /// Returns false, changing nothing, when `id` is not running (under this process's claim).
     fn fan_out(&self, id: Uuid, children: &[NewJob], progress: f64) -> Result<bool, StoreError> {
         let _ = (id, children, progress);
-        Err(StoreError("this job store cannot fan jobs out".into()))
+        Err(StoreError::Unsupported("fan jobs out"))
     }
     /// Every child job of `id`, oldest first, with requests and results.
     fn children(&self, id: Uuid) -> Result<Vec<JobRecord>, StoreError> {
@@ -387,8 +443,10 @@ impl SqliteStore {
     /// Open (or create) the store at `path`.
     pub fn open(path: &Path) -> Result<Self, StoreError> {
         let open = || -> Result<Connection, StoreError> {
-            let c = Connection::open(path)
-                .map_err(|e| StoreError(format!("{}: {e}", path.display())))?;
+            let c = Connection::open(path).map_err(|e| StoreError::Open {
+                path: path.display().to_string(),
+                detail: e.to_string(),
+            })?;
             // Writers from another process (a second server on the same data) wait instead of failing.
             c.busy_timeout(Duration::from_secs(10))?;
             c.pragma_update(None, "journal_mode", "WAL")?;
@@ -415,7 +473,7 @@ impl SqliteStore {
         let mut c = self
             .writer
             .lock()
-            .map_err(|_| StoreError("writer lock poisoned".into()))?;
+            .map_err(|_| StoreError::Poisoned("writer"))?;
         f(&mut c)
     }
 
@@ -426,14 +484,14 @@ impl SqliteStore {
         let c = self
             .reader
             .lock()
-            .map_err(|_| StoreError("reader lock poisoned".into()))?;
+            .map_err(|_| StoreError::Poisoned("reader"))?;
         f(&c)
     }
 }
 
 fn json_col(s: Option<String>, what: &str) -> Result<Option<serde_json::Value>, StoreError> {
     s.map(|s| {
-        serde_json::from_str(&s).map_err(|e| StoreError(format!("corrupt {what} column: {e}")))
+        serde_json::from_str(&s).map_err(|e| StoreError::corrupt(format!("{what} column"), e))
     })
     .transpose()
 }
@@ -456,7 +514,8 @@ fn row_to_record(row: &rusqlite::Row<'_>) -> rusqlite::Result<Result<JobRecord, 
     let owner: Option<String> = row.get(14)?;
     Ok((|| {
         Ok(JobRecord {
-            id: Uuid::parse_str(&id).map_err(|e| StoreError(format!("corrupt id {id:?}: {e}")))?,
+            id: Uuid::parse_str(&id)
+                .map_err(|e| StoreError::corrupt("id", format!("{id:?}: {e}")))?,
             kind: JobKind::parse(&kind)?,
             status: JobStatus::parse(&status)?,
             request: json_col(Some(request), "request")?.unwrap_or_default(),
@@ -472,7 +531,7 @@ fn row_to_record(row: &rusqlite::Row<'_>) -> rusqlite::Result<Result<JobRecord, 
             parent: parent
                 .map(|p| {
                     Uuid::parse_str(&p)
-                        .map_err(|e| StoreError(format!("corrupt parent {p:?}: {e}")))
+                        .map_err(|e| StoreError::corrupt("parent", format!("{p:?}: {e}")))
                 })
                 .transpose()?,
             owner,
@@ -551,7 +610,7 @@ impl JobStore for SqliteStore {
                 .collect::<Result<_, _>>()?;
             ids.iter()
                 .map(|i| {
-                    Uuid::parse_str(i).map_err(|e| StoreError(format!("corrupt id {i:?}: {e}")))
+                    Uuid::parse_str(i).map_err(|e| StoreError::corrupt("id", format!("{i:?}: {e}")))
                 })
                 .collect()
         })
@@ -704,7 +763,7 @@ impl JobStore for SqliteStore {
                 .query_map([], |r| r.get(0))?
                 .collect::<Result<_, _>>()?;
             for p in parents {
-                let p = Uuid::parse_str(&p).map_err(|e| StoreError(format!("corrupt id {p:?}: {e}")))?;
+                let p = Uuid::parse_str(&p).map_err(|e| StoreError::corrupt("id", format!("{p:?}: {e}")))?;
                 settle(&tx, p)?;
             }
             tx.commit()?;
@@ -814,7 +873,7 @@ fn child_ended(tx: &rusqlite::Transaction<'_>, id: Uuid, status: &str) -> Result
         return Ok(());
     };
     let parent = Uuid::parse_str(&parent)
-        .map_err(|e| StoreError(format!("corrupt parent {parent:?}: {e}")))?;
+        .map_err(|e| StoreError::corrupt("parent", format!("{parent:?}: {e}")))?;
     if status == "succeeded" {
         tx.execute(
             "UPDATE jobs SET progress = MIN(0.99, progress + COALESCE(

@@ -218,7 +218,7 @@ pub async fn list_jobs(
     let owner = access.list_filter().map(str::to_string);
     let jobs = blocking(move || store.list_owned(limit, kind, owner.as_deref()))
         .await?
-        .map_err(ApiError::internal)?;
+        .map_err(ApiError::store)?;
     let body = format!(
         "{{\"jobs\":[{}]}}",
         jobs.iter()

@@ -23,35 +23,35 @@ impl Simulation {
     /// Current energies of the free blocks and contact springs.
     pub fn energy(&self) -> Energy {
         let mut e = Energy::default();
-        for (f, st) in self.states.iter().enumerate() {
-            let b = self.dofs.block_of[f];
-            let g = &self.geoms[b];
-            let rho = self.scene.materials[self.scene.blocks[b].material].density;
-            let nd = self.dofs.ndof[f];
+        for (f, st) in self.state.states.iter().enumerate() {
+            let b = self.state.dofs.block_of[f];
+            let g = &self.state.geoms[b];
+            let rho = self.state.scene.materials[self.state.scene.blocks[b].material].density;
+            let nd = self.state.dofs.ndof[f];
             let m = g.mass_matrix(rho);
             let mut v = st.vel;
             for k in nd..6 {
                 v[k] = 0.0;
             }
             e.kinetic += 0.5 * (v.transpose() * m * v)[(0, 0)];
-            e.gravity += rho * g.moments.area * self.scene.gravity * g.centroid.y;
+            e.gravity += rho * g.moments.area * self.state.scene.gravity * g.centroid.y;
             if nd == 6 {
                 // ½·A·σᵀ·C⁻¹·σ
-                if let Some(inv) = self.elastic_inverse(f) {
+                if let Some(inv) = self.state.elastic_inverse(f) {
                     e.strain +=
                         0.5 * g.moments.area * (st.stress.transpose() * inv * st.stress)[(0, 0)];
                 }
             }
         }
-        for c in &self.contacts.contacts {
+        for c in &self.state.contacts.contacts {
             match c.state {
                 ContactState::Open => {}
                 ContactState::Locked => {
-                    e.springs += 0.5 * self.springs.normal * c.gap.min(0.0).powi(2)
-                        + 0.5 * self.springs.shear * (c.s0 + c.slip).powi(2)
+                    e.springs += 0.5 * self.stepper.springs.normal * c.gap.min(0.0).powi(2)
+                        + 0.5 * self.stepper.springs.shear * (c.s0 + c.slip).powi(2)
                 }
                 ContactState::Sliding { .. } => {
-                    e.springs += 0.5 * self.springs.normal * c.gap.min(0.0).powi(2)
+                    e.springs += 0.5 * self.stepper.springs.normal * c.gap.min(0.0).powi(2)
                 }
             }
         }

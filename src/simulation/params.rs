@@ -38,7 +38,7 @@ pub struct SimParams {
     /// Deepest penetration a converged step may leave, as a fraction of the thinner block's
     /// 4·area/perimeter; beyond it the run stops with `SimError::PenaltyTooSoft`. At 5 % the
     /// overlap is visible in any drawing and the vertex–edge linearisation (vertex near its
-    /// edge) degrades; the seeds' deliberately soft single-contact tests peak at ~2.5 %.
+    /// edge) degrades; the deliberately soft single-contact tests of Li et al. 2018 (docs/verification.md) peak at ~2.5 %.
     pub max_penetration_ratio: f64,
     /// Impact location (adaptive runs only; off by default): the longest approach of a vertex onto an edge in
     /// the step where their contact closes, as a fraction of the smallest free block's half

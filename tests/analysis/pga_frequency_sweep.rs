@@ -157,7 +157,7 @@ fn dda_mode(c: Column, f: f64, a: f64) -> usize {
     let mut s = sim(&sc, &gm);
     let (mut last_sign, mut impacts) = (0.0f64, 0);
     run_until(&mut s, 1.0 / f + AFTER, |s| {
-        let th = s.geoms[1].rotation;
+        let th = s.geoms()[1].rotation;
         if th.abs() > 1e-3 {
             if last_sign != 0.0 && th.signum() != last_sign {
                 impacts += 1;
@@ -183,17 +183,17 @@ fn engine(c: Column, f: f64, a: f64) -> (bool, f64) {
     let mut peak: f64 = 0.0;
     let mut toppled = false;
     run_until(&mut s, t_end, |s| {
-        let th = s.geoms[1].rotation.abs();
+        let th = s.geoms()[1].rotation.abs();
         peak = peak.max(th);
         if th >= std::f64::consts::FRAC_PI_3 {
             toppled = true;
             return true;
         }
-        s.time > t_pulse && s.energy().total() - e0 < 0.9 * tip_energy
+        s.time() > t_pulse && s.energy().total() - e0 < 0.9 * tip_energy
     });
-    let end = s.geoms[1].rotation.abs();
+    let end = s.geoms()[1].rotation.abs();
     (
-        toppled || (s.time >= t_end - 1e-9 && end > std::f64::consts::FRAC_PI_6),
+        toppled || (s.time() >= t_end - 1e-9 && end > std::f64::consts::FRAC_PI_6),
         peak / alpha,
     )
 }

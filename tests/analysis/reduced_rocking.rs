@@ -25,7 +25,12 @@ fn pulse(a: f64) -> GroundMotion {
 /// Housner by RK4 (`ashlar::analysis::reference`): θ samples every 0.01 s, first impact
 /// time, overturned.
 fn housner(a: f64, t_end: f64) -> (Vec<f64>, Option<f64>, bool) {
-    let r = housner_history(&HousnerColumn::SEED_000, half_sine_pulse(a), t_end, 1000);
+    let r = housner_history(
+        &HousnerColumn::YAGODA_BIRAN_2015,
+        half_sine_pulse(a),
+        t_end,
+        1000,
+    );
     let theta = r.samples.iter().map(|s| s.1).collect();
     (theta, r.first_impact, r.overturned)
 }

@@ -35,8 +35,8 @@ pub fn parse(v: &Value) -> Scene {
 
 /// Run to `t_end`, calling `probe(sim)` after every step.
 pub fn run(sim: &mut Simulation, t_end: f64, mut probe: impl FnMut(&Simulation)) {
-    while sim.time < t_end - 1e-12 {
-        if let Err(e) = sim.step(t_end - sim.time) {
+    while sim.time() < t_end - 1e-12 {
+        if let Err(e) = sim.step(t_end - sim.time()) {
             panic!("simulation failed: {e}");
         }
         probe(sim);
@@ -49,7 +49,7 @@ pub fn sim(scene: &Scene, motion: &GroundMotion) -> Simulation {
 
 /// Centroid displacement of block `b` from its start, m.
 pub fn displacement(sim: &Simulation, b: usize) -> [f64; 2] {
-    let g = &sim.geoms[b];
+    let g = &sim.geoms()[b];
     [
         g.centroid.x - g.initial_centroid.x,
         g.centroid.y - g.initial_centroid.y,
@@ -62,8 +62,8 @@ pub fn run_until(
     t_end: f64,
     mut stop: impl FnMut(&Simulation) -> bool,
 ) -> bool {
-    while sim.time < t_end - 1e-12 {
-        if let Err(e) = sim.step(t_end - sim.time) {
+    while sim.time() < t_end - 1e-12 {
+        if let Err(e) = sim.step(t_end - sim.time()) {
             panic!("simulation failed: {e}");
         }
         if stop(sim) {
@@ -132,10 +132,10 @@ pub fn depth_inside(p: nalgebra::Vector2<f64>, poly: &[nalgebra::Vector2<f64>]) 
 /// statistics): for every pair whose bounding boxes overlap, the distance from each vertex of
 /// one block that lies inside the other to that block's nearest edge ([`depth_inside`]).
 pub fn geometric_penetration(sim: &Simulation) -> f64 {
-    let boxes: Vec<_> = sim.geoms.iter().map(|g| g.bounds()).collect();
+    let boxes: Vec<_> = sim.geoms().iter().map(|g| g.bounds()).collect();
     let mut worst = 0.0f64;
-    for (a, ga) in sim.geoms.iter().enumerate() {
-        for (b, gb) in sim.geoms.iter().enumerate() {
+    for (a, ga) in sim.geoms().iter().enumerate() {
+        for (b, gb) in sim.geoms().iter().enumerate() {
             let ((la, ha), (lb, hb)) = (boxes[a], boxes[b]);
             if a == b || la.x > hb.x || lb.x > ha.x || la.y > hb.y || lb.y > ha.y {
                 continue;

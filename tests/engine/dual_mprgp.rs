@@ -80,7 +80,7 @@ fn run_steps(
             panic!("step {k} (budget {cg_budget}) failed: {e}");
         }
         let slides = |c: &ashlar::contact::Contact| matches!(c.state, ContactState::Sliding { .. });
-        sliding += usize::from(s.contacts.contacts.iter().any(slides));
+        sliding += usize::from(s.contacts().contacts.iter().any(slides));
     }
     (s, sliding)
 }
@@ -95,22 +95,23 @@ fn compare(scene: &Scene, motion: &GroundMotion, steps: usize) -> (f64, f64, usi
         steps,
         SimParams::default().dual.max_cg_iterations,
     );
-    assert_eq!(reference.stats.dual_cg_products, 0);
-    assert!(reference.stats.dual_iterations > 0);
+    assert_eq!(reference.stats().dual_cg_products, 0);
+    assert!(reference.stats().dual_iterations > 0);
     // The minimisation must have done the work, without handing over to the reference.
-    assert!(cg.stats.dual_cg_products > 0);
+    assert!(cg.stats().dual_cg_products > 0);
     assert_eq!(
-        cg.stats.dual_iterations, 0,
+        cg.stats().dual_iterations,
+        0,
         "MPRGP fell back to projection–contraction"
     );
     assert_eq!(
-        (reference.stats.time_step_cuts, reference.time.to_bits()),
-        (cg.stats.time_step_cuts, cg.time.to_bits()),
+        (reference.stats().time_step_cuts, reference.time().to_bits()),
+        (cg.stats().time_step_cuts, cg.time().to_bits()),
         "same step sizes"
     );
     let (mut diff, mut motion_max): (f64, f64) = (0.0, 0.0);
-    for b in 0..reference.geoms.len() {
-        let (a, c) = (&reference.geoms[b], &cg.geoms[b]);
+    for b in 0..reference.geoms().len() {
+        let (a, c) = (&reference.geoms()[b], &cg.geoms()[b]);
         diff = diff.max((a.centroid - c.centroid).norm());
         motion_max =
             motion_max.max(displacement(&reference, b)[0].hypot(displacement(&reference, b)[1]));
@@ -119,7 +120,7 @@ fn compare(scene: &Scene, motion: &GroundMotion, steps: usize) -> (f64, f64, usi
         "{steps} steps: largest centroid difference {diff:.3e} m, largest motion {motion_max:.3e} m; \
          W products {} (MPRGP) against {} projection–contraction iterations; \
          {sliding} steps with a sliding contact",
-        cg.stats.dual_cg_products, reference.stats.dual_iterations
+        cg.stats().dual_cg_products, reference.stats().dual_iterations
     );
     (diff, motion_max, sliding)
 }

@@ -49,8 +49,8 @@ fn two_equal_blocks_exchange_velocities_on_a_frictionless_table() {
     // Mass is density × the initial area (the current area changes with the blocks' strains).
     let masses = [
         0.0,
-        2800.0 * s.geoms[1].moments.area,
-        2800.0 * s.geoms[2].moments.area,
+        2800.0 * s.geoms()[1].moments.area,
+        2800.0 * s.geoms()[2].moments.area,
     ];
     let m = |_: &ashlar::simulation::Simulation, b: usize| masses[b];
     let p0 = m(&s, 1) * v0;
@@ -60,8 +60,8 @@ fn two_equal_blocks_exchange_velocities_on_a_frictionless_table() {
         let (va, vb) = (s.block_velocity(1)[0], s.block_velocity(2)[0]);
         let p = m(s, 1) * va + m(s, 2) * vb;
         worst_momentum = worst_momentum.max(((p - p0) / p0).abs());
-        if s.time > 0.5 {
-            after.push((s.time, va, vb));
+        if s.time() > 0.5 {
+            after.push((s.time(), va, vb));
         }
     });
     let (mut ea, mut eb): (f64, f64) = (0.0, 0.0);
@@ -71,9 +71,9 @@ fn two_equal_blocks_exchange_velocities_on_a_frictionless_table() {
     }
     eprintln!(
         "after impact: |v_A| ≤ {ea:.2e} m/s, |v_B − 0.5| ≤ {eb:.2e} m/s; momentum drift {worst_momentum:.2e}; {} MPRGP products and {} projection–contraction iterations in {} steps",
-        s.stats.dual_cg_products, s.stats.dual_iterations, s.stats.steps
+        s.stats().dual_cg_products, s.stats().dual_iterations, s.stats().steps
     );
-    assert_eq!(s.stats.steps, 160);
+    assert_eq!(s.stats().steps, 160);
     assert!(ea < 1e-4, "A keeps {ea} m/s");
     assert!(eb < 1e-4, "B moves at 0.5 ± {eb} m/s");
     // Regression bound: 5× the 1.74e-5 m/s measured 2026-11-25 (the paper: 1.73e-5).
@@ -84,7 +84,7 @@ fn two_equal_blocks_exchange_velocities_on_a_frictionless_table() {
     );
     assert!(worst_momentum < 1e-9, "momentum drift {worst_momentum}");
     // The blocks never overlap: B's left side stays right of A's right side.
-    let gap = s.geoms[2].bounds().0.x - s.geoms[1].bounds().1.x;
+    let gap = s.geoms()[2].bounds().0.x - s.geoms()[1].bounds().1.x;
     assert!(gap > -1e-8, "overlap {gap}");
 }
 
@@ -105,14 +105,14 @@ fn ramp_error(solver: &str, penalty: Option<f64>) -> (f64, f64) {
     let acc = G * (a.sin() - a.cos() * f.tan());
     let mut worst: f64 = 0.0;
     run(&mut s, 3.0, |s| {
-        if s.time >= 0.1 - 1e-9 {
+        if s.time() >= 0.1 - 1e-9 {
             let u = displacement(s, 1);
             let num = u[0] * d[0] + u[1] * d[1];
-            let exact = 0.5 * acc * s.time * s.time;
+            let exact = 0.5 * acc * s.time() * s.time();
             worst = worst.max(((num - exact) / exact).abs());
         }
     });
-    (worst, s.stats.max_penetration)
+    (worst, s.stats().max_penetration)
 }
 
 #[test]
@@ -169,11 +169,12 @@ fn bao_zhao(solver: &str) -> [f64; 2] {
     let scene = parse(&v);
     let mut sim = sim(&scene, &GroundMotion::none());
     run(&mut sim, 0.2, |_| {});
-    let p = sim.geoms[1].vertices[0];
+    let p = sim.geoms()[1].vertices[0];
     let [x, y] = back([p.x, p.y]);
     eprintln!(
         "{solver}: A's vertex at ({x:.6}, {y:.9}) after {} steps; {} pair switches",
-        sim.stats.steps, sim.stats.dual_switches
+        sim.stats().steps,
+        sim.stats().dual_switches
     );
     [x, y]
 }

@@ -19,13 +19,13 @@ use common::*;
 /// size (its bounding box's half diagonal, 0.224 m here).
 fn tolerance(s: &Simulation) -> f64 {
     let half = s
-        .geoms
+        .geoms()
         .iter()
-        .zip(&s.scene.blocks)
+        .zip(&s.scene().blocks)
         .filter(|(_, b)| matches!(b.kind, BlockKind::Free(_)))
         .map(|(g, _)| g.half_size)
         .fold(f64::INFINITY, f64::min);
-    s.params.dual.tolerance * half
+    s.params().dual.tolerance * half
 }
 
 /// The 3 × 3 aligned stack under `"contact"`: the stall is the dual solver's own impact step.
@@ -60,8 +60,8 @@ fn starved(iterations: usize, acceptance: f64) -> SimParams {
 
 fn run_to_end(params: SimParams) -> Result<Simulation, SimError> {
     let mut s = Simulation::new(&struck_stack(), &GroundMotion::none(), params);
-    while s.time < T_END - 1e-12 {
-        s.step(T_END - s.time)?;
+    while s.time() < T_END - 1e-12 {
+        s.step(T_END - s.time())?;
     }
     Ok(s)
 }
@@ -81,7 +81,7 @@ fn a_stall_with_nothing_accepted_cuts_and_then_names_the_contact() {
         Err(e) => e,
         Ok(s) => panic!(
             "a solver without iterations converged ({} steps)",
-            s.stats.steps
+            s.stats().steps
         ),
     };
     let text = err.to_string();
@@ -126,19 +126,19 @@ fn a_stall_with_nothing_accepted_cuts_and_then_names_the_contact() {
 fn a_stall_within_the_acceptance_is_taken_counted_and_bounded() {
     let (iterations, acceptance) = (1000, 1e4);
     let reference = run_to_end(SimParams::default()).expect("the converged run");
-    assert_eq!(reference.stats.dual_loose_solves, 0);
-    assert_eq!(reference.stats.dual_loose_residual, 0.0);
+    assert_eq!(reference.stats().dual_loose_solves, 0);
+    assert_eq!(reference.stats().dual_loose_residual, 0.0);
     let tol = tolerance(&reference);
     match run_to_end(starved(iterations, 1.0)) {
         Ok(s) => assert!(
-            s.stats.time_step_cuts > 0,
+            s.stats().time_step_cuts > 0,
             "the starved solver kept the step alone"
         ),
         Err(SimError::DualNotConverged { .. }) => {}
         Err(e) => panic!("the starved run without acceptance: {e}"),
     }
     let loose = run_to_end(starved(iterations, acceptance)).expect("the starved run, accepting");
-    let st = loose.stats;
+    let st = loose.stats();
     let r = st.dual_loose_residual;
     eprintln!(
         "{} loose solves in {} steps, largest violation {r:.3e} m (tolerance {tol:.2e}, bound \
@@ -149,8 +149,8 @@ fn a_stall_within_the_acceptance_is_taken_counted_and_bounded() {
         st.max_penetration
     );
     assert_eq!(
-        (st.steps, st.time_step_cuts, loose.time.to_bits()),
-        (reference.stats.steps, 0, reference.time.to_bits()),
+        (st.steps, st.time_step_cuts, loose.time().to_bits()),
+        (reference.stats().steps, 0, reference.time().to_bits()),
         "same steps as the converged run"
     );
     assert!(st.dual_loose_solves > 0, "no stall was accepted");
@@ -164,8 +164,8 @@ fn a_stall_within_the_acceptance_is_taken_counted_and_bounded() {
         st.max_penetration
     );
     let (mut diff, mut moved): (f64, f64) = (0.0, 0.0);
-    for b in 0..reference.geoms.len() {
-        diff = diff.max((reference.geoms[b].centroid - loose.geoms[b].centroid).norm());
+    for b in 0..reference.geoms().len() {
+        diff = diff.max((reference.geoms()[b].centroid - loose.geoms()[b].centroid).norm());
         let d = displacement(&reference, b);
         moved = moved.max(d[0].hypot(d[1]));
     }
@@ -189,25 +189,26 @@ fn the_scene_knobs_reach_the_solver_and_the_summary() {
     let mut scene = struck_stack();
     scene.control.dual_stall_acceptance = Some(acceptance);
     let mut s = Simulation::new(&scene, &GroundMotion::none(), starved(iterations, 1.0));
-    assert_eq!(s.params.dual.stall_acceptance, acceptance);
-    while s.time < T_END - 1e-12 {
-        s.step(T_END - s.time).expect("scene knob");
+    assert_eq!(s.params().dual.stall_acceptance, acceptance);
+    while s.time() < T_END - 1e-12 {
+        s.step(T_END - s.time()).expect("scene knob");
     }
     assert_eq!(
         (
-            s.stats.steps,
-            s.stats.dual_loose_solves,
-            s.stats.dual_loose_residual.to_bits()
+            s.stats().steps,
+            s.stats().dual_loose_solves,
+            s.stats().dual_loose_residual.to_bits()
         ),
         (
-            by_engine.stats.steps,
-            by_engine.stats.dual_loose_solves,
-            by_engine.stats.dual_loose_residual.to_bits()
+            by_engine.stats().steps,
+            by_engine.stats().dual_loose_solves,
+            by_engine.stats().dual_loose_residual.to_bits()
         )
     );
-    for b in 0..s.geoms.len() {
+    for b in 0..s.geoms().len() {
         assert_eq!(
-            s.geoms[b].centroid, by_engine.geoms[b].centroid,
+            s.geoms()[b].centroid,
+            by_engine.geoms()[b].centroid,
             "block {b}"
         );
     }

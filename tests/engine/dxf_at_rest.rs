@@ -20,7 +20,7 @@ fn imported_wall_stands_at_rest() {
     v["control"]["duration"] = 3.0.into();
     let scene = common::parse(&v);
     let (worst, _, sim) = settle(&scene, 3.0, |_| false);
-    assert!(sim.time >= 3.0 - 1e-9, "stopped at {} s", sim.time);
+    assert!(sim.time() >= 3.0 - 1e-9, "stopped at {} s", sim.time());
     assert!(
         worst <= REST_BOUND,
         "the imported wall moved {worst:.3e} m (bound {REST_BOUND:.0e} m)"

@@ -172,10 +172,10 @@ fn dims(v: &[Vector2<f64>]) -> f64 {
 /// Deepest vertex-in-block penetration over all block pairs, as a fraction of the smaller
 /// block dimension of the pair. Bounding boxes prune pairs (the 1000-block case).
 fn penetration_ratio(s: &Simulation) -> (f64, f64) {
-    let boxes: Vec<_> = s.geoms.iter().map(|g| g.bounds()).collect();
+    let boxes: Vec<_> = s.geoms().iter().map(|g| g.bounds()).collect();
     let (mut worst_ratio, mut worst_depth) = (0.0f64, 0.0f64);
-    for a in 0..s.geoms.len() {
-        for b in 0..s.geoms.len() {
+    for a in 0..s.geoms().len() {
+        for b in 0..s.geoms().len() {
             if a == b {
                 continue;
             }
@@ -184,9 +184,9 @@ fn penetration_ratio(s: &Simulation) -> (f64, f64) {
             if la.x > hb.x || lb.x > ha.x || la.y > hb.y || lb.y > ha.y {
                 continue;
             }
-            let scale = dims(&s.geoms[a].vertices).min(dims(&s.geoms[b].vertices));
-            for p in &s.geoms[a].vertices {
-                let d = depth_inside(*p, &s.geoms[b].vertices);
+            let scale = dims(&s.geoms()[a].vertices).min(dims(&s.geoms()[b].vertices));
+            for p in &s.geoms()[a].vertices {
+                let d = depth_inside(*p, &s.geoms()[b].vertices);
                 worst_depth = worst_depth.max(d);
                 worst_ratio = worst_ratio.max(d / scale);
             }
@@ -222,18 +222,18 @@ fn drive(name: &str, scene: &Scene, motion: &GroundMotion, check_every: u64) -> 
     let budget = scene.control.max_steps;
     let mut s = Simulation::new(scene, motion, SimParams::default());
     let masses: Vec<f64> = s
-        .dofs
+        .dofs()
         .block_of
         .iter()
-        .map(|&b| s.geoms[b].moments.area * scene.materials[scene.blocks[b].material].density)
+        .map(|&b| s.geoms()[b].moments.area * scene.materials[scene.blocks[b].material].density)
         .collect();
     let heights: f64 = s
-        .dofs
+        .dofs()
         .block_of
         .iter()
         .zip(&masses)
         .map(|(&b, m)| {
-            let (lo, hi) = s.geoms[b].bounds();
+            let (lo, hi) = s.geoms()[b].bounds();
             m * scene.gravity * (hi.y - lo.y)
         })
         .sum();
@@ -242,14 +242,14 @@ fn drive(name: &str, scene: &Scene, motion: &GroundMotion, check_every: u64) -> 
     let (mut work, mut growth, mut pen, mut pen_m) = (0.0, f64::NEG_INFINITY, 0.0f64, 0.0f64);
     let mut diagnostic = None;
     let mut non_finite = false;
-    while s.time < duration * (1.0 - 1e-12) && s.stats.steps < budget {
+    while s.time() < duration * (1.0 - 1e-12) && s.stats().steps < budget {
         let before: Vec<Vector2<f64>> = s
-            .dofs
+            .dofs()
             .block_of
             .iter()
-            .map(|&b| s.geoms[b].centroid)
+            .map(|&b| s.geoms()[b].centroid)
             .collect();
-        if let Err(e) = s.step(duration - s.time) {
+        if let Err(e) = s.step(duration - s.time()) {
             diagnostic = Some(e.to_string());
             break;
         }
@@ -257,14 +257,14 @@ fn drive(name: &str, scene: &Scene, motion: &GroundMotion, check_every: u64) -> 
             non_finite = true;
             break;
         }
-        let ag = s.motion.acceleration(s.time);
-        for (f, &b) in s.dofs.block_of.iter().enumerate() {
-            let du = s.geoms[b].centroid - before[f];
+        let ag = s.motion().acceleration(s.time());
+        for (f, &b) in s.dofs().block_of.iter().enumerate() {
+            let du = s.geoms()[b].centroid - before[f];
             let dw = -masses[f] * (ag[0] * du.x + ag[1] * du.y);
             work += dw;
             scale += dw.abs();
         }
-        if s.stats.steps % check_every == 0 {
+        if s.stats().steps % check_every == 0 {
             let e = s.energy().total();
             if !e.is_finite() {
                 non_finite = true;
@@ -279,8 +279,8 @@ fn drive(name: &str, scene: &Scene, motion: &GroundMotion, check_every: u64) -> 
     Outcome {
         name: name.into(),
         diagnostic,
-        steps: s.stats.steps,
-        time: s.time,
+        steps: s.stats().steps,
+        time: s.time(),
         energy_growth: if growth.is_finite() { growth } else { 0.0 },
         penetration: pen,
         penetration_m: pen_m,

@@ -183,10 +183,10 @@ fn simulate(case: &Case) -> (Mode, f64, f64, f64) {
         GroundMotion::horizontal(Signal::Sampled(Sampled::new(0.01, vec![-case.k * G; 101])))
     };
     let mut s = sim(&scene, &motion);
-    let corner0 = s.geoms[1].vertices[1];
+    let corner0 = s.geoms()[1].vertices[1];
     let measure = |s: &ashlar::simulation::Simulation| {
-        let c = s.geoms[1].vertices[1] - corner0;
-        (c.x * d[0] + c.y * d[1], s.geoms[1].rotation)
+        let c = s.geoms()[1].vertices[1] - corner0;
+        (c.x * d[0] + c.y * d[1], s.geoms()[1].rotation)
     };
     run_until(&mut s, T_MAX, |s| {
         let (slip, rot) = measure(s);
@@ -199,7 +199,7 @@ fn simulate(case: &Case) -> (Mode, f64, f64, f64) {
         (false, true) => Mode::Toppling,
         (true, true) => Mode::SlidingToppling,
     };
-    (mode, slip, rot, s.time)
+    (mode, slip, rot, s.time())
 }
 
 #[test]

@@ -46,10 +46,10 @@ fn dda(a: f64, f: f64, mu: f64, t_end: f64, every: f64) -> Vec<(f64, f64)> {
     let mut s = sim(&scene, &motion);
     let mut out = vec![(0.0, 0.0)];
     let mut next = every;
-    while s.time < t_end - 1e-12 {
-        s.step(next - s.time).expect("simulation step");
-        if s.time >= next - 1e-9 {
-            out.push((s.time, displacement(&s, 1)[0]));
+    while s.time() < t_end - 1e-12 {
+        s.step(next - s.time()).expect("simulation step");
+        if s.time() >= next - 1e-9 {
+            out.push((s.time(), displacement(&s, 1)[0]));
             next += every;
         }
     }

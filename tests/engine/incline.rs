@@ -26,10 +26,10 @@ fn check(alpha: f64, phi: f64, v0: f64, t_end: f64, from: f64) -> f64 {
     let acc = G * (a.sin() - a.cos() * f.tan());
     let mut worst: f64 = 0.0;
     run(&mut s, t_end, |s| {
-        if s.time >= from - 1e-9 {
+        if s.time() >= from - 1e-9 {
             let u = displacement(s, 1);
             let num = u[0] * d[0] + u[1] * d[1];
-            let exact = 0.5 * acc * s.time * s.time + v0 * s.time;
+            let exact = 0.5 * acc * s.time() * s.time() + v0 * s.time();
             worst = worst.max(((num - exact) / exact).abs());
         }
     });

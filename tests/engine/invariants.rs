@@ -58,7 +58,7 @@ fn wall_blocks(courses: usize, per_course: usize, bw: f64, bh: f64) -> Value {
 
 fn max_vertex_motion(s: &Simulation, start: &[Vec<nalgebra::Vector2<f64>>]) -> f64 {
     let mut m: f64 = 0.0;
-    for (g, v0) in s.geoms.iter().zip(start) {
+    for (g, v0) in s.geoms().iter().zip(start) {
         for (p, q) in g.vertices.iter().zip(v0) {
             m = m.max((p - q).norm());
         }
@@ -67,7 +67,7 @@ fn max_vertex_motion(s: &Simulation, start: &[Vec<nalgebra::Vector2<f64>>]) -> f
 }
 
 fn penetration_tolerance(s: &Simulation) -> f64 {
-    s.params.penetration_ratio * s.max_step_displacement()
+    s.params().penetration_ratio * s.max_step_displacement()
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -88,7 +88,7 @@ fn running_bond_wall_stays_at_rest_for_10_s() {
         json!({ "time_step": 1e-3, "duration": 10.0, "block_model": "deformable" }),
     ));
     let mut s = sim(&scene, &GroundMotion::none());
-    let start: Vec<_> = s.geoms.iter().map(|g| g.vertices.clone()).collect();
+    let start: Vec<_> = s.geoms().iter().map(|g| g.vertices.clone()).collect();
     let mut worst: f64 = 0.0;
     let mut penetration: f64 = 0.0;
     run(&mut s, 10.0, |s| {
@@ -99,9 +99,9 @@ fn running_bond_wall_stays_at_rest_for_10_s() {
     eprintln!(
         "wall: {} blocks, {} steps ({} cuts), largest vertex motion {worst:.3e} m (docs/verification.md's bound 1e-4 m, regression bound {WALL_REST_REGRESSION:e} m), geometric penetration {penetration:.3e} m (engine's statistic {:.3e} m; tolerance {tol:.3e} m)",
         scene.blocks.len(),
-        s.stats.steps,
-        s.stats.time_step_cuts,
-        s.stats.max_penetration
+        s.stats().steps,
+        s.stats().time_step_cuts,
+        s.stats().max_penetration
     );
     assert!(
         worst <= 1e-4,
@@ -171,7 +171,7 @@ fn bounce(
     let scene = bouncing_scene(integrator, dt, friction_deg);
     let mut s = sim(&scene, &GroundMotion::none());
     let m = 2500.0 * 0.04;
-    let touch_y = s.geoms[1].centroid.y - DROP;
+    let touch_y = s.geoms()[1].centroid.y - DROP;
     let rel = |s: &Simulation| s.energy().total() - m * G * touch_y;
     let e0 = rel(&s);
     let mut flights = Vec::new();
@@ -179,21 +179,21 @@ fn bounce(
     let mut flight_steps = 0;
     let mut penetration: f64 = 0.0;
     while flights.len() < impacts {
-        assert!(s.time < 2.0, "only {} impacts in 2 s", flights.len());
+        assert!(s.time() < 2.0, "only {} impacts in 2 s", flights.len());
         // 10 impacts take ~0.45 s, i.e. ~23 000 steps of 2e-5 s: a step count far beyond that
         // means the time step collapsed (see tests/regression/regression_contact_chatter.rs).
         assert!(
-            s.stats.steps < 200_000,
+            s.stats().steps < 200_000,
             "time step collapsed: t = {} s after {} steps, Δt = {:.2e} s",
-            s.time,
-            s.stats.steps,
-            s.dt
+            s.time(),
+            s.stats().steps,
+            s.dt()
         );
         if let Err(e) = s.step(dt) {
             panic!("simulation failed: {e}");
         }
         penetration = penetration.max(geometric_penetration(&s));
-        let closed = s.contacts.contacts.iter().any(|c| c.state.is_closed());
+        let closed = s.contacts().contacts.iter().any(|c| c.state.is_closed());
         if closed {
             in_contact = true;
             flight_steps = 0;
@@ -226,7 +226,7 @@ fn check_bounce(friction_deg: f64, strict: bool) {
     let tol_pen = penetration_tolerance(&s);
     eprintln!(
         "geometric penetration {penetration:.3e} m (engine's statistic {:.3e} m; tolerance {tol_pen:.3e} m), {} steps, {} cuts",
-        s.stats.max_penetration, s.stats.steps, s.stats.time_step_cuts
+        s.stats().max_penetration, s.stats().steps, s.stats().time_step_cuts
     );
     let mut previous = e0;
     for (k, &e) in flights.iter().enumerate() {
@@ -292,20 +292,20 @@ fn bounce_never_gains_energy_under_the_trapezoidal_rule() {
 /// checked below.
 fn solved_matrix(s: &Simulation) -> Vec<Vec<f64>> {
     let sys = s.solved_system();
-    let n = s.dofs.n;
+    let n = s.dofs().n;
     let mut k = vec![vec![0.0; n]; n];
-    for f in 0..s.dofs.block_of.len() {
-        let o = s.dofs.offset[f];
-        for r in 0..s.dofs.ndof[f] {
-            for c in 0..s.dofs.ndof[f] {
+    for f in 0..s.dofs().block_of.len() {
+        let o = s.dofs().offset[f];
+        for r in 0..s.dofs().ndof[f] {
+            for c in 0..s.dofs().ndof[f] {
                 k[o + r][o + c] = sys.diag[f][(r, c)];
             }
         }
     }
     for (p, &(a, b)) in sys.pairs.iter().enumerate() {
-        let (oa, ob) = (s.dofs.offset[a], s.dofs.offset[b]);
-        for r in 0..s.dofs.ndof[a] {
-            for c in 0..s.dofs.ndof[b] {
+        let (oa, ob) = (s.dofs().offset[a], s.dofs().offset[b]);
+        for r in 0..s.dofs().ndof[a] {
+            for c in 0..s.dofs().ndof[b] {
                 k[oa + r][ob + c] = sys.off[p][(r, c)];
                 k[ob + c][oa + r] = sys.off[p][(r, c)];
             }
@@ -358,11 +358,11 @@ fn system_matrix_is_symmetric_and_is_what_the_solver_solves() {
 
 fn check_symmetry(s: &mut Simulation) {
     assert_eq!(
-        s.scene.control.contact_solver,
+        s.scene().control.contact_solver,
         ashlar::scene::ContactSolver::Penalty,
         "this check reads the penalty solver's system (the dual solver assembles no springs)"
     );
-    let states: Vec<_> = s.contacts.contacts.iter().map(|c| c.state).collect();
+    let states: Vec<_> = s.contacts().contacts.iter().map(|c| c.state).collect();
     let sliding = states
         .iter()
         .filter(|st| matches!(st, ashlar::contact::ContactState::Sliding { .. }))
@@ -383,7 +383,7 @@ fn check_symmetry(s: &mut Simulation) {
     let k = solved_matrix(s);
     let n = k.len();
     let kmax = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    for f in 0..s.dofs.block_of.len() {
+    for f in 0..s.dofs().block_of.len() {
         for r in 0..6 {
             for c in 0..6 {
                 let (a, b) = (sys.diag[f][(r, c)], sys.diag[f][(c, r)]);
@@ -400,9 +400,9 @@ fn check_symmetry(s: &mut Simulation) {
     let xnorm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
     let mut fnorm = 0.0f64;
     let mut worst = 0.0f64;
-    for (f, _) in s.dofs.block_of.iter().enumerate() {
-        let o = s.dofs.offset[f];
-        for r in 0..s.dofs.ndof[f] {
+    for (f, _) in s.dofs().block_of.iter().enumerate() {
+        let o = s.dofs().offset[f];
+        for r in 0..s.dofs().ndof[f] {
             let kx: f64 = k[o + r].iter().zip(x).map(|(a, b)| a * b).sum();
             let rhs = sys.rhs[f][r];
             fnorm += rhs * rhs;
@@ -426,7 +426,7 @@ fn check_symmetry(s: &mut Simulation) {
         for &j in &probes {
             set_unit_rhs(&mut unit, s, j);
             let mut x = Vec::new();
-            if let Err(e) = solver.solve(&unit, &s.dofs, &mut x) {
+            if let Err(e) = solver.solve(&unit, s.dofs(), &mut x) {
                 panic!("solve failed: {e}");
             }
             let xnorm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -468,9 +468,9 @@ fn set_unit_rhs(sys: &mut BlockSystem, s: &Simulation, j: usize) {
     for r in &mut sys.rhs {
         *r = ashlar::geometry::Vec6::zeros();
     }
-    for f in 0..s.dofs.block_of.len() {
-        let o = s.dofs.offset[f];
-        if j >= o && j < o + s.dofs.ndof[f] {
+    for f in 0..s.dofs().block_of.len() {
+        let o = s.dofs().offset[f];
+        if j >= o && j < o + s.dofs().ndof[f] {
             sys.rhs[f][j - o] = 1.0;
         }
     }

@@ -174,13 +174,13 @@ fn engine_overturns(
     let mut fell = false;
     run_until(&mut s, 4.0, |s| {
         each_step(s);
-        if watched.iter().any(|&b| s.geoms[b].rotation.abs() > 0.6) {
+        if watched.iter().any(|&b| s.geoms()[b].rotation.abs() > 0.6) {
             fell = true;
             return true;
         }
-        let th = s.geoms[watched[0]].rotation;
+        let th = s.geoms()[watched[0]].rotation;
         if th.abs() > 1e-4 {
-            if s.time > 0.5 && sign != 0.0 && th.signum() != sign {
+            if s.time() > 0.5 && sign != 0.0 && th.signum() != sign {
                 return true;
             }
             sign = th.signum();
@@ -228,9 +228,9 @@ fn check_frame(gamma: f64, solver: &str, regression: f64) {
         engine_overturns(&scene, a, &[1, 2], |s| {
             // The columns rock together and the cap stays level, as the model assumes.
             let (l, r, c) = (
-                s.geoms[1].rotation,
-                s.geoms[2].rotation,
-                s.geoms[3].rotation,
+                s.geoms()[1].rotation,
+                s.geoms()[2].rotation,
+                s.geoms()[3].rotation,
             );
             if l.abs().max(r.abs()) < 0.3 {
                 worst_sync = worst_sync.max((l - r).abs()).max(c.abs());
@@ -291,10 +291,10 @@ fn frame_history(solver: &str) {
     let mut worst: f64 = 0.0;
     let mut engine_peak: f64 = 0.0;
     run(&mut s, landing - 0.01, |s| {
-        let th = s.geoms[1].rotation;
+        let th = s.geoms()[1].rotation;
         // Reference samples every REF_DT from its onset; before it the column is at rest.
         let k = reference
-            .partition_point(|p| p.0 < s.time)
+            .partition_point(|p| p.0 < s.time())
             .min(reference.len() - 1);
         worst = worst.max((th - reference[k].1).abs());
         engine_peak = engine_peak.max(th.abs());
@@ -375,7 +375,7 @@ fn frame_restitution_from(gamma: f64, solver: &str, dt: Option<f64>, fraction: f
     let mut s = sim(&scene, &GroundMotion::none());
     let (mut hit, mut peak) = (false, f64::NEG_INFINITY);
     let done = run_until(&mut s, 3.0, |s| {
-        let th = s.geoms[1].rotation;
+        let th = s.geoms()[1].rotation;
         let w = s.block_velocity(1)[2];
         if !hit {
             hit = th >= theta0;
@@ -536,9 +536,9 @@ fn check_pier(solver: &str, regression: f64) {
     let mut opening: f64 = 0.0;
     let (lo, hi) = engine_threshold(reference, |a| {
         engine_overturns(&scene, a, &[1], |s| {
-            if s.geoms[1].rotation.abs() < alpha {
+            if s.geoms()[1].rotation.abs() < alpha {
                 for k in 2..=COURSES {
-                    opening = opening.max((s.geoms[k].rotation - s.geoms[1].rotation).abs());
+                    opening = opening.max((s.geoms()[k].rotation - s.geoms()[1].rotation).abs());
                 }
             }
         })
@@ -732,8 +732,8 @@ fn check_stack(solver: &str, regression: f64) {
         l[0],
         u[0],
         err,
-        s.geoms[1].rotation,
-        s.geoms[2].rotation
+        s.geoms()[1].rotation,
+        s.geoms()[2].rotation
     );
     assert!(reference.abs() > 0.01, "the case must slide");
     assert!(err.abs() < 0.02, "{solver}: {err}");
@@ -861,9 +861,9 @@ fn frame_record_engine(
     let (mut peak, mut sync) = (0.0f64, 0.0f64);
     let fell = run_until(&mut s, t_end, |s| {
         let (l, r, c) = (
-            s.geoms[1].rotation,
-            s.geoms[2].rotation,
-            s.geoms[3].rotation,
+            s.geoms()[1].rotation,
+            s.geoms()[2].rotation,
+            s.geoms()[3].rotation,
         );
         peak = peak.max(l.abs());
         if l.abs().max(r.abs()) < 0.3 {
@@ -1027,7 +1027,7 @@ fn frame_loma_prieta_slip() {
     let scene = frame_scene(1.0, "penalty");
     let mut s = sim(&scene, &m);
     let corner = |s: &ashlar::simulation::Simulation, b: usize, local: [f64; 2]| {
-        let g = &s.geoms[b];
+        let g = &s.geoms()[b];
         let (c, sn) = (g.rotation.cos(), g.rotation.sin());
         let (dx, dy) = (
             local[0] - g.initial_centroid.x,
@@ -1046,13 +1046,13 @@ fn frame_loma_prieta_slip() {
                 let p = corner(s, b, [x0, 0.0]);
                 if p[1] < 1e-4 {
                     slip = slip.max((p[0] - x0).abs());
-                    if s.time < 6.2 {
+                    if s.time() < 6.2 {
                         slip_before = slip_before.max((p[0] - x0).abs());
                     }
                     if first_tenth.is_nan() && (p[0] - x0).abs() > 1e-4 {
-                        first_tenth = s.time;
+                        first_tenth = s.time();
                         let states: Vec<String> = s
-                            .contacts
+                            .contacts()
                             .contacts
                             .iter()
                             .filter(|c| (c.vertex_block == 0) != (c.edge_block == 0))
@@ -1060,16 +1060,16 @@ fn frame_loma_prieta_slip() {
                             .collect();
                         eprintln!(
                             "t = {:.4} s, θ = {:.5} / {:.5} rad, velocities (vx, vy, ω) left {:.4?}, right {:.4?}, cap {:.4?}; base contacts {states:?}",
-                            s.time,
-                            s.geoms[1].rotation,
-                            s.geoms[2].rotation,
+                            s.time(),
+                            s.geoms()[1].rotation,
+                            s.geoms()[2].rotation,
                             s.block_velocity(1),
                             s.block_velocity(2),
                             s.block_velocity(3)
                         );
                     }
                     if first_mm.is_nan() && (p[0] - x0).abs() > 1e-3 {
-                        first_mm = s.time;
+                        first_mm = s.time();
                     }
                 }
             }

@@ -48,8 +48,8 @@ fn two_block_velocities(restitution: Value, dt: f64, solver: &str) -> (f64, f64,
     let mut s = sim(&scene, &GroundMotion::none());
     let m = [
         0.0,
-        2500.0 * s.geoms[1].moments.area,
-        2500.0 * s.geoms[2].moments.area,
+        2500.0 * s.geoms()[1].moments.area,
+        2500.0 * s.geoms()[2].moments.area,
     ];
     let p0 = m[1] * V0;
     let mut drift: f64 = 0.0;
@@ -87,13 +87,13 @@ fn engine_rocking_ratio(b: f64, h: f64, control: Value) -> (f64, f64) {
     let mut s = sim(&scene, &GroundMotion::none());
     let mut before = None;
     let mut history = Vec::new();
-    while s.time < 2.0 && history.len() < 2 {
+    while s.time() < 2.0 && history.len() < 2 {
         let w0 = s.block_velocity(1)[2];
-        let n0 = s.stats.impacts;
+        let n0 = s.stats().impacts;
         s.step(f64::INFINITY).expect("step");
         if before.is_some() {
             history.push(s.block_velocity(1)[2]);
-        } else if s.stats.impacts > n0 {
+        } else if s.stats().impacts > n0 {
             before = Some(w0);
             history.push(s.block_velocity(1)[2]);
         }

@@ -235,7 +235,7 @@ fn engine_restitution(c: Column, theta0: f64, solver: &str, dt: Option<f64>) -> 
     // column tilts onto its other corner up to θ1 = max rotation − θ0, where ω changes sign.
     let (mut hit, mut peak) = (false, f64::NEG_INFINITY);
     let done = run_until(&mut s, 3.0, |s| {
-        let th = s.geoms[1].rotation;
+        let th = s.geoms()[1].rotation;
         let w = s.block_velocity(1)[2];
         if !hit {
             hit = th >= theta0;
@@ -409,7 +409,9 @@ fn engine_history_of(
     let scene = parse(&v);
     let mut s = sim(&scene, &seed_pulse(A_PULSE));
     let mut out = vec![(0.0, 0.0)];
-    run(&mut s, t_end, |s| out.push((s.time, s.geoms[1].rotation)));
+    run(&mut s, t_end, |s| {
+        out.push((s.time(), s.geoms()[1].rotation))
+    });
     out
 }
 

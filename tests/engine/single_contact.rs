@@ -1,4 +1,5 @@
-//! Single-contact tests after the DEM validation seed (002, T1 and T3), adapted to a block on a
+//! Single-contact tests after Li et al. 2018, "Validation tests for discrete element codes using
+//! single-contact systems" (T1 and T3; docs/verification.md), adapted to a block on a
 //! fixed block: both of the block's bottom corners touch the base, so the contact stiffness
 //! seen by the block is twice the per-contact penalty.
 //!
@@ -54,18 +55,18 @@ fn impact(integrator: &str) -> (f64, f64, f64) {
     let mut s = sim(&scene, &GroundMotion::none());
     let (mut start, mut end) = (None, None);
     run_until(&mut s, 0.05, |s| {
-        let closed = s.contacts.contacts.iter().any(|c| c.state.is_closed());
+        let closed = s.contacts().contacts.iter().any(|c| c.state.is_closed());
         if closed && start.is_none() {
-            start = Some(s.time);
+            start = Some(s.time());
         }
         if !closed && start.is_some() {
-            end = Some(s.time);
+            end = Some(s.time());
             return true;
         }
         false
     });
     let (start, end) = (start.expect("contact closed"), end.expect("contact opened"));
-    (end - start, s.states[0].vel[1], expected)
+    (end - start, s.states()[0].vel[1], expected)
 }
 
 #[test]
@@ -109,20 +110,20 @@ fn shear_stick_slide_restick() {
         0.0,
     );
     let mut s = sim(&scene, &GroundMotion::none());
-    let kt = 2.0 * s.springs.shear;
+    let kt = 2.0 * s.springs().shear;
     let w = (kt / m).sqrt();
     let x1 = mu * m * G / kt;
     let v0 = 2.0 * x1 * w;
     // Settle the normal springs under gravity first: the block starts on undeformed springs and
     // would bounce on them. Kinetic damping at 900 1/s (≈ 2ω of the vertical mode, critical)
     // for 20 ms, then none, then launch.
-    s.scene.control.kinetic_damping_rate = 900.0;
+    s.set_kinetic_damping_rate(900.0);
     run(&mut s, 0.02, |_| {});
-    s.scene.control.kinetic_damping_rate = 0.0;
+    s.set_kinetic_damping_rate(0.0);
     let x_start = displacement(&s, 1)[0];
-    s.states[0].vel[0] = v0;
-    s.states[0].vel[1] = 0.0;
-    let t0 = s.time;
+    s.states_mut()[0].vel[0] = v0;
+    s.states_mut()[0].vel[1] = 0.0;
+    let t0 = s.time();
     let ts1 = (x1 * w / v0).asin() / w;
     let vs1 = v0 * (w * ts1).cos();
     let ts4 = ts1 + vs1 / (mu * G);
@@ -130,16 +131,16 @@ fn shear_stick_slide_restick() {
     let (mut slip_at, mut restick_at) = (None, None);
     run_until(&mut s, t0 + ts4 + 0.05, |s| {
         let sliding = s
-            .contacts
+            .contacts()
             .contacts
             .iter()
             .filter(|c| matches!(c.state, ContactState::Sliding { .. }))
             .count();
         if sliding == 2 && slip_at.is_none() {
-            slip_at = Some(s.time - t0);
+            slip_at = Some(s.time() - t0);
         }
         if slip_at.is_some() && sliding == 0 && restick_at.is_none() {
-            restick_at = Some(s.time - t0);
+            restick_at = Some(s.time() - t0);
         }
         false
     });
@@ -157,7 +158,7 @@ fn shear_stick_slide_restick() {
     let period = 2.0 * std::f64::consts::PI / w;
     let mut sum = 0.0;
     let mut n = 0.0;
-    let t_mean = s.time;
+    let t_mean = s.time();
     run(&mut s, t_mean + 4.0 * period, |s| {
         sum += displacement(s, 1)[0] - x_start;
         n += 1.0;

@@ -34,7 +34,7 @@ fn run(scene: &Scene, motion: &GroundMotion, params: SimParams, t_end: f64) -> S
 /// displacement of the first, m.
 fn compare(a: &Simulation, b: &Simulation) -> (f64, f64) {
     let (mut diff, mut scale) = (0.0_f64, 0.0_f64);
-    for k in 0..a.geoms.len() {
+    for k in 0..a.geoms().len() {
         let (da, db) = (displacement(a, k), displacement(b, k));
         diff = diff.max((da[0] - db[0]).abs()).max((da[1] - db[1]).abs());
         scale = scale.max(da[0].abs()).max(da[1].abs());
@@ -71,7 +71,10 @@ fn reused_factorization_gives_the_refactored_answer() {
     let mut fresh = SimParams::default();
     fresh.solver.sparse.max_reuse_iterations = 0;
     let log = |sim: &Simulation, its: &mut Vec<(u64, u64)>| {
-        its.push((sim.stats.open_close_iterations, sim.stats.time_step_cuts));
+        its.push((
+            sim.stats().open_close_iterations,
+            sim.stats().time_step_cuts,
+        ));
     };
     let (mut a_log, mut b_log) = (Vec::new(), Vec::new());
     let mut a = Simulation::new(&scene, &motion, checked);
@@ -80,7 +83,7 @@ fn reused_factorization_gives_the_refactored_answer() {
     common::run(&mut b, 0.5, |s| log(s, &mut b_log));
     let (ca, cb) = (a.solver_counts(), b.solver_counts());
     println!("reuse: {ca:?}\nfresh: {cb:?}");
-    assert!(a.dofs.n > 96, "the wall must take the sparse path");
+    assert!(a.dofs().n > 96, "the wall must take the sparse path");
     // Without the check's own factorizations (they are not counted).
     assert!(
         ca.numeric * 5 < cb.numeric,
@@ -127,14 +130,15 @@ fn skipped_detection_gives_the_detected_answer() {
     let b = run(&scene, &still, every_step, 1.0);
     println!(
         "detections: {} with reuse, {} without",
-        a.contacts.detections, b.contacts.detections
+        a.contacts().detections,
+        b.contacts().detections
     );
-    assert_eq!(b.contacts.detections, b.stats.steps);
+    assert_eq!(b.contacts().detections, b.stats().steps);
     assert!(
-        a.contacts.detections * 10 < a.stats.steps,
+        a.contacts().detections * 10 < a.stats().steps,
         "a wall at rest should rarely need detection: {} of {} steps",
-        a.contacts.detections,
-        a.stats.steps
+        a.contacts().detections,
+        a.stats().steps
     );
     let (diff, _) = compare(&a, &b);
     assert!(diff <= 1e-12, "difference {diff} m");
@@ -153,13 +157,14 @@ fn moving_blocks_are_detected_every_step() {
     let b = run(&scene, &still, every_step, 0.5);
     println!(
         "detections: {} of {} steps",
-        a.contacts.detections, a.stats.steps
+        a.contacts().detections,
+        a.stats().steps
     );
     assert!(
-        a.contacts.detections * 10 > a.stats.steps * 9,
+        a.contacts().detections * 10 > a.stats().steps * 9,
         "a sliding block skipped detection: {} of {} steps",
-        a.contacts.detections,
-        a.stats.steps
+        a.contacts().detections,
+        a.stats().steps
     );
     let (diff, scale) = compare(&a, &b);
     println!("largest difference {diff:.3e} m of {scale:.3e} m");
@@ -194,19 +199,19 @@ fn skipped_detection_on_a_shaken_wall_gives_the_detected_answer() {
     let b = run(&scene, &motion, every_step, 0.5);
     println!(
         "shaken wall: detections {} of {} steps with the shortcut, {} of {} without; contacts at the end {} and {}",
-        a.contacts.detections,
-        a.stats.steps,
-        b.contacts.detections,
-        b.stats.steps,
-        a.contacts.contacts.len(),
-        b.contacts.contacts.len()
+        a.contacts().detections,
+        a.stats().steps,
+        b.contacts().detections,
+        b.stats().steps,
+        a.contacts().contacts.len(),
+        b.contacts().contacts.len()
     );
-    assert_eq!(b.contacts.detections, b.stats.steps);
+    assert_eq!(b.contacts().detections, b.stats().steps);
     assert!(
-        a.contacts.detections > 10 && a.contacts.detections < a.stats.steps,
+        a.contacts().detections > 10 && a.contacts().detections < a.stats().steps,
         "{} detections in {} steps: the shortcut must both skip and re-detect, else the comparison tests nothing",
-        a.contacts.detections,
-        a.stats.steps
+        a.contacts().detections,
+        a.stats().steps
     );
     let (diff, scale) = compare(&a, &b);
     println!(

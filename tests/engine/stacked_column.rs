@@ -372,8 +372,8 @@ fn check(st: Stack, a: f64, f: f64, solver: &str, expect_opening: bool, regressi
     let (mut worst, mut worst_rel): (f64, f64) = (0.0, 0.0);
     let mut engine_opened = None;
     run(&mut s, impact - 0.01, |s| {
-        let k = ((s.time / REF_DT).round() as usize).min(r.samples.len() - 1);
-        let (t1, t2) = (s.geoms[1].rotation, s.geoms[2].rotation);
+        let k = ((s.time() / REF_DT).round() as usize).min(r.samples.len() - 1);
+        let (t1, t2) = (s.geoms()[1].rotation, s.geoms()[2].rotation);
         worst = worst
             .max((t1 - r.samples[k].1).abs())
             .max((t2 - r.samples[k].2).abs());
@@ -381,7 +381,7 @@ fn check(st: Stack, a: f64, f: f64, solver: &str, expect_opening: bool, regressi
         // monolithic model would get wrong.
         worst_rel = worst_rel.max(((t2 - t1) - (r.samples[k].2 - r.samples[k].1)).abs());
         if engine_opened.is_none() && (t2 - t1).abs() > 1e-3 {
-            engine_opened = Some(s.time);
+            engine_opened = Some(s.time());
         }
     });
     let rel_peak = r

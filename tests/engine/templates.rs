@@ -39,7 +39,7 @@ fn scene(name: &str, set: &[(&str, Value)], duration: f64) -> Scene {
 
 /// Largest displacement of any vertex of any block from where it started, m.
 fn largest_move(sim: &Simulation, start: &[Vec<nalgebra::Vector2<f64>>]) -> f64 {
-    sim.geoms
+    sim.geoms()
         .iter()
         .zip(start)
         .flat_map(|(g, s)| g.vertices.iter().zip(s).map(|(p, q)| (p - q).norm()))
@@ -54,7 +54,7 @@ pub(crate) fn settle(
     stop: impl Fn(&Simulation) -> bool,
 ) -> (f64, bool, Simulation) {
     let mut sim = Simulation::new(scene, &GroundMotion::none(), SimParams::default());
-    let start: Vec<_> = sim.geoms.iter().map(|g| g.vertices.clone()).collect();
+    let start: Vec<_> = sim.geoms().iter().map(|g| g.vertices.clone()).collect();
     let mut worst = 0.0f64;
     let clock = std::time::Instant::now();
     let stopped = common::run_until(&mut sim, t_end, |s| {
@@ -64,9 +64,9 @@ pub(crate) fn settle(
     eprintln!(
         "{}: {} blocks, t = {:.3} s, {} steps, largest move {:.3e} m, wall {:.1} s",
         scene.name,
-        sim.geoms.len(),
-        sim.time,
-        sim.stats.steps,
+        sim.geoms().len(),
+        sim.time(),
+        sim.stats().steps,
         worst,
         clock.elapsed().as_secs_f64()
     );
@@ -145,10 +145,10 @@ fn crown_drop(sim: &Simulation, start_y: f64) -> f64 {
             .fold(f64::NEG_INFINITY, f64::max)
     };
     let i = sim
-        .scene
+        .scene()
         .block_index("v20")
         .unwrap_or_else(|| panic!("no v20"));
-    start_y - crown(&sim.geoms[i])
+    start_y - crown(&sim.geoms()[i])
 }
 
 #[test]

@@ -59,7 +59,7 @@ fn run_a_few_steps(scene: &Scene) {
                     sim.first_non_finite_block(),
                     None,
                     "accepted step left a non-finite state at t = {}",
-                    sim.time
+                    sim.time()
                 );
             }
             Err(e) => {

@@ -41,12 +41,12 @@ fn drop_on_slab(friction_deg: f64) -> (f64, u64) {
         json!({ "time_step": 1e-4, "duration": 0.1 }),
     ));
     let mut s = sim(&scene, &GroundMotion::none());
-    while s.time < 0.1 - 1e-12 && s.stats.steps < 2000 {
-        if let Err(e) = s.step(0.1 - s.time) {
+    while s.time() < 0.1 - 1e-12 && s.stats().steps < 2000 {
+        if let Err(e) = s.step(0.1 - s.time()) {
             panic!("simulation failed: {e}");
         }
     }
-    (s.time, s.stats.steps)
+    (s.time(), s.stats().steps)
 }
 
 #[test]

@@ -51,16 +51,16 @@ fn dual_drop_with_the_dda_rule_never_gains_energy() {
     let scene = parse(&drop_scene("dda"));
     let mut s = sim(&scene, &GroundMotion::none());
     let m = 2500.0 * 0.04;
-    let touch_y = s.geoms[1].centroid.y - DROP;
+    let touch_y = s.geoms()[1].centroid.y - DROP;
     let rel = |s: &ashlar::simulation::Simulation| s.energy().total() - m * G * touch_y;
     let e0 = rel(&s);
     let mut flights = Vec::new();
     let mut in_contact = false;
-    while flights.len() < 3 && s.time < 0.5 {
+    while flights.len() < 3 && s.time() < 0.5 {
         if let Err(e) = s.step(1e-4) {
             panic!("simulation failed: {e}");
         }
-        let closed = s.contacts.contacts.iter().any(|c| c.state.is_closed());
+        let closed = s.contacts().contacts.iter().any(|c| c.state.is_closed());
         if closed {
             in_contact = true;
         } else if in_contact {

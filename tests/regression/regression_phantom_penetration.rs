@@ -40,8 +40,8 @@ fn outside_vertex_is_not_found_deep_inside_its_neighbour() {
     // The right block falls freely past the left one's face; no contact claims a depth
     // beyond round-off of the 0.2 mm face overlap.
     assert!(
-        sim.stats.max_penetration < 1e-3,
+        sim.stats().max_penetration < 1e-3,
         "max penetration {:.3e} m",
-        sim.stats.max_penetration
+        sim.stats().max_penetration
     );
 }

@@ -28,12 +28,12 @@ fn block_on_base(penalty: serde_json::Value) -> ashlar::scene::Scene {
 fn run_to_end(penalty: serde_json::Value) -> (Result<(), SimError>, f64) {
     let scene = block_on_base(penalty);
     let mut s = sim(&scene, &GroundMotion::none());
-    while s.time < 1.0 - 1e-12 {
-        if let Err(e) = s.step(1.0 - s.time) {
-            return (Err(e), s.stats.max_penetration);
+    while s.time() < 1.0 - 1e-12 {
+        if let Err(e) = s.step(1.0 - s.time()) {
+            return (Err(e), s.stats().max_penetration);
         }
     }
-    (Ok(()), s.stats.max_penetration)
+    (Ok(()), s.stats().max_penetration)
 }
 
 #[test]

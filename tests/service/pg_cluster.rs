@@ -14,7 +14,7 @@
 use crate::service_support;
 
 use ashlar::service::pg_store::{LeaseParams, PgStore, SCHEMA_VERSION};
-use ashlar::service::store::{Finish, JobKind, JobStatus, JobStore, NewJob, QueueFull};
+use ashlar::service::store::{Finish, JobKind, JobStatus, JobStore, NewJob, QueueFull, StoreError};
 use ashlar::service::{Service, ServiceConfig};
 use postgres::NoTls;
 use serde_json::{json, Value};
@@ -660,7 +660,7 @@ fn migrates_a_version_1_database() {
         .err()
         .expect("refused");
     assert!(
-        e.0.contains("version 99") && e.0.contains("upgrade ashlar"),
+        matches!(&e, StoreError::Schema(m) if m.contains("version 99") && m.contains("upgrade ashlar")),
         "{e}"
     );
 }
@@ -671,7 +671,10 @@ fn bad_database_urls_are_named() {
     let e = PgStore::open("mysql://x", LeaseParams::default())
         .err()
         .expect("refused");
-    assert!(e.0.contains("--database"), "{e}");
+    assert!(
+        matches!(&e, StoreError::Config(m) if m.contains("--database")),
+        "{e}"
+    );
     let out = Command::new(env!("CARGO_BIN_EXE_ashlar"))
         .args(["worker", "--database", "sqlite:/tmp/x.sqlite"])
         .output()

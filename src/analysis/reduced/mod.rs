@@ -11,6 +11,11 @@
 //! of the pivot while rocking, a sliding block whose leading corner lifts, or loss of contact
 //! are the coupled cases the reduced models do not represent (a *violation*: `auto` then runs
 //! the full engine).
+//!
+//! Length (over 600 lines): the four-state machine (`Reduced`: the step, the transitions
+//! between the states, event location, impacts) is one piece whose transitions are read
+//! together; each model's own equations are already `rocking.rs` and `sliding.rs`, the
+//! qualification `qualify.rs`, the integrator `ode.rs`, the outputs `record.rs`.
 pub mod ode;
 pub mod qualify;
 pub mod record;

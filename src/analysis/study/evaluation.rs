@@ -33,10 +33,10 @@ pub(super) fn run_once(
     observed: usize,
     budget: f64,
     stop_rotation: Option<f64>,
-) -> Result<Measured, String> {
+) -> Result<Measured, StudyError> {
     let mut v = bench.scene.clone();
     v["control"] = setting.control(bench.duration);
-    let scene = scene_from_value(&v).map_err(|e| e.to_string())?;
+    let scene = scene_from_value(&v)?;
     let frames = Mutex::new(Vec::new());
     let record = |f: &Frame| {
         let b = &f.blocks[observed];
@@ -68,7 +68,7 @@ pub(super) fn run_once(
         }),
         ..Default::default()
     };
-    let out = run(&scene, motion, &opts).map_err(|e| e.to_string())?;
+    let out = run(&scene, motion, &opts)?;
     let over_budget =
         start.elapsed().as_secs_f64() > budget && out.summary.stopped_reason.is_some();
     Ok(Measured {
@@ -117,7 +117,7 @@ pub(super) fn evaluate(
     setting: &Setting,
     reference_frames: Option<&[(f64, f64)]>,
     opts: &StudyOptions,
-) -> Result<Evaluated, String> {
+) -> Result<Evaluated, StudyError> {
     let budget = opts.point_budget_s;
     match &bench.metric {
         Metric::Overturning { exact, tolerance } => {
@@ -140,7 +140,7 @@ pub(super) fn evaluate(
                         fell
                     }
                     Err(e) => {
-                        failure = Some(e);
+                        failure = Some(e.to_string());
                         false
                     }
                 }
@@ -155,7 +155,9 @@ pub(super) fn evaluate(
                     safe = mid;
                 }
             }
-            let summary = last.ok_or_else(|| failure.clone().unwrap_or_else(|| "no run".into()))?;
+            let summary = last.ok_or_else(|| {
+                StudyError::NoRun(failure.clone().unwrap_or_else(|| "no run".into()))
+            })?;
             let wall = t0.elapsed().as_secs_f64();
             if let Some(f) = failure {
                 return Ok(Evaluated {

@@ -173,7 +173,8 @@ pub(super) fn decisions(result: &StudyResult) -> String {
             let ok = pts.len() == scenes.len()
                 && pts.iter().all(|p| p.error.is_some_and(|e| e <= TARGET));
             let cost: f64 = pts.iter().map(|p| solves(p)).sum();
-            // 5 %: below that the saving is not worth a default that differs from the seeds'.
+            // 5 %: below that the saving is not worth a default that differs from the published
+            // benchmarks' (docs/verification.md).
             (ok && cost < 0.95 * full_cost).then_some((cost, label))
         })
         .collect();

@@ -9,15 +9,15 @@ pub(super) fn material_scene(blocks: Value, friction_deg: f64) -> Value {
 /// Housner's rocking of Yagoda-Biran & Hatzor's (2015) column under its half-sine pulse of amplitude `a` (RK4 at
 /// 1e-5 s): (t, θ) every `every` s, overturned by `t_end`, first impact.
 pub(super) fn housner(a: f64, t_end: f64, every: f64) -> (Vec<(f64, f64)>, bool, Option<f64>) {
-    let col = reference::HousnerColumn::SEED_000;
+    let col = reference::HousnerColumn::YAGODA_BIRAN_2015;
     let stride = (every / col.dt).round() as usize;
     let r = reference::housner_history(&col, reference::half_sine_pulse(a), t_end, stride);
     (r.samples, r.overturned, r.first_impact)
 }
 
 /// The study's column is the reference's.
-pub(super) const COL_B: f64 = reference::HousnerColumn::SEED_000.b;
-pub(super) const COL_H: f64 = reference::HousnerColumn::SEED_000.h;
+pub(super) const COL_B: f64 = reference::HousnerColumn::YAGODA_BIRAN_2015.b;
+pub(super) const COL_H: f64 = reference::HousnerColumn::YAGODA_BIRAN_2015.h;
 const _: () = assert!(
     COL_B == presets::Column::SEED.half_width && COL_H == presets::Column::SEED.half_height
 );
@@ -28,19 +28,18 @@ pub(super) fn column_scene() -> Value {
 }
 
 /// The wall's record: Northridge (Mulholland 009) from `ground_motions`, scaled to 0.4 g.
-pub fn wall_record(ground_motions: &Path) -> Result<GroundMotion, String> {
+pub fn wall_record(ground_motions: &Path) -> Result<GroundMotion, StudyError> {
     let record = ground_motions.join("northridge-1994-mulholland-009.at2");
-    let gm = motion::load_path(&record).map_err(|e| {
-        format!(
-            "{}: {e} (the record is in the repository, {GROUND_MOTIONS_DIR}/)",
-            record.display()
-        )
+    let gm = motion::load_path(&record).map_err(|source| StudyError::Motion {
+        path: record.clone(),
+        source,
+        hint: format!(" (the record is in the repository, {GROUND_MOTIONS_DIR}/)"),
     })?;
     Ok(gm.scaled_to_pga(0.4 * motion::STANDARD_GRAVITY))
 }
 
 /// The benchmark scenes.
-pub(super) fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
+pub(super) fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, StudyError> {
     let every: f64 = 0.01;
     let mut out = Vec::new();
     // 1. Incline under gravity (Yagoda-Biran & Hatzor 2015, Eq. 14).
@@ -138,7 +137,7 @@ pub(super) fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, String> {
     // 6. Masonry wall under a recorded ground motion (data/ground-motions).
     let gm = wall_record(&opts.ground_motions)?;
     let wall = running_bond_wall(&presets::study_wall());
-    let scene = serde_json::to_value(&wall).map_err(|e| e.to_string())?;
+    let scene = serde_json::to_value(&wall)?;
     let observed = scene["blocks"].as_array().map(|b| b.len() - 1).unwrap_or(1);
     let duration = if opts.quick { 3.0 } else { 8.0 };
     let mut reference = Setting::baseline();

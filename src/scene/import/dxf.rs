@@ -6,6 +6,10 @@
 //!
 //! Nothing is approximated: arcs, bulged segments, circles, ellipses and splines are refused, not
 //! cut into chords, because the choice of chords would change the contacts the engine sees.
+//!
+//! Length (over 600 lines): one importer read top to bottom (options and units, the error type
+//! whose messages name the entity's handle and layer, reading, outlines, the spec), then its
+//! tests; the drawings' validation is `scene::validate`, shared with every scene.
 use crate::scene::spec::*;
 use crate::scene::templates::common::{LIMESTONE, MAX_BLOCKS};
 use crate::scene::{validate, Scene, SceneError};

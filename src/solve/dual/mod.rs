@@ -64,7 +64,7 @@ pub struct DualParams {
     pub gamma: f64,
     /// Products with W allowed to the MPRGP minimisation ([`mprgp`]) before the
     /// projection–contraction iteration takes over from its forces (0: the
-    /// projection–contraction iteration alone, as in the seed). 5000: the warm-started solves
+    /// projection–contraction iteration alone, as in Zheng, Zhang & Du 2016, docs/dual.md). 5000: the warm-started solves
     /// that converge take hundreds (small stacks and walls, `tests/engine/dual_mprgp.rs`) to ~8000
     /// (the 1700-block pile); on the pile a budget of 20 000 ran its first 5 steps slower
     /// than 5000 (more time spent on solves that end in a time-step cut anyway).

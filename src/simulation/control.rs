@@ -1,0 +1,186 @@
+//! Simulation › step control: whether a solved step is accepted (displacement limit, overshot
+//! contacts, the adaptive step's accuracy bounds: impact location, local error, rotation per
+//! step) and, if not, why ([`Refusal`]) and by how much to cut.
+use super::Simulation;
+use crate::contact::Contact;
+use crate::geometry::{displacement_matrix, Vec6};
+
+/// Why one attempt at a step is refused (the step is then cut, or the run stops).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Refusal {
+    /// The contact solver did not converge; the contact it changed last or left worst.
+    Unconverged(Option<usize>),
+    /// A vertex of this block (scene index) would move this far (m), beyond the step limit.
+    Moved { block: usize, by: f64 },
+    /// This contact deepened beyond what the time step resolves.
+    Overshot(usize),
+    /// This contact closed within the step after a longer approach than
+    /// `SimParams::impact_approach_ratio` allows: the step is cut by `factor` to locate the
+    /// impact.
+    Impact { contact: usize, factor: f64 },
+    /// The step's estimated local error exceeds the bound of `SimParams::local_error_ratio`.
+    LocalError { factor: f64 },
+}
+
+impl Refusal {
+    /// Factor applied to Δt for the next attempt: the step-control refusals aim at their bound
+    /// (with a 10 % margin), never cutting deeper than `cut`; the others cut by `cut`.
+    pub(super) fn factor(self, cut: f64) -> f64 {
+        match self {
+            Refusal::Impact { factor, .. } | Refusal::LocalError { factor, .. } => {
+                (0.9 * factor).clamp(cut, 0.9)
+            }
+            _ => cut,
+        }
+    }
+
+    /// A bound of the step's accuracy, not of its validity.
+    pub(super) fn is_accuracy(self) -> bool {
+        matches!(self, Refusal::Impact { .. } | Refusal::LocalError { .. })
+    }
+}
+
+impl Simulation {
+    /// After convergence: is the step within the displacement limit and the penetration
+    /// tolerance? Returns why not, if not.
+    pub(super) fn check_step(&self, dt: f64) -> Option<Refusal> {
+        if self.state.scene.control.adaptive_time_step {
+            let limit = self.max_step_displacement();
+            for f in 0..self.state.dofs.block_of.len() {
+                let d = self.block_increment(f);
+                let b = self.state.dofs.block_of[f];
+                let g = &self.state.geoms[b];
+                let by = g
+                    .vertices
+                    .iter()
+                    .map(|p| (displacement_matrix(*p, g.centroid) * d).norm())
+                    .fold(0.0, f64::max);
+                if by > limit {
+                    return Some(Refusal::Moved { block: b, by });
+                }
+            }
+        }
+        for (k, c) in self.state.contacts.contacts.iter().enumerate() {
+            if self.overshot(c) && self.stepper.dt * self.params.cut_factor > self.params.min_dt {
+                return Some(Refusal::Overshot(k));
+            }
+        }
+        if self.state.scene.control.adaptive_time_step {
+            return self.step_control(dt);
+        }
+        None
+    }
+
+    /// The longest step that turns no free block by more than `SimParams::max_rotation_step`
+    /// at its current angular velocity (adaptive runs only; infinite without the bound).
+    pub(super) fn rotation_bound(&self) -> f64 {
+        let Some(limit) = self.params.max_rotation_step else {
+            return f64::INFINITY;
+        };
+        if !self.state.scene.control.adaptive_time_step {
+            return f64::INFINITY;
+        }
+        let w = self
+            .states()
+            .iter()
+            .map(|s| s.vel[2].abs())
+            .fold(0.0, f64::max);
+        (limit / w).max(10.0 * self.params.min_dt)
+    }
+
+    /// The accuracy bounds of the adaptive step (impact location, rotation per step): the
+    /// worst violation, if any, as a refusal with the factor that meets its bound. Never
+    /// below `min_dt` × 10 (a step this short is no longer an accuracy question).
+    pub(super) fn step_control(&self, dt: f64) -> Option<Refusal> {
+        let floor = 10.0 * self.params.min_dt;
+        let mut worst: Option<Refusal> = None;
+        let mut keep = |r: Refusal, f: f64| {
+            let better = match worst {
+                Some(Refusal::Impact { factor, .. } | Refusal::LocalError { factor, .. }) => {
+                    f < factor
+                }
+                _ => true,
+            };
+            if f < 1.0 && dt * f.max(self.params.cut_factor) > floor && better {
+                worst = Some(r);
+            }
+        };
+        if let Some(ratio) = self.params.impact_approach_ratio {
+            let limit = ratio * self.stepper.smallest_free_block;
+            for (k, c) in self.state.contacts.contacts.iter().enumerate() {
+                // Open at the step start, closed at its end: the contact closed within the step.
+                let approach = c.g0 - c.gap;
+                if c.g0 > 0.0 && c.state.is_closed() && approach > limit {
+                    let factor = limit / approach;
+                    keep(Refusal::Impact { contact: k, factor }, factor);
+                }
+            }
+        }
+        if let Some((_, e)) = self.local_error(dt) {
+            let tol = self.local_error_tolerance();
+            let floor = self.params.min_error_step_ratio * self.state.scene.control.time_step;
+            if e > 2.0 * tol && dt > floor {
+                let factor = (tol / e).sqrt().max(floor / dt);
+                keep(Refusal::LocalError { factor }, factor);
+            }
+        }
+        worst
+    }
+
+    /// The local error bound, m (infinite when the control is off).
+    pub(super) fn local_error_tolerance(&self) -> f64 {
+        self.params
+            .local_error_ratio
+            .map_or(f64::INFINITY, |r| r * self.stepper.smallest_free_block)
+    }
+
+    /// The step's estimated local displacement error, m, and the block where it is largest:
+    /// |β − 1/6|·Δt²·|a₁ − a₀| at the worst vertex, a₁ from the solved increments (the same
+    /// Newmark rule as `integrate::update_motion`), a₀ the step-start acceleration. `None`
+    /// when the control is off.
+    pub(super) fn local_error(&self, dt: f64) -> Option<(usize, f64)> {
+        self.params.local_error_ratio?;
+        let nm = self.stepper.newmark;
+        let c = (nm.beta - 1.0 / 6.0).abs() * dt * dt;
+        let mut worst = (0, 0.0f64);
+        for f in 0..self.state.dofs.block_of.len() {
+            let b = self.state.dofs.block_of[f];
+            if self.state.retired[b] {
+                continue;
+            }
+            let d = self.block_increment(f);
+            let st = &self.state.states[f];
+            let a1 = (d - st.vel * dt - st.acc * (dt * dt * (0.5 - nm.beta))) / (nm.beta * dt * dt);
+            let da = a1 - st.acc;
+            let g = &self.state.geoms[b];
+            let e = g
+                .vertices
+                .iter()
+                .map(|p| (displacement_matrix(*p, g.centroid) * da).norm())
+                .fold(0.0, f64::max)
+                * c;
+            if e > worst.1 {
+                worst = (b, e);
+            }
+        }
+        Some(worst)
+    }
+
+    pub(super) fn block_increment(&self, f: usize) -> Vec6 {
+        let mut d = Vec6::zeros();
+        let o = self.state.dofs.offset[f];
+        for k in 0..self.state.dofs.ndof[f] {
+            d[k] = self.stepper.x[o + k];
+        }
+        d
+    }
+
+    /// A closed contact whose penetration deepened within the step by more than the tolerance:
+    /// a vertex overshot its edge (a time-step problem). A deep but steady penetration is the
+    /// spring's compliance (a penalty problem) and is reported, not cut.
+    pub(super) fn overshot(&self, c: &Contact) -> bool {
+        let deepened = -c.gap - (-c.g0).max(0.0);
+        c.state.is_closed()
+            && deepened > self.params.penetration_ratio * self.max_step_displacement()
+    }
+}

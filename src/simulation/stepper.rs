@@ -1,0 +1,74 @@
+//! Simulation › stepper: what advances the state by one step (the equilibrium system, the
+//! linear and dual solvers with their scratch, the spring parameters, the integrator's
+//! constants, the adaptive time step) and what the steps have counted so far (statistics,
+//! stage timings, refusals). The state it advances is `state.rs`.
+use super::diagnostics::{Stats, StepProfile};
+use super::params::{resolve_penalty, SimParams};
+use super::state::SimState;
+use crate::assembly::contact_springs::SpringParams;
+use crate::assembly::{BlockSystem, Newmark};
+use crate::solve::dual::{DualOutcome, DualSolver};
+use crate::solve::open_close;
+use crate::solve::LinearSolver;
+
+pub(super) struct Stepper {
+    pub(super) springs: SpringParams,
+    pub(super) system: BlockSystem,
+    pub(super) solver: LinearSolver,
+    pub(super) dual: DualSolver,
+    /// Last dual solve (for diagnostics on failure).
+    pub(super) last_dual: Option<DualOutcome>,
+    /// Smallest free block's half size, m (length scale of tolerances).
+    pub(super) smallest_free_block: f64,
+    /// The increments of the step's last solve (scratch of the solvers).
+    pub(super) x: Vec<f64>,
+    pub(super) newmark: Newmark,
+    /// Current (adaptive) time step, s.
+    pub(super) dt: f64,
+    pub(super) stats: Stats,
+    pub(super) profile: StepProfile,
+    /// Why the open–close loop iterated (diagnostics).
+    pub(super) changes: open_close::ChangeCounts,
+    /// Buffers of the open–close loop kept across steps.
+    pub(super) open_close_scratch: open_close::OpenCloseScratch,
+    /// Step attempts refused, by reason: [contact solve not converged, a block moved beyond
+    /// the step limit, a contact overshot, a step-control bound (impact location or local
+    /// error)]; each led to a time-step cut or the run's end.
+    pub(super) refusals: [u64; 4],
+}
+
+impl Stepper {
+    /// The stepper for `state`'s scene: springs from the resolved penalty, the scene's
+    /// integrator and time step.
+    pub(super) fn new(state: &SimState, params: &SimParams) -> Self {
+        let scene = &state.scene;
+        let smallest_free_block = state.smallest_free_block();
+        let penalty = resolve_penalty(scene);
+        let newmark = Newmark::of(scene.control.integrator);
+        let springs = SpringParams {
+            normal: penalty,
+            shear: penalty * params.shear_ratio,
+            gap_tolerance: params.gap_tolerance_ratio * smallest_free_block,
+            release_weight: (1.0 - newmark.gamma) / newmark.gamma,
+        };
+        Self {
+            springs,
+            system: BlockSystem::default(),
+            solver: LinearSolver::new(params.solver),
+            dual: DualSolver::new(params.dual),
+            last_dual: None,
+            smallest_free_block,
+            x: Vec::new(),
+            newmark,
+            dt: scene.control.time_step,
+            stats: Stats {
+                min_dt: f64::INFINITY,
+                ..Default::default()
+            },
+            profile: StepProfile::default(),
+            changes: Default::default(),
+            open_close_scratch: Default::default(),
+            refusals: [0; 4],
+        }
+    }
+}
