@@ -17,11 +17,10 @@
 //! searched range under a uniform prior. The product assumes the observations independent given
 //! the PGA (not one record shared by every structure); the per-record intervals assume that.
 use super::fragility::{fit_interval, probability, Capacity, FitParams, Fragility};
-use super::pga::{record_error, search, Combine, Criterion, PgaRequest};
+use super::pga::{search, Combine, Criterion, PgaRequest};
 use super::run::{RunError, RunOptions};
 use crate::motion::GroundMotion;
 use crate::scene::Scene;
-use rayon::prelude::*;
 use serde::Serialize;
 
 /// One field observation: the criterion and whether the damage it describes was seen.
@@ -411,30 +410,12 @@ pub fn site_analysis(
             "records: at least one is required".into(),
         ));
     }
-    let parts = std::sync::Mutex::new(vec![0.0f64; records.len()]);
-    let intervals: Vec<RecordInterval> = records
-        .par_iter()
-        .enumerate()
-        .map(|(i, (name, gm))| {
-            let progress = |p: f64| {
-                if let (Some(report), Ok(mut parts)) = (opts.progress, parts.lock()) {
-                    parts[i] = p;
-                    report(parts.iter().sum::<f64>() / parts.len() as f64);
-                }
-            };
-            let sub = RunOptions {
-                cancel: opts.cancel,
-                progress: Some(&progress),
-                ..Default::default()
-            };
-            site_interval(scene, gm, observations, base, &sub)
-                .map(|interval| RecordInterval {
-                    record: name.clone(),
-                    interval,
-                })
-                .map_err(|e| record_error(name, e))
+    let intervals = super::pga::for_each_record(records, opts, |name, gm, sub| {
+        site_interval(scene, gm, observations, base, sub).map(|interval| RecordInterval {
+            record: name.to_string(),
+            interval,
         })
-        .collect::<Result<_, _>>()?;
+    })?;
     let plain: Vec<SiteInterval> = intervals.iter().map(|r| r.interval.clone()).collect();
     let distribution = distribution(
         &criterion_records(observations, &plain),

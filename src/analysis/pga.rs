@@ -669,8 +669,25 @@ pub fn search_records(
     opts: &RunOptions,
 ) -> Result<MultiResult, RunError> {
     validate_records(scene, records, req)?;
+    let results = for_each_record(records, opts, |name, gm, sub| {
+        search(scene, gm, req, sub).map(|result| RecordResult {
+            motion: name.to_string(),
+            result,
+        })
+    })?;
+    Ok(multi_result(results, req, method))
+}
+
+/// `f` over every record in parallel, each with its own [`RunOptions`] whose progress feeds the
+/// caller's as the mean of the records' progress (the caller's cancel flag is shared); a record's
+/// error names the record ([`record_error`]). Results keep the records' order.
+pub fn for_each_record<T: Send>(
+    records: &[(String, GroundMotion)],
+    opts: &RunOptions,
+    f: impl Fn(&str, &GroundMotion, &RunOptions) -> Result<T, RunError> + Sync,
+) -> Result<Vec<T>, RunError> {
     let parts = std::sync::Mutex::new(vec![0.0f64; records.len()]);
-    let results: Vec<RecordResult> = records
+    records
         .par_iter()
         .enumerate()
         .map(|(i, (name, gm))| {
@@ -685,15 +702,9 @@ pub fn search_records(
                 progress: Some(&progress),
                 ..Default::default()
             };
-            search(scene, gm, req, &sub)
-                .map(|result| RecordResult {
-                    motion: name.clone(),
-                    result,
-                })
-                .map_err(|e| record_error(name, e))
+            f(name, gm, &sub).map_err(|e| record_error(name, e))
         })
-        .collect::<Result<_, _>>()?;
-    Ok(multi_result(results, req, method))
+        .collect()
 }
 
 /// A record's error in a multi-record search names the record (a cancel stays a cancel).
