@@ -496,7 +496,7 @@ function criterionSkeleton(kind) {
 // A block id offered by a click on the drawing or the select: into the JSON criterion at the
 // cursor (as a JSON string) when that is the criterion in use, else as the criterion's block.
 function offerBlock(id) {
-  if ($("criterion-kind").value === "json" && !$("pga-fields").hidden) {
+  if ($("criterion-kind").value === "json" && !$("criterion-box").hidden) {
     const t = $("criterion-json");
     const text = JSON.stringify(id);
     const at = t.selectionStart ?? t.value.length, end = t.selectionEnd ?? at;
@@ -777,6 +777,12 @@ async function onSubmit(ev) {
     url = "/v1/jobs";
     body = { scene };
     if (motions[0]) body.motion = motions[0];
+    // Optional: the finished run's summary then says whether the criterion was met.
+    if ($("run-judge").checked) {
+      const criterion = currentCriterion();
+      if (criterion === null) return;
+      body.criterion = criterion;
+    }
   } else {
     url = "/v1/pga-searches";
     const criterion = currentCriterion();
@@ -1184,8 +1190,16 @@ function renderSummary(j) {
     el("td", { class: "num", text: fmt(b.sliding_distance) }),
     el("td", { text: b.toppled ? "yes" : "no" })));
   const table = el("table", { class: "peaks" }, el("thead", {}, head), el("tbody", {}, ...rows));
+  // The verdicts of the criteria the run was submitted with (summary.criteria, docs/web.md).
+  const verdicts = Array.isArray(s.criteria) && s.criteria.length
+    ? el("table", { class: "peaks criteria", id: "criteria" },
+      el("thead", {}, el("tr", {}, el("th", { scope: "col", text: "Damage criterion" }), el("th", { scope: "col", text: "On this run" }))),
+      el("tbody", {}, ...s.criteria.map((c) => el("tr", { "data-met": String(Boolean(c.met)) },
+        el("td", {}, el("code", { text: c.criterion })),
+        el("td", {}, el("span", { class: `badge ${c.met ? "met" : "not-met"}`, text: c.met ? "met" : "not met" }))))))
+    : null;
   const diag = s.diagnostics ? el("p", { class: "info", text: "Diagnostics: " + Object.entries(s.diagnostics).map(([k, v]) => `${k.replace(/_/g, " ")} ${typeof v === "number" ? fmt(v) : JSON.stringify(v)}`).join(" · ") }) : null;
-  box.replaceChildren(facts, table, diag || "");
+  box.replaceChildren(facts, verdicts || "", table, diag || "");
 }
 
 function renderDownloads(j) {
@@ -1304,7 +1318,12 @@ function syncVisibility() {
   document.querySelector('label[for="scale-units"]').hidden = mode !== "pga";
   const site = radio("analysis") === "site";
   const pga = radio("analysis") === "pga" || site;
+  const run = radio("analysis") === "run";
   $("pga-fields").hidden = !pga;
+  $("pga-info").hidden = !pga;
+  $("run-judge-row").hidden = !run;
+  // One criterion builder: a search's or site's criterion, or the one a single run is judged by.
+  $("criterion-box").hidden = !(pga || (run && $("run-judge").checked));
   $("site-box").hidden = !site;
   // A PGA search scales the record itself: no scale of its own.
   $("scale-mode-row").hidden = pga;
@@ -1348,6 +1367,7 @@ async function init() {
     r.addEventListener("change", () => { syncVisibility(); scheduleInspect(); });
   }
   $("criterion-kind").addEventListener("change", syncVisibility);
+  $("run-judge").addEventListener("change", syncVisibility);
   $("job-form").addEventListener("submit", onSubmit);
   $("obs-add-fell").addEventListener("click", () => addObservation(true));
   $("obs-add-stood").addEventListener("click", () => addObservation(false));

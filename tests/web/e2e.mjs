@@ -263,8 +263,10 @@ try {
   await check("summary: failure mode and per-block peaks", async () => {
     const mode = await page.textContent("#failure-mode");
     assert(["stable", "sliding", "toppling", "sliding_toppling", "collapse", "undecided"].includes(mode), `mode ${mode}`);
-    const peaks = await page.textContent("#summary table");
+    const peaks = await page.textContent("#summary table.peaks:not(.criteria)");
     assert(peaks.includes("column"), peaks);
+    // Submitted without a criterion: no verdicts shown.
+    assert((await page.$("#criteria")) === null, "verdicts shown for a run submitted without a criterion");
   });
 
   await check("time slider and play/pause", async () => {
@@ -695,6 +697,69 @@ try {
     await page.selectOption("#criterion-kind", "toppled");
     await page.check('input[name="analysis"][value="run"]');
     await page.fill("#duration", "");
+  });
+
+  await check("a single run judged by a damage criterion: the control in run mode, `criterion` sent, met / not met shown", async () => {
+    // docs/observations.md: under the 1 s half-sine pulse, column A of examples/two-columns.json
+    // topples from 5.64 m/s² (Housner's amplitude, independent RK4 in tests/engine/rocking.rs) and
+    // B stands up to 8.60 m/s². At 7 m/s², A falls and B stands (`ashlar run --criterion` agrees).
+    const scene = readFileSync(new URL("../../examples/two-columns.json", import.meta.url));
+    await page.setInputFiles("#scene-file", { name: "two-columns.json", mimeType: "application/json", buffer: scene });
+    await page.waitForFunction(() => /^two-columns\.json: .*\(2 free\)/.test(document.getElementById("scene-info").textContent), null, { timeout: 10000 });
+    // (isHidden is also true of an element that is not there.)
+    assert((await page.$("#run-judge")) !== null && (await page.$("#criterion-box")) !== null, "the page has no run criterion control");
+    await page.check('input[name="analysis"][value="pga"]');
+    assert(await page.isHidden("#run-judge-row"), "the run's criterion control is offered in a PGA search");
+    await page.check('input[name="analysis"][value="run"]');
+    assert(!(await page.isHidden("#run-judge-row")), "no criterion control in run mode");
+    assert(await page.isHidden("#criterion-box"), "the criterion builder shows before the run is to be judged");
+    await page.check("#run-judge");
+    assert(!(await page.isHidden("#criterion-box")), "the criterion builder does not show when the run is to be judged");
+    await page.check('input[name="motion-source"][value="pulse"]');
+    await page.selectOption("#pulse-shape", "sine");
+    await page.fill("#pulse-amplitude", "7");
+    await page.selectOption("#pulse-units", "m/s2");
+    await page.fill("#pulse-period", "1");
+    await page.fill("#pulse-cycles", "0.5");
+    await page.check('input[name="scale-mode"][value="none"]');
+    const judged = async (expect) => {
+      const sent = page.waitForRequest((r) => r.url().endsWith("/v1/jobs") && r.method() === "POST", { timeout: 20000 });
+      const prev = ((await page.textContent("#submit-status")).match(/Queued run (\w+)/) || [])[1];
+      await page.click("#submit-button");
+      const body = (await sent).postDataJSON();
+      assert(body.criterion === expect.criterion && body.motion.horizontal.pulse.amplitude === 7, `sent: ${JSON.stringify({ criterion: body.criterion, motion: body.motion })}`);
+      await page.waitForFunction((prev) => { const m = document.getElementById("submit-status").textContent.match(/Queued run (\w+)/); return m && m[1] !== prev; }, prev, { timeout: 20000 });
+      const id = (await page.textContent("#submit-status")).match(/Queued run (\w+)/)[1];
+      await page.waitForFunction((id) => new RegExp(`Run ${id}: succeeded`).test(document.getElementById("result-head").textContent) && !document.getElementById("run-view").hidden, id, { timeout: 180000 });
+      const rows = await page.$$eval("#criteria tbody tr", (rs) => rs.map((r) => [r.querySelector("code").textContent, r.querySelector(".badge").textContent, r.dataset.met]));
+      // The service gives a criterion back in its own text form (compact JSON for a damage object).
+      const want = [[expect.shown, expect.met ? "met" : "not met", String(expect.met)]];
+      assert(JSON.stringify(rows) === JSON.stringify(want), `shown ${JSON.stringify(rows)}, want ${JSON.stringify(want)}`);
+      // What the page shows is the stored summary, and agrees with the per-block table.
+      const job = await (await fetch(`${base}/v1/jobs?kind=run&limit=1`)).json();
+      const s = job.jobs[0].summary;
+      assert(job.jobs[0].id.startsWith(id) && JSON.stringify(s.criteria) === JSON.stringify([{ criterion: expect.shown, met: expect.met }]), `stored: ${JSON.stringify(s.criteria)}`);
+      const toppled = Object.fromEntries(s.blocks.map((b) => [b.id, b.toppled]));
+      assert(toppled.A === true && toppled.B === false, `A and B at 7 m/s²: ${JSON.stringify(toppled)}`);
+      console.log(`     ${expect.criterion}: ${rows[0][1]} (run ${id}, failure mode ${s.failure_mode})`);
+    };
+    // A by a click on the drawing (toppled:A): met.
+    await page.selectOption("#criterion-kind", "toppled");
+    await page.click('#scene-svg polygon[data-id="A"]');
+    await judged({ criterion: "toppled:A", shown: "toppled:A", met: true });
+    // B as a JSON damage criterion, its id inserted from the drawing: not met.
+    await page.selectOption("#criterion-kind", "json");
+    await page.fill("#criterion-json", '{"kind": "fallen", "blocks": [');
+    await page.focus("#criterion-json");
+    await page.keyboard.press("End");
+    await page.click('#scene-svg polygon[data-id="B"]');
+    await page.focus("#criterion-json");
+    await page.keyboard.press("End");
+    await page.keyboard.type("]}");
+    await judged({ criterion: '{"kind": "fallen", "blocks": ["B"]}', shown: '{"kind":"fallen","blocks":["B"]}', met: false });
+    await page.selectOption("#criterion-kind", "toppled");
+    await page.uncheck("#run-judge");
+    assert(await page.isHidden("#criterion-box"), "the criterion builder stays after unticking");
   });
 
   if (baseTokens && token) {
