@@ -84,16 +84,7 @@ async fn site_criteria_as_objects_are_accepted_and_every_missing_block_is_named(
 /// tests/engine/rocking.rs): at 7 m/s², 1.4 m/s² clear of both, A falls and B stands.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_runs_criteria_are_judged_on_its_summary() {
-    use ashlar::service::{analysis_runner, app, Service, ServiceConfig, WorkerParams};
-    let dir = temp_dir("run-criteria");
-    let mut cfg = ServiceConfig::new(&dir);
-    cfg.workers = WorkerParams {
-        workers: 1,
-        idle_poll: Duration::from_millis(50),
-        ..WorkerParams::default()
-    };
-    let svc = Service::start(cfg, analysis_runner()).expect("start");
-    let router = app(svc.state());
+    let (svc, router, dir) = start_analysis("run-criteria", ashlar::service::Limits::default());
     let read = |name: &str| -> serde_json::Value {
         let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(name);
         serde_json::from_str(&std::fs::read_to_string(p).expect("read")).expect("json")

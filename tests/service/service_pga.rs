@@ -4,23 +4,12 @@
 //! cancellable and stops promptly; bad multi-record requests are 422 problems naming the field.
 use crate::service_support;
 
-use ashlar::service::{analysis_runner, app, Limits, Service, ServiceConfig, WorkerParams};
 use serde_json::{json, Value};
 use service_support::*;
 use std::time::{Duration, Instant};
 
-fn start(tag: &str) -> (Service, axum::Router, std::path::PathBuf) {
-    let dir = temp_dir(tag);
-    let mut cfg = ServiceConfig::new(&dir);
-    cfg.limits = Limits::default();
-    cfg.workers = WorkerParams {
-        workers: 1,
-        idle_poll: Duration::from_millis(50),
-        ..WorkerParams::default()
-    };
-    let svc = Service::start(cfg, analysis_runner()).expect("start");
-    let router = app(svc.state());
-    (svc, router, dir)
+fn start(tag: &str) -> (ashlar::service::Service, axum::Router, std::path::PathBuf) {
+    start_analysis(tag, ashlar::service::Limits::default())
 }
 
 fn rigid_column(duration: f64) -> Value {
@@ -157,20 +146,7 @@ async fn a_running_multi_record_search_is_cancellable() {
     // 60 s of simulation per run: long enough to be caught running.
     let mut body = multi_body(60.0);
     body["tolerance"] = json!(0.001);
-    let r = call(&app, post_json("/v1/pga-searches", &body)).await;
-    assert_eq!(r.status, 202, "{}", r.text());
-    let id = r.json()["id"].as_str().expect("id").to_string();
-    let uri = format!("/v1/pga-searches/{id}");
-    wait_for(&app, &uri, Duration::from_secs(60), |j| {
-        j["status"] == "running" || is_terminal(j)
-    })
-    .await;
-    let c = call(
-        &app,
-        post_raw(&format!("{uri}/cancel"), "application/json", ""),
-    )
-    .await;
-    assert!(matches!(c.status, 200 | 202), "{}", c.text());
+    let uri = submit_and_cancel_when_running(&app, "/v1/pga-searches", &body).await;
     let t = Instant::now();
     let j = wait_for(&app, &uri, Duration::from_secs(30), is_terminal).await;
     assert_eq!(j["status"], "cancelled", "{j}");

@@ -8,23 +8,13 @@ use crate::service_support;
 
 use ashlar::analysis::observations::{site_analysis, Observation};
 use ashlar::analysis::pga::{Combine, Criterion, PgaRequest};
-use ashlar::service::{analysis_runner, app, Limits, Service, ServiceConfig, WorkerParams};
+use ashlar::service::{Limits, Service};
 use serde_json::{json, Value};
 use service_support::*;
 use std::time::Duration;
 
 fn start(tag: &str, limits: Limits) -> (Service, axum::Router, std::path::PathBuf) {
-    let dir = temp_dir(tag);
-    let mut cfg = ServiceConfig::new(&dir);
-    cfg.limits = limits;
-    cfg.workers = WorkerParams {
-        workers: 1,
-        idle_poll: Duration::from_millis(50),
-        ..WorkerParams::default()
-    };
-    let svc = Service::start(cfg, analysis_runner()).expect("start");
-    let router = app(svc.state());
-    (svc, router, dir)
+    start_analysis(tag, limits)
 }
 
 /// The bundled two columns (A slender, B stocky; docs/observations.md), `duration` s a run.
@@ -190,20 +180,7 @@ async fn a_running_site_analysis_is_cancellable() {
     let (svc, app, dir) = start("site-cancel", Limits::default());
     let mut b = body(60.0);
     b["tolerance"] = json!(0.001);
-    let r = call(&app, post_json("/v1/site-analyses", &b)).await;
-    assert_eq!(r.status, 202, "{}", r.text());
-    let id = r.json()["id"].as_str().expect("id").to_string();
-    let uri = format!("/v1/site-analyses/{id}");
-    wait_for(&app, &uri, Duration::from_secs(60), |j| {
-        j["status"] == "running" || is_terminal(j)
-    })
-    .await;
-    let c = call(
-        &app,
-        post_raw(&format!("{uri}/cancel"), "application/json", ""),
-    )
-    .await;
-    assert!(matches!(c.status, 200 | 202), "{}", c.text());
+    let uri = submit_and_cancel_when_running(&app, "/v1/site-analyses", &b).await;
     let j = wait_for(&app, &uri, Duration::from_secs(60), is_terminal).await;
     assert_eq!(j["status"], "cancelled", "{j}");
     assert!(j["result"].is_null(), "{j}");

@@ -348,3 +348,48 @@ pub fn start_fake(tag: &str) -> (ashlar::service::Service, axum::Router, PathBuf
     let router = app(svc.state());
     (svc, router, dir)
 }
+
+/// A service in a fresh temporary directory with one worker running the real engine
+/// (`analysis_runner`, polling every 50 ms) under `limits`, and its router: for tests of what
+/// a job computes.
+pub fn start_analysis(
+    tag: &str,
+    limits: ashlar::service::Limits,
+) -> (ashlar::service::Service, axum::Router, PathBuf) {
+    use ashlar::service::{analysis_runner, app, Service, ServiceConfig, WorkerParams};
+    let dir = temp_dir(tag);
+    let mut cfg = ServiceConfig::new(&dir);
+    cfg.limits = limits;
+    cfg.workers = WorkerParams {
+        workers: 1,
+        idle_poll: Duration::from_millis(50),
+        ..WorkerParams::default()
+    };
+    let svc = Service::start(cfg, analysis_runner()).expect("start");
+    let router = app(svc.state());
+    (svc, router, dir)
+}
+
+/// Submit `body` to `collection` (e.g. `/v1/pga-searches`), wait until the job runs (or has
+/// already ended), and ask to cancel it (200 or 202). Returns the job's URI.
+pub async fn submit_and_cancel_when_running(
+    app: &axum::Router,
+    collection: &str,
+    body: &Value,
+) -> String {
+    let r = call(app, post_json(collection, body)).await;
+    assert_eq!(r.status, 202, "{}", r.text());
+    let id = r.json()["id"].as_str().expect("id").to_string();
+    let uri = format!("{collection}/{id}");
+    wait_for(app, &uri, Duration::from_secs(60), |j| {
+        j["status"] == "running" || is_terminal(j)
+    })
+    .await;
+    let c = call(
+        app,
+        post_raw(&format!("{uri}/cancel"), "application/json", ""),
+    )
+    .await;
+    assert!(matches!(c.status, 200 | 202), "{}", c.text());
+    uri
+}
