@@ -141,16 +141,15 @@ impl ArtifactStore {
         })
     }
 
+    /// `<prefix>/jobs/<tail…>`: where every job's artifacts live.
+    fn under_jobs(&self, tail: &[&str]) -> StorePath {
+        let parts = self.prefix.parts().map(|p| p.as_ref().to_string());
+        let tail = std::iter::once("jobs").chain(tail.iter().copied());
+        StorePath::from_iter(parts.chain(tail.map(String::from)))
+    }
+
     fn location(&self, id: Uuid, name: &str) -> StorePath {
-        let mut parts: Vec<String> = self
-            .prefix
-            .parts()
-            .map(|p| p.as_ref().to_string())
-            .collect();
-        parts.push("jobs".into());
-        parts.push(id.hyphenated().to_string());
-        parts.push(name.to_string());
-        StorePath::from_iter(parts)
+        self.under_jobs(&[&id.hyphenated().to_string(), name])
     }
 
     /// Upload the artifacts found in a job's directory (blocking; worker threads).
@@ -179,13 +178,7 @@ impl ArtifactStore {
     /// Bytes of every job's published artifacts (one listing of `<prefix>/jobs/`; blocking).
     pub fn total_bytes(&self) -> Result<u64, String> {
         use futures_util::TryStreamExt;
-        let mut parts: Vec<String> = self
-            .prefix
-            .parts()
-            .map(|p| p.as_ref().to_string())
-            .collect();
-        parts.push("jobs".into());
-        let jobs = StorePath::from_iter(parts);
+        let jobs = self.under_jobs(&[]);
         runtime()?
             .block_on(
                 self.store
