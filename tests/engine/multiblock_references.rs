@@ -44,6 +44,18 @@ fn rocking_acc(p2: f64, alpha: f64, s: f64, th: f64, ag: f64) -> f64 {
     -p2 * (s * (alpha - s * th).sin() - ag / G * (alpha - s * th).cos())
 }
 
+/// One classical RK4 step of θ̈ = f(t, θ) from (θ, θ̇) at t over h: the new (θ, θ̇).
+fn rk4_step(f: impl Fn(f64, f64) -> f64, t: f64, th: f64, w: f64, h: f64) -> (f64, f64) {
+    let (k1t, k1w) = (w, f(t, th));
+    let (k2t, k2w) = (w + 0.5 * h * k1w, f(t + 0.5 * h, th + 0.5 * h * k1t));
+    let (k3t, k3w) = (w + 0.5 * h * k2w, f(t + 0.5 * h, th + 0.5 * h * k2t));
+    let (k4t, k4w) = (w + h * k3w, f(t + h, th + h * k3t));
+    (
+        th + h / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t),
+        w + h / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w),
+    )
+}
+
 /// Yagoda-Biran & Hatzor's half-sine pulse a(t) = A sin(2πt), 0 ≤ t ≤ 0.5 s.
 fn pulse_fn(a: f64) -> impl Fn(f64) -> f64 {
     move |t: f64| {
@@ -93,13 +105,7 @@ fn rock_from_rest(
             }
             continue;
         }
-        let f = |t: f64, th: f64| rocking_acc(p2, alpha, s, th, ag(t));
-        let (k1t, k1w) = (w, f(t, th));
-        let (k2t, k2w) = (w + 0.5 * h * k1w, f(t + 0.5 * h, th + 0.5 * h * k1t));
-        let (k3t, k3w) = (w + 0.5 * h * k2w, f(t + 0.5 * h, th + 0.5 * h * k2t));
-        let (k4t, k4w) = (w + h * k3w, f(t + h, th + h * k3t));
-        th += h / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t);
-        w += h / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
+        (th, w) = rk4_step(|t, th| rocking_acc(p2, alpha, s, th, ag(t)), t, th, w, h);
         t += h;
         if s * th < 0.0 {
             return Outcome::Lands(t);
@@ -815,13 +821,7 @@ fn column_record_reference(
                 continue;
             }
         }
-        let f = |t: f64, th: f64| rocking_acc(p2, alpha, s, th, ag(t));
-        let (k1t, k1w) = (w, f(t, th));
-        let (k2t, k2w) = (w + 0.5 * h * k1w, f(t + 0.5 * h, th + 0.5 * h * k1t));
-        let (k3t, k3w) = (w + 0.5 * h * k2w, f(t + 0.5 * h, th + 0.5 * h * k2t));
-        let (k4t, k4w) = (w + h * k3w, f(t + h, th + h * k3t));
-        let nth = th + h / 6.0 * (k1t + 2.0 * k2t + 2.0 * k3t + k4t);
-        let nw = w + h / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
+        let (nth, nw) = rk4_step(|t, th| rocking_acc(p2, alpha, s, th, ag(t)), t, th, w, h);
         if nth * s < 0.0 {
             th = 0.0;
             w = nw * r;
