@@ -97,16 +97,7 @@ async fn a_runs_criteria_are_judged_on_its_summary() {
         {"kind": "not", "of": {"kind": "fallen", "blocks": ["B"]}}
     ]);
     let body = json!({"scene": read("examples/two-columns.json"), "motion": motion, "criterion": criteria});
-    let r = call(&router, post_json("/v1/jobs", &body)).await;
-    assert_eq!(r.status, 202, "{}", r.text());
-    let id = r.json()["id"].as_str().expect("id").to_string();
-    let j = wait_for(
-        &router,
-        &format!("/v1/jobs/{id}"),
-        Duration::from_secs(300),
-        is_terminal,
-    )
-    .await;
+    let (_, j) = submit_and_wait(&router, "/v1/jobs", &body, Duration::from_secs(300)).await;
     assert_eq!(j["status"], "succeeded", "{j}");
     let got: Vec<(String, bool)> = j["summary"]["criteria"]
         .as_array()
@@ -136,16 +127,7 @@ async fn a_runs_criteria_are_judged_on_its_summary() {
     let mut plain = body.clone();
     plain.as_object_mut().expect("o").remove("criterion");
     plain["scene"]["control"]["duration"] = json!(0.1);
-    let r = call(&router, post_json("/v1/jobs", &plain)).await;
-    assert_eq!(r.status, 202, "{}", r.text());
-    let id = r.json()["id"].as_str().expect("id").to_string();
-    let j = wait_for(
-        &router,
-        &format!("/v1/jobs/{id}"),
-        Duration::from_secs(120),
-        is_terminal,
-    )
-    .await;
+    let (_, j) = submit_and_wait(&router, "/v1/jobs", &plain, Duration::from_secs(120)).await;
     assert!(j["summary"].get("criteria").is_none(), "{j}");
     let mut bad = body;
     bad["criterion"] = json!(["toppled:A", "toppled:base"]);

@@ -206,11 +206,8 @@ async fn bad_multi_record_requests_name_the_field() {
         "scene": rigid_column(1.0), "motion": pulse(1.0), "criterion": "toppled:column",
         "range": {"min": 1.0, "max": 9.0}, "tolerance": 4.0, "scan_points": 2
     });
-    let r = call(&app, post_json("/v1/pga-searches", &single)).await;
-    assert_eq!(r.status, 202, "{}", r.text());
-    let id = r.json()["id"].as_str().expect("id").to_string();
-    let uri = format!("/v1/pga-searches/{id}");
-    let j = wait_for(&app, &uri, Duration::from_secs(60), is_terminal).await;
+    let (uri, j) =
+        submit_and_wait(&app, "/v1/pga-searches", &single, Duration::from_secs(60)).await;
     assert_eq!(j["status"], "succeeded", "{j}");
     let svg = call(&app, get(&format!("{uri}/fragility.svg"))).await;
     let p = svg.problem(409);
@@ -236,16 +233,7 @@ async fn the_default_model_is_auto_and_the_summary_says_which_ran() {
             scene["control"]["model"] = json!(m);
         }
         let body = json!({ "scene": scene, "motion": pulse(2.0) });
-        let r = call(&app, post_json("/v1/jobs", &body)).await;
-        assert_eq!(r.status, 202, "{}", r.text());
-        let id = r.json()["id"].as_str().expect("id").to_string();
-        let j = wait_for(
-            &app,
-            &format!("/v1/jobs/{id}"),
-            Duration::from_secs(120),
-            is_terminal,
-        )
-        .await;
+        let (_, j) = submit_and_wait(&app, "/v1/jobs", &body, Duration::from_secs(120)).await;
         assert_eq!(j["status"], "succeeded", "{j}");
         ran.push((
             j["summary"]["model"].as_str().unwrap_or("").to_string(),

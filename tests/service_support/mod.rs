@@ -393,3 +393,19 @@ pub async fn submit_and_cancel_when_running(
     assert!(matches!(c.status, 200 | 202), "{}", c.text());
     uri
 }
+
+/// Submit `body` to `collection` (202 asserted) and wait up to `timeout` for the job to end.
+/// Returns the job's URI and its final JSON.
+pub async fn submit_and_wait(
+    app: &axum::Router,
+    collection: &str,
+    body: &Value,
+    timeout: Duration,
+) -> (String, Value) {
+    let r = call(app, post_json(collection, body)).await;
+    assert_eq!(r.status, 202, "{}", r.text());
+    let id = r.json()["id"].as_str().expect("id").to_string();
+    let uri = format!("{collection}/{id}");
+    let j = wait_for(app, &uri, timeout, is_terminal).await;
+    (uri, j)
+}
