@@ -63,9 +63,12 @@ pub fn sweep(core: &Core, keep: Duration) -> usize {
         };
         let n = ids.len();
         for id in ids {
+            // Files first, then the record: once a swept job answers 404 its artifacts are
+            // gone (the other order left a window in which a 404 job still had published
+            // files). The job is finished, so only "deleted meanwhile" can refuse the delete.
+            super::routes::remove_artifacts(core, id);
             match core.store.delete(id) {
                 Ok(DeleteOutcome::Deleted) => {
-                    super::routes::remove_artifacts(core, id);
                     deleted += 1;
                 }
                 // Deleted meanwhile by its owner, or by another server's sweeper.
