@@ -255,7 +255,13 @@ def isolation():
     st, _, b = call(i, "POST", "/v1/jobs", {"scene": blocker, "motion": pulse})
     jid = json.loads(b)["id"]
     wait_status(i, f"/v1/jobs/{jid}", {"running"}, 60)
-    kids = i.children()
+    # "running" is recorded before the job's process is spawned: wait for the process to appear
+    # (CI once read the children in between and saw none).
+    kids, deadline = [], time.time() + 30
+    while not kids and time.time() < deadline:
+        kids = i.children()
+        if not kids:
+            time.sleep(0.05)
     i.proc.kill()
     i.proc.wait(10)
     time.sleep(1.0)
