@@ -23,6 +23,9 @@
 //!   fraction of a step early, before the fall to the impact, and the height still to fall
 //!   was lost in a second, slow landing: five impacts at Δt = 1 ms were 7.6–9.4 % of the
 //!   peak off Housner's history (docs/restitution.md);
+//! - contacts that land later within the step of an impact join it (one impulse set; each
+//!   lands at the step's end, `ImpactParams::group_landings`): a rocking frame's two columns
+//!   land a fraction of a step apart, and stopped one at a time they parted;
 //! - the contacts involved are the impacting ones and every closed contact of the blocks they
 //!   touch (e.g. the pivot a rocking column leaves);
 //! - normal impulses pₙ ≥ 0 and friction impulses |pₜ| ≤ tanφ·pₙ on the blocks' rigid-body
@@ -66,6 +69,17 @@ pub struct ImpactParams {
     /// half the time, and the contact then takes part of the impact (five-impact history
     /// 3.7–4.2 % of peak instead of 2.2–2.6 % with ½·`window`, docs/restitution.md).
     pub margin: f64,
+    /// Contacts that land later within the step of an impact (open, approaching faster than
+    /// the settling threshold, predicted to close within Δt) join that impact: one impulse set
+    /// for all, each later contact given ġ⁺ = −2 g0/Δt so that it lands at the step's end, and
+    /// no located step for them afterwards. Why: the two columns of a rocking frame land a
+    /// fraction of a step apart (0.1–0.3 Δt under Loma Prieta 0.6 g); taken one at a time,
+    /// each landing stopped one column while the cap and the other column flew on, every such
+    /// impact left the columns' rotations further apart (1e-4 rad by 4.9 s), and the frame's
+    /// one degree of freedom split: the columns parted by 0.11 rad and the peak was −28.6 %
+    /// off Makris–Vassiliou's (docs/impacts-and-multiblock.md). `false` restores the old law
+    /// (for diagnosis).
+    pub group_landings: bool,
 }
 
 impl Default for ImpactParams {
@@ -76,6 +90,7 @@ impl Default for ImpactParams {
             slow_factor: 2.0,
             window: 0.01,
             margin: 1e-4,
+            group_landings: true,
         }
     }
 }
@@ -189,17 +204,21 @@ fn impact_time(
 }
 
 /// The first impact after the window at the step start ([`ImpactParams::window`]), s from the
-/// step start, if one falls within the next two steps.
+/// step start, if one falls within the next two steps. Contacts flagged in `landing` (they
+/// joined this step's impact, [`apply_impacts`]) are skipped: they land at the step's end.
 pub fn next_impact(
     input: &ImpactInput,
     contacts: &[Contact],
     states: &[BlockState],
     params: &ImpactParams,
+    landing: &[bool],
 ) -> Option<f64> {
     let window = params.window * input.dt;
     contacts
         .iter()
-        .filter_map(|c| impact_time(input, c, states, params))
+        .enumerate()
+        .filter(|(k, _)| !landing.get(*k).copied().unwrap_or(false))
+        .filter_map(|(_, c)| impact_time(input, c, states, params))
         .filter(|&t| t > window)
         .min_by(f64::total_cmp)
 }
@@ -221,9 +240,10 @@ pub fn located_step(
     contacts: &[Contact],
     states: &[BlockState],
     params: &ImpactParams,
+    landing: &[bool],
 ) -> f64 {
     let dt = input.dt;
-    match next_impact(input, contacts, states, params) {
+    match next_impact(input, contacts, states, params, landing) {
         Some(t) if t <= dt => t - params.margin * dt,
         Some(t) if t <= 2.0 * dt => 0.5 * (t - params.margin * dt),
         _ => dt,
@@ -231,14 +251,19 @@ pub fn located_step(
 }
 
 /// Apply the impacts of the step about to be taken to `states` (velocities at the step start).
-/// Returns the number of impacting contacts (0: nothing changed).
+/// Returns the number of impacting contacts (0: nothing changed). `landing` is set, per
+/// contact, to whether it joined the impact from later in the step
+/// ([`ImpactParams::group_landings`]); pass it to [`located_step`].
 pub fn apply_impacts(
     input: &ImpactInput,
     contacts: &[Contact],
     states: &mut [BlockState],
     params: &ImpactParams,
+    landing: &mut Vec<bool>,
 ) -> usize {
     let dofs = input.dofs;
+    landing.clear();
+    landing.resize(contacts.len(), false);
     let velocity = |b: usize, states: &[BlockState]| -> Vec6 {
         match dofs.free_index[b] {
             Some(f) => states[f].vel,
@@ -256,9 +281,20 @@ pub fn apply_impacts(
     // Impacting contacts and the free blocks they touch.
     let mut impacting = vec![false; contacts.len()];
     let mut involved = vec![false; dofs.block_of.len()];
+    let times: Vec<Option<f64>> = contacts
+        .iter()
+        .map(|c| impact_time(input, c, states, params))
+        .collect();
+    let any_now = times.iter().any(|t| t.is_some_and(|t| t <= window));
     for (k, c) in contacts.iter().enumerate() {
-        if impact_time(input, c, states, params).is_some_and(|t| t <= window) {
+        let now = times[k].is_some_and(|t| t <= window);
+        // A later landing within this step joins the impact (`ImpactParams::group_landings`).
+        let later = any_now
+            && params.group_landings
+            && times[k].is_some_and(|t| t > window && t <= input.dt);
+        if now || later {
             impacting[k] = true;
+            landing[k] = later;
             for b in [c.vertex_block, c.edge_block] {
                 if let Some(f) = dofs.free_index[b] {
                     involved[f] = true;

@@ -97,11 +97,13 @@ impl Simulation {
             nominal_dt: self.state.scene.control.time_step,
             gravity: self.state.scene.gravity,
         };
+        let mut landing = Vec::new();
         let n = apply_impacts(
             &input,
             &self.state.contacts.contacts,
             &mut self.state.states,
             &self.params.impact,
+            &mut landing,
         );
         self.stepper.stats.impacts += n as u64;
         located_step(
@@ -109,6 +111,7 @@ impl Simulation {
             &self.state.contacts.contacts,
             &self.state.states,
             &self.params.impact,
+            &landing,
         )
     }
 

@@ -12,6 +12,7 @@ mod regression_pga_range;
 mod regression_phantom_penetration;
 mod regression_reported_controls;
 mod regression_sigterm_after_listening;
+mod regression_simultaneous_landings;
 mod regression_soft_penalty;
 mod regression_step_limit_diagnostic;
 mod regression_trapezoidal_release;
