@@ -5,7 +5,7 @@
 //! Prints one line per (column, record, PGA, control): peak |θ|, fell, error against Housner
 //! and against the converged run, steps, cuts, wall time.
 //! Run: `cargo run --release --example records_dt -- [records…]` (default: Friuli only);
-//! `ASHLAR_LEVELS="0.3 0.5"` picks the PGA levels (g), `ASHLAR_BLOCK=rigid` the block model.
+//! `ASHLAR_LEVELS="0.3 0.5"` picks the PGA levels (g), `ASHLAR_BLOCK=rigid` the block model, `ASHLAR_COLUMNS="0"` the column.
 use ashlar::analysis::study_records::{self as sr, COLUMNS};
 use ashlar::simulation::SimParams;
 use serde_json::json;
@@ -25,12 +25,14 @@ fn main() {
         .filter_map(|s| s.parse().ok())
         .collect();
     let block = std::env::var("ASHLAR_BLOCK").unwrap_or_else(|_| "deformable".into());
-    // ASHLAR_VARIANTS: comma-separated list of `old` (the step control before the
-    // impact location existed), `new` (the defaults), `imp:R` (impact_approach_ratio R), `rot:R`
+    // ASHLAR_VARIANTS: comma-separated list of `old` (the defaults before the rocking step
+    // control, `SimParams::rocking_velocity_change` off), `new` (the defaults), `rock:C` (the
+    // rocking control at C), `trap` (the trapezoidal integrator, rocking control off), `imp:R` (impact_approach_ratio R), `rot:R`
     // (max_rotation_step R rad, no impact location), `dt:S` (time_step S, no impact location).
     let spec = std::env::var("ASHLAR_VARIANTS").unwrap_or_else(|_| "old,new".into());
     let no_impact = SimParams {
         impact_approach_ratio: None,
+        rocking_velocity_change: None,
         ..SimParams::default()
     };
     let variants: Vec<(String, serde_json::Value, SimParams)> = spec
@@ -47,6 +49,17 @@ fn main() {
                 (json!({}), no_impact)
             } else if v == "new" {
                 (json!({}), SimParams::default())
+            } else if v == "trap" {
+                (json!({ "integrator": "trapezoidal" }), no_impact)
+            } else if v.starts_with("rock:") {
+                let r = num("rock:");
+                (
+                    json!({}),
+                    SimParams {
+                        rocking_velocity_change: Some(r),
+                        ..SimParams::default()
+                    },
+                )
             } else if v.starts_with("imp:") {
                 let r = num("imp:");
                 (
@@ -100,7 +113,13 @@ fn main() {
         ..SimParams::default()
     };
     println!("column | record | PGA g | control | peak rad | fell | err vs Housner | err vs dt=1e-4 | steps | cuts | wall s");
-    for col in &COLUMNS {
+    // ASHLAR_COLUMNS="0" or "1" picks one of the two columns (default both).
+    let columns: Vec<usize> = std::env::var("ASHLAR_COLUMNS")
+        .unwrap_or_else(|_| "0 1".into())
+        .split_whitespace()
+        .filter_map(|s| s.parse().ok())
+        .collect();
+    for col in columns.iter().map(|&i| &COLUMNS[i]) {
         for rec in &records {
             for &pga in &levels {
                 let m = sr::load_record(dir, rec, pga).expect("record");

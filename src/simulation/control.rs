@@ -88,6 +88,75 @@ impl Simulation {
         (limit / w).max(10.0 * self.params.min_dt)
     }
 
+    /// The longest step the rocking control allows (`SimParams::rocking_velocity_change`, adaptive
+    /// runs only; infinite without it): for each free block in a rocking episode (recent peak
+    /// angular speed Ω above `rocking_speed_floor`, and a pivot seen: see
+    /// `Simulation::update_rocking`), c·Ω/θ̈_g with θ̈_g gravity's angular acceleration about
+    /// its last pivot, never below `min_error_step_ratio` × `control.time_step`. Both Ω (a
+    /// decaying maximum) and θ̈_g (geometry) vary slowly, so the steps do too: a step much
+    /// shorter than the one before turns the pivot's per-step lift (exact rotation against the
+    /// linear contact condition) into a spurious velocity (assembly::restitution::located_step),
+    /// which is why the instantaneous θ̈ is not used.
+    pub(super) fn rocking_bound(&self) -> f64 {
+        let Some(c) = self.params.rocking_velocity_change else {
+            return f64::INFINITY;
+        };
+        if !self.state.scene.control.adaptive_time_step {
+            return f64::INFINITY;
+        }
+        let floor = self.params.min_error_step_ratio * self.state.scene.control.time_step;
+        let mut bound = f64::INFINITY;
+        for (f, &b) in self.state.dofs.block_of.iter().enumerate() {
+            let a = self.stepper.rocking_accel[f];
+            if self.state.retired[b] || a <= 0.0 {
+                continue;
+            }
+            bound = bound.min((c * self.stepper.omega_scale[f] / a).max(floor));
+        }
+        bound
+    }
+
+    /// After an accepted step: each free block's recent peak angular speed Ω (decaying over
+    /// `rocking_speed_memory`) and, while Ω is above `rocking_speed_floor`, gravity's angular
+    /// acceleration about its pivot when it turns on one closed contact, m·g·|x_c − x_p| / I_p
+    /// (rad/s²; I_p the moment of inertia about the pivot p). Below the floor the block is no
+    /// longer rocking and the rocking control forgets it.
+    pub(super) fn update_rocking(&mut self, dt: f64) {
+        if self.params.rocking_velocity_change.is_none() {
+            return;
+        }
+        let memory = (-dt / self.params.rocking_speed_memory).exp();
+        let mut closed = vec![(0u32, 0usize); self.state.geoms.len()];
+        for (k, c) in self.state.contacts.contacts.iter().enumerate() {
+            if c.state.is_closed() {
+                for b in [c.vertex_block, c.edge_block] {
+                    closed[b].0 += 1;
+                    closed[b].1 = k;
+                }
+            }
+        }
+        let g = self.state.scene.gravity.abs();
+        for (f, &b) in self.state.dofs.block_of.iter().enumerate() {
+            let w = &mut self.stepper.omega_scale[f];
+            *w = self.state.states[f].vel[2].abs().max(*w * memory);
+            if *w < self.params.rocking_speed_floor {
+                self.stepper.rocking_accel[f] = 0.0;
+                continue;
+            }
+            if closed[b].0 != 1 {
+                continue;
+            }
+            let c = &self.state.contacts.contacts[closed[b].1];
+            let pivot = self.state.geoms[c.vertex_block].vertices[c.vertex];
+            let m = &self.state.geoms[b].moments;
+            let r = pivot - m.centroid;
+            let inertia = m.sxx + m.syy + m.area * r.norm_squared();
+            if inertia > 0.0 {
+                self.stepper.rocking_accel[f] = m.area * g * r.x.abs() / inertia;
+            }
+        }
+    }
+
     /// The accuracy bounds of the adaptive step (impact location, rotation per step): the
     /// worst violation, if any, as a refusal with the factor that meets its bound. Never
     /// below `min_dt` × 10 (a step this short is no longer an accuracy question).

@@ -83,7 +83,12 @@ impl Simulation {
         let t0 = Instant::now();
         self.detect_contacts();
         self.stepper.profile.detect += t0.elapsed();
-        let dt = self.stepper.dt.min(max_dt).min(self.rotation_bound());
+        let dt = self
+            .stepper
+            .dt
+            .min(max_dt)
+            .min(self.rotation_bound())
+            .min(self.rocking_bound());
         let dt = self.restitution(dt);
         let (dt, cuts) = self.solve_with_cuts(dt)?;
         if let Some(e) = self.too_soft(dt) {

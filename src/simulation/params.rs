@@ -57,6 +57,24 @@ pub struct SimParams {
     /// `control.time_step` (it bounds the control's cost; impact location and the validity
     /// cuts may go shorter).
     pub min_error_step_ratio: f64,
+    /// Rocking step control (adaptive runs only): while a free block rocks (it turned about one
+    /// point, one closed contact, and its recent peak angular speed Ω is above
+    /// `rocking_speed_floor`), Δt ≤ c·Ω/θ̈_g, θ̈_g gravity's angular acceleration about the
+    /// pivot: gravity changes the block's angular velocity by at most this fraction of Ω in a
+    /// step (never below `min_error_step_ratio` × `control.time_step`). Why: the DDA
+    /// integrator's velocity update (γ = 1) errs by ½Δt·(θ̈(t) − θ̈(t₀)) since the last impact,
+    /// so a half-cycle of length T ≈ Ω/θ̈ gains a rotation error ∝ Δt/T; the bound gives every
+    /// half-cycle about 1/c steps (docs/accuracy-vs-speed.md, "Where the 1 ms error comes
+    /// from"). `None`: off.
+    pub rocking_velocity_change: Option<f64>,
+    /// Angular speed, rad/s, below which the rocking step control leaves a block alone: 1e-3
+    /// (a 1 m block's corner at 1 mm/s) is far above a resting block's spring vibration and
+    /// below any rocking a user would observe.
+    pub rocking_speed_floor: f64,
+    /// Memory of the peak angular speed Ω of the rocking control, s: Ω decays as e^(−t/τ)
+    /// unless the block turns faster. 0.25 s outlasts the short half-cycles (0.05–0.2 s) the
+    /// control is for, so Ω at a half-cycle's peak (θ̇ = 0) is its start's speed.
+    pub rocking_speed_memory: f64,
 }
 
 /// A starting value for [`SimParams::impact_approach_ratio`] (off by default, see
@@ -101,6 +119,15 @@ impl Default for SimParams {
             // the user's restitution rather than the springs' (docs/restitution.md).
             local_error_ratio: None,
             min_error_step_ratio: 0.05,
+            // Off: measured on the records (docs/accuracy-vs-speed.md, "Where the 1 ms error
+            // comes from"): at 0.005 it did not bring the default closer to Housner at the
+            // well-conditioned points (already within 0.5 %), moved the ill-conditioned ones
+            // either way (Friuli 0.5 g +6.0 → −42 %, 1.0 g −1.3 → −6.0 %; at 0.6 g the peak
+            // +5.1 / −8.8 % at half-cycle 9 for c = 0.005 / 0.002, not converging), and took
+            // 2.1× the steps over the 96 points (up to 9.4× at one).
+            rocking_velocity_change: None,
+            rocking_speed_floor: 1e-3,
+            rocking_speed_memory: 0.25,
         }
     }
 }

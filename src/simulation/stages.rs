@@ -286,6 +286,7 @@ impl Simulation {
             self.stepper.stats.dual_loose_residual =
                 self.stepper.stats.dual_loose_residual.max(o.residual);
         }
+        self.update_rocking(dt);
         self.state.time += dt;
         self.stepper.stats.steps += 1;
         self.stepper.stats.min_dt = self.stepper.stats.min_dt.min(dt);

@@ -35,6 +35,12 @@ pub(super) struct Stepper {
     /// the step limit, a contact overshot, a step-control bound (impact location or local
     /// error)]; each led to a time-step cut or the run's end.
     pub(super) refusals: [u64; 4],
+    /// Per free block (in `dofs` order): recent peak angular speed Ω, rad/s, of the rocking
+    /// step control (`SimParams::rocking_velocity_change`).
+    pub(super) omega_scale: Vec<f64>,
+    /// Per free block: gravity's angular acceleration about its last pivot, rad/s², while it
+    /// rocks (0: not rocking; see `Simulation::update_rocking`).
+    pub(super) rocking_accel: Vec<f64>,
 }
 
 impl Stepper {
@@ -69,6 +75,8 @@ impl Stepper {
             changes: Default::default(),
             open_close_scratch: Default::default(),
             refusals: [0; 4],
+            omega_scale: vec![0.0; state.dofs.block_of.len()],
+            rocking_accel: vec![0.0; state.dofs.block_of.len()],
         }
     }
 }

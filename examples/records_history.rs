@@ -1,0 +1,135 @@
+//! Where the full engine's Δt error on a record arises (docs/accuracy-vs-speed.md, "Records",
+//! "Where the 1 ms error comes from"): one column of `analysis::study_records` under one record
+//! at one PGA, the engine at the default Δt and at 1e-4 s and Housner's equation (RK4 at 1e-5 s),
+//! each history cut into half-cycles (from a lift-off or an impact to the next impact). Prints
+//! per half-cycle: start time, |θ̇| at its start (after the impact), peak |θ|, for the three;
+//! the growth of the difference between the two engine runs tells the phase that makes it:
+//! the impact (ω after it differs with ω before equal), the free rocking (the peak differs with
+//! the start equal) or the lift-off (the first half-cycle).
+//! Run: `cargo run --example records_history -- [column 0|1] [record] [PGA g] [variant]`
+//! (default: 0, Friuli, 0.6; variant as in `records_dt`: `new`, `old`, `rock:C`, `trap`, `err:R`,
+//! `dt:S`; the 1e-4 s run and the variants other than `new` and `rock:C` have the rocking control off).
+use ashlar::analysis::reference::{housner_rocking, HousnerColumn};
+use ashlar::analysis::study_records::{self as sr, COLUMNS};
+use ashlar::scene::scene_from_value;
+use ashlar::simulation::{SimParams, Simulation};
+use serde_json::json;
+use std::path::Path;
+
+/// Half-cycles of a history (t, θ, θ̇): (start time, |θ̇| at start, peak |θ|).
+fn half_cycles(h: &[(f64, f64, f64)]) -> Vec<(f64, f64, f64)> {
+    let still = 1e-5;
+    let mut out: Vec<(f64, f64, f64)> = Vec::new();
+    let mut sign = 0.0f64;
+    for &(t, th, w) in h {
+        let s = if th.abs() > still { th.signum() } else { 0.0 };
+        if s != 0.0 && s != sign {
+            out.push((t, w.abs(), th.abs()));
+        }
+        if s != 0.0 {
+            sign = s;
+        }
+        if let Some(last) = out.last_mut() {
+            if s == sign && s != 0.0 {
+                last.2 = last.2.max(th.abs());
+            }
+        }
+    }
+    out
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let col = &COLUMNS[args.first().and_then(|s| s.parse().ok()).unwrap_or(0)];
+    let rec = args.get(1).map_or(sr::RECORDS[0], |s| s.as_str());
+    let pga: f64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(0.6);
+    let variant = args.get(3).map_or("new", |s| s.as_str());
+    let m = sr::load_record(Path::new("data/ground-motions"), rec, pga).expect("record");
+    let t_end = sr::run_length(&m);
+    let run = |control: serde_json::Value, params: SimParams| {
+        let scene = scene_from_value(&sr::column_scene(col, &control)).expect("scene");
+        let mut sim = Simulation::new(&scene, &m, params);
+        let mut h = Vec::new();
+        while sim.time() < t_end - 1e-12 {
+            sim.step(t_end - sim.time()).expect("step");
+            let th = sim.geoms()[1].rotation;
+            h.push((sim.time(), th, sim.block_velocity(1)[2]));
+            if th.abs() > sr::FALLEN {
+                break;
+            }
+        }
+        (h, sim.stats().steps)
+    };
+    // The defaults before the rocking step control.
+    let old = SimParams {
+        rocking_velocity_change: None,
+        ..SimParams::default()
+    };
+    let (coarse_c, coarse_p) = match variant {
+        "new" => (json!({}), SimParams::default()),
+        "old" => (json!({}), old),
+        "trap" => (json!({ "integrator": "trapezoidal" }), old),
+        v if v.starts_with("rock:") => (
+            json!({}),
+            SimParams {
+                rocking_velocity_change: Some(v[5..].parse().expect("ratio")),
+                ..SimParams::default()
+            },
+        ),
+        v if v.starts_with("err:") => (
+            json!({}),
+            SimParams {
+                local_error_ratio: Some(v[4..].parse().expect("ratio")),
+                ..old
+            },
+        ),
+        v if v.starts_with("dt:") => (
+            json!({ "time_step": v[3..].parse::<f64>().expect("dt") }),
+            old,
+        ),
+        v => panic!("unknown variant {v}"),
+    };
+    let (coarse, n_coarse) = run(coarse_c, coarse_p);
+    let (fine, n_fine) = run(json!({ "time_step": 1e-4 }), old);
+    let mut hh = Vec::new();
+    housner_rocking(
+        &HousnerColumn {
+            b: col.b,
+            h: col.h,
+            g: sr::G,
+            dt: sr::HOUSNER_DT,
+        },
+        |t| m.acceleration(t)[0],
+        t_end,
+        |s| {
+            hh.push((s.t, s.theta, s.omega));
+            s.theta.abs() > sr::FALLEN
+        },
+    );
+    let (a, b, c) = (half_cycles(&coarse), half_cycles(&fine), half_cycles(&hh));
+    println!(
+        "{} {rec} {pga} g, {variant}: {n_coarse} steps, 1e-4 s: {n_fine} steps",
+        col.name
+    );
+    println!("k | start s: {variant} / 1e-4 / Housner | |ω| at start rad/s | peak |θ| rad | peak {variant} vs 1e-4");
+    for k in 0..a.len().max(b.len()).max(c.len()) {
+        let f = |v: &[(f64, f64, f64)], i: usize| v.get(k).map(|x| [x.0, x.1, x.2][i]);
+        let s = |x: Option<f64>, p: usize| x.map_or("-".into(), |x| format!("{x:.p$}"));
+        let rel = match (f(&a, 2), f(&b, 2)) {
+            (Some(x), Some(y)) => format!("{:+.2} %", 100.0 * (x / y - 1.0)),
+            _ => "-".into(),
+        };
+        println!(
+            "{k} | {} / {} / {} | {} / {} / {} | {} / {} / {} | {rel}",
+            s(f(&a, 0), 4),
+            s(f(&b, 0), 4),
+            s(f(&c, 0), 4),
+            s(f(&a, 1), 4),
+            s(f(&b, 1), 4),
+            s(f(&c, 1), 4),
+            s(f(&a, 2), 5),
+            s(f(&b, 2), 5),
+            s(f(&c, 2), 5),
+        );
+    }
+}
