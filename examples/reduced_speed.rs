@@ -131,9 +131,8 @@ fn main() {
         let mut reasons = std::collections::BTreeSet::new();
         for r in &ra.runs {
             let c = cpu();
-            let (_, s) =
-                evaluate_with_summary(&auto, &gm, &req.criteria, req.combine, r.pga, None)
-                    .expect("run");
+            let (_, s) = evaluate_with_summary(&auto, &gm, &req.criteria, req.combine, r.pga, None)
+                .expect("run");
             let c = cpu() - c;
             if s.model == "dda" {
                 n_dda += 1;
