@@ -389,6 +389,19 @@ pub fn evaluate_combined(
     pga: f64,
     cancel: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<bool, RunError> {
+    evaluate_with_summary(scene, motion, criteria, combine, pga, cancel).map(|(failed, _)| failed)
+}
+
+/// [`evaluate_combined`] returning the run's summary too (which model ran, its steps and wall
+/// time: `examples/reduced_speed.rs` profiles searches with it).
+pub fn evaluate_with_summary(
+    scene: &Scene,
+    motion: &GroundMotion,
+    criteria: &[Criterion],
+    combine: Combine,
+    pga: f64,
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<(bool, super::run::Summary), RunError> {
     let gm = motion.scaled_to_pga(pga);
     let decided = |tr: &Tracker| {
         combine
@@ -414,7 +427,7 @@ pub fn evaluate_combined(
         tr.final_rotation.push(b.final_rotation);
         tr.final_displacement.push(b.final_displacement);
     }
-    Ok(combine.verdict(criteria.iter().map(|c| c.met(&tr))))
+    Ok((combine.verdict(criteria.iter().map(|c| c.met(&tr))), s))
 }
 
 /// One step of a search replayed from the outcomes known so far (see [`plan`]).

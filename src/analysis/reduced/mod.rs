@@ -232,6 +232,8 @@ pub struct Reduced {
     /// Total sliding distance, m.
     pub slid: f64,
     h: f64,
+    /// f at the end of the last ODE step, for the next one (FSAL).
+    first_stage: Option<FirstStage>,
     pub stats: ReducedStats,
     /// Violations met so far (only the first stops an `Auto` run; the forced models keep
     /// going and report them).
@@ -255,9 +257,62 @@ fn load_at(block: &SingleBlock, motion: &GroundMotion, t: f64) -> Vector2<f64> {
     block.to_local(Vector2::new(-ag[0], -block.gravity - ag[1]))
 }
 
-/// One adaptive step of `f` from (t, y), ending at `end` at the latest. `h` is the step-size
-/// proposal, updated for the next step. Returns the step taken, the new state, and whether the
-/// step was cut short to end exactly on `end` (the caller then sets its time to `end`).
+/// The load over one ODE step [t0, end] that ends at or before the motion's next kink
+/// (`GroundMotion::next_kink`), per unit mass in local coordinates (m/s²). Under a record
+/// (piecewise linear) it is linear in t there, so it is the line through its values at the
+/// step's midpoint and end: two evaluations of the record a step instead of one per stage
+/// (seven), exact up to round-off. The midpoint and not t0: at the record's end the
+/// acceleration drops to zero right after t0, and the line must be that of the open interval.
+/// Curved motions (pulses, sines) are evaluated at each stage.
+enum StepLoad<'a> {
+    Linear {
+        end: f64,
+        at_end: Vector2<f64>,
+        slope: Vector2<f64>,
+    },
+    Exact {
+        block: &'a SingleBlock,
+        motion: &'a GroundMotion,
+    },
+}
+
+impl<'a> StepLoad<'a> {
+    fn new(block: &'a SingleBlock, motion: &'a GroundMotion, t0: f64, end: f64) -> Self {
+        if motion.piecewise_linear() && end.is_finite() && end > t0 {
+            let mid = 0.5 * (t0 + end);
+            let at_end = load_at(block, motion, end);
+            let slope = (at_end - load_at(block, motion, mid)) / (end - mid);
+            StepLoad::Linear { end, at_end, slope }
+        } else {
+            StepLoad::Exact { block, motion }
+        }
+    }
+
+    #[inline]
+    fn at(&self, t: f64) -> Vector2<f64> {
+        match self {
+            StepLoad::Linear { end, at_end, slope } => at_end + slope * (t - end),
+            StepLoad::Exact { block, motion } => load_at(block, motion, t),
+        }
+    }
+}
+
+/// The first stage of the next ODE step, f(t, y) of the motion `tag` (pivot 0/1 for rocking,
+/// 2/3 for sliding −/+), as the last stage of the step that ended at (t, y) left it
+/// ([`ode::step_from`]). Used only where (t, y, tag) match bit for bit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct FirstStage {
+    t: f64,
+    y: State,
+    tag: u8,
+    k: State,
+}
+
+/// One adaptive step of `f` from (t, y), whose f(t, y) is `k1`, ending at `end` at the latest.
+/// `h` is the step-size proposal, updated for the next step. Returns the step taken, the new
+/// state, whether the step was cut short to end exactly on `end` (the caller then sets its
+/// time to `end`), and f at the step's end ([`ode::step_from`]).
+#[allow(clippy::too_many_arguments)]
 fn ode_step(
     h: &mut f64,
     stats: &mut ReducedStats,
@@ -265,13 +320,14 @@ fn ode_step(
     f: &impl Fn(f64, State) -> State,
     t: f64,
     y: State,
+    k1: State,
     end: f64,
-) -> (f64, State, bool) {
+) -> (f64, State, bool, State) {
     loop {
         let proposal = h.min(params.max_step);
         let clipped = proposal >= end - t;
         let step = if clipped { end - t } else { proposal };
-        let (y1, err) = ode::step(f, t, y, step, params.tolerance);
+        let (y1, err, k7) = ode::step_from(f, t, y, k1, step, params.tolerance);
         if err <= 1.0 || step < 1e-12 {
             let next = ode::next_h(step, err).max(1e-12);
             // A step cut short by `end` must not shrink the next proposal.
@@ -281,7 +337,7 @@ fn ode_step(
                 stats.min_dt = stats.min_dt.min(step);
                 stats.max_dt = stats.max_dt.max(step);
             }
-            return (step, y1, clipped);
+            return (step, y1, clipped, k7);
         }
         stats.rejected_steps += 1;
         *h = ode::next_h(step, err);
@@ -293,17 +349,19 @@ fn ode_step(
 /// the state returned is a full fifth-order step. The trial steps come from the Illinois
 /// variant of regula falsi on the event function `g` (positive before the event, ≤ 0 after:
 /// a handful of trials instead of bisection's 60), with a bisection whenever it stalls.
+#[allow(clippy::too_many_arguments)]
 fn locate(
     f: &impl Fn(f64, State) -> State,
     tol: Tolerance,
     t: f64,
     y: State,
+    k1: State,
     h: f64,
     g: impl Fn(&State) -> f64,
     crossed: impl Fn(&State) -> bool,
 ) -> (f64, State) {
     let (mut lo, mut glo) = (0.0, g(&y));
-    let mut yh = ode::step(f, t, y, h, tol).0;
+    let mut yh = ode::step_from(f, t, y, k1, h, tol).0;
     let (mut hi, mut ghi) = (h, g(&yh));
     // Which end the last trial replaced (Illinois halves the weight of an end kept twice).
     let mut last = 0i8;
@@ -323,7 +381,7 @@ fn locate(
         if mid <= lo || mid >= hi {
             break;
         }
-        let ym = ode::step(f, t, y, mid, tol).0;
+        let ym = ode::step_from(f, t, y, k1, mid, tol).0;
         let gm = g(&ym);
         if crossed(&ym) {
             hi = mid;
@@ -364,6 +422,7 @@ impl Reduced {
         };
         Self {
             h: params.max_step.min(1e-4),
+            first_stage: None,
             block,
             motion: motion.clone(),
             params,
@@ -554,26 +613,33 @@ impl Reduced {
             return false;
         };
         let (b, motion, params, t0) = (&self.block, &self.motion, self.params, self.time);
-        let f = |t: f64, y: State| {
-            [
-                y[1],
-                rocking::angular_acceleration(b, k, y[0], load_at(b, motion, t)),
-            ]
-        };
+        let end = target.min(motion.next_kink(t0));
+        let load = StepLoad::new(b, motion, t0, end);
+        let f = |t: f64, y: State| [y[1], rocking::angular_acceleration(b, k, y[0], load.at(t))];
         let s = rocking::side(k);
         let lift = 1e-9 * b.pivots[1];
         let landing = |y: &State| s * y[0];
         let landed = |y: &State| landing(y) < 0.0;
         let clearance = |y: &State| rocking::side_clearance(b, k, y[0], lift);
         let on_side = |y: &State| clearance(y) < 0.0;
-        let end = target.min(motion.next_kink(t0));
         let y0 = [theta, omega];
-        let (h, y1, clipped) = ode_step(&mut self.h, &mut self.stats, &params, &f, t0, y0, end);
+        let tag = k as u8;
+        let k1 = match self.first_stage {
+            Some(fs) if fs.t == t0 && fs.y == y0 && fs.tag == tag => fs.k,
+            _ => f(t0, y0),
+        };
+        let (h, y1, clipped, k7) =
+            ode_step(&mut self.h, &mut self.stats, &params, &f, t0, y0, k1, end);
+        self.first_stage = Some(FirstStage {
+            t: t0 + h,
+            y: y1,
+            tag,
+            k: k7,
+        });
         if landed(&y1) {
-            let (h, y) = locate(&f, params.tolerance, t0, y0, h, landing, landed);
-            let b = self.block.clone();
+            let (h, y) = locate(&f, params.tolerance, t0, y0, k1, h, landing, landed);
             self.time += h;
-            let w = rocking::restitution(&b, k, self.params.restitution) * y[1];
+            let w = rocking::restitution(b, k, params.restitution) * y[1];
             self.stats.impacts += 1;
             self.phase = if w.abs() < self.params.rest_angular_speed {
                 Phase::Rest
@@ -588,7 +654,7 @@ impl Reduced {
             return false;
         }
         if on_side(&y1) {
-            let (h, y) = locate(&f, params.tolerance, t0, y0, h, clearance, on_side);
+            let (h, y) = locate(&f, params.tolerance, t0, y0, k1, h, clearance, on_side);
             let b = self.block.clone();
             self.time += h;
             if !rocking::beyond_tipping(&b, k, y[0]) {
@@ -641,14 +707,27 @@ impl Reduced {
             return false;
         };
         let (b, motion, params, t0) = (&self.block, &self.motion, self.params, self.time);
-        let f = |t: f64, y: State| [y[1], sliding::acceleration(b, dir, load_at(b, motion, t))];
+        let end = target.min(motion.next_kink(t0));
+        let load = StepLoad::new(b, motion, t0, end);
+        let f = |t: f64, y: State| [y[1], sliding::acceleration(b, dir, load.at(t))];
         let speed = |y: &State| dir * y[1];
         let stopped = |y: &State| speed(y) <= 0.0;
-        let end = target.min(motion.next_kink(t0));
         let y0 = [self.slip, rate];
-        let (h, y1, clipped) = ode_step(&mut self.h, &mut self.stats, &params, &f, t0, y0, end);
+        let tag = if dir > 0.0 { 3 } else { 2 };
+        let k1 = match self.first_stage {
+            Some(fs) if fs.t == t0 && fs.y == y0 && fs.tag == tag => fs.k,
+            _ => f(t0, y0),
+        };
+        let (h, y1, clipped, k7) =
+            ode_step(&mut self.h, &mut self.stats, &params, &f, t0, y0, k1, end);
+        self.first_stage = Some(FirstStage {
+            t: t0 + h,
+            y: y1,
+            tag,
+            k: k7,
+        });
         let (t1, y1) = if stopped(&y1) {
-            let (h, y) = locate(&f, params.tolerance, t0, y0, h, speed, stopped);
+            let (h, y) = locate(&f, params.tolerance, t0, y0, k1, h, speed, stopped);
             (t0 + h, y)
         } else if clipped {
             (end, y1)
