@@ -62,7 +62,12 @@ fn run(scene: &Scene, gm: &GroundMotion, start: f64, oc: OpenCloseParams) -> (Si
 fn compare(a: &Simulation, b: &Simulation, scene: &Scene) -> (f64, f64) {
     let (mut worst, mut moved) = (0.0_f64, 0.0_f64);
     for (k, (g, r)) in a.geoms().iter().zip(b.geoms()).enumerate() {
-        for ((v, w), v0) in g.vertices.iter().zip(&r.vertices).zip(&scene.blocks[k].vertices) {
+        for ((v, w), v0) in g
+            .vertices
+            .iter()
+            .zip(&r.vertices)
+            .zip(&scene.blocks[k].vertices)
+        {
             worst = worst.max((v - w).norm());
             moved = moved.max((w - v0).norm());
         }
@@ -107,7 +112,10 @@ fn the_settle_rule_takes_the_shaken_walls_cycling_steps_and_keeps_the_answer() {
     );
     // Measured: no cut after the first step with or without the rule on this wall (the 410-stone
     // wall of docs/contact-solve.md §8 is where the rule takes cut steps: too slow for a test).
-    assert_eq!(cuts, 0, "the settle rule leaves no cut after the first step");
+    assert_eq!(
+        cuts, 0,
+        "the settle rule leaves no cut after the first step"
+    );
     assert_eq!(cuts_off, 0, "nor the loop without it, on this wall");
     // Measured 2.09e-8 m of 8.46e-7 m (2.5 %) over 0.194 s. Bound 5e-8 m, 2.4× that: the
     // difference is the integrator's Δt error (1 ms against 0.1 ms) plus what the accepted
