@@ -9,7 +9,8 @@
 //!
 //! `cargo run --release --example shaken_walls -- [--sizes 100,400,1600] [--steps 300]
 //!  [--motions rest,sine,record] [--diag] [--tight] [--block-model rigid|deformable] [--poisson V]
-//!  [--anderson DEPTH] [--anderson-restart] [--legacy] [--reference]`
+//!  [--anderson DEPTH] [--anderson-restart] [--legacy] [--reference] [--record-start T]
+//!  [--seconds S] [--settle TOL] [--settle-after K]`
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
 //! fixed-point loop); `--anderson-restart` restarts its history whenever a contact changes state.
@@ -124,7 +125,13 @@ fn main() {
         _ => BlockModel::Rigid,
     };
     let rec = record();
-    let rec_start = (peak_time(&rec) - 0.2).max(0.0);
+    // `--record-start T`: start the record at T s (default 0.2 s before its peak); with
+    // `--seconds S` the run covers S s of simulated time instead of `--steps` steps (the
+    // whole-record run of docs/contact-solve.md §8: `--record-start 0 --seconds 20`).
+    let rec_start = arg("--record-start")
+        .map(|v| v.parse().expect("--record-start"))
+        .unwrap_or_else(|| (peak_time(&rec) - 0.2).max(0.0));
+    let seconds: Option<f64> = arg("--seconds").map(|v| v.parse().expect("--seconds"));
     println!(
         "| stones | motion | steps | s/step | linear solves/step | open–close iterations/step | Δt cuts | min Δt (s) | max penetration (m) |"
     );
@@ -186,6 +193,12 @@ fn main() {
             if std::env::args().any(|a| a == "--anderson-restart") {
                 params.open_close.anderson_keep = false;
             }
+            if let Some(v) = arg("--settle") {
+                params.open_close.settle_tolerance = v.parse().expect("--settle");
+            }
+            if let Some(v) = arg("--settle-after") {
+                params.open_close.settle_after = v.parse().expect("--settle-after");
+            }
             if let Some(v) = arg("--friction-tol") {
                 params.open_close.friction_tolerance = v.parse().expect("--friction-tol");
             }
@@ -197,8 +210,15 @@ fn main() {
             sim.set_time(start);
             let t = Instant::now();
             let mut done = 0;
-            for _ in 0..steps {
-                if let Err(e) = sim.step(f64::INFINITY) {
+            let end = seconds.map(|s| start + s);
+            loop {
+                match end {
+                    Some(end) if sim.time() >= end - 1e-12 => break,
+                    None if done >= steps => break,
+                    _ => {}
+                }
+                let max_dt = end.map_or(f64::INFINITY, |end| end - sim.time());
+                if let Err(e) = sim.step(max_dt) {
                     eprintln!("  {n} {m}: stopped after {done} steps: {e}");
                     break;
                 }
@@ -253,6 +273,16 @@ fn main() {
                     );
                 }
                 eprintln!("  changes by iteration: {:?}", ch.by_iteration);
+                for (k, name) in CHANGE_KINDS.iter().enumerate() {
+                    eprintln!(
+                        "  last iteration {name:>22}: bed {:>7} head {:>7}",
+                        ch.last_kind[k][0], ch.last_kind[k][1]
+                    );
+                }
+                eprintln!(
+                    "  last iteration by force decade (1e-3.. N): {:?}; settled {}",
+                    ch.last_force, ch.settled
+                );
                 eprintln!("  changes by force decade (1e-3.. N): {:?}", ch.by_force);
             }
         }

@@ -22,6 +22,7 @@ mod records_housner;
 mod restitution;
 mod rocking;
 mod rocking_impacts;
+mod shaken_wall_settle;
 mod single_contact;
 mod sliding_newmark;
 mod solver_reuse;
