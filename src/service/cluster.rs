@@ -3,7 +3,9 @@
 //! and reaps expired ones. It drives the worker (`worker::Core`) from the store's signals, so it
 //! sits above both: the store never imports the worker.
 use super::store::postgres::{PgStore, CHANNEL_CANCEL, CHANNEL_WORK};
+use super::store::JobStore;
 use super::worker::Core;
+use postgres::fallible_iterator::FallibleIterator;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};

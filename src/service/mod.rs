@@ -6,11 +6,11 @@
 pub mod artifacts;
 pub mod auth;
 pub mod budget;
+pub mod cluster;
 pub mod events;
 pub mod fake;
 pub mod histories;
-pub mod pg_store;
-pub mod pg_tls;
+pub mod jobs;
 pub mod problem;
 pub mod request;
 pub mod retention;
@@ -26,6 +26,9 @@ pub mod worker;
 pub use problem::ApiError;
 pub use request::Limits;
 pub use routes::{app, route_table, AppState, OPENAPI_YAML};
+/// The PostgreSQL store and its TLS under their former paths (`service::pg_store::PgStore`,
+/// `service::pg_tls::parse`), now `store::postgres` and `store::tls`.
+pub use store::{postgres as pg_store, tls as pg_tls};
 pub use store::{JobStore, SqliteStore, StoreError};
 pub use worker::{analysis_runner, JobRunner, RunHooks, RunnerOutcome, WorkerParams};
 
@@ -243,7 +246,7 @@ pub enum StartError {
 pub struct Service {
     state: AppState,
     pool: worker::Pool,
-    cluster: Option<pg_store::ClusterThreads>,
+    cluster: Option<cluster::ClusterThreads>,
     sweeper: Option<retention::Sweeper>,
 }
 
@@ -306,7 +309,7 @@ impl Service {
         let core = Arc::new(core);
         let cluster = match pg {
             Some(pg) => Some(
-                pg_store::ClusterThreads::start(core.clone(), pg).map_err(StartError::Component)?,
+                cluster::ClusterThreads::start(core.clone(), pg).map_err(StartError::Component)?,
             ),
             None => None,
         };

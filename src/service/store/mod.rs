@@ -1,13 +1,21 @@
-//! Durable job store: the service's memory. Routes write submissions here, workers claim jobs
-//! from here, and a restarted server resumes from here. [`JobStore`] is the small interface the
-//! rest of the service sees; [`SqliteStore`] is the embedded default (one file under `--data`).
-//! A PostgreSQL store for many machines implements the same trait (`claim` becomes
-//! `UPDATE … WHERE id = (SELECT … FOR UPDATE SKIP LOCKED) RETURNING …`).
-use rusqlite::{params, Connection, OptionalExtension};
+//! Service: the durable job store, the service's memory. Routes write submissions here, workers
+//! claim jobs from here, and a restarted server resumes from here. [`JobStore`] is the small
+//! interface the rest of the service sees; [`SqliteStore`] (`sqlite.rs`) is the embedded
+//! default (one file under `--data`), [`postgres::PgStore`] (`postgres.rs`, TLS in `tls.rs`)
+//! the cluster store for many processes. Both apply the one job state machine of
+//! [`super::jobs`] (which statuses an operation applies to, how a waiting search settles, what
+//! recovery does) in their own SQL, and each keeps its schema as numbered migrations under
+//! `src/service/migrations/{sqlite,postgres}/`. The store imports neither HTTP nor the worker.
+pub mod postgres;
+mod sqlite;
+pub mod tls;
+
+pub(crate) use super::jobs::child_error;
+pub use super::jobs::{CancelOutcome, JobStatus};
+pub use sqlite::SqliteStore;
+
 use serde::Serialize;
-use std::path::Path;
-use std::sync::Mutex;
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::{SystemTime, UNIX_EPOCH};
 use uuid::Uuid;
 
 /// What a job computes.
@@ -45,33 +53,7 @@ impl JobKind {
     }
 }
 
-/// Life cycle: `queued → running → succeeded | failed | cancelled`; `running → queued` when a
-/// server stops (or dies) while the job runs; `running → waiting → queued` when a fanned-out
-/// search waits for its child runs (no worker holds it meanwhile; the end of its last child
-/// queues it again).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum JobStatus {
-    Queued,
-    Running,
-    Succeeded,
-    Failed,
-    Cancelled,
-    /// A search parked until its child runs end (see [`JobStore::fan_out`]).
-    Waiting,
-}
-
 impl JobStatus {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            JobStatus::Queued => "queued",
-            JobStatus::Running => "running",
-            JobStatus::Succeeded => "succeeded",
-            JobStatus::Failed => "failed",
-            JobStatus::Cancelled => "cancelled",
-            JobStatus::Waiting => "waiting",
-        }
-    }
     pub(crate) fn parse(s: &str) -> Result<Self, StoreError> {
         Ok(match s {
             "queued" => JobStatus::Queued,
@@ -82,13 +64,6 @@ impl JobStatus {
             "waiting" => JobStatus::Waiting,
             other => return Err(StoreError::corrupt("job status", format!("{other:?}"))),
         })
-    }
-    /// No further change can happen.
-    pub fn is_terminal(self) -> bool {
-        matches!(
-            self,
-            JobStatus::Succeeded | JobStatus::Failed | JobStatus::Cancelled
-        )
     }
 }
 
@@ -153,16 +128,25 @@ pub enum Finish {
     Cancelled(Option<serde_json::Value>),
 }
 
-/// What `request_cancel` did.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CancelOutcome {
-    /// The job was queued and is now cancelled.
-    CancelledQueued,
-    /// The job is running; its worker will stop it within one step.
-    Requested,
-    /// The job had already finished with this status; nothing changed.
-    AlreadyFinished(JobStatus),
-    NotFound,
+impl Finish {
+    /// The state machine's end ([`super::jobs::End`]).
+    pub fn end(&self) -> super::jobs::End {
+        match self {
+            Finish::Succeeded(_) => super::jobs::End::Succeeded,
+            Finish::Failed(_) => super::jobs::End::Failed,
+            Finish::Cancelled(_) => super::jobs::End::Cancelled,
+        }
+    }
+
+    /// The columns a finish writes, in both stores: (result JSON text, error, progress; `None`
+    /// keeps the progress reached).
+    pub(crate) fn columns(&self) -> (Option<String>, Option<String>, Option<f64>) {
+        match self {
+            Finish::Succeeded(v) => (Some(v.to_string()), None, Some(1.0)),
+            Finish::Failed(e) => (None, Some(e.clone()), None),
+            Finish::Cancelled(v) => (v.as_ref().map(|v| v.to_string()), None, None),
+        }
+    }
 }
 
 /// What `delete` did.
@@ -245,21 +229,6 @@ impl StoreError {
     }
 }
 
-impl From<rusqlite::Error> for StoreError {
-    fn from(e: rusqlite::Error) -> Self {
-        let busy = matches!(
-            e.sqlite_error_code(),
-            Some(rusqlite::ErrorCode::DatabaseBusy | rusqlite::ErrorCode::DatabaseLocked)
-        );
-        let (database, detail) = (Backend::Sqlite, e.to_string());
-        if busy {
-            StoreError::Busy { database, detail }
-        } else {
-            StoreError::Database { database, detail }
-        }
-    }
-}
-
 /// The durable queue. Every method is one transaction; implementations must make `claim`
 /// atomic across processes (two workers never get the same job).
 pub trait JobStore: Send + Sync {
@@ -305,7 +274,9 @@ pub trait JobStore: Send + Sync {
     fn request_cancel(&self, id: Uuid) -> Result<CancelOutcome, StoreError>;
     /// Start-up recovery: jobs left `running` by a server that died go back to `queued`, unless
     /// they have already been started `max_attempts` times (then they fail: a job that keeps
-    /// killing the server must not keep killing it). Returns (requeued, failed).
+    /// killing the server must not keep killing it; a job whose cancel was requested ends
+    /// cancelled): each by [`super::jobs::recover`]. Returns (requeued, ended: failed or
+    /// cancelled).
     fn recover(&self, max_attempts: u32) -> Result<(usize, usize), StoreError>;
     fn counts(&self) -> Result<Counts, StoreError>;
     /// The most recent jobs, newest first, at most `limit`, optionally of one kind, for the
@@ -389,5 +360,4 @@ mod tests {
         assert_eq!(rfc3339(951_782_400_123), "2000-02-29T00:00:00.123Z");
         assert_eq!(rfc3339(1_795_349_400_000), "2026-11-22T12:10:00.000Z");
     }
-
 }

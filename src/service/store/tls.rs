@@ -1,6 +1,6 @@
 //! TLS for the PostgreSQL job store: reads libpq's connection parameters `sslmode`,
 //! `sslrootcert`, `sslcert`, `sslkey` and `sslcrl` from a `--database postgres://…` URL and makes
-//! connections through rustls (pure Rust, `ring` provider). Beside `pg_store`, which opens
+//! connections through rustls (pure Rust, `ring` provider). Beside `store::postgres`, which opens
 //! every connection (pool and `LISTEN`) through [`PgTarget::connect`].
 //!
 //! The modes follow libpq (<https://www.postgresql.org/docs/current/libpq-ssl.html>):
