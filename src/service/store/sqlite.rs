@@ -1016,7 +1016,9 @@ CREATE INDEX IF NOT EXISTS jobs_finished ON jobs(finished_ms) WHERE parent IS NU
             motion: serde_json::json!({}),
             owner: None,
         };
-        assert!(s.fan_out(mine.id, &[child.clone()], 0.1).expect("fan out"));
+        assert!(s
+            .fan_out(mine.id, std::slice::from_ref(&child), 0.1)
+            .expect("fan out"));
         let c = s.get(child.id).expect("get").expect("child");
         assert_eq!(
             (c.parent, c.owner.as_deref()),
