@@ -18,6 +18,9 @@
 //! - **Migrations**: `src/service/migrations/postgres/NNNN_*.sql`, applied in order under an advisory lock, the
 //!   version kept in `ashlar_schema_version`.
 //!
+//! Over 600 lines: one `JobStore` implementation plus its leases, heartbeats, attempt log and
+//! migrations, which share its connection pool and SQL (its tests are `tests/service/pg_*.rs`).
+//!
 //! The sync `postgres` client fits the sync [`JobStore`] trait, which is called from worker
 //! threads and `spawn_blocking` (never from the async runtime's own threads).
 use super::{

@@ -3,6 +3,9 @@
 //! is the numbered migrations in `src/service/migrations/sqlite/`, the version kept in
 //! `PRAGMA user_version`; files created before the migrations existed (version 0) are
 //! recognised by their columns.
+//!
+//! Over 600 lines because its unit tests (queue order, recovery, quotas, cancel, the schemas of
+//! older files) sit beside it; the store itself is about 670 lines, one transaction per method.
 use super::{
     now_ms, Backend, CancelOutcome, Counts, DeleteOutcome, Finish, JobKind, JobRecord, JobStatus,
     JobStore, NewJob, QueueFull, StoreError,

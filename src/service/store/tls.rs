@@ -19,6 +19,9 @@
 //! certificate (for `hostssl … cert` in `pg_hba.conf`). Over a Unix socket `sslmode` is
 //! ignored, as in libpq. A parameter the URL does not set is taken, as libpq does, from the
 //! environment: `PGSSLMODE`, `PGSSLROOTCERT`, `PGSSLCERT`, `PGSSLKEY`, `PGSSLCRL` (empty means unset).
+//!
+//! Over 600 lines: the `sslmode` table, certificate and revocation-list loading, the verifier
+//! and their unit tests belong together.
 use postgres::config::{Host, SslMode as PgSslMode};
 use postgres::{Client, NoTls};
 use rustls::client::danger::{HandshakeSignatureValid, ServerCertVerified, ServerCertVerifier};
