@@ -6,11 +6,11 @@
 pub mod artifacts;
 pub mod auth;
 pub mod budget;
+pub mod cluster;
 pub mod events;
 pub mod fake;
 pub mod histories;
-pub mod pg_store;
-pub mod pg_tls;
+pub mod jobs;
 pub mod problem;
 pub mod request;
 pub mod retention;
@@ -26,6 +26,10 @@ pub mod worker;
 pub use problem::ApiError;
 pub use request::Limits;
 pub use routes::{app, route_table, AppState, OPENAPI_YAML};
+/// The PostgreSQL store and its TLS under their former paths (`service::pg_store::PgStore`,
+/// `service::pg_tls::parse`), now `store::postgres` and `store::tls`: kept while other code
+/// moves to the new paths.
+pub use store::{postgres as pg_store, tls as pg_tls};
 pub use store::{JobStore, SqliteStore, StoreError};
 pub use worker::{analysis_runner, JobRunner, RunHooks, RunnerOutcome, WorkerParams};
 
@@ -204,7 +208,7 @@ pub struct ServiceConfig {
     pub postgres: Option<String>,
     /// Shared artifact storage URL (see [`artifacts::ArtifactStore::open`]).
     pub artifacts: Option<String>,
-    pub lease: pg_store::LeaseParams,
+    pub lease: store::postgres::LeaseParams,
 }
 
 impl ServiceConfig {
@@ -216,7 +220,7 @@ impl ServiceConfig {
             workers: WorkerParams::default(),
             postgres: None,
             artifacts: None,
-            lease: pg_store::LeaseParams::default(),
+            lease: store::postgres::LeaseParams::default(),
         }
     }
 }
@@ -243,7 +247,7 @@ pub enum StartError {
 pub struct Service {
     state: AppState,
     pool: worker::Pool,
-    cluster: Option<pg_store::ClusterThreads>,
+    cluster: Option<cluster::ClusterThreads>,
     sweeper: Option<retention::Sweeper>,
 }
 
@@ -264,10 +268,10 @@ impl Service {
             path: config.data_dir.clone(),
             source,
         })?;
-        let (store, pg): (Arc<dyn JobStore>, Option<Arc<pg_store::PgStore>>) =
+        let (store, pg): (Arc<dyn JobStore>, Option<Arc<store::postgres::PgStore>>) =
             match &config.postgres {
                 Some(url) => {
-                    let pg = Arc::new(pg_store::PgStore::open(url, config.lease.clone())?);
+                    let pg = Arc::new(store::postgres::PgStore::open(url, config.lease.clone())?);
                     (pg.clone(), Some(pg))
                 }
                 None => {
@@ -306,7 +310,7 @@ impl Service {
         let core = Arc::new(core);
         let cluster = match pg {
             Some(pg) => Some(
-                pg_store::ClusterThreads::start(core.clone(), pg).map_err(StartError::Component)?,
+                cluster::ClusterThreads::start(core.clone(), pg).map_err(StartError::Component)?,
             ),
             None => None,
         };
@@ -352,7 +356,7 @@ pub enum Database {
 /// Parse a `--database` URL.
 pub fn parse_database(url: &str) -> Result<Database, String> {
     if url.starts_with("postgres://") || url.starts_with("postgresql://") {
-        pg_store::parse_url(url)?;
+        store::postgres::parse_url(url)?;
         return Ok(Database::Postgres(url.to_string()));
     }
     database_path(url).map(Database::Sqlite)
@@ -567,15 +571,15 @@ pub fn isolation_for(
 }
 
 /// `--lease SECONDS` as lease parameters.
-pub fn lease_params(secs: f64) -> Result<pg_store::LeaseParams, String> {
+pub fn lease_params(secs: f64) -> Result<store::postgres::LeaseParams, String> {
     if !(secs.is_finite() && (1.0..=86_400.0).contains(&secs)) {
         return Err(format!(
             "--lease must be a number of seconds between 1 and 86400, got {secs}"
         ));
     }
-    Ok(pg_store::LeaseParams::with_lease(Duration::from_secs_f64(
-        secs,
-    )))
+    Ok(store::postgres::LeaseParams::with_lease(
+        Duration::from_secs_f64(secs),
+    ))
 }
 
 /// SIGINT and SIGTERM, caught from the moment they are registered. Register them before telling

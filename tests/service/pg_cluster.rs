@@ -13,7 +13,7 @@
 //! - migration of a version-1 database (fixture) to the current schema.
 use crate::service_support;
 
-use ashlar::service::pg_store::{LeaseParams, PgStore, SCHEMA_VERSION};
+use ashlar::service::store::postgres::{LeaseParams, PgStore, SCHEMA_VERSION};
 use ashlar::service::store::{Finish, JobKind, JobStatus, JobStore, NewJob, QueueFull, StoreError};
 use ashlar::service::{Service, ServiceConfig};
 use postgres::NoTls;

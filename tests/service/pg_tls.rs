@@ -21,7 +21,7 @@
 //!   (signed by the CA) and refuses one without.
 use crate::service_support;
 
-use ashlar::service::pg_tls;
+use ashlar::service::store::tls as pg_tls;
 use serde_json::{json, Value};
 use service_support::*;
 use std::io::Write as _;

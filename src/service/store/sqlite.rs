@@ -1,249 +1,21 @@
-//! Durable job store: the service's memory. Routes write submissions here, workers claim jobs
-//! from here, and a restarted server resumes from here. [`JobStore`] is the small interface the
-//! rest of the service sees; [`SqliteStore`] is the embedded default (one file under `--data`).
-//! A PostgreSQL store for many machines implements the same trait (`claim` becomes
-//! `UPDATE … WHERE id = (SELECT … FOR UPDATE SKIP LOCKED) RETURNING …`).
+//! Service: the embedded job store, [`JobStore`] on SQLite (one file under `--data`). Sits under
+//! `store` beside `postgres`; applies the state machine of [`crate::service::jobs`]. Its schema
+//! is the numbered migrations in `src/service/migrations/sqlite/`, the version kept in
+//! `PRAGMA user_version`; files created before the migrations existed (version 0) are
+//! recognised by their columns.
+//!
+//! Over 600 lines because its unit tests (queue order, recovery, quotas, cancel, the schemas of
+//! older files) sit beside it; the store itself is about 670 lines, one transaction per method.
+use super::{
+    now_ms, Backend, CancelOutcome, Counts, DeleteOutcome, Finish, JobKind, JobRecord, JobStatus,
+    JobStore, NewJob, QueueFull, StoreError,
+};
+use crate::service::jobs::{self, Event};
 use rusqlite::{params, Connection, OptionalExtension};
-use serde::Serialize;
 use std::path::Path;
 use std::sync::Mutex;
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::Duration;
 use uuid::Uuid;
-
-/// What a job computes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum JobKind {
-    /// One run of a scene under a motion (`POST /v1/jobs`).
-    Run,
-    /// A PGA threshold search (`POST /v1/pga-searches`).
-    PgaSearch,
-    /// Several observations at one site over a set of records (`POST /v1/site-analyses`).
-    SiteAnalysis,
-    /// One run of a fanned-out PGA search at one amplitude: a child job (`parent` = the
-    /// search), never submitted over HTTP nor listed by `GET /v1/jobs`.
-    PgaRun,
-}
-
-impl JobKind {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            JobKind::Run => "run",
-            JobKind::PgaSearch => "pga_search",
-            JobKind::PgaRun => "pga_run",
-            JobKind::SiteAnalysis => "site_analysis",
-        }
-    }
-    pub(crate) fn parse(s: &str) -> Result<Self, StoreError> {
-        match s {
-            "run" => Ok(JobKind::Run),
-            "pga_search" => Ok(JobKind::PgaSearch),
-            "pga_run" => Ok(JobKind::PgaRun),
-            "site_analysis" => Ok(JobKind::SiteAnalysis),
-            other => Err(StoreError::corrupt("job kind", format!("{other:?}"))),
-        }
-    }
-}
-
-/// Life cycle: `queued → running → succeeded | failed | cancelled`; `running → queued` when a
-/// server stops (or dies) while the job runs; `running → waiting → queued` when a fanned-out
-/// search waits for its child runs (no worker holds it meanwhile; the end of its last child
-/// queues it again).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum JobStatus {
-    Queued,
-    Running,
-    Succeeded,
-    Failed,
-    Cancelled,
-    /// A search parked until its child runs end (see [`JobStore::fan_out`]).
-    Waiting,
-}
-
-impl JobStatus {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            JobStatus::Queued => "queued",
-            JobStatus::Running => "running",
-            JobStatus::Succeeded => "succeeded",
-            JobStatus::Failed => "failed",
-            JobStatus::Cancelled => "cancelled",
-            JobStatus::Waiting => "waiting",
-        }
-    }
-    pub(crate) fn parse(s: &str) -> Result<Self, StoreError> {
-        Ok(match s {
-            "queued" => JobStatus::Queued,
-            "running" => JobStatus::Running,
-            "succeeded" => JobStatus::Succeeded,
-            "failed" => JobStatus::Failed,
-            "cancelled" => JobStatus::Cancelled,
-            "waiting" => JobStatus::Waiting,
-            other => return Err(StoreError::corrupt("job status", format!("{other:?}"))),
-        })
-    }
-    /// No further change can happen.
-    pub fn is_terminal(self) -> bool {
-        matches!(
-            self,
-            JobStatus::Succeeded | JobStatus::Failed | JobStatus::Cancelled
-        )
-    }
-}
-
-/// A job as stored.
-#[derive(Debug, Clone, PartialEq)]
-pub struct JobRecord {
-    pub id: Uuid,
-    pub kind: JobKind,
-    pub status: JobStatus,
-    /// The validated request body, as submitted (re-parsed by the worker).
-    pub request: serde_json::Value,
-    /// Intensity summary of the motion, computed at submission (`{"pga": …}`).
-    pub motion: serde_json::Value,
-    /// Simulated time / duration, 0..1.
-    pub progress: f64,
-    /// `summary.json` of a run or `result.json` of a PGA search, once done, as the JSON text
-    /// the runner's value serialised to. Kept as text and served verbatim: re-parsing it with
-    /// serde_json's default float parser could move a number by one ULP.
-    pub result: Option<String>,
-    /// Why the job failed (a message for the user; internals are logged, not stored here).
-    pub error: Option<String>,
-    pub cancel_requested: bool,
-    /// How many times a worker has started the job.
-    pub attempts: u32,
-    /// Unix milliseconds.
-    pub created_ms: i64,
-    pub started_ms: Option<i64>,
-    pub finished_ms: Option<i64>,
-    /// The search a child run belongs to (`None` for jobs submitted over HTTP).
-    pub parent: Option<Uuid>,
-    /// The owner id of the token that submitted it ([`super::auth::owner_id`]); `None` when
-    /// the server ran without tokens.
-    pub owner: Option<String>,
-}
-
-/// A new job to enqueue.
-#[derive(Debug, Clone)]
-pub struct NewJob {
-    pub id: Uuid,
-    pub kind: JobKind,
-    pub request: serde_json::Value,
-    pub motion: serde_json::Value,
-    /// See [`JobRecord::owner`].
-    pub owner: Option<String>,
-}
-
-/// Why a bounded insert refused a job: the number of jobs already waiting.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum QueueFull {
-    /// The whole server's queue (`--max-queued-jobs`) is full.
-    Server(u64),
-    /// The owner's own quota of queued jobs of this kind is used up.
-    Owner(u64),
-}
-
-/// How a claimed job ended.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Finish {
-    Succeeded(serde_json::Value),
-    Failed(String),
-    /// Stopped by the user; `result` holds the partial summary where the runner gave one.
-    Cancelled(Option<serde_json::Value>),
-}
-
-/// What `request_cancel` did.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CancelOutcome {
-    /// The job was queued and is now cancelled.
-    CancelledQueued,
-    /// The job is running; its worker will stop it within one step.
-    Requested,
-    /// The job had already finished with this status; nothing changed.
-    AlreadyFinished(JobStatus),
-    NotFound,
-}
-
-/// What `delete` did.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum DeleteOutcome {
-    /// The job (and a search's child runs) is gone from the store.
-    Deleted,
-    /// The job has not finished (queued, running or waiting): cancel it first.
-    NotFinished(JobStatus),
-    NotFound,
-}
-
-/// Queue depth by status, for `/healthz` and the load test.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
-pub struct Counts {
-    pub queued: u64,
-    pub running: u64,
-    pub succeeded: u64,
-    pub failed: u64,
-    pub cancelled: u64,
-    /// Searches waiting for their child runs.
-    pub waiting: u64,
-}
-
-/// Which database a [`StoreError`] came from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Backend {
-    Sqlite,
-    Postgres,
-}
-
-impl std::fmt::Display for Backend {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Backend::Sqlite => "sqlite",
-            Backend::Postgres => "postgres",
-        })
-    }
-}
-
-/// A store failure, by cause, over both databases. Logged in full; the HTTP edge
-/// (`ApiError::store`) gives clients a problem per cause without internals: `Busy` is
-/// `unavailable` (503, retry), every other cause `internal` (500).
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum StoreError {
-    /// The database is busy or unreachable (SQLite locked past its busy timeout; PostgreSQL's
-    /// connection lost or refused): a retry may succeed.
-    #[error("job store: {database}: busy or unreachable: {detail}")]
-    Busy { database: Backend, detail: String },
-    /// Any other failure the database reported (I/O, a constraint, a server error).
-    #[error("job store: {database}: {detail}")]
-    Database { database: Backend, detail: String },
-    /// The database URL or its TLS settings (`--database postgres://…`) are not usable.
-    #[error("job store: {0}")]
-    Config(String),
-    /// The store file could not be opened.
-    #[error("job store: {path}: {detail}")]
-    Open { path: String, detail: String },
-    /// A stored value this ashlar cannot read (`what`: a column, an id, a kind, a status).
-    #[error("job store: corrupt {what}: {detail}")]
-    Corrupt { what: String, detail: String },
-    /// The database's schema is newer than this ashlar, or a numbered migration failed.
-    #[error("job store: {0}")]
-    Schema(String),
-    /// This store does not implement the operation (`what`, e.g. "delete jobs").
-    #[error("job store: this job store cannot {0}")]
-    Unsupported(&'static str),
-    /// A thread panicked holding the store's connection (`which`: "reader" or "writer").
-    #[error("job store: {0} lock poisoned")]
-    Poisoned(&'static str),
-}
-
-impl StoreError {
-    /// A stored value that does not parse.
-    pub(crate) fn corrupt(what: impl Into<String>, detail: impl std::fmt::Display) -> Self {
-        StoreError::Corrupt {
-            what: what.into(),
-            detail: detail.to_string(),
-        }
-    }
-}
 
 impl From<rusqlite::Error> for StoreError {
     fn from(e: rusqlite::Error) -> Self {
@@ -260,124 +32,6 @@ impl From<rusqlite::Error> for StoreError {
     }
 }
 
-/// The durable queue. Every method is one transaction; implementations must make `claim`
-/// atomic across processes (two workers never get the same job).
-pub trait JobStore: Send + Sync {
-    fn insert(&self, job: &NewJob) -> Result<(), StoreError>;
-    /// Insert unless `max_queued` submitted jobs (not child runs) are already queued, deciding
-    /// in the insert's own transaction so that concurrent submissions cannot all slip under
-    /// the limit. `Ok(None)`: inserted; `Ok(Some(n))`: refused, `n` jobs are waiting.
-    fn insert_bounded(&self, job: &NewJob, max_queued: u64) -> Result<Option<u64>, StoreError> {
-        Ok(self
-            .insert_quota(job, max_queued, u64::MAX)?
-            .map(|(QueueFull::Server(n) | QueueFull::Owner(n))| n))
-    }
-    /// [`JobStore::insert_bounded`], and also unless the job's owner (when it has one) already
-    /// has `max_owner` jobs of the job's kind queued: both counts and the insert in one
-    /// transaction.
-    fn insert_quota(
-        &self,
-        job: &NewJob,
-        max_queued: u64,
-        max_owner: u64,
-    ) -> Result<Option<QueueFull>, StoreError>;
-    /// Top-level jobs (searches with their child runs) that ended before `cutoff_ms` (Unix
-    /// ms), oldest first, at most `limit`: what the retention sweeper deletes.
-    fn finished_before(&self, cutoff_ms: i64, limit: usize) -> Result<Vec<Uuid>, StoreError> {
-        let _ = (cutoff_ms, limit);
-        Ok(Vec::new())
-    }
-    /// Remove a finished job (and a search's child runs) from the store. The caller removes
-    /// its artifacts.
-    fn delete(&self, id: Uuid) -> Result<DeleteOutcome, StoreError> {
-        let _ = id;
-        Err(StoreError::Unsupported("delete jobs"))
-    }
-    fn get(&self, id: Uuid) -> Result<Option<JobRecord>, StoreError>;
-    /// Atomically move the oldest queued job to `running` (attempts + 1) and return it.
-    fn claim(&self) -> Result<Option<JobRecord>, StoreError>;
-    /// Record progress of a running job (0..1).
-    fn set_progress(&self, id: Uuid, progress: f64) -> Result<(), StoreError>;
-    /// Move a running job to a terminal status.
-    fn finish(&self, id: Uuid, finish: &Finish) -> Result<(), StoreError>;
-    /// Put a running job back in the queue (graceful shutdown); `refund` gives back the attempt.
-    fn requeue(&self, id: Uuid, refund: bool) -> Result<(), StoreError>;
-    fn request_cancel(&self, id: Uuid) -> Result<CancelOutcome, StoreError>;
-    /// Start-up recovery: jobs left `running` by a server that died go back to `queued`, unless
-    /// they have already been started `max_attempts` times (then they fail: a job that keeps
-    /// killing the server must not keep killing it). Returns (requeued, failed).
-    fn recover(&self, max_attempts: u32) -> Result<(usize, usize), StoreError>;
-    fn counts(&self) -> Result<Counts, StoreError>;
-    /// The most recent jobs, newest first, at most `limit`, optionally of one kind, for the
-    /// web page's queue (`GET /v1/jobs`). Their `request` is left out (`Null`): a record
-    /// embedded in it can be megabytes, and a listing never needs it.
-    fn list_recent(
-        &self,
-        limit: usize,
-        kind: Option<JobKind>,
-    ) -> Result<Vec<JobRecord>, StoreError> {
-        self.list_owned(limit, kind, None)
-    }
-    /// [`JobStore::list_recent`] of one owner's jobs (`None`: everyone's).
-    fn list_owned(
-        &self,
-        limit: usize,
-        kind: Option<JobKind>,
-        owner: Option<&str>,
-    ) -> Result<Vec<JobRecord>, StoreError> {
-        let _ = (limit, kind, owner);
-        Err(StoreError::Unsupported("list jobs"))
-    }
-    /// Fan a running job out, in one transaction: insert `children` (queued, `parent` = `id`)
-    /// and park the job in `waiting`, giving its claim back (attempts − 1: waiting is not a
-    /// crash) and setting its progress. When no child of the job is left unfinished (they all
-    /// ended before this call), the job goes straight back to the queue instead. The end of
-    /// the last child requeues a waiting job (in the child's `finish` transaction); a child
-    /// that fails fails it with the child's error; cancelling it cancels its children.
-    /// Returns false, changing nothing, when `id` is not running (under this process's claim).
-    fn fan_out(&self, id: Uuid, children: &[NewJob], progress: f64) -> Result<bool, StoreError> {
-        let _ = (id, children, progress);
-        Err(StoreError::Unsupported("fan jobs out"))
-    }
-    /// Every child job of `id`, oldest first, with requests and results.
-    fn children(&self, id: Uuid) -> Result<Vec<JobRecord>, StoreError> {
-        let _ = id;
-        Ok(Vec::new())
-    }
-}
-
-/// Unix time in milliseconds.
-pub fn now_ms() -> i64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_millis() as i64)
-        .unwrap_or(0)
-}
-
-/// RFC 3339 UTC timestamp (`2026-11-22T12:00:00.000Z`) from Unix milliseconds.
-pub fn rfc3339(ms: i64) -> String {
-    let secs = ms.div_euclid(1000);
-    let milli = ms.rem_euclid(1000);
-    let days = secs.div_euclid(86_400);
-    let sod = secs.rem_euclid(86_400);
-    // Civil date from days since 1970-01-01 (H. Hinnant's algorithm).
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!(
-        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}.{milli:03}Z",
-        sod / 3600,
-        sod % 3600 / 60,
-        sod % 60
-    )
-}
-
 /// The embedded store: SQLite in WAL mode, `synchronous = FULL` so that a job acknowledged with
 /// 202 survives even a power cut. One writer connection and one reader connection (WAL lets
 /// readers proceed while a write commits), each behind a mutex.
@@ -386,55 +40,60 @@ pub struct SqliteStore {
     reader: Mutex<Connection>,
 }
 
-const SCHEMA: &str = "
-CREATE TABLE IF NOT EXISTS jobs (
-    seq INTEGER PRIMARY KEY AUTOINCREMENT,
-    id TEXT NOT NULL UNIQUE,
-    kind TEXT NOT NULL,
-    status TEXT NOT NULL,
-    request TEXT NOT NULL,
-    motion TEXT NOT NULL,
-    progress REAL NOT NULL DEFAULT 0,
-    result TEXT,
-    error TEXT,
-    cancel_requested INTEGER NOT NULL DEFAULT 0,
-    attempts INTEGER NOT NULL DEFAULT 0,
-    created_ms INTEGER NOT NULL,
-    started_ms INTEGER,
-    finished_ms INTEGER
-);
-CREATE INDEX IF NOT EXISTS jobs_status_seq ON jobs(status, seq);
-";
+/// Schema migrations, in order; migration k brings the schema to version k (kept in
+/// `PRAGMA user_version`).
+pub const MIGRATIONS: &[(i32, &str)] = &[
+    (1, include_str!("../migrations/sqlite/0001_jobs.sql")),
+    (2, include_str!("../migrations/sqlite/0002_parent.sql")),
+    (3, include_str!("../migrations/sqlite/0003_owner.sql")),
+];
 
-/// Added for fanned-out searches; files created before it get the column on open.
-const SCHEMA_PARENT: &str = "
-ALTER TABLE jobs ADD COLUMN parent TEXT;
-";
-const INDEX_PARENT: &str =
-    "CREATE INDEX IF NOT EXISTS jobs_parent ON jobs(parent) WHERE parent IS NOT NULL;";
+/// The schema version this binary works with.
+pub const SCHEMA_VERSION: i32 = 3;
 
-/// Added for ownership (`--tokens`); files created before it get the column on open (their
-/// jobs have no owner: only an admin token sees them).
-const SCHEMA_OWNER: &str = "
-ALTER TABLE jobs ADD COLUMN owner TEXT;
-";
-
-/// Add a column an older database file lacks (`ddl`: its `ALTER TABLE`), once; the schemas
-/// above add the columns later versions brought.
-fn add_column_if_missing(c: &Connection, column: &str, ddl: &str) -> rusqlite::Result<()> {
-    let present = c
-        .prepare("SELECT 1 FROM pragma_table_info('jobs') WHERE name = ?1")?
-        .exists([column])?;
-    if !present {
-        c.execute_batch(ddl)?;
-    }
-    Ok(())
+/// The version of a file created before the migrations were numbered (`user_version` 0): the
+/// code then built the schema inline, adding `parent` and later `owner` with an `ALTER TABLE`
+/// on open, so the columns present tell how far it got (every such open also created the
+/// indexes of the columns it added).
+fn legacy_version(c: &Connection) -> rusqlite::Result<i32> {
+    let has = |column: &str| -> rusqlite::Result<bool> {
+        c.prepare("SELECT 1 FROM pragma_table_info('jobs') WHERE name = ?1")?
+            .exists([column])
+    };
+    Ok(if !has("id")? {
+        0
+    } else if has("owner")? {
+        3
+    } else if has("parent")? {
+        2
+    } else {
+        1
+    })
 }
 
-const INDEX_OWNER: &str = "
-CREATE INDEX IF NOT EXISTS jobs_owner ON jobs(owner, seq) WHERE owner IS NOT NULL;
-CREATE INDEX IF NOT EXISTS jobs_finished ON jobs(finished_ms) WHERE parent IS NULL;
-";
+/// Bring the schema to [`SCHEMA_VERSION`] in one immediate transaction, so that two processes
+/// opening the same file migrate once (the second waits on the busy timeout, then finds the
+/// version current).
+fn migrate(c: &mut Connection) -> Result<(), StoreError> {
+    let tx = c.transaction_with_behavior(rusqlite::TransactionBehavior::Immediate)?;
+    let mut v: i32 = tx.query_row("PRAGMA user_version", [], |r| r.get(0))?;
+    if v == 0 {
+        v = legacy_version(&tx)?;
+    }
+    if v > SCHEMA_VERSION {
+        return Err(StoreError::Schema(format!(
+            "the database schema is version {v}, newer than this ashlar understands ({SCHEMA_VERSION}); upgrade ashlar"
+        )));
+    }
+    for &(version, sql) in MIGRATIONS.iter().filter(|(k, _)| *k > v) {
+        tx.execute_batch(sql)
+            .map_err(|e| StoreError::Schema(format!("schema migration {version}: sqlite: {e}")))?;
+        tracing::info!(version, "applied schema migration");
+    }
+    tx.pragma_update(None, "user_version", SCHEMA_VERSION)?;
+    tx.commit()?;
+    Ok(())
+}
 
 const COLUMNS: &str =
     "id, kind, status, request, motion, progress, result, error, cancel_requested, attempts, created_ms, started_ms, finished_ms, parent, owner";
@@ -453,17 +112,18 @@ impl SqliteStore {
             c.pragma_update(None, "synchronous", "FULL")?;
             Ok(c)
         };
-        let writer = open()?;
-        writer.execute_batch(SCHEMA)?;
-        add_column_if_missing(&writer, "parent", SCHEMA_PARENT)?;
-        writer.execute_batch(INDEX_PARENT)?;
-        add_column_if_missing(&writer, "owner", SCHEMA_OWNER)?;
-        writer.execute_batch(INDEX_OWNER)?;
+        let mut writer = open()?;
+        migrate(&mut writer)?;
         let reader = open()?;
         Ok(Self {
             writer: Mutex::new(writer),
             reader: Mutex::new(reader),
         })
+    }
+
+    /// The installed schema version (`PRAGMA user_version`).
+    pub fn schema_version(&self) -> Result<i32, StoreError> {
+        self.read(|c| Ok(c.query_row("PRAGMA user_version", [], |r| r.get(0))?))
     }
 
     fn write<T>(
@@ -657,8 +317,9 @@ impl JobStore for SqliteStore {
             let sql = format!(
                 "UPDATE jobs SET status = 'running', attempts = attempts + 1, started_ms = ?1,
                         progress = CASE WHEN kind = 'pga_search' THEN progress ELSE 0 END
-                 WHERE seq = (SELECT seq FROM jobs WHERE status = 'queued' ORDER BY seq LIMIT 1)
-                 RETURNING {COLUMNS}"
+                 WHERE seq = (SELECT seq FROM jobs WHERE {} ORDER BY seq LIMIT 1)
+                 RETURNING {COLUMNS}",
+                jobs::guard(&Event::Claim)
             );
             c.query_row(&sql, params![now_ms()], row_to_record)
                 .optional()?
@@ -669,7 +330,10 @@ impl JobStore for SqliteStore {
     fn set_progress(&self, id: Uuid, progress: f64) -> Result<(), StoreError> {
         self.write(|c| {
             c.execute(
-                "UPDATE jobs SET progress = ?2 WHERE id = ?1 AND status = 'running'",
+                &format!(
+                    "UPDATE jobs SET progress = ?2 WHERE id = ?1 AND {}",
+                    jobs::guard(&Event::Progress)
+                ),
                 params![id.to_string(), progress.clamp(0.0, 1.0)],
             )?;
             Ok(())
@@ -677,20 +341,21 @@ impl JobStore for SqliteStore {
     }
 
     fn finish(&self, id: Uuid, finish: &Finish) -> Result<(), StoreError> {
-        let (status, result, error, progress) = match finish {
-            Finish::Succeeded(v) => ("succeeded", Some(v.to_string()), None, Some(1.0)),
-            Finish::Failed(e) => ("failed", None, Some(e.clone()), None),
-            Finish::Cancelled(v) => ("cancelled", v.as_ref().map(|v| v.to_string()), None, None),
-        };
+        let end = finish.end();
+        let (result, error, progress) = finish.columns();
+        let status = end.status().as_str();
         self.write(|c| {
             let tx = c.transaction()?;
             let n = tx.execute(
-                "UPDATE jobs SET status = ?2, result = ?3, error = ?4, progress = COALESCE(?5, progress), finished_ms = ?6
-                 WHERE id = ?1 AND status = 'running'",
+                &format!(
+                    "UPDATE jobs SET status = ?2, result = ?3, error = ?4, progress = COALESCE(?5, progress), finished_ms = ?6
+                     WHERE id = ?1 AND {}",
+                    jobs::guard(&Event::Finish(end))
+                ),
                 params![id.to_string(), status, result, error, progress, now_ms()],
             )?;
             if n == 1 {
-                child_ended(&tx, id, status)?;
+                child_ended(&tx, id, end)?;
             }
             tx.commit()?;
             Ok(())
@@ -700,9 +365,12 @@ impl JobStore for SqliteStore {
     fn requeue(&self, id: Uuid, refund: bool) -> Result<(), StoreError> {
         self.write(|c| {
             c.execute(
-                "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL,
-                        attempts = CASE WHEN ?2 THEN MAX(attempts - 1, 0) ELSE attempts END
-                 WHERE id = ?1 AND status = 'running'",
+                &format!(
+                    "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL,
+                            attempts = CASE WHEN ?2 THEN MAX(attempts - 1, 0) ELSE attempts END
+                     WHERE id = ?1 AND {}",
+                    jobs::guard(&Event::Requeue { refund })
+                ),
                 params![id.to_string(), refund],
             )?;
             Ok(())
@@ -712,27 +380,32 @@ impl JobStore for SqliteStore {
     fn request_cancel(&self, id: Uuid) -> Result<CancelOutcome, StoreError> {
         self.write(|c| {
             let tx = c.transaction()?;
-            let status: Option<String> =
-                tx.query_row("SELECT status FROM jobs WHERE id = ?1", params![id.to_string()], |r| r.get(0)).optional()?;
-            let Some(status) = status else {
-                return Ok(CancelOutcome::NotFound);
-            };
-            let out = match JobStatus::parse(&status)? {
-                // No worker holds a queued job, nor a waiting search: it ends now, with its children.
-                JobStatus::Queued | JobStatus::Waiting => {
+            let status: Option<String> = tx
+                .query_row(
+                    "SELECT status FROM jobs WHERE id = ?1",
+                    params![id.to_string()],
+                    |r| r.get(0),
+                )
+                .optional()?;
+            let out = jobs::cancel(status.as_deref().map(JobStatus::parse).transpose()?);
+            match out {
+                // No worker holds a queued job, nor a waiting search: it ends now.
+                CancelOutcome::CancelledQueued => {
                     tx.execute(
                         "UPDATE jobs SET status = 'cancelled', cancel_requested = 1, finished_ms = ?2 WHERE id = ?1",
                         params![id.to_string(), now_ms()],
                     )?;
-                    CancelOutcome::CancelledQueued
                 }
-                JobStatus::Running => {
-                    tx.execute("UPDATE jobs SET cancel_requested = 1 WHERE id = ?1", params![id.to_string()])?;
-                    CancelOutcome::Requested
+                // Its worker stops it within one step.
+                CancelOutcome::Requested => {
+                    tx.execute(
+                        "UPDATE jobs SET cancel_requested = 1 WHERE id = ?1",
+                        params![id.to_string()],
+                    )?;
                 }
-                s => CancelOutcome::AlreadyFinished(s),
-            };
-            if !matches!(out, CancelOutcome::AlreadyFinished(_)) {
+                CancelOutcome::AlreadyFinished(_) | CancelOutcome::NotFound => {}
+            }
+            if jobs::cancel_reaches_children(out) {
                 cancel_children(&tx, id)?;
             }
             tx.commit()?;
@@ -740,34 +413,61 @@ impl JobStore for SqliteStore {
         })
     }
 
+    /// Start-up recovery: every job left running belongs to a server that died (only one
+    /// server runs jobs on a file), so each is recovered by [`jobs::recover`].
     fn recover(&self, max_attempts: u32) -> Result<(usize, usize), StoreError> {
         self.write(|c| {
             let tx = c.transaction()?;
-            let failed = tx.execute(
-                "UPDATE jobs SET status = 'failed', finished_ms = ?2,
-                        error = 'the server stopped ' || attempts || ' times while running this job; not retried again'
-                 WHERE status = 'running' AND attempts >= ?1",
-                params![i64::from(max_attempts), now_ms()],
-            )?;
-            // A cancel requested before the crash is honoured now rather than rerunning the job.
-            tx.execute(
-                "UPDATE jobs SET status = 'cancelled', finished_ms = ?1 WHERE status = 'running' AND cancel_requested = 1",
-                params![now_ms()],
-            )?;
-            let requeued =
-                tx.execute("UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL WHERE status = 'running'", [])?;
+            let running: Vec<(i64, i64, bool)> = tx
+                .prepare(&format!(
+                    "SELECT seq, attempts, cancel_requested != 0 FROM jobs WHERE {} ORDER BY seq",
+                    jobs::guard(&Event::Recover(jobs::Recovery::Requeue))
+                ))?
+                .query_map([], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)))?
+                .collect::<Result<_, _>>()?;
+            let (mut requeued, mut ended) = (0, 0);
+            for (seq, attempts, cancel) in running {
+                let attempts = u32::try_from(attempts).unwrap_or(u32::MAX);
+                match jobs::recover(attempts, max_attempts, cancel, jobs::Abandoned::ServerStopped) {
+                    jobs::Recovery::Requeue => {
+                        tx.execute(
+                            "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL WHERE seq = ?1",
+                            params![seq],
+                        )?;
+                        requeued += 1;
+                    }
+                    jobs::Recovery::Fail(error) => {
+                        tx.execute(
+                            "UPDATE jobs SET status = 'failed', finished_ms = ?2, error = ?3 WHERE seq = ?1",
+                            params![seq, now_ms(), error],
+                        )?;
+                        ended += 1;
+                    }
+                    jobs::Recovery::Cancel => {
+                        tx.execute(
+                            "UPDATE jobs SET status = 'cancelled', finished_ms = ?2 WHERE seq = ?1",
+                            params![seq, now_ms()],
+                        )?;
+                        ended += 1;
+                    }
+                }
+            }
             // Children failed or cancelled above end their searches; and a search whose
             // children all ended is never left waiting.
             let parents: Vec<String> = tx
-                .prepare("SELECT id FROM jobs WHERE status = 'waiting'")?
+                .prepare(&format!(
+                    "SELECT id FROM jobs WHERE {}",
+                    jobs::guard(&Event::Settle(jobs::Settlement::Wait))
+                ))?
                 .query_map([], |r| r.get(0))?
                 .collect::<Result<_, _>>()?;
             for p in parents {
-                let p = Uuid::parse_str(&p).map_err(|e| StoreError::corrupt("id", format!("{p:?}: {e}")))?;
+                let p = Uuid::parse_str(&p)
+                    .map_err(|e| StoreError::corrupt("id", format!("{p:?}: {e}")))?;
                 settle(&tx, p)?;
             }
             tx.commit()?;
-            Ok((requeued, failed))
+            Ok((requeued, ended))
         })
     }
 
@@ -797,8 +497,11 @@ impl JobStore for SqliteStore {
         self.write(|c| {
             let tx = c.transaction()?;
             let n = tx.execute(
-                "UPDATE jobs SET status = 'waiting', attempts = MAX(attempts - 1, 0), progress = MAX(progress, ?2)
-                 WHERE id = ?1 AND status = 'running'",
+                &format!(
+                    "UPDATE jobs SET status = 'waiting', attempts = MAX(attempts - 1, 0), progress = MAX(progress, ?2)
+                     WHERE id = ?1 AND {}",
+                    jobs::guard(&Event::FanOut)
+                ),
                 params![id.to_string(), progress.clamp(0.0, 1.0)],
             )?;
             if n == 0 {
@@ -858,9 +561,9 @@ impl JobStore for SqliteStore {
     }
 }
 
-/// A job ended with `status`: if it is a child run, add its share to its waiting search's
-/// progress and settle the search.
-fn child_ended(tx: &rusqlite::Transaction<'_>, id: Uuid, status: &str) -> Result<(), StoreError> {
+/// A job ended (`end`): if it is a child run, add its share to its waiting search's progress
+/// and settle the search.
+fn child_ended(tx: &rusqlite::Transaction<'_>, id: Uuid, end: jobs::End) -> Result<(), StoreError> {
     let parent: Option<String> = tx
         .query_row(
             "SELECT parent FROM jobs WHERE id = ?1",
@@ -874,20 +577,22 @@ fn child_ended(tx: &rusqlite::Transaction<'_>, id: Uuid, status: &str) -> Result
     };
     let parent = Uuid::parse_str(&parent)
         .map_err(|e| StoreError::corrupt("parent", format!("{parent:?}: {e}")))?;
-    if status == "succeeded" {
+    if end == jobs::End::Succeeded {
         tx.execute(
-            "UPDATE jobs SET progress = MIN(0.99, progress + COALESCE(
-                 (SELECT json_extract(request, '$.progress_step') FROM jobs WHERE id = ?2), 0))
-             WHERE id = ?1 AND status = 'waiting'",
-            params![parent.to_string(), id.to_string()],
+            &format!(
+                "UPDATE jobs SET progress = MIN(?3, progress + COALESCE(
+                     (SELECT json_extract(request, '$.progress_step') FROM jobs WHERE id = ?2), 0))
+                 WHERE id = ?1 AND {}",
+                jobs::guard(&Event::Settle(jobs::Settlement::Wait))
+            ),
+            params![parent.to_string(), id.to_string(), jobs::CHILD_PROGRESS_CAP],
         )?;
     }
     settle(tx, parent)
 }
 
-/// Settle a waiting search: a failed (or cancelled) child fails it with the child's error and
-/// cancels the other children; when no child is left unfinished it goes back to the queue,
-/// where a worker replays it from its children's results.
+/// Apply [`jobs::settle`] to a search: read its children's facts, write the decision (a failed
+/// search also cancels its other children).
 fn settle(tx: &rusqlite::Transaction<'_>, parent: Uuid) -> Result<(), StoreError> {
     let p = parent.to_string();
     let status: Option<String> = tx
@@ -895,56 +600,72 @@ fn settle(tx: &rusqlite::Transaction<'_>, parent: Uuid) -> Result<(), StoreError
             r.get(0)
         })
         .optional()?;
-    if status.as_deref() != Some("waiting") {
+    let status = status.as_deref().map(JobStatus::parse).transpose()?;
+    if status
+        .and_then(|s| jobs::next(s, &Event::Settle(jobs::Settlement::Wait)))
+        .is_none()
+    {
         return Ok(());
     }
-    let bad: Option<(String, Option<String>)> = tx
+    let first_bad: Option<(String, Option<String>)> = tx
         .query_row(
-            "SELECT status, error FROM jobs WHERE parent = ?1 AND status IN ('failed', 'cancelled') ORDER BY seq LIMIT 1",
+            &format!(
+                "SELECT status, error FROM jobs WHERE parent = ?1 AND {} ORDER BY seq LIMIT 1",
+                jobs::child_bad_sql()
+            ),
             params![p],
             |r| Ok((r.get(0)?, r.get(1)?)),
         )
         .optional()?;
-    if let Some((st, err)) = bad {
-        tx.execute(
-            "UPDATE jobs SET status = 'failed', error = ?2, finished_ms = ?3 WHERE id = ?1",
-            params![p, child_error(&st, err), now_ms()],
-        )?;
-        cancel_children(tx, parent)?;
-        return Ok(());
-    }
     let unfinished: i64 = tx.query_row(
-        "SELECT COUNT(*) FROM jobs WHERE parent = ?1 AND status IN ('queued', 'running')",
+        &format!(
+            "SELECT COUNT(*) FROM jobs WHERE parent = ?1 AND {}",
+            jobs::child_unfinished_sql()
+        ),
         params![p],
         |r| r.get(0),
     )?;
-    if unfinished == 0 {
-        tx.execute(
-            "UPDATE jobs SET status = 'queued', started_ms = NULL WHERE id = ?1",
-            params![p],
-        )?;
+    let children = jobs::Children {
+        first_bad: first_bad
+            .map(|(s, e)| Ok::<_, StoreError>((JobStatus::parse(&s)?, e)))
+            .transpose()?,
+        unfinished: u64::try_from(unfinished).unwrap_or(0),
+    };
+    match jobs::settle(&children) {
+        jobs::Settlement::Wait => {}
+        jobs::Settlement::Requeue => {
+            tx.execute(
+                "UPDATE jobs SET status = 'queued', started_ms = NULL WHERE id = ?1",
+                params![p],
+            )?;
+        }
+        jobs::Settlement::Fail(error) => {
+            tx.execute(
+                "UPDATE jobs SET status = 'failed', error = ?2, finished_ms = ?3 WHERE id = ?1",
+                params![p, error, now_ms()],
+            )?;
+            cancel_children(tx, parent)?;
+        }
     }
     Ok(())
 }
 
-/// The error a search fails with when one of its child runs ended `status` with `error`.
-pub(crate) fn child_error(status: &str, error: Option<String>) -> String {
-    match (status, error) {
-        (_, Some(e)) => e,
-        ("cancelled", None) => "a run of the search was cancelled".into(),
-        (_, None) => "a run of the search failed".into(),
-    }
-}
-
-/// Cancel the unfinished children of a job: queued ones at once, running ones by request.
+/// Cancel the unfinished children of a job as [`jobs::cancel`] says: queued ones end at once,
+/// running ones get a cancel request.
 fn cancel_children(tx: &rusqlite::Transaction<'_>, parent: Uuid) -> Result<(), StoreError> {
     let p = parent.to_string();
     tx.execute(
-        "UPDATE jobs SET status = 'cancelled', cancel_requested = 1, finished_ms = ?2 WHERE parent = ?1 AND status = 'queued'",
+        &format!(
+            "UPDATE jobs SET status = 'cancelled', cancel_requested = 1, finished_ms = ?2 WHERE parent = ?1 AND {}",
+            jobs::guard_to(&Event::Cancel, JobStatus::Cancelled)
+        ),
         params![p, now_ms()],
     )?;
     tx.execute(
-        "UPDATE jobs SET cancel_requested = 1 WHERE parent = ?1 AND status = 'running'",
+        &format!(
+            "UPDATE jobs SET cancel_requested = 1 WHERE parent = ?1 AND {}",
+            jobs::guard_to(&Event::Cancel, JobStatus::Running)
+        ),
         params![p],
     )?;
     Ok(())
@@ -971,14 +692,6 @@ mod tests {
             motion: serde_json::json!({"pga": 2.0}),
             owner: None,
         }
-    }
-
-    #[test]
-    fn rfc3339_matches_known_instants() {
-        // Reference values from `date -u -d @SECONDS`.
-        assert_eq!(rfc3339(0), "1970-01-01T00:00:00.000Z");
-        assert_eq!(rfc3339(951_782_400_123), "2000-02-29T00:00:00.123Z");
-        assert_eq!(rfc3339(1_795_349_400_000), "2026-11-22T12:10:00.000Z");
     }
 
     #[test]
@@ -1033,6 +746,26 @@ mod tests {
         let r = s.get(a.id).expect("get").expect("exists");
         assert_eq!(r.status, JobStatus::Failed);
         assert!(r.error.unwrap_or_default().contains("3 times"));
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn recovery_honours_a_cancel_requested_before_the_crash() {
+        let (s, dir) = temp_store();
+        let (a, b) = (job(JobKind::Run), job(JobKind::Run));
+        s.insert(&a).expect("insert");
+        s.insert(&b).expect("insert");
+        s.claim().expect("claim");
+        s.claim().expect("claim");
+        s.request_cancel(a.id).expect("cancel");
+        s.request_cancel(b.id).expect("cancel");
+        // `a` at its first start, `b` at max_attempts = 1: both end cancelled, as the
+        // cluster store's reaper does (the cancel wins over the attempts limit).
+        assert_eq!(s.recover(1).expect("recover"), (0, 2));
+        for id in [a.id, b.id] {
+            let r = s.get(id).expect("get").expect("job");
+            assert_eq!((r.status, r.error), (JobStatus::Cancelled, None));
+        }
         std::fs::remove_dir_all(dir).ok();
     }
 
@@ -1177,6 +910,183 @@ mod tests {
         assert_eq!(r.progress, 1.0);
         assert_eq!(r.result.as_deref(), Some(r#"{"ok":true}"#));
         assert!(r.finished_ms.is_some());
+        std::fs::remove_dir_all(dir).ok();
+    }
+}
+
+/// Databases created before the migrations were numbered must still open.
+#[cfg(test)]
+mod legacy_schema_tests {
+    use super::*;
+
+    /// The schema exactly as the code before numbered migrations built it on open (its
+    /// `SCHEMA` constant, copied verbatim), without the columns added later.
+    const OLD_SCHEMA_V1: &str = "
+CREATE TABLE IF NOT EXISTS jobs (
+    seq INTEGER PRIMARY KEY AUTOINCREMENT,
+    id TEXT NOT NULL UNIQUE,
+    kind TEXT NOT NULL,
+    status TEXT NOT NULL,
+    request TEXT NOT NULL,
+    motion TEXT NOT NULL,
+    progress REAL NOT NULL DEFAULT 0,
+    result TEXT,
+    error TEXT,
+    cancel_requested INTEGER NOT NULL DEFAULT 0,
+    attempts INTEGER NOT NULL DEFAULT 0,
+    created_ms INTEGER NOT NULL,
+    started_ms INTEGER,
+    finished_ms INTEGER
+);
+CREATE INDEX IF NOT EXISTS jobs_status_seq ON jobs(status, seq);
+";
+    /// What that code's open then added (`add_column_if_missing` and the index constants).
+    const OLD_PARENT: &str = "ALTER TABLE jobs ADD COLUMN parent TEXT;
+CREATE INDEX IF NOT EXISTS jobs_parent ON jobs(parent) WHERE parent IS NOT NULL;";
+    const OLD_OWNER: &str = "ALTER TABLE jobs ADD COLUMN owner TEXT;
+CREATE INDEX IF NOT EXISTS jobs_owner ON jobs(owner, seq) WHERE owner IS NOT NULL;
+CREATE INDEX IF NOT EXISTS jobs_finished ON jobs(finished_ms) WHERE parent IS NULL;";
+
+    fn temp_path(name: &str) -> (std::path::PathBuf, std::path::PathBuf) {
+        let dir = std::env::temp_dir().join(format!("ashlar-legacy-{name}-{}", Uuid::new_v4()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        (dir.join("jobs.sqlite"), dir)
+    }
+
+    /// Write an old-style file: `ddl`, then one queued and one succeeded job as the old code
+    /// inserted them (no user_version set: 0).
+    fn old_file(path: &Path, ddl: &[&str]) -> (Uuid, Uuid) {
+        let c = Connection::open(path).expect("open raw");
+        c.pragma_update(None, "journal_mode", "WAL").expect("wal");
+        for d in ddl {
+            c.execute_batch(d).expect("old ddl");
+        }
+        let (q, s) = (Uuid::new_v4(), Uuid::new_v4());
+        c.execute(
+            "INSERT INTO jobs (id, kind, status, request, motion, created_ms) VALUES (?1, 'run', 'queued', '{\"a\":1}', '{\"pga\":2.0}', 1)",
+            params![q.to_string()],
+        )
+        .expect("insert queued");
+        c.execute(
+            "INSERT INTO jobs (id, kind, status, request, motion, created_ms, finished_ms, result, progress, attempts)
+             VALUES (?1, 'pga_search', 'succeeded', '{}', '{}', 2, 3, '{\"ok\":true}', 1.0, 1)",
+            params![s.to_string()],
+        )
+        .expect("insert done");
+        let v: i32 = c
+            .query_row("PRAGMA user_version", [], |r| r.get(0))
+            .expect("version");
+        assert_eq!(v, 0, "old files carry no schema version");
+        (q, s)
+    }
+
+    fn columns(path: &Path) -> Vec<String> {
+        let c = Connection::open(path).expect("open raw");
+        let mut st = c
+            .prepare("SELECT name FROM pragma_table_info('jobs') ORDER BY cid")
+            .expect("prepare");
+        st.query_map([], |r| r.get(0))
+            .expect("query")
+            .collect::<Result<_, _>>()
+            .expect("rows")
+    }
+
+    /// Open an old file with the new code and use it: its jobs read back, the queue order
+    /// holds, a search fans out (needs `parent`), owners are listed (needs `owner`).
+    fn opens_and_works(path: &Path, queued: Uuid, done: Uuid) {
+        let s = SqliteStore::open(path).expect("the new code opens the old file");
+        assert_eq!(s.schema_version().expect("version"), SCHEMA_VERSION);
+        let d = s.get(done).expect("get").expect("old finished job");
+        assert_eq!(d.status, JobStatus::Succeeded);
+        assert_eq!(d.result.as_deref(), Some(r#"{"ok":true}"#));
+        assert_eq!((d.parent, d.owner), (None, None));
+        let mine = NewJob {
+            id: Uuid::new_v4(),
+            kind: JobKind::PgaSearch,
+            request: serde_json::json!({}),
+            motion: serde_json::json!({}),
+            owner: Some("aaaa".into()),
+        };
+        s.insert(&mine).expect("insert new");
+        let first = s.claim().expect("claim").expect("the old queued job");
+        assert_eq!((first.id, first.attempts), (queued, 1));
+        let search = s.claim().expect("claim").expect("the new job");
+        assert_eq!(search.id, mine.id);
+        let child = NewJob {
+            id: Uuid::new_v4(),
+            kind: JobKind::PgaRun,
+            request: serde_json::json!({"progress_step": 0.5}),
+            motion: serde_json::json!({}),
+            owner: None,
+        };
+        assert!(s
+            .fan_out(mine.id, std::slice::from_ref(&child), 0.1)
+            .expect("fan out"));
+        let c = s.get(child.id).expect("get").expect("child");
+        assert_eq!(
+            (c.parent, c.owner.as_deref()),
+            (Some(mine.id), Some("aaaa"))
+        );
+        assert_eq!(s.list_owned(10, None, Some("aaaa")).expect("list").len(), 1);
+        drop(s);
+        // Reopening a migrated file changes nothing.
+        let s = SqliteStore::open(path).expect("reopen");
+        assert_eq!(s.schema_version().expect("version"), SCHEMA_VERSION);
+        assert_eq!(s.counts().expect("counts").waiting, 1);
+    }
+
+    #[test]
+    fn a_file_of_the_last_inline_schema_opens() {
+        let (path, dir) = temp_path("v3");
+        let (q, d) = old_file(&path, &[OLD_SCHEMA_V1, OLD_PARENT, OLD_OWNER]);
+        let before = columns(&path);
+        opens_and_works(&path, q, d);
+        assert_eq!(columns(&path), before, "no column added or lost");
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn files_from_before_parent_and_owner_get_both_columns() {
+        for (name, ddl) in [
+            ("v1", &[OLD_SCHEMA_V1][..]),
+            ("v2", &[OLD_SCHEMA_V1, OLD_PARENT][..]),
+        ] {
+            let (path, dir) = temp_path(name);
+            let (q, d) = old_file(&path, ddl);
+            opens_and_works(&path, q, d);
+            let cols = columns(&path);
+            assert_eq!(&cols[cols.len() - 2..], ["parent", "owner"], "{name}");
+            std::fs::remove_dir_all(dir).ok();
+        }
+    }
+
+    #[test]
+    fn a_fresh_file_has_the_same_columns_as_a_migrated_old_one() {
+        let (fresh, dir) = temp_path("fresh");
+        drop(SqliteStore::open(&fresh).expect("open"));
+        let (old, dir2) = temp_path("old");
+        old_file(&old, &[OLD_SCHEMA_V1, OLD_PARENT, OLD_OWNER]);
+        drop(SqliteStore::open(&old).expect("open"));
+        assert_eq!(columns(&fresh), columns(&old));
+        std::fs::remove_dir_all(dir).ok();
+        std::fs::remove_dir_all(dir2).ok();
+    }
+
+    #[test]
+    fn a_newer_schema_is_refused() {
+        let (path, dir) = temp_path("newer");
+        drop(SqliteStore::open(&path).expect("open"));
+        let c = Connection::open(&path).expect("raw");
+        c.pragma_update(None, "user_version", 99).expect("set");
+        drop(c);
+        let e = match SqliteStore::open(&path) {
+            Ok(_) => panic!("a newer schema must be refused"),
+            Err(e) => e,
+        };
+        assert!(
+            matches!(&e, StoreError::Schema(m) if m.contains("version 99") && m.contains("upgrade ashlar")),
+            "{e}"
+        );
         std::fs::remove_dir_all(dir).ok();
     }
 }

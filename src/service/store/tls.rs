@@ -1,6 +1,6 @@
 //! TLS for the PostgreSQL job store: reads libpq's connection parameters `sslmode`,
 //! `sslrootcert`, `sslcert`, `sslkey` and `sslcrl` from a `--database postgres://…` URL and makes
-//! connections through rustls (pure Rust, `ring` provider). Beside `pg_store`, which opens
+//! connections through rustls (pure Rust, `ring` provider). Beside `store::postgres`, which opens
 //! every connection (pool and `LISTEN`) through [`PgTarget::connect`].
 //!
 //! The modes follow libpq (<https://www.postgresql.org/docs/current/libpq-ssl.html>):
@@ -19,6 +19,9 @@
 //! certificate (for `hostssl … cert` in `pg_hba.conf`). Over a Unix socket `sslmode` is
 //! ignored, as in libpq. A parameter the URL does not set is taken, as libpq does, from the
 //! environment: `PGSSLMODE`, `PGSSLROOTCERT`, `PGSSLCERT`, `PGSSLKEY`, `PGSSLCRL` (empty means unset).
+//!
+//! Over 600 lines: the `sslmode` table, certificate and revocation-list loading, the verifier
+//! and their unit tests belong together.
 use postgres::config::{Host, SslMode as PgSslMode};
 use postgres::{Client, NoTls};
 use rustls::client::danger::{HandshakeSignatureValid, ServerCertVerified, ServerCertVerifier};

@@ -1,6 +1,8 @@
 //! The cluster job store: [`JobStore`] on PostgreSQL, for any number of API and worker
 //! processes on any number of machines (`ashlar serve|worker --database postgres://…`).
-//! Sits beside `store` (the embedded SQLite store) under `worker`/`routes`.
+//! Sits under `store` beside `sqlite` (the embedded store); applies the state machine of
+//! [`crate::service::jobs`]. Its background threads (listener, keeper) live in
+//! `service::cluster`, above the worker: the store does not know the worker.
 //!
 //! - **Claim**: `UPDATE … FROM (SELECT … FOR UPDATE SKIP LOCKED LIMIT 1)`: concurrent claimers
 //!   skip each other's locked rows, so two workers never get the same job and never wait.
@@ -13,29 +15,30 @@
 //!   failing those already started `max_attempts` times.
 //! - **Wake-up and cancel**: `NOTIFY ashlar_work` on every new or requeued job wakes idle
 //!   workers at once; `NOTIFY ashlar_cancel, '<id>'` reaches the process running the job.
-//! - **Migrations**: `migrations/NNNN_*.sql`, applied in order under an advisory lock, the
+//! - **Migrations**: `src/service/migrations/postgres/NNNN_*.sql`, applied in order under an advisory lock, the
 //!   version kept in `ashlar_schema_version`.
+//!
+//! Over 600 lines: one `JobStore` implementation plus its leases, heartbeats, attempt log and
+//! migrations, which share its connection pool and SQL (its tests are `tests/service/pg_*.rs`).
 //!
 //! The sync `postgres` client fits the sync [`JobStore`] trait, which is called from worker
 //! threads and `spawn_blocking` (never from the async runtime's own threads).
-use super::store::{
-    now_ms, Backend, CancelOutcome, Counts, Finish, JobKind, JobRecord, JobStatus, JobStore,
-    NewJob, StoreError,
+use super::{
+    now_ms, Backend, CancelOutcome, Counts, DeleteOutcome, Finish, JobKind, JobRecord, JobStatus,
+    JobStore, NewJob, QueueFull, StoreError,
 };
-use super::worker::Core;
-use postgres::fallible_iterator::FallibleIterator;
+use crate::service::jobs::{self, Event};
 use postgres::{Client, Row};
 use std::collections::HashMap;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::sync::Mutex;
+use std::time::Duration;
 use uuid::Uuid;
 
 /// Schema migrations, in order; migration k brings the schema to version k.
 pub const MIGRATIONS: &[(i32, &str)] = &[
-    (1, include_str!("migrations/0001_jobs.sql")),
-    (2, include_str!("migrations/0002_leases.sql")),
-    (3, include_str!("migrations/0003_owner.sql")),
+    (1, include_str!("../migrations/postgres/0001_jobs.sql")),
+    (2, include_str!("../migrations/postgres/0002_leases.sql")),
+    (3, include_str!("../migrations/postgres/0003_owner.sql")),
 ];
 
 /// The schema version this binary works with.
@@ -95,7 +98,7 @@ pub struct Heartbeat {
 /// PostgreSQL job store. Connections are pooled (one per concurrently calling thread).
 pub struct PgStore {
     /// Client configuration and TLS (`sslmode`, `sslrootcert`…), see `pg_tls`.
-    target: super::pg_tls::PgTarget,
+    target: super::tls::PgTarget,
     pool: Mutex<Vec<Client>>,
     /// `host:pid`, recorded with each claim.
     worker_name: String,
@@ -142,8 +145,8 @@ fn row_to_record(row: &Row) -> Result<JobRecord, StoreError> {
     let attempts: i32 = row.try_get(9)?;
     Ok(JobRecord {
         id: row.try_get(0)?,
-        kind: parse_kind(&kind)?,
-        status: parse_status(&status)?,
+        kind: JobKind::parse(&kind)?,
+        status: JobStatus::parse(&status)?,
         request: json(3, "request")?,
         motion: json(4, "motion")?,
         progress: row.try_get(5)?,
@@ -159,35 +162,13 @@ fn row_to_record(row: &Row) -> Result<JobRecord, StoreError> {
     })
 }
 
-fn parse_kind(s: &str) -> Result<JobKind, StoreError> {
-    match s {
-        "run" => Ok(JobKind::Run),
-        "pga_search" => Ok(JobKind::PgaSearch),
-        "pga_run" => Ok(JobKind::PgaRun),
-        "site_analysis" => Ok(JobKind::SiteAnalysis),
-        other => Err(StoreError::corrupt("job kind", format!("{other:?}"))),
-    }
-}
-
-fn parse_status(s: &str) -> Result<JobStatus, StoreError> {
-    Ok(match s {
-        "queued" => JobStatus::Queued,
-        "running" => JobStatus::Running,
-        "succeeded" => JobStatus::Succeeded,
-        "failed" => JobStatus::Failed,
-        "cancelled" => JobStatus::Cancelled,
-        "waiting" => JobStatus::Waiting,
-        other => return Err(StoreError::corrupt("job status", format!("{other:?}"))),
-    })
-}
-
 /// Check a `--database` URL names PostgreSQL and parse it, TLS parameters included
 /// (credentials are never echoed).
-pub fn parse_url(url: &str) -> Result<super::pg_tls::PgTarget, String> {
+pub fn parse_url(url: &str) -> Result<super::tls::PgTarget, String> {
     if !(url.starts_with("postgres://") || url.starts_with("postgresql://")) {
         return Err("--database: expected postgres://USER@HOST:PORT/DBNAME".into());
     }
-    super::pg_tls::parse(url)
+    super::tls::parse(url)
 }
 
 impl PgStore {
@@ -404,8 +385,7 @@ impl JobStore for PgStore {
         job: &NewJob,
         max_queued: u64,
         max_owner: u64,
-    ) -> Result<Option<super::store::QueueFull>, StoreError> {
-        use super::store::QueueFull;
+    ) -> Result<Option<QueueFull>, StoreError> {
         let max = i64::try_from(max_queued).unwrap_or(i64::MAX);
         let max_owner = i64::try_from(max_owner).unwrap_or(i64::MAX);
         self.with(|c| {
@@ -436,8 +416,7 @@ impl JobStore for PgStore {
         })
     }
 
-    fn delete(&self, id: Uuid) -> Result<super::store::DeleteOutcome, StoreError> {
-        use super::store::DeleteOutcome;
+    fn delete(&self, id: Uuid) -> Result<DeleteOutcome, StoreError> {
         self.with(|c| {
             let mut tx = c.transaction()?;
             let row = tx.query_opt(
@@ -448,7 +427,7 @@ impl JobStore for PgStore {
                 return Ok(DeleteOutcome::NotFound);
             };
             let status: String = row.try_get(0)?;
-            let status = parse_status(&status)?;
+            let status = JobStatus::parse(&status)?;
             if !status.is_terminal() {
                 return Ok(DeleteOutcome::NotFinished(status));
             }
@@ -514,10 +493,11 @@ impl JobStore for PgStore {
                         progress = CASE WHEN j.kind = 'pga_search' THEN j.progress ELSE 0 END,
                         lease_token = $2, worker = $3,
                         lease_until = now() + make_interval(secs => $4)
-                 FROM (SELECT seq FROM jobs WHERE status = 'queued' ORDER BY seq
+                 FROM (SELECT seq FROM jobs WHERE {} ORDER BY seq
                        LIMIT 1 FOR UPDATE SKIP LOCKED) next
                  WHERE j.seq = next.seq
                  RETURNING {}",
+                jobs::guard(&Event::Claim),
                 COLUMNS
                     .split(", ")
                     .map(|c| format!("j.{c}"))
@@ -550,7 +530,10 @@ impl JobStore for PgStore {
         };
         self.with(|c| {
             c.execute(
-                "UPDATE jobs SET progress = $2 WHERE id = $1 AND status = 'running' AND lease_token = $3",
+                &format!(
+                    "UPDATE jobs SET progress = $2 WHERE id = $1 AND {} AND lease_token = $3",
+                    jobs::guard(&Event::Progress)
+                ),
                 &[&id, &progress.clamp(0.0, 1.0), &token],
             )?;
             Ok(())
@@ -562,11 +545,9 @@ impl JobStore for PgStore {
             tracing::warn!(%id, "finishing a job this process does not hold; result discarded");
             return Ok(());
         };
-        let (status, result, error, progress) = match finish {
-            Finish::Succeeded(v) => ("succeeded", Some(v.to_string()), None, Some(1.0f64)),
-            Finish::Failed(e) => ("failed", None, Some(e.clone()), None),
-            Finish::Cancelled(v) => ("cancelled", v.as_ref().map(|v| v.to_string()), None, None),
-        };
+        let end = finish.end();
+        let (result, error, progress) = finish.columns();
+        let status = end.status().as_str();
         let n = self.with(|c| {
             let mut tx = c.transaction()?;
             // A child run locks its search's row first: every transaction touching both
@@ -580,18 +561,24 @@ impl JobStore for PgStore {
                 tx.execute("SELECT 1 FROM jobs WHERE id = $1 FOR UPDATE", &[&p])?;
             }
             let n = tx.execute(
-                "UPDATE jobs SET status = $2, result = $3, error = $4, progress = COALESCE($5, progress),
-                        finished_ms = $6, lease_token = NULL, lease_until = NULL
-                 WHERE id = $1 AND status = 'running' AND lease_token = $7",
+                &format!(
+                    "UPDATE jobs SET status = $2, result = $3, error = $4, progress = COALESCE($5, progress),
+                            finished_ms = $6, lease_token = NULL, lease_until = NULL
+                     WHERE id = $1 AND {} AND lease_token = $7",
+                    jobs::guard(&Event::Finish(end))
+                ),
                 &[&id, &status, &result, &error, &progress, &now_ms(), &token],
             )?;
             if let (1, Some(p)) = (n, parent) {
-                if status == "succeeded" {
+                if end == jobs::End::Succeeded {
                     tx.execute(
-                        "UPDATE jobs SET progress = LEAST(0.99, progress + COALESCE(
-                             (SELECT (request::jsonb ->> 'progress_step')::float8 FROM jobs WHERE id = $2), 0))
-                         WHERE id = $1 AND status = 'waiting'",
-                        &[&p, &id],
+                        &format!(
+                            "UPDATE jobs SET progress = LEAST($3, progress + COALESCE(
+                                 (SELECT (request::jsonb ->> 'progress_step')::float8 FROM jobs WHERE id = $2), 0))
+                             WHERE id = $1 AND {}",
+                            jobs::guard(&Event::Settle(jobs::Settlement::Wait))
+                        ),
+                        &[&p, &id, &jobs::CHILD_PROGRESS_CAP],
                     )?;
                 }
                 settle(&mut tx, p)?;
@@ -620,10 +607,13 @@ impl JobStore for PgStore {
         self.with(|c| {
             let mut tx = c.transaction()?;
             let n = tx.execute(
-                "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL,
-                        lease_token = NULL, lease_until = NULL, worker = NULL,
-                        attempts = CASE WHEN $2 THEN GREATEST(attempts - 1, 0) ELSE attempts END
-                 WHERE id = $1 AND status = 'running' AND lease_token = $3",
+                &format!(
+                    "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL,
+                            lease_token = NULL, lease_until = NULL, worker = NULL,
+                            attempts = CASE WHEN $2 THEN GREATEST(attempts - 1, 0) ELSE attempts END
+                     WHERE id = $1 AND {} AND lease_token = $3",
+                    jobs::guard(&Event::Requeue { refund })
+                ),
                 &[&id, &refund, &token],
             )?;
             if n == 1 {
@@ -644,32 +634,32 @@ impl JobStore for PgStore {
         self.with(|c| {
             let mut tx = c.transaction()?;
             let row = tx.query_opt("SELECT status FROM jobs WHERE id = $1 FOR UPDATE", &[&id])?;
-            let Some(row) = row else {
-                return Ok(CancelOutcome::NotFound);
-            };
-            let status: String = row.try_get(0)?;
-            let out = match parse_status(&status)? {
-                // No worker holds a queued job, nor a waiting search: it ends now, with its children.
-                JobStatus::Queued | JobStatus::Waiting => {
+            let status = row
+                .map(|r| r.try_get::<_, String>(0))
+                .transpose()?
+                .map(|s| JobStatus::parse(&s))
+                .transpose()?;
+            let out = jobs::cancel(status);
+            match out {
+                // No worker holds a queued job, nor a waiting search: it ends now.
+                CancelOutcome::CancelledQueued => {
                     tx.execute(
                         "UPDATE jobs SET status = 'cancelled', cancel_requested = TRUE, finished_ms = $2 WHERE id = $1",
                         &[&id, &now_ms()],
                     )?;
                     tx.execute("SELECT pg_notify($1, $2)", &[&CHANNEL_DONE, &id.to_string()])?;
-                    CancelOutcome::CancelledQueued
                 }
-                JobStatus::Running => {
+                CancelOutcome::Requested => {
                     tx.execute(
                         "UPDATE jobs SET cancel_requested = TRUE WHERE id = $1",
                         &[&id],
                     )?;
                     // Reaches the process running the job, wherever it is.
                     tx.execute("SELECT pg_notify($1, $2)", &[&CHANNEL_CANCEL, &id.to_string()])?;
-                    CancelOutcome::Requested
                 }
-                s => CancelOutcome::AlreadyFinished(s),
-            };
-            if !matches!(out, CancelOutcome::AlreadyFinished(_)) {
+                CancelOutcome::AlreadyFinished(_) | CancelOutcome::NotFound => {}
+            }
+            if jobs::cancel_reaches_children(out) {
                 cancel_children(&mut tx, id)?;
             }
             tx.commit()?;
@@ -682,13 +672,15 @@ impl JobStore for PgStore {
     /// embedded store's start-up recovery, jobs with a live lease are left alone: their
     /// workers, in other processes, are running them.
     fn recover(&self, max_attempts: u32) -> Result<(usize, usize), StoreError> {
-        let max = i32::try_from(max_attempts).unwrap_or(i32::MAX);
         self.with(|c| {
             let mut tx = c.transaction()?;
             let rows = tx.query(
-                "SELECT seq, lease_token, attempts, cancel_requested FROM jobs
-                 WHERE status = 'running' AND (lease_until IS NULL OR lease_until < now())
-                 FOR UPDATE SKIP LOCKED",
+                &format!(
+                    "SELECT seq, lease_token, attempts, cancel_requested FROM jobs
+                     WHERE {} AND (lease_until IS NULL OR lease_until < now())
+                     FOR UPDATE SKIP LOCKED",
+                    jobs::guard(&Event::Recover(jobs::Recovery::Requeue))
+                ),
                 &[],
             )?;
             let (mut requeued, mut failed) = (0, 0);
@@ -703,28 +695,33 @@ impl JobStore for PgStore {
                         &[&t],
                     )?;
                 }
-                if cancel {
-                    tx.execute(
-                        "UPDATE jobs SET status = 'cancelled', finished_ms = $2, lease_token = NULL, lease_until = NULL WHERE seq = $1",
-                        &[&seq, &now_ms()],
-                    )?;
-                    failed += 1;
-                } else if attempts >= max {
-                    tx.execute(
-                        "UPDATE jobs SET status = 'failed', finished_ms = $2, lease_token = NULL, lease_until = NULL,
-                                error = 'the worker running this job died ' || attempts || ' times; not retried again'
-                         WHERE seq = $1",
-                        &[&seq, &now_ms()],
-                    )?;
-                    failed += 1;
-                } else {
-                    tx.execute(
-                        "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL,
-                                lease_token = NULL, lease_until = NULL, worker = NULL
-                         WHERE seq = $1",
-                        &[&seq],
-                    )?;
-                    requeued += 1;
+                let attempts = u32::try_from(attempts).unwrap_or(0);
+                match jobs::recover(attempts, max_attempts, cancel, jobs::Abandoned::WorkerDied) {
+                    jobs::Recovery::Cancel => {
+                        tx.execute(
+                            "UPDATE jobs SET status = 'cancelled', finished_ms = $2, lease_token = NULL, lease_until = NULL WHERE seq = $1",
+                            &[&seq, &now_ms()],
+                        )?;
+                        failed += 1;
+                    }
+                    jobs::Recovery::Fail(error) => {
+                        tx.execute(
+                            "UPDATE jobs SET status = 'failed', finished_ms = $2, lease_token = NULL, lease_until = NULL,
+                                    error = $3
+                             WHERE seq = $1",
+                            &[&seq, &now_ms(), &error],
+                        )?;
+                        failed += 1;
+                    }
+                    jobs::Recovery::Requeue => {
+                        tx.execute(
+                            "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL,
+                                    lease_token = NULL, lease_until = NULL, worker = NULL
+                             WHERE seq = $1",
+                            &[&seq],
+                        )?;
+                        requeued += 1;
+                    }
                 }
             }
             if requeued > 0 {
@@ -738,9 +735,14 @@ impl JobStore for PgStore {
             // settled, each in its own transaction (parent row first, as everywhere).
             let parents: Vec<Uuid> = c
                 .query(
-                    "SELECT p.id FROM jobs p WHERE p.status = 'waiting' AND (
-                         NOT EXISTS (SELECT 1 FROM jobs k WHERE k.parent = p.id AND k.status IN ('queued', 'running'))
-                         OR EXISTS (SELECT 1 FROM jobs k WHERE k.parent = p.id AND k.status IN ('failed', 'cancelled')))",
+                    &format!(
+                        "SELECT p.id FROM jobs p WHERE p.{} AND (
+                             NOT EXISTS (SELECT 1 FROM jobs k WHERE k.parent = p.id AND k.{})
+                             OR EXISTS (SELECT 1 FROM jobs k WHERE k.parent = p.id AND k.{}))",
+                        jobs::guard(&Event::Settle(jobs::Settlement::Wait)),
+                        jobs::child_unfinished_sql(),
+                        jobs::child_bad_sql()
+                    ),
                     &[],
                 )?
                 .iter()
@@ -763,9 +765,12 @@ impl JobStore for PgStore {
         let ok = self.with(|c| {
             let mut tx = c.transaction()?;
             let n = tx.execute(
-                "UPDATE jobs SET status = 'waiting', attempts = GREATEST(attempts - 1, 0), progress = GREATEST(progress, $3),
-                        lease_token = NULL, lease_until = NULL, worker = NULL
-                 WHERE id = $1 AND status = 'running' AND lease_token = $2",
+                &format!(
+                    "UPDATE jobs SET status = 'waiting', attempts = GREATEST(attempts - 1, 0), progress = GREATEST(progress, $3),
+                            lease_token = NULL, lease_until = NULL, worker = NULL
+                     WHERE id = $1 AND {} AND lease_token = $2",
+                    jobs::guard(&Event::FanOut)
+                ),
                 &[&id, &token, &progress.clamp(0.0, 1.0)],
             )?;
             if n == 0 {
@@ -807,7 +812,7 @@ impl JobStore for PgStore {
                 let s: String = r.try_get(0)?;
                 let n: i64 = r.try_get(1)?;
                 let n = u64::try_from(n).unwrap_or(0);
-                match parse_status(&s)? {
+                match JobStatus::parse(&s)? {
                     JobStatus::Queued => out.queued = n,
                     JobStatus::Running => out.running = n,
                     JobStatus::Succeeded => out.succeeded = n,
@@ -821,59 +826,87 @@ impl JobStore for PgStore {
     }
 }
 
-/// Settle a waiting search whose row the caller has locked: a failed (or cancelled) child
-/// fails it with the child's error and cancels the other children; when no child is left
-/// unfinished it goes back to the queue (and wakes a worker), which replays it.
+/// Apply [`jobs::settle`] to a search whose row the caller has locked: read its children's
+/// facts, write the decision (a failed search also cancels its other children; a requeued one
+/// wakes a worker, which replays it).
 fn settle(tx: &mut postgres::Transaction<'_>, parent: Uuid) -> Result<(), StoreError> {
-    let status: Option<String> = tx
+    let status = tx
         .query_opt("SELECT status FROM jobs WHERE id = $1", &[&parent])?
-        .map(|r| r.try_get(0))
+        .map(|r| r.try_get::<_, String>(0))
+        .transpose()?
+        .map(|s| JobStatus::parse(&s))
         .transpose()?;
-    if status.as_deref() != Some("waiting") {
+    if status
+        .and_then(|s| jobs::next(s, &Event::Settle(jobs::Settlement::Wait)))
+        .is_none()
+    {
         return Ok(());
     }
-    let bad = tx.query_opt(
-        "SELECT status, error FROM jobs WHERE parent = $1 AND status IN ('failed', 'cancelled') ORDER BY seq LIMIT 1",
-        &[&parent],
-    )?;
-    if let Some(r) = bad {
-        let st: String = r.try_get(0)?;
-        let err: Option<String> = r.try_get(1)?;
-        tx.execute(
-            "UPDATE jobs SET status = 'failed', error = $2, finished_ms = $3 WHERE id = $1",
-            &[&parent, &super::store::child_error(&st, err), &now_ms()],
-        )?;
-        tx.execute(
-            "SELECT pg_notify($1, $2)",
-            &[&CHANNEL_DONE, &parent.to_string()],
-        )?;
-        return cancel_children(tx, parent);
-    }
+    let first_bad = tx
+        .query_opt(
+            &format!(
+                "SELECT status, error FROM jobs WHERE parent = $1 AND {} ORDER BY seq LIMIT 1",
+                jobs::child_bad_sql()
+            ),
+            &[&parent],
+        )?
+        .map(|r| -> Result<_, StoreError> {
+            let st: String = r.try_get(0)?;
+            Ok((JobStatus::parse(&st)?, r.try_get::<_, Option<String>>(1)?))
+        })
+        .transpose()?;
     let unfinished: i64 = tx
         .query_one(
-            "SELECT count(*) FROM jobs WHERE parent = $1 AND status IN ('queued', 'running')",
+            &format!(
+                "SELECT count(*) FROM jobs WHERE parent = $1 AND {}",
+                jobs::child_unfinished_sql()
+            ),
             &[&parent],
         )?
         .try_get(0)?;
-    if unfinished == 0 {
-        tx.execute(
-            "UPDATE jobs SET status = 'queued', started_ms = NULL WHERE id = $1",
-            &[&parent],
-        )?;
-        tx.execute("SELECT pg_notify($1, '')", &[&CHANNEL_WORK])?;
+    let children = jobs::Children {
+        first_bad,
+        unfinished: u64::try_from(unfinished).unwrap_or(0),
+    };
+    match jobs::settle(&children) {
+        jobs::Settlement::Wait => {}
+        jobs::Settlement::Requeue => {
+            tx.execute(
+                "UPDATE jobs SET status = 'queued', started_ms = NULL WHERE id = $1",
+                &[&parent],
+            )?;
+            tx.execute("SELECT pg_notify($1, '')", &[&CHANNEL_WORK])?;
+        }
+        jobs::Settlement::Fail(error) => {
+            tx.execute(
+                "UPDATE jobs SET status = 'failed', error = $2, finished_ms = $3 WHERE id = $1",
+                &[&parent, &error, &now_ms()],
+            )?;
+            tx.execute(
+                "SELECT pg_notify($1, $2)",
+                &[&CHANNEL_DONE, &parent.to_string()],
+            )?;
+            cancel_children(tx, parent)?;
+        }
     }
     Ok(())
 }
 
-/// Cancel the unfinished children of a job: queued ones at once, running ones by request
-/// (their processes hear it on the cancel channel).
+/// Cancel the unfinished children of a job as [`jobs::cancel`] says: queued ones end at once,
+/// running ones get a cancel request (their processes hear it on the cancel channel).
 fn cancel_children(tx: &mut postgres::Transaction<'_>, parent: Uuid) -> Result<(), StoreError> {
     tx.execute(
-        "UPDATE jobs SET status = 'cancelled', cancel_requested = TRUE, finished_ms = $2 WHERE parent = $1 AND status = 'queued'",
+        &format!(
+            "UPDATE jobs SET status = 'cancelled', cancel_requested = TRUE, finished_ms = $2 WHERE parent = $1 AND {}",
+            jobs::guard_to(&Event::Cancel, JobStatus::Cancelled)
+        ),
         &[&parent, &now_ms()],
     )?;
     let running = tx.query(
-        "UPDATE jobs SET cancel_requested = TRUE WHERE parent = $1 AND status = 'running' RETURNING id",
+        &format!(
+            "UPDATE jobs SET cancel_requested = TRUE WHERE parent = $1 AND {} RETURNING id",
+            jobs::guard_to(&Event::Cancel, JobStatus::Running)
+        ),
         &[&parent],
     )?;
     for r in running {
@@ -884,118 +917,4 @@ fn cancel_children(tx: &mut postgres::Transaction<'_>, parent: Uuid) -> Result<(
         )?;
     }
     Ok(())
-}
-
-/// The background threads of a process on the cluster store: the listener (wake-ups and
-/// cancels from other processes) and the keeper (heartbeats and the reaper).
-pub struct ClusterThreads {
-    stop: Arc<AtomicBool>,
-    handles: Vec<std::thread::JoinHandle<()>>,
-}
-
-impl ClusterThreads {
-    /// Start both threads for `core`, whose store is `store`.
-    pub fn start(core: Arc<Core>, store: Arc<PgStore>) -> Result<Self, String> {
-        let stop = Arc::new(AtomicBool::new(false));
-        let mut handles = Vec::new();
-        {
-            let (core, store, stop) = (core.clone(), store.clone(), stop.clone());
-            handles.push(
-                std::thread::Builder::new()
-                    .name("ashlar-listen".into())
-                    .spawn(move || listen_loop(&core, &store, &stop))
-                    .map_err(|e| format!("starting the listener thread: {e}"))?,
-            );
-        }
-        {
-            let stop2 = stop.clone();
-            handles.push(
-                std::thread::Builder::new()
-                    .name("ashlar-lease".into())
-                    .spawn(move || keeper_loop(&core, &store, &stop2))
-                    .map_err(|e| format!("starting the lease thread: {e}"))?,
-            );
-        }
-        Ok(Self { stop, handles })
-    }
-
-    pub fn stop(self) {
-        self.stop.store(true, Ordering::SeqCst);
-        for h in self.handles {
-            let _ = h.join();
-        }
-    }
-}
-
-fn listen_loop(core: &Core, store: &PgStore, stop: &AtomicBool) {
-    let mut backoff = Duration::from_millis(200);
-    while !stop.load(Ordering::SeqCst) {
-        let mut client = match store.connect().and_then(|mut c| {
-            c.batch_execute(&format!("LISTEN {CHANNEL_WORK}; LISTEN {CHANNEL_CANCEL}"))?;
-            Ok(c)
-        }) {
-            Ok(c) => c,
-            Err(e) => {
-                tracing::warn!(error = %e, "LISTEN connection failed; retrying");
-                std::thread::sleep(backoff);
-                backoff = (backoff * 2).min(Duration::from_secs(5));
-                continue;
-            }
-        };
-        backoff = Duration::from_millis(200);
-        // A wake-up may have been sent before LISTEN took effect: look once.
-        core.notify_work();
-        while !stop.load(Ordering::SeqCst) {
-            let mut n = client.notifications();
-            let mut it = n.timeout_iter(Duration::from_millis(500));
-            match it.next() {
-                Ok(Some(note)) => match note.channel() {
-                    CHANNEL_WORK => core.notify_work(),
-                    CHANNEL_CANCEL => {
-                        if let Ok(id) = Uuid::parse_str(note.payload()) {
-                            core.signal_cancel(id);
-                        }
-                    }
-                    _ => {}
-                },
-                Ok(None) => {}
-                Err(e) => {
-                    tracing::warn!(error = %e, "LISTEN connection lost; reconnecting");
-                    break;
-                }
-            }
-        }
-    }
-}
-
-fn keeper_loop(core: &Core, store: &PgStore, stop: &AtomicBool) {
-    let p = store.lease_params().clone();
-    let mut next_beat = Instant::now() + p.heartbeat;
-    let mut next_reap = Instant::now();
-    while !stop.load(Ordering::SeqCst) {
-        let now = Instant::now();
-        if now >= next_beat {
-            next_beat = now + p.heartbeat;
-            let ids = core.running_ids();
-            match store.heartbeat(&ids) {
-                Ok(hb) => {
-                    for id in hb.lost {
-                        tracing::warn!(%id, "lost the lease of a running job; stopping it");
-                        core.signal_lost(id);
-                    }
-                    for id in hb.cancel {
-                        core.signal_cancel(id);
-                    }
-                }
-                Err(e) => tracing::warn!(error = %e, "heartbeat failed"),
-            }
-        }
-        if now >= next_reap {
-            next_reap = now + p.reap_every;
-            if let Err(e) = store.recover(core.params.max_attempts) {
-                tracing::warn!(error = %e, "reaping expired leases failed");
-            }
-        }
-        std::thread::sleep(Duration::from_millis(100).min(p.heartbeat));
-    }
 }

@@ -1,0 +1,7 @@
+-- Schema version 3: ownership (`ashlar serve --tokens`). `owner` is the owner id of the token
+-- that submitted a job (never the token); NULL when the server ran without tokens (only an
+-- admin token then sees the job). Child runs carry their search's owner. `jobs_finished`
+-- serves the retention sweeper.
+ALTER TABLE jobs ADD COLUMN owner TEXT;
+CREATE INDEX IF NOT EXISTS jobs_owner ON jobs(owner, seq) WHERE owner IS NOT NULL;
+CREATE INDEX IF NOT EXISTS jobs_finished ON jobs(finished_ms) WHERE parent IS NULL;
