@@ -3,29 +3,26 @@
 //!
 //! `routes` answers requests (async, no simulation work), `store` keeps every job durably,
 //! `worker` runs jobs on std threads through a `JobRunner`, `events` streams progress.
-pub mod artifacts;
 pub mod auth;
-pub mod budget;
 pub mod events;
 pub mod fake;
 pub mod histories;
+pub mod http;
 pub mod pg_store;
 pub mod pg_tls;
-pub mod problem;
-pub mod request;
 pub mod retention;
-pub mod routes;
-pub mod runner;
-pub mod scene_import;
 pub mod server;
 pub mod store;
-pub mod templates;
-pub mod web;
 pub mod worker;
 
-pub use problem::ApiError;
-pub use request::Limits;
-pub use routes::{app, route_table, AppState, OPENAPI_YAML};
+// The paths the CLI, the tests and the store use from before the layering (service/http/,
+// service/worker/), kept so that their callers need not change.
+pub use http::{budget, problem, request};
+pub use worker::{artifacts, runner};
+
+pub use http::problem::ApiError;
+pub use http::request::Limits;
+pub use http::{app, route_table, AppState, OPENAPI_YAML};
 pub use store::{JobStore, SqliteStore, StoreError};
 pub use worker::{analysis_runner, JobRunner, RunHooks, RunnerOutcome, WorkerParams};
 

@@ -6,7 +6,7 @@
 use super::budget::check_ranges;
 use super::problem::{dotted_to_pointer, point_at_named_field, ApiError};
 use super::request::json_body;
-use super::routes::{blocking, check_json_content_type, AppState};
+use super::{blocking, check_json_content_type, AppState};
 use crate::scene::import::dxf::{self, DxfImportError, ImportOptions};
 use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;

@@ -1,11 +1,11 @@
 //! Request bodies of the service: JSON text → validated [`JobInput`], with the server's limits
 //! applied. Used twice with the same rules: by the routes when a job is submitted (errors become
 //! 400/413/422 problems naming the field) and by a worker when it starts the stored job.
-use super::problem::{dotted_to_pointer, point_at_named_field, ApiError};
 use crate::analysis::fragility::Method;
 use crate::analysis::pga::{Combine, Criterion, PgaRequest};
 use crate::motion::{Amplitude, GroundMotion, Signal, Units};
 use crate::scene::Scene;
+use crate::service::http::problem::{dotted_to_pointer, point_at_named_field, ApiError};
 use serde::Deserialize;
 use serde_json::Value;
 
@@ -498,9 +498,9 @@ fn scene_and_motion(
 ) -> Result<(Scene, GroundMotion), ApiError> {
     check_shapes(scene, motion)?;
     check_sizes(scene, motion, limits)?;
-    super::budget::check_ranges(scene)?;
+    crate::service::http::budget::check_ranges(scene)?;
     if let Some(m) = motion {
-        super::budget::check_motion_ranges("/motion", m)?;
+        crate::service::http::budget::check_motion_ranges("/motion", m)?;
     }
     if let Some(n) = scene.get("blocks").and_then(Value::as_array).map(Vec::len) {
         if n > limits.max_blocks {
@@ -547,9 +547,9 @@ fn scene_and_motion(
             format!(
                 "/scene/control/duration: {} s at a time step of {} s is {} steps, over the server's limit of {} \
                  (ashlar serve --max-total-steps); shorten the duration or lengthen control.time_step",
-                super::budget::num(duration),
-                super::budget::num(scene.control.time_step),
-                super::budget::num(steps),
+                crate::service::http::budget::num(duration),
+                crate::service::http::budget::num(scene.control.time_step),
+                crate::service::http::budget::num(steps),
                 limits.max_total_steps
             ),
         ));
@@ -561,14 +561,14 @@ fn scene_and_motion(
             format!(
                 "/scene/control/output_interval: {} s recorded every {} s is {} frames, over the server's \
                  limit of {} (ashlar serve --max-total-steps)",
-                super::budget::num(duration),
-                super::budget::num(scene.control.output_interval),
-                super::budget::num(frames),
+                crate::service::http::budget::num(duration),
+                crate::service::http::budget::num(scene.control.output_interval),
+                crate::service::http::budget::num(frames),
                 limits.max_total_steps
             ),
         ));
     }
-    super::budget::check_run_work(scene.blocks.len(), steps, frames, limits)?;
+    crate::service::http::budget::check_run_work(scene.blocks.len(), steps, frames, limits)?;
     scene.control.max_steps = scene
         .control
         .max_steps
@@ -692,7 +692,8 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
             .unzip();
     let (min, max, tolerance, scan_points) =
         search_range(&b.range, b.tolerance.as_ref(), b.scan_points, limits)?;
-    let runs = super::budget::search_runs(records.len(), scan_points, max - min, tolerance);
+    let runs =
+        crate::service::http::budget::search_runs(records.len(), scan_points, max - min, tolerance);
     // The longest record sets the length of every run (a scene's own duration overrides it).
     let duration = scene.control.duration.unwrap_or_else(|| {
         records
@@ -703,7 +704,7 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
             .fold(0.0, f64::max)
     });
     let steps = (duration / scene.control.time_step).ceil();
-    super::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
+    crate::service::http::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
     let request = PgaRequest {
         criteria,
         combine,
@@ -820,7 +821,12 @@ pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
         search_range(&b.range, b.tolerance.as_ref(), b.scan_points, limits)?;
     // Each observation is one search per record.
     let runs = observations.len() as f64
-        * super::budget::search_runs(records.len(), scan_points, max - min, tolerance);
+        * crate::service::http::budget::search_runs(
+            records.len(),
+            scan_points,
+            max - min,
+            tolerance,
+        );
     let duration = scene.control.duration.unwrap_or_else(|| {
         records
             .iter()
@@ -828,7 +834,7 @@ pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
             .fold(0.0, f64::max)
     });
     let steps = (duration / scene.control.time_step).ceil();
-    super::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
+    crate::service::http::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
     let motion = records[0].1.clone();
     let mut motion_summary = motion_summary(&motion);
     if let Some(obj) = motion_summary.as_object_mut() {

@@ -4,11 +4,11 @@
 //! top of the flow; the page itself is plain HTML/CSS/JS under `web/`, embedded in the binary.
 use super::problem::{dotted_to_pointer, ApiError};
 use super::request::json_body;
-use super::routes::{blocking, check_json_content_type, job_json_signed, load, parse_id, AppState};
-use super::store::{JobKind, JobRecord};
+use super::{blocking, check_json_content_type, job_json_signed, load, parse_id, AppState};
 use crate::geometry::polygon_moments;
 use crate::motion::{report_with, GroundMotion, ReportParams, Signal};
 use crate::scene::{BlockKind, Excitation, Scene};
+use crate::service::store::{JobKind, JobRecord};
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, PathRejection, QueryRejection};
 use axum::extract::{Path, Query, State};
@@ -23,22 +23,22 @@ const ASSETS: &[(&str, &str, &str)] = &[
     (
         "index.html",
         "text/html; charset=utf-8",
-        include_str!("../../web/index.html"),
+        include_str!("../../../web/index.html"),
     ),
     (
         "app.js",
         "text/javascript; charset=utf-8",
-        include_str!("../../web/app.js"),
+        include_str!("../../../web/app.js"),
     ),
     (
         "plot.js",
         "text/javascript; charset=utf-8",
-        include_str!("../../web/plot.js"),
+        include_str!("../../../web/plot.js"),
     ),
     (
         "app.css",
         "text/css; charset=utf-8",
-        include_str!("../../web/app.css"),
+        include_str!("../../../web/app.css"),
     ),
 ];
 
@@ -49,43 +49,43 @@ pub const EXAMPLES: &[(&str, &str, &str, &str)] = &[
         "column",
         "scene",
         "Free-standing column on a plinth (rocking, toppling)",
-        include_str!("../../examples/column.json"),
+        include_str!("../../../examples/column.json"),
     ),
     (
         "incline",
         "scene",
         "Block on a 20° incline (sliding)",
-        include_str!("../../examples/incline.json"),
+        include_str!("../../../examples/incline.json"),
     ),
     (
         "two-columns",
         "scene",
         "Two columns side by side (one falls, one stands: site observations)",
-        include_str!("../../examples/two-columns.json"),
+        include_str!("../../../examples/two-columns.json"),
     ),
     (
         "doric-colonnade",
         "scene",
         "Doric colonnade: three seven-drum columns carrying architraves (template colonnade)",
-        include_str!("../../examples/doric-colonnade.json"),
+        include_str!("../../../examples/doric-colonnade.json"),
     ),
     (
         "arch",
         "scene",
         "Semicircular arch of 15 voussoirs on two piers (template arch)",
-        include_str!("../../examples/arch.json"),
+        include_str!("../../../examples/arch.json"),
     ),
     (
         "wall-window",
         "scene",
         "Running-bond wall with a window and its lintel (template wall)",
-        include_str!("../../examples/wall-window.json"),
+        include_str!("../../../examples/wall-window.json"),
     ),
     (
         "half-sine-pulse",
         "motion",
         "Half-sine pulse, 5 m/s², 1 s period",
-        include_str!("../../examples/half-sine-pulse.json"),
+        include_str!("../../../examples/half-sine-pulse.json"),
     ),
 ];
 
@@ -193,7 +193,7 @@ fn query_usize(
 /// `GET /v1/jobs/{id}` (or `/v1/pga-searches/{id}`) answers.
 pub async fn list_jobs(
     State(s): State<AppState>,
-    access: super::auth::Access,
+    access: crate::service::auth::Access,
     query: Result<Query<Vec<(String, String)>>, QueryRejection>,
 ) -> ApiResult {
     let Query(query) = query.map_err(|e| ApiError::invalid_parameter("query", e.body_text()))?;
@@ -288,7 +288,7 @@ pub fn scene_geometry(scene: &Scene) -> Value {
 /// `GET /v1/jobs/{id}/scene`.
 pub async fn job_scene(
     State(s): State<AppState>,
-    access: super::auth::Access,
+    access: crate::service::auth::Access,
     id: Result<Path<String>, PathRejection>,
 ) -> ApiResult {
     let j = load(&s, &access, parse_id(id)?, JobKind::Run).await?;
@@ -333,7 +333,7 @@ pub fn ground_series(motion: &GroundMotion, duration: f64, n: usize) -> Value {
 /// `GET /v1/jobs/{id}/ground?points=N`: the ground motion the run felt, over its duration.
 pub async fn job_ground(
     State(s): State<AppState>,
-    access: super::auth::Access,
+    access: crate::service::auth::Access,
     id: Result<Path<String>, PathRejection>,
     query: Result<Query<Vec<(String, String)>>, QueryRejection>,
 ) -> ApiResult {

@@ -1,9 +1,9 @@
 //! Workers: a fixed pool of std threads that claim jobs from the store and run them through a
 //! [`JobRunner`] (the physics never runs on the async runtime). Also the shared core the routes
 //! see ([`Core`]): store, limits, progress hub, the stop switches of running jobs.
-use super::events::{Hub, JobEvent};
-use super::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
-use super::store::{Finish, JobKind, JobRecord, JobStatus, JobStore, NewJob};
+use crate::service::events::{Hub, JobEvent};
+use crate::service::http::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
+use crate::service::store::{Finish, JobKind, JobRecord, JobStatus, JobStore, NewJob};
 use serde_json::Value;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -32,7 +32,7 @@ pub enum RunnerOutcome {
 }
 
 /// The computation behind a job. The default is [`analysis_runner`]; tests use
-/// [`super::fake::fake_runner`].
+/// [`crate::service::fake::fake_runner`].
 pub type JobRunner =
     Arc<dyn Fn(&JobInput, &RunHooks<'_>) -> Result<RunnerOutcome, String> + Send + Sync>;
 
@@ -242,7 +242,7 @@ pub struct Core {
     /// `data_dir`, which all processes then share).
     pub artifacts: Option<Arc<super::artifacts::ArtifactStore>>,
     /// Connection and timeout settings of the HTTP server (the routes read the body timeout).
-    pub server: super::server::ServerParams,
+    pub server: crate::service::server::ServerParams,
     /// Large request bodies read and parsed at once: each can cost up to a few hundred MB
     /// while parsed, so their number is what bounds the server's memory.
     pub large_bodies: Arc<tokio::sync::Semaphore>,
@@ -283,7 +283,7 @@ impl Core {
             store_healthy: AtomicBool::new(true),
             remote_workers: AtomicBool::new(false),
             artifacts: None,
-            server: super::server::ServerParams::default(),
+            server: crate::service::server::ServerParams::default(),
             large_bodies: Arc::new(tokio::sync::Semaphore::new(LARGE_BODIES)),
             disk_used: Mutex::new(None),
         }
@@ -415,7 +415,11 @@ impl Core {
         }
     }
 
-    fn store_result<T>(&self, what: &str, r: Result<T, super::store::StoreError>) -> Option<T> {
+    fn store_result<T>(
+        &self,
+        what: &str,
+        r: Result<T, crate::service::store::StoreError>,
+    ) -> Option<T> {
         match r {
             Ok(v) => {
                 self.store_healthy.store(true, Ordering::Relaxed);
@@ -816,7 +820,7 @@ fn fans_out(core: &Core, job: &JobRecord) -> bool {
             .unwrap_or(false)
 }
 
-fn store_msg(e: super::store::StoreError) -> String {
+fn store_msg(e: crate::service::store::StoreError) -> String {
     tracing::error!(error = %e, "job store");
     "the job store failed while running the search; see the server log".into()
 }
@@ -863,7 +867,10 @@ fn fan_out_search(
                 known.insert(key, r.failed);
             }
             JobStatus::Failed | JobStatus::Cancelled => {
-                return Err(super::store::child_error(ch.status.as_str(), ch.error))
+                return Err(crate::service::store::child_error(
+                    ch.status.as_str(),
+                    ch.error,
+                ))
             }
             _ => {
                 unfinished.insert(key);

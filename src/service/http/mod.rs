@@ -1,15 +1,21 @@
 //! HTTP routes (docs/format.md §4, `openapi.yaml`): thin async handlers that validate, talk to the
 //! store on the blocking pool, and answer. No simulation work happens here.
-use super::auth::Access;
-use super::events::{job_stream, EventParams, JobEvent};
-use super::histories::Histories;
-use super::problem::ApiError;
-use super::request::{json_body, parse_pga, parse_run, parse_site};
-use super::store::{
+pub mod budget;
+pub mod problem;
+pub mod request;
+pub mod scene_import;
+pub mod templates;
+pub mod web;
+
+use self::problem::ApiError;
+use self::request::{json_body, parse_pga, parse_run, parse_site};
+use crate::service::auth::Access;
+use crate::service::events::{job_stream, EventParams, JobEvent};
+use crate::service::histories::Histories;
+use crate::service::store::{
     rfc3339, CancelOutcome, DeleteOutcome, JobKind, JobRecord, JobStatus, NewJob, QueueFull,
 };
-use super::web;
-use super::worker::Core;
+use crate::service::worker::Core;
 use axum::body::{Body, Bytes};
 use axum::extract::rejection::{PathRejection, QueryRejection};
 use axum::extract::{DefaultBodyLimit, Path, Query, State};
@@ -25,7 +31,7 @@ use std::time::Duration;
 use uuid::Uuid;
 
 /// The hand-written OpenAPI 3.1 description, served at `/openapi.yaml`.
-pub const OPENAPI_YAML: &str = include_str!("../../openapi.yaml");
+pub const OPENAPI_YAML: &str = include_str!("../../../openapi.yaml");
 
 /// Shared state of the handlers.
 #[derive(Clone)]
@@ -93,16 +99,16 @@ pub fn route_table() -> Vec<(Method, &'static str, MethodRouter<AppState>)> {
         (Method::POST, "/v1/motions/inspect", post(web::inspect)),
         (Method::GET, "/v1/examples", get(web::list_examples)),
         (Method::GET, "/v1/examples/{name}", get(web::get_example)),
-        (Method::GET, "/v1/templates", get(super::templates::list)),
+        (Method::GET, "/v1/templates", get(self::templates::list)),
         (
             Method::POST,
             "/v1/templates/{name}",
-            post(super::templates::build),
+            post(self::templates::build),
         ),
         (
             Method::POST,
             "/v1/scenes/import",
-            post(super::scene_import::import),
+            post(self::scene_import::import),
         ),
     ]
 }
@@ -184,8 +190,8 @@ async fn no_route(uri: axum::http::Uri) -> ApiError {
 /// `/healthz` and `/openapi.yaml` stay open), or, on the GET routes a browser or Foxglove opens
 /// without headers ([`signable`]), a valid signed URL. Says who the caller is.
 fn authorize(
-    tokens: Option<&super::auth::Tokens>,
-    signing: Option<&super::auth::SigningKey>,
+    tokens: Option<&crate::service::auth::Tokens>,
+    signing: Option<&crate::service::auth::SigningKey>,
     req: &axum::extract::Request,
 ) -> Result<Access, ApiError> {
     let Some(tokens) = tokens else {
@@ -199,7 +205,7 @@ fn authorize(
         .headers()
         .get(header::AUTHORIZATION)
         .and_then(|v| v.to_str().ok())
-        .and_then(super::auth::bearer);
+        .and_then(crate::service::auth::bearer);
     let query: Vec<(String, String)> = req
         .uri()
         .query()
@@ -234,7 +240,7 @@ fn authorize(
                 path,
                 param("expires"),
                 param("sig"),
-                super::auth::unix_now(),
+                crate::service::auth::unix_now(),
             )
             .map_err(|e| ApiError::unauthorized(e.to_string()).with_parameter("sig"))?;
             Ok(Access::Signed)
@@ -260,7 +266,7 @@ fn signable(path: &str) -> bool {
 /// Request headers within `--max-header-bytes` and `--max-headers`, else 431 as a problem.
 fn check_headers(
     headers: &HeaderMap,
-    limits: &super::server::ServerParams,
+    limits: &crate::service::server::ServerParams,
 ) -> Result<(), ApiError> {
     let n = headers.len();
     let bytes: usize = headers
@@ -425,7 +431,7 @@ async fn read_body(
         return Err(ApiError::payload_too_large(limit));
     }
     let timeout = core.server.body_read_timeout;
-    let permit = if declared.is_none_or(|n| n > super::worker::LARGE_BODY_BYTES) {
+    let permit = if declared.is_none_or(|n| n > crate::service::worker::LARGE_BODY_BYTES) {
         let slot = tokio::time::timeout(timeout, core.large_bodies.clone().acquire_owned()).await;
         match slot {
             Ok(Ok(p)) => Some(p),
@@ -474,7 +480,7 @@ async fn submit(
     // Parsing an embedded record can take milliseconds: off the async threads. The pre-scan
     // refuses an oversized document before it is built in memory.
     let parsed = blocking(move || {
-        super::budget::prescan(&bytes, &limits)?;
+        self::budget::prescan(&bytes, &limits)?;
         let value = json_body(&bytes)?;
         drop(bytes);
         let parsed = match kind {
@@ -648,7 +654,7 @@ async fn delete_kind(
 
 /// Remove a deleted job's artifacts: its local directory and, with `--artifacts`, what was
 /// published to shared storage (also used by the retention sweeper). Blocking.
-pub(super) fn remove_artifacts(core: &Core, id: Uuid) {
+pub(crate) fn remove_artifacts(core: &Core, id: Uuid) {
     if let Some(a) = &core.artifacts {
         if let Err(e) = a.remove(id) {
             tracing::warn!(%id, error = %e, "removing a deleted job's published artifacts");
@@ -694,7 +700,7 @@ async fn get_limits(State(s): State<AppState>) -> ApiResult {
         "max_block_frames": l.max_block_frames,
         "max_search_block_steps": l.max_search_block_steps,
         "max_scan_points": l.max_scan_points,
-        "max_records": super::request::MAX_RECORDS,
+        "max_records": self::request::MAX_RECORDS,
         "max_queued_jobs": l.max_queued_jobs,
         "max_queued_jobs_per_token": l.max_queued_jobs_per_token,
         "max_queued_searches_per_token": l.max_queued_searches_per_token,
@@ -708,7 +714,7 @@ async fn get_limits(State(s): State<AppState>) -> ApiResult {
         "idle_timeout_s": p.idle_timeout.as_secs_f64(),
         "max_header_bytes": p.max_header_bytes,
         "max_headers": p.max_headers,
-        "ranges": super::budget::ranges_json(),
+        "ranges": self::budget::ranges_json(),
     });
     if let Some(o) = body.as_object_mut() {
         o.extend(process_limits(&s.core));
@@ -721,7 +727,7 @@ async fn get_limits(State(s): State<AppState>) -> ApiResult {
 /// `--job-cpu-seconds`; null with threads), crash retries, large bodies parsed at once, the
 /// signed links' validity (null without `--tokens`).
 fn process_limits(core: &Core) -> serde_json::Map<String, Value> {
-    use super::runner::Isolation;
+    use crate::service::worker::runner::Isolation;
     let (mode, memory, cpu) = match &core.params.isolation {
         Isolation::Thread => ("thread", None, None),
         Isolation::Process(p) => ("process", Some(p.memory_limit), Some(p.cpu_seconds)),
@@ -731,8 +737,8 @@ fn process_limits(core: &Core) -> serde_json::Map<String, Value> {
         "job_memory_limit_bytes": memory,
         "job_cpu_seconds": cpu,
         "max_job_attempts": core.params.max_attempts,
-        "max_large_bodies": super::worker::LARGE_BODIES,
-        "large_body_bytes": super::worker::LARGE_BODY_BYTES,
+        "max_large_bodies": crate::service::worker::LARGE_BODIES,
+        "large_body_bytes": crate::service::worker::LARGE_BODY_BYTES,
         "signed_url_seconds": core.server.signing.as_ref().map(|k| k.validity.as_secs()),
     });
     match v {
@@ -742,9 +748,9 @@ fn process_limits(core: &Core) -> serde_json::Map<String, Value> {
 }
 
 /// Links of a job that a browser or Foxglove opens without headers, signed for
-/// [`super::auth::SigningKey::validity`] from now (with `--tokens` only).
-fn signed_links(kind: JobKind, id: Uuid, key: &super::auth::SigningKey) -> Value {
-    let now = super::auth::unix_now();
+/// [`crate::service::auth::SigningKey::validity`] from now (with `--tokens` only).
+fn signed_links(kind: JobKind, id: Uuid, key: &crate::service::auth::SigningKey) -> Value {
+    let now = crate::service::auth::unix_now();
     let b = format!("{}/{id}", base(kind));
     let sign = |tail: &str| key.sign(&format!("{b}/{tail}"), now);
     let mut v = match kind {
@@ -764,7 +770,10 @@ fn signed_links(kind: JobKind, id: Uuid, key: &super::auth::SigningKey) -> Value
 }
 
 /// [`job_json`], with `signed_links` when the server signs links.
-pub(super) fn job_json_signed(j: &JobRecord, key: Option<&super::auth::SigningKey>) -> String {
+pub(super) fn job_json_signed(
+    j: &JobRecord,
+    key: Option<&crate::service::auth::SigningKey>,
+) -> String {
     let mut v = json!({
         "id": j.id,
         "kind": j.kind,
@@ -1047,7 +1056,7 @@ async fn get_histories(
     }
     let j = load(&s, &access, id, JobKind::Run).await?;
     artifact_available(&j, "histories")?;
-    super::artifacts::ensure_local(&s.core, id, "histories.csv").await;
+    crate::service::worker::artifacts::ensure_local(&s.core, id, "histories.csv").await;
     let path = s.core.job_dir(id).join("histories.csv");
     let file = match tokio::fs::File::open(&path).await {
         Ok(f) => f,
@@ -1272,7 +1281,7 @@ async fn get_trajectory(
     let id = parse_id(id)?;
     let j = load(&s, &access, id, JobKind::Run).await?;
     artifact_available(&j, "trajectory")?;
-    super::artifacts::ensure_local(&s.core, id, "trajectory.mcap").await;
+    crate::service::worker::artifacts::ensure_local(&s.core, id, "trajectory.mcap").await;
     let path = s.core.job_dir(id).join("trajectory.mcap");
     let file = match tokio::fs::File::open(&path).await {
         Ok(f) => f,
@@ -1346,7 +1355,7 @@ async fn get_fragility_svg(
         )));
     }
     // Written by whichever worker finished the search: fetched from shared storage if need be.
-    super::artifacts::ensure_local(&s.core, id, "fragility.svg").await;
+    crate::service::worker::artifacts::ensure_local(&s.core, id, "fragility.svg").await;
     let path = s.core.job_dir(id).join("fragility.svg");
     match tokio::fs::read(&path).await {
         Ok(bytes) => Ok((

@@ -6,7 +6,7 @@
 //!
 //! Without `--artifacts`, artifacts stay in each process's `--data DIR/jobs/<uuid>/`, which is
 //! enough when every process is given the same (shared) directory.
-use super::worker::Core;
+use super::pool::Core;
 use object_store::path::Path as StorePath;
 use object_store::{ObjectStore, PutPayload};
 use std::path::Path;

@@ -3,7 +3,7 @@
 //! template is cheap (no simulation), so it runs on the request's task.
 use super::problem::ApiError;
 use super::request::json_body;
-use super::routes::AppState;
+use super::AppState;
 use crate::scene::templates::{self, TemplateError};
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, PathRejection};
@@ -35,7 +35,7 @@ pub async fn build(
     let given = if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         BTreeMap::new()
     } else {
-        super::routes::check_json_content_type(&headers)?;
+        super::check_json_content_type(&headers)?;
         parameters(&json_body(&bytes)?)?
     };
     let (spec, _) = template.build(&given).map_err(|e| match &e {

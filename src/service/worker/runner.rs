@@ -14,9 +14,9 @@
 //! RLIMIT_FSIZE), asks the kernel to kill it when the worker thread that started it dies
 //! (PR_SET_PDEATHSIG, Linux), and checks its parent is still the server (else exits). Unix only;
 //! elsewhere `ashlar serve` runs jobs in-process.
-use super::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
-use super::store::JobKind;
-use super::worker::{ChildRequest, RunHooks, RunnerOutcome};
+use super::pool::{ChildRequest, RunHooks, RunnerOutcome};
+use crate::service::http::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
+use crate::service::store::JobKind;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::io::{BufRead, Read, Write};
@@ -158,7 +158,7 @@ fn limits_from_value(v: &Value) -> Limits {
 const STDERR_TAIL: usize = 8 << 10;
 
 /// Run one job (`Run` or an in-process `PgaSearch`) in a child process; same contract as a
-/// [`super::worker::JobRunner`]: progress through `hooks`, stops when `hooks.cancel` is set.
+/// [`super::pool::JobRunner`]: progress through `hooks`, stops when `hooks.cancel` is set.
 pub fn run_in_child(
     params: &ProcessParams,
     kind: JobKind,
@@ -171,7 +171,7 @@ pub fn run_in_child(
 
 /// Run one child run (`pga_run`) of a fanned-out search in a child process: `search` is the
 /// search's stored request, `run` the amplitude and record. Its outcome is the
-/// [`super::worker::ChildResult`] the in-thread path stores.
+/// [`super::pool::ChildResult`] the in-thread path stores.
 pub fn run_pga_run_in_child(
     params: &ProcessParams,
     search: &Value,
@@ -499,7 +499,7 @@ fn run_spec(spec: &ChildSpec, out: &Mutex<std::io::Stdout>) -> Result<ChildMessa
             .map_err(|e| format!("the stored request is no longer accepted: {}", e.detail))?
             .input;
         test_fault(&input.scene().name);
-        return Ok(match super::worker::evaluate_child(&input, run, &CANCEL)? {
+        return Ok(match super::pool::evaluate_child(&input, run, &CANCEL)? {
             RunnerOutcome::Completed(value) => ChildMessage::Completed { value },
             RunnerOutcome::Cancelled(partial) => ChildMessage::Cancelled { partial },
         });
@@ -514,8 +514,8 @@ fn run_spec(spec: &ChildSpec, out: &Mutex<std::io::Stdout>) -> Result<ChildMessa
     let input: JobInput = parsed.input;
     test_fault(&input.scene().name);
     let runner = match spec.fake_ms {
-        Some(ms) => super::fake::fake_runner(Duration::from_millis(ms)),
-        None => super::worker::analysis_runner(),
+        Some(ms) => crate::service::fake::fake_runner(Duration::from_millis(ms)),
+        None => super::pool::analysis_runner(),
     };
     // Progress at most every 50 ms (a run reports every output frame): the server forwards
     // each line to the job's event stream.
