@@ -327,6 +327,23 @@ impl Core {
         total
     }
 
+    /// Remove a deleted job's artifacts: its local directory and, with `--artifacts`, what was
+    /// published to shared storage (`DELETE` of a job and the retention sweeper). Blocking.
+    pub fn remove_artifacts(&self, id: Uuid) {
+        if let Some(a) = &self.artifacts {
+            if let Err(e) = a.remove(id) {
+                tracing::warn!(%id, error = %e, "removing a deleted job's published artifacts");
+            }
+        }
+        let dir = self.job_dir(id);
+        if let Err(e) = std::fs::remove_dir_all(&dir) {
+            if e.kind() != std::io::ErrorKind::NotFound {
+                tracing::warn!(dir = %dir.display(), error = %e, "removing a deleted job's artifacts");
+            }
+        }
+        self.forget_artifact_bytes();
+    }
+
     /// Forget the cached artifact total (after a delete).
     pub fn forget_artifact_bytes(&self) {
         if let Ok(mut g) = self.disk_used.lock() {
