@@ -4,7 +4,11 @@
 //! into child runs; `runner` runs a job in a child process; `artifacts` publishes and fetches
 //! job files on shared storage.
 pub mod artifacts;
+pub mod fanout;
 pub mod pool;
+pub mod run;
 pub mod runner;
 
+pub use fanout::{ChildRequest, ChildResult};
 pub use pool::*;
+pub use run::{analysis_runner, JobRunner, RunHooks, RunnerOutcome};
