@@ -96,11 +96,10 @@ pub enum CliError {
     /// `ashlar study` (the sweep, the records study, their outputs).
     #[error(transparent)]
     Study(#[from] StudyError),
-    /// A layer that still reports its failure as text: `ashlar serve`'s and
-    /// `ashlar internal-run-job`'s start-up (the service's errors; docs/architecture.md, "What
-    /// is still a string").
-    #[error("{0}")]
-    Untyped(String),
+    /// `ashlar serve` or `ashlar internal-run-job` did not start (or stopped serving), and
+    /// `--isolation process` of `ashlar worker` found no executable.
+    #[error(transparent)]
+    Serve(#[from] crate::service::ServeError),
 }
 
 impl CliError {

@@ -59,13 +59,14 @@ pub fn main() -> ExitCode {
         Command::Run(args) => run::run(&args),
         Command::Pga(args) => run::pga(&args),
         Command::Motion(args) => motion::run(&args).map_err(CliError::from),
-        Command::Serve(args) => crate::service::serve_cli(args).map_err(CliError::Untyped),
+        Command::Serve(args) => crate::service::serve_cli(args).map_err(CliError::from),
         Command::Study(args) => study::run(&args),
         Command::Worker(args) => worker::run(&args),
         Command::Sweep(args) => sweep::run(&args),
         Command::Scene(args) => scene::run(&args),
         Command::Site(args) => site::run(&args),
-        Command::InternalRunJob => crate::service::runner::child_main().map_err(CliError::Untyped),
+        Command::InternalRunJob => crate::service::runner::child_main()
+            .map_err(|e| CliError::from(crate::service::ServeError::from(e))),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

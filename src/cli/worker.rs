@@ -129,8 +129,7 @@ pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
         args.job_cpu_seconds,
         &config.limits,
         args.fake_runner_ms.map(Duration::from_millis),
-    )
-    .map_err(CliError::Untyped)?;
+    )?;
     let runner = match args.fake_runner_ms {
         Some(ms) => service::fake::fake_runner(Duration::from_millis(ms)),
         None => service::analysis_runner(),

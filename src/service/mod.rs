@@ -1,35 +1,31 @@
 //! Service: HTTP routes → durable queue → store → worker threads, driving `analysis`.
 //! The top of the flow; nothing in the physics core imports it.
 //!
-//! `routes` answers requests (async, no simulation work), `store` keeps every job durably,
-//! `worker` runs jobs on std threads through a `JobRunner`, `events` streams progress.
-pub mod artifacts;
+//! `http` answers requests (one router per resource; async, no simulation work), `store` keeps
+//! every job durably, `worker` runs jobs on std threads through a `JobRunner`, `events` streams
+//! progress (docs/architecture.md, "The service").
 pub mod auth;
-pub mod budget;
-pub mod cluster;
 pub mod events;
 pub mod fake;
 pub mod histories;
+pub mod http;
 pub mod jobs;
-pub mod problem;
-pub mod request;
 pub mod retention;
-pub mod routes;
-pub mod runner;
-pub mod scene_import;
+pub mod serve;
 pub mod server;
 pub mod store;
-pub mod templates;
-pub mod web;
 pub mod worker;
 
-pub use problem::ApiError;
-pub use request::Limits;
-pub use routes::{app, route_table, AppState, OPENAPI_YAML};
-/// The PostgreSQL store and its TLS under their former paths (`service::pg_store::PgStore`,
-/// `service::pg_tls::parse`), now `store::postgres` and `store::tls`: kept while other code
-/// moves to the new paths.
+// The paths the CLI, the tests and the store use from before the layering (service/http/,
+// service/worker/, service/store/), kept so that their callers need not change.
+pub use http::{budget, problem, request};
 pub use store::{postgres as pg_store, tls as pg_tls};
+pub use worker::{artifacts, runner};
+
+pub use http::problem::ApiError;
+pub use http::request::Limits;
+pub use http::{app, route_table, AppState, OPENAPI_YAML};
+pub use serve::ServeError;
 pub use store::{JobStore, SqliteStore, StoreError};
 pub use worker::{analysis_runner, JobRunner, RunHooks, RunnerOutcome, WorkerParams};
 
@@ -247,7 +243,7 @@ pub enum StartError {
 pub struct Service {
     state: AppState,
     pool: worker::Pool,
-    cluster: Option<cluster::ClusterThreads>,
+    cluster: Option<worker::cluster::ClusterThreads>,
     sweeper: Option<retention::Sweeper>,
 }
 
@@ -310,7 +306,8 @@ impl Service {
         let core = Arc::new(core);
         let cluster = match pg {
             Some(pg) => Some(
-                cluster::ClusterThreads::start(core.clone(), pg).map_err(StartError::Component)?,
+                worker::cluster::ClusterThreads::start(core.clone(), pg)
+                    .map_err(StartError::Component)?,
             ),
             None => None,
         };
@@ -378,7 +375,7 @@ fn database_path(url: &str) -> Result<PathBuf, String> {
 }
 
 /// Entry point of `ashlar serve`: blocks until SIGINT/SIGTERM, then shuts down gracefully.
-pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
+pub fn serve_cli(args: ServeArgs) -> Result<(), ServeError> {
     let _ = tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env()
@@ -389,13 +386,19 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .try_init();
     let mut config = ServiceConfig::new(&args.data);
-    match args.database.as_deref().map(parse_database).transpose()? {
+    match args
+        .database
+        .as_deref()
+        .map(parse_database)
+        .transpose()
+        .map_err(ServeError::Database)?
+    {
         Some(Database::Sqlite(p)) => config.database = Some(p),
         Some(Database::Postgres(url)) => config.postgres = Some(url),
         None => {}
     }
     config.artifacts = args.artifacts.clone();
-    config.lease = lease_params(args.lease)?;
+    config.lease = lease_params(args.lease).map_err(ServeError::Lease)?;
     config.limits = Limits {
         max_body_bytes: args.max_body_bytes,
         max_blocks: args.max_blocks,
@@ -414,17 +417,15 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
         retain_finished: args.retain_finished,
         ..Limits::default()
     };
-    let secs = |name: &str, v: f64| {
-        if v.is_finite() && (0.1..=86_400.0).contains(&v) {
-            Ok(Duration::from_secs_f64(v))
+    let secs = |option: &'static str, value: f64| {
+        if value.is_finite() && (0.1..=86_400.0).contains(&value) {
+            Ok(Duration::from_secs_f64(value))
         } else {
-            Err(format!(
-                "--{name} must be a number of seconds between 0.1 and 86400, got {v}"
-            ))
+            Err(ServeError::Seconds { option, value })
         }
     };
     if args.max_connections == 0 {
-        return Err("--max-connections must be at least 1".into());
+        return Err(ServeError::NoConnections);
     }
     for o in &args.cors_origins {
         let ok = (o.starts_with("https://") || o.starts_with("http://"))
@@ -436,26 +437,24 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
                 .contains('/')
             && axum::http::HeaderValue::from_str(o).is_ok();
         if !ok {
-            return Err(format!(
-                "--cors-origin {o:?}: expected an origin, scheme://host[:port], e.g. https://app.foxglove.dev"
-            ));
+            return Err(ServeError::CorsOrigin { origin: o.clone() });
         }
     }
     let tokens = args
         .tokens
         .as_deref()
         .map(auth::Tokens::load)
-        .transpose()?
+        .transpose()
+        .map_err(ServeError::Tokens)?
         .map(Arc::new);
     if !(1..=7 * 86_400).contains(&args.signed_url_seconds) {
-        return Err(format!(
-            "--signed-url-seconds must be between 1 and 604800 (a week), got {}",
-            args.signed_url_seconds
-        ));
+        return Err(ServeError::SignedUrlSeconds(args.signed_url_seconds));
     }
     let validity = Duration::from_secs(args.signed_url_seconds);
     let signing = match (&tokens, &args.signing_key_file) {
-        (_, Some(path)) => Some(auth::SigningKey::load(path, validity)?),
+        (_, Some(path)) => {
+            Some(auth::SigningKey::load(path, validity).map_err(ServeError::SigningKey)?)
+        }
         (Some(_), None) => Some(auth::SigningKey::random(validity)),
         (None, None) => None,
     };
@@ -475,15 +474,12 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
     };
     if let Some(n) = args.workers {
         if n == 0 && config.postgres.is_none() {
-            return Err("--workers must be at least 1 (0 only with a PostgreSQL --database, whose `ashlar worker` processes run the jobs)".into());
+            return Err(ServeError::NoWorkers);
         }
         config.workers.workers = n;
     }
     if !(args.shutdown_grace.is_finite() && args.shutdown_grace >= 0.0) {
-        return Err(format!(
-            "--shutdown-grace must be a number of seconds ≥ 0, got {}",
-            args.shutdown_grace
-        ));
+        return Err(ServeError::ShutdownGrace(args.shutdown_grace));
     }
     if !args.fake_runner {
         config.workers.fanout_width = fanout_width(args.fanout_width, config.postgres.is_some());
@@ -497,23 +493,22 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()
-        .map_err(|e| format!("starting the async runtime: {e}"))?;
+        .map_err(ServeError::Runtime)?;
     // Bind before starting workers: a port clash must not start running recovered jobs.
     let listener = runtime
         .block_on(tokio::net::TcpListener::bind(&args.addr))
-        .map_err(|e| format!("--addr {}: {e}", args.addr))?;
-    let local = listener
-        .local_addr()
-        .map_err(|e| format!("--addr {}: {e}", args.addr))?;
+        .map_err(|source| ServeError::Bind {
+            addr: args.addr.clone(),
+            source,
+        })?;
+    let local = listener.local_addr().map_err(|source| ServeError::Bind {
+        addr: args.addr.clone(),
+        source,
+    })?;
     if !local.ip().is_loopback() && server_params.tokens.is_none() && !args.allow_insecure {
-        return Err(format!(
-            "--addr {local} is reachable from other machines, and without --tokens anyone who reaches \
-             the port could submit, read and delete jobs. Give --tokens FILE, or pass --allow-insecure \
-             on a network you trust"
-        ));
+        return Err(ServeError::Insecure { addr: local });
     }
-    let service =
-        Service::start_with(config, runner, server_params.clone()).map_err(|e| e.to_string())?;
+    let service = Service::start_with(config, runner, server_params.clone())?;
     let state = service.state();
     let signals = runtime.block_on(async { ShutdownSignals::register() });
     // One line on stdout that scripts (and the tests) read to find the port.
@@ -534,11 +529,11 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), String> {
     let requeued = service.shutdown(Duration::from_secs_f64(args.shutdown_grace));
     runtime.shutdown_timeout(Duration::from_secs(1));
     tracing::info!(requeued, "stopped");
-    served.map_err(|e| format!("serving: {e}"))
+    served.map_err(ServeError::Serve)
 }
 
 /// The isolation a `serve` command line asks for.
-fn isolation(args: &ServeArgs, limits: &Limits) -> Result<runner::Isolation, String> {
+fn isolation(args: &ServeArgs, limits: &Limits) -> Result<runner::Isolation, ServeError> {
     isolation_for(
         args.isolation,
         args.job_memory_limit,
@@ -556,12 +551,11 @@ pub fn isolation_for(
     cpu_seconds: Option<u64>,
     limits: &Limits,
     fake: Option<Duration>,
-) -> Result<runner::Isolation, String> {
+) -> Result<runner::Isolation, ServeError> {
     if flag == IsolationFlag::Thread || !cfg!(unix) {
         return Ok(runner::Isolation::Thread);
     }
-    let exe = std::env::current_exe()
-        .map_err(|e| format!("--isolation process: cannot find the ashlar executable: {e}"))?;
+    let exe = std::env::current_exe().map_err(ServeError::Executable)?;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64;
     let mut p = runner::ProcessParams::new(exe);
     p.memory_limit = memory_limit;

@@ -66,7 +66,7 @@ pub fn sweep(core: &Core, keep: Duration) -> usize {
             // Files first, then the record: once a swept job answers 404 its artifacts are
             // gone (the other order left a window in which a 404 job still had published
             // files). The job is finished, so only "deleted meanwhile" can refuse the delete.
-            super::routes::remove_artifacts(core, id);
+            core.remove_artifacts(id);
             match core.store.delete(id) {
                 Ok(DeleteOutcome::Deleted) => {
                     deleted += 1;

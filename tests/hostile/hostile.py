@@ -225,7 +225,7 @@ def isolation():
     fails alone (the cause named) while a job on the other worker succeeds, the server's memory
     stays flat; a SIGKILLed server leaves no child running and its job is run again."""
     column, pulse = load("column.json"), load("half-sine-pulse.json")
-    faults = {"ASHLAR_TEST_FAULTS": "1"}  # honoured by debug builds only (src/service/runner.rs)
+    faults = {"ASHLAR_TEST_FAULTS": "1"}  # honoured by debug builds only (src/service/worker/runner.rs)
     i = Server("--workers", "2", "--job-memory-limit", "256M", env=faults)
     rss0 = i.hwm_mb()
     good_scene = json.loads(json.dumps(column))

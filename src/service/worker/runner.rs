@@ -14,9 +14,10 @@
 //! RLIMIT_FSIZE), asks the kernel to kill it when the worker thread that started it dies
 //! (PR_SET_PDEATHSIG, Linux), and checks its parent is still the server (else exits). Unix only;
 //! elsewhere `ashlar serve` runs jobs in-process.
-use super::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
-use super::store::JobKind;
-use super::worker::{ChildRequest, RunHooks, RunnerOutcome};
+use super::fanout::ChildRequest;
+use super::run::{RunHooks, RunnerOutcome};
+use crate::service::http::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
+use crate::service::store::JobKind;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::io::{BufRead, Read, Write};
@@ -158,7 +159,7 @@ fn limits_from_value(v: &Value) -> Limits {
 const STDERR_TAIL: usize = 8 << 10;
 
 /// Run one job (`Run` or an in-process `PgaSearch`) in a child process; same contract as a
-/// [`super::worker::JobRunner`]: progress through `hooks`, stops when `hooks.cancel` is set.
+/// [`super::run::JobRunner`]: progress through `hooks`, stops when `hooks.cancel` is set.
 pub fn run_in_child(
     params: &ProcessParams,
     kind: JobKind,
@@ -171,7 +172,7 @@ pub fn run_in_child(
 
 /// Run one child run (`pga_run`) of a fanned-out search in a child process: `search` is the
 /// search's stored request, `run` the amplitude and record. Its outcome is the
-/// [`super::worker::ChildResult`] the in-thread path stores.
+/// [`super::fanout::ChildResult`] the in-thread path stores.
 pub fn run_pga_run_in_child(
     params: &ProcessParams,
     search: &Value,
@@ -451,15 +452,32 @@ fn emit(out: &Mutex<std::io::Stdout>, m: &ChildMessage) {
     }
 }
 
+/// Why `ashlar internal-run-job` could not start the job it was given.
+#[derive(Debug, thiserror::Error)]
+pub enum ChildError {
+    /// Standard input (the job's first line) could not be read.
+    #[error("internal-run-job: reading the job: {0}")]
+    ReadJob(#[source] std::io::Error),
+    /// The first line is not a job spec: the command was not started by a server.
+    #[error("internal-run-job is started by `ashlar serve` only ({0})")]
+    NotFromServer(#[source] serde_json::Error),
+    /// The server that started this process exited before the child could tie itself to it.
+    #[error("internal-run-job: the server that started this run is gone")]
+    ParentGone,
+    /// A resource limit (`memory`, `CPU`, `file size`) could not be set.
+    #[error("internal-run-job: setting the {what} limit: {source}")]
+    Limit {
+        what: &'static str,
+        source: std::io::Error,
+    },
+}
+
 /// Entry point of the hidden `ashlar internal-run-job` (started by the server, never by users).
-pub fn child_main() -> Result<(), String> {
+pub fn child_main() -> Result<(), ChildError> {
     let mut input = std::io::BufReader::new(std::io::stdin());
     let mut first = String::new();
-    input
-        .read_line(&mut first)
-        .map_err(|e| format!("internal-run-job: reading the job: {e}"))?;
-    let spec: ChildSpec = serde_json::from_str(&first)
-        .map_err(|e| format!("internal-run-job is started by `ashlar serve` only ({e})"))?;
+    input.read_line(&mut first).map_err(ChildError::ReadJob)?;
+    let spec: ChildSpec = serde_json::from_str(&first).map_err(ChildError::NotFromServer)?;
     guard_parent(&spec)?;
     set_limits(&spec)?;
     // Further lines: `cancel`; the end of stdin means the server is gone or gave up on us.
@@ -499,7 +517,7 @@ fn run_spec(spec: &ChildSpec, out: &Mutex<std::io::Stdout>) -> Result<ChildMessa
             .map_err(|e| format!("the stored request is no longer accepted: {}", e.detail))?
             .input;
         test_fault(&input.scene().name);
-        return Ok(match super::worker::evaluate_child(&input, run, &CANCEL)? {
+        return Ok(match super::fanout::evaluate_child(&input, run, &CANCEL)? {
             RunnerOutcome::Completed(value) => ChildMessage::Completed { value },
             RunnerOutcome::Cancelled(partial) => ChildMessage::Cancelled { partial },
         });
@@ -514,8 +532,8 @@ fn run_spec(spec: &ChildSpec, out: &Mutex<std::io::Stdout>) -> Result<ChildMessa
     let input: JobInput = parsed.input;
     test_fault(&input.scene().name);
     let runner = match spec.fake_ms {
-        Some(ms) => super::fake::fake_runner(Duration::from_millis(ms)),
-        None => super::worker::analysis_runner(),
+        Some(ms) => crate::service::fake::fake_runner(Duration::from_millis(ms)),
+        None => super::run::analysis_runner(),
     };
     // Progress at most every 50 ms (a run reports every output frame): the server forwards
     // each line to the job's event stream.
@@ -545,7 +563,7 @@ fn run_spec(spec: &ChildSpec, out: &Mutex<std::io::Stdout>) -> Result<ChildMessa
 
 /// Die with the server: PR_SET_PDEATHSIG (Linux), then make sure the server did not die before
 /// that took effect (our parent would already be another process).
-fn guard_parent(spec: &ChildSpec) -> Result<(), String> {
+fn guard_parent(spec: &ChildSpec) -> Result<(), ChildError> {
     #[cfg(target_os = "linux")]
     {
         let _ = nix::sys::prctl::set_pdeathsig(nix::sys::signal::Signal::SIGKILL);
@@ -553,23 +571,25 @@ fn guard_parent(spec: &ChildSpec) -> Result<(), String> {
     #[cfg(unix)]
     {
         if nix::unistd::getppid().as_raw() as u32 != spec.parent_pid {
-            return Err("internal-run-job: the server that started this run is gone".into());
+            return Err(ChildError::ParentGone);
         }
     }
     let _ = spec;
     Ok(())
 }
 
-fn set_limits(spec: &ChildSpec) -> Result<(), String> {
+fn set_limits(spec: &ChildSpec) -> Result<(), ChildError> {
     #[cfg(unix)]
     {
         use nix::sys::resource::{setrlimit, Resource};
-        let set = |r: Resource, v: u64, what: &str| -> Result<(), String> {
+        let set = |r: Resource, v: u64, what: &'static str| -> Result<(), ChildError> {
             if v == 0 {
                 return Ok(());
             }
-            setrlimit(r, v as _, v as _)
-                .map_err(|e| format!("internal-run-job: setting the {what} limit: {e}"))
+            setrlimit(r, v as _, v as _).map_err(|e| ChildError::Limit {
+                what,
+                source: e.into(),
+            })
         };
         set(Resource::RLIMIT_AS, spec.memory_limit, "memory")?;
         // The soft CPU limit sends SIGXCPU (the cause the server reports); the hard one, a
@@ -580,7 +600,10 @@ fn set_limits(spec: &ChildSpec) -> Result<(), String> {
                 spec.cpu_seconds as _,
                 spec.cpu_seconds.saturating_add(1) as _,
             )
-            .map_err(|e| format!("internal-run-job: setting the CPU limit: {e}"))?;
+            .map_err(|e| ChildError::Limit {
+                what: "CPU",
+                source: e.into(),
+            })?;
         }
         set(Resource::RLIMIT_FSIZE, spec.file_size_limit, "file size")?;
     }

@@ -1,13 +1,23 @@
 //! Request bodies of the service: JSON text → validated [`JobInput`], with the server's limits
 //! applied. Used twice with the same rules: by the routes when a job is submitted (errors become
 //! 400/413/422 problems naming the field) and by a worker when it starts the stored job.
-use super::problem::{dotted_to_pointer, point_at_named_field, ApiError};
+//! This module holds what the three kinds share (limits, the scene and motion checks, criteria);
+//! `run`, `pga` and `site` parse each kind's body. Over 600 lines with its tests, which cover
+//! the three parsers through their shared checks.
+mod pga;
+mod run;
+mod site;
+
 use crate::analysis::fragility::Method;
-use crate::analysis::pga::{Combine, Criterion, PgaRequest};
-use crate::motion::{Amplitude, GroundMotion, Signal, Units};
+use crate::analysis::pga::{Criterion, PgaRequest};
+use crate::motion::{GroundMotion, Signal};
 use crate::scene::Scene;
+use crate::service::http::problem::{dotted_to_pointer, point_at_named_field, ApiError};
+pub use pga::{parse_pga, DEFAULT_SCAN_POINTS, MAX_RECORDS};
+pub use run::parse_run;
 use serde::Deserialize;
 use serde_json::Value;
+pub use site::{parse_site, MAX_OBSERVATIONS};
 
 /// Limits that protect the server from requests that would exhaust it. Each is a flag of
 /// `ashlar serve`; exceeding one is answered with 413 (body size) or 422 naming the field.
@@ -173,7 +183,10 @@ pub fn json_body(bytes: &[u8]) -> Result<Value, ApiError> {
 }
 
 /// Deserialize a typed body part, turning serde's message into a problem naming the field.
-fn typed<T: for<'de> Deserialize<'de>>(prefix: &str, value: &Value) -> Result<T, ApiError> {
+pub(super) fn typed<T: for<'de> Deserialize<'de>>(
+    prefix: &str,
+    value: &Value,
+) -> Result<T, ApiError> {
     serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
         let msg = e.into_inner().to_string();
@@ -185,17 +198,6 @@ fn typed<T: for<'de> Deserialize<'de>>(prefix: &str, value: &Value) -> Result<T,
         };
         ApiError::invalid_field(pointer.clone(), format!("{shown}: {msg}"))
     })
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RunBody {
-    scene: Value,
-    #[serde(default)]
-    motion: Option<Value>,
-    /// Damage criteria to judge on the finished run (as a search's `criterion`).
-    #[serde(default)]
-    criterion: Option<Value>,
 }
 
 /// Criteria of a request at JSON pointer `pointer`: a string (`toppled:B`, …), a damage object
@@ -280,135 +282,9 @@ pub fn parse_criteria(
     Ok(out.into_iter().map(|(_, tc)| tc).collect())
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RangeSpec {
-    /// A number in `units`, or a string with its own units ("0.05g").
-    min: Amplitude,
-    max: Amplitude,
-    /// Units of numeric `min`, `max` and `tolerance` (m/s² by default).
-    #[serde(default = "default_units")]
-    units: Units,
-}
-
-fn default_units() -> Units {
-    Units::MetresPerSecond2
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct PgaBody {
-    scene: Value,
-    #[serde(default)]
-    motion: Value,
-    /// Several records (a fragility study) instead of `motion`.
-    #[serde(default)]
-    motions: Option<Vec<Value>>,
-    criterion: Value,
-    #[serde(default)]
-    combine: Option<String>,
-    #[serde(default)]
-    fit: Option<String>,
-    range: RangeSpec,
-    /// A number in `range.units`, or a string with its own units ("0.01g").
-    #[serde(default)]
-    tolerance: Option<Amplitude>,
-    #[serde(default)]
-    scan_points: Option<usize>,
-}
-
-/// Scan points of a PGA search when the request does not say (as `ashlar pga`): 40 puts
-/// them 0.49 m/s² apart over 0.05–2 g, finer than the failing intervals of a rocking column
-/// under the bundled records (docs/pga.md); the search reports this resolution.
-pub const DEFAULT_SCAN_POINTS: usize = 40;
-
-/// Records of one multi-record search: 100 is more than any fragility study uses (FEMA P695
-/// has 44), and bounds one job to 100 searches; the body-size limit bounds their samples.
-pub const MAX_RECORDS: usize = 100;
-
-/// Re-point an error of the single-motion parser at `/motions/{i}`.
-fn at_record(e: ApiError, i: usize) -> ApiError {
-    let re = |t: &str| t.replacen("/motion", &format!("/motions/{i}"), 1);
-    ApiError {
-        detail: re(&e.detail),
-        pointer: e.pointer.as_deref().map(re),
-        ..e
-    }
-}
-
-/// The records of `"motions"`: each a GroundMotion, optionally with a `"name"` (default
-/// `motions/{i}`), parsed with the same rules as `"motion"`.
-fn parse_records(
-    scene: &Value,
-    items: &[Value],
-    limits: &Limits,
-) -> Result<(Scene, Vec<(String, GroundMotion)>), ApiError> {
-    if items.is_empty() {
-        return Err(ApiError::invalid_field(
-            "/motions",
-            "/motions: give at least one record",
-        ));
-    }
-    if items.len() > MAX_RECORDS {
-        return Err(ApiError::limit_exceeded(
-            "/motions",
-            format!(
-                "/motions: {} records exceed the limit of {MAX_RECORDS} per search",
-                items.len()
-            ),
-        ));
-    }
-    let mut parsed_scene = None;
-    let mut records = Vec::new();
-    for (i, item) in items.iter().enumerate() {
-        let mut item = item.clone();
-        let name = match item.as_object_mut().and_then(|o| o.remove("name")) {
-            None => format!("motions/{i}"),
-            Some(Value::String(n)) if !n.trim().is_empty() => n,
-            Some(_) => {
-                let p = format!("/motions/{i}/name");
-                return Err(ApiError::invalid_field(
-                    p.clone(),
-                    format!("{p}: must be a non-empty string"),
-                ));
-            }
-        };
-        if item.is_null() {
-            let p = format!("/motions/{i}");
-            return Err(ApiError::invalid_field(
-                p.clone(),
-                format!("{p}: a record is required"),
-            ));
-        }
-        let (sc, motion) =
-            scene_and_motion(scene, Some(&item), limits).map_err(|e| at_record(e, i))?;
-        if motion.horizontal.peak() <= 0.0 {
-            let p = format!("/motions/{i}/horizontal");
-            return Err(ApiError::invalid_field(
-                p.clone(),
-                format!(
-                    "{p}: a PGA search scales the horizontal component, which is missing or zero"
-                ),
-            ));
-        }
-        if records.iter().any(|(n, _)| *n == name) {
-            let p = format!("/motions/{i}/name");
-            return Err(ApiError::invalid_field(
-                p.clone(),
-                format!("{p}: {name:?} names an earlier record too"),
-            ));
-        }
-        parsed_scene.get_or_insert(sc);
-        records.push((name, motion));
-    }
-    let scene =
-        parsed_scene.ok_or_else(|| ApiError::invalid_field("/motions", "/motions: empty"))?;
-    Ok((scene, records))
-}
-
 /// Shape checks before any work: a `base_acceleration` excitation takes no other field (the
 /// scene reader leaves that out), and the motion reads as a [`crate::motion::MotionSpec`].
-fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), ApiError> {
+pub(super) fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), ApiError> {
     if let Some(ex) = scene.get("excitation").and_then(Value::as_object) {
         let allowed: &[&str] = match ex.get("type").and_then(Value::as_str) {
             Some("driven_block") => &["type", "block"],
@@ -438,7 +314,11 @@ fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), ApiError> {
 /// Sizes checked on the raw JSON, before any work proportional to them: vertices per block,
 /// and the length of analytic pulses (counted as 20 samples a cycle against the record limit,
 /// since evaluating a pulse's peak walks its cycles).
-fn check_sizes(scene: &Value, motion: Option<&Value>, limits: &Limits) -> Result<(), ApiError> {
+pub(super) fn check_sizes(
+    scene: &Value,
+    motion: Option<&Value>,
+    limits: &Limits,
+) -> Result<(), ApiError> {
     let blocks = scene
         .get("blocks")
         .and_then(Value::as_array)
@@ -484,23 +364,23 @@ fn check_sizes(scene: &Value, motion: Option<&Value>, limits: &Limits) -> Result
 
 /// A motion error as a problem pointing into the body (`motion.horizontal.dt` →
 /// `/motion/horizontal/dt`).
-fn motion_problem(e: &crate::motion::MotionError) -> ApiError {
+pub(super) fn motion_problem(e: &crate::motion::MotionError) -> ApiError {
     ApiError::motion(
         point_at_named_field(dotted_to_pointer("", &e.origin), &e.message),
         e,
     )
 }
 
-fn scene_and_motion(
+pub(super) fn scene_and_motion(
     scene: &Value,
     motion: Option<&Value>,
     limits: &Limits,
 ) -> Result<(Scene, GroundMotion), ApiError> {
     check_shapes(scene, motion)?;
     check_sizes(scene, motion, limits)?;
-    super::budget::check_ranges(scene)?;
+    crate::service::http::budget::check_ranges(scene)?;
     if let Some(m) = motion {
-        super::budget::check_motion_ranges("/motion", m)?;
+        crate::service::http::budget::check_motion_ranges("/motion", m)?;
     }
     if let Some(n) = scene.get("blocks").and_then(Value::as_array).map(Vec::len) {
         if n > limits.max_blocks {
@@ -547,9 +427,9 @@ fn scene_and_motion(
             format!(
                 "/scene/control/duration: {} s at a time step of {} s is {} steps, over the server's limit of {} \
                  (ashlar serve --max-total-steps); shorten the duration or lengthen control.time_step",
-                super::budget::num(duration),
-                super::budget::num(scene.control.time_step),
-                super::budget::num(steps),
+                crate::service::http::budget::num(duration),
+                crate::service::http::budget::num(scene.control.time_step),
+                crate::service::http::budget::num(steps),
                 limits.max_total_steps
             ),
         ));
@@ -561,14 +441,14 @@ fn scene_and_motion(
             format!(
                 "/scene/control/output_interval: {} s recorded every {} s is {} frames, over the server's \
                  limit of {} (ashlar serve --max-total-steps)",
-                super::budget::num(duration),
-                super::budget::num(scene.control.output_interval),
-                super::budget::num(frames),
+                crate::service::http::budget::num(duration),
+                crate::service::http::budget::num(scene.control.output_interval),
+                crate::service::http::budget::num(frames),
                 limits.max_total_steps
             ),
         ));
     }
-    super::budget::check_run_work(scene.blocks.len(), steps, frames, limits)?;
+    crate::service::http::budget::check_run_work(scene.blocks.len(), steps, frames, limits)?;
     scene.control.max_steps = scene
         .control
         .max_steps
@@ -576,7 +456,7 @@ fn scene_and_motion(
     Ok((scene, motion))
 }
 
-fn signal_samples(s: &Signal) -> usize {
+pub(super) fn signal_samples(s: &Signal) -> usize {
     match s {
         Signal::Sampled(x) => x.accel.len(),
         _ => 0,
@@ -601,312 +481,6 @@ pub fn motion_summary(m: &GroundMotion) -> Value {
         "has_vertical": !matches!(m.vertical, Signal::Zero),
         "provenance": m.provenance,
     })
-}
-
-/// `POST /v1/jobs` body → run input.
-pub fn parse_run(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
-    if !body.is_object() {
-        return Err(ApiError::invalid_field(
-            "",
-            "the body must be a JSON object {\"scene\": …, \"motion\": …}",
-        ));
-    }
-    let b: RunBody = typed("", body)?;
-    let (scene, motion) = scene_and_motion(&b.scene, b.motion.as_ref(), limits)?;
-    let criteria = match b.criterion.as_ref().filter(|c| !c.is_null()) {
-        None => Vec::new(),
-        Some(c) => parse_criteria(c, "/criterion", &scene)?
-            .into_iter()
-            .map(|(_, c)| c)
-            .collect(),
-    };
-    let motion_summary = motion_summary(&motion);
-    Ok(Parsed {
-        input: JobInput::Run {
-            scene,
-            motion,
-            criteria,
-        },
-        motion_summary,
-    })
-}
-
-/// `POST /v1/pga-searches` body → search input (amplitudes converted to m/s²).
-pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
-    if !body.is_object() {
-        return Err(ApiError::invalid_field(
-            "",
-            "the body must be a JSON object {\"scene\", \"motion\", \"criterion\", \"range\", \"tolerance\"}",
-        ));
-    }
-    let b: PgaBody = typed("", body)?;
-    let (scene, motion, records) = match &b.motions {
-        Some(items) => {
-            if !b.motion.is_null() {
-                return Err(ApiError::invalid_field(
-                    "/motions",
-                    "/motions: give either \"motion\" (one record) or \"motions\" (several), not both",
-                ));
-            }
-            let (scene, records) = parse_records(&b.scene, items, limits)?;
-            (scene, records[0].1.clone(), records)
-        }
-        None => {
-            if b.motion.is_null() {
-                return Err(ApiError::invalid_field(
-                    "/motion",
-                    "/motion: a PGA search needs a ground motion to scale (or \"motions\": several records)",
-                ));
-            }
-            let (scene, motion) = scene_and_motion(&b.scene, Some(&b.motion), limits)?;
-            (scene, motion, Vec::new())
-        }
-    };
-    let combine = match &b.combine {
-        None => Combine::All,
-        Some(t) => {
-            Combine::parse(t).map_err(|e| ApiError::invalid_field("/combine", format!("/{e}")))?
-        }
-    };
-    let fit = match &b.fit {
-        None => Method::Interval,
-        Some(t) => {
-            Method::parse(t).map_err(|e| ApiError::invalid_field("/fit", format!("/fit: {e}")))?
-        }
-    };
-    if b.fit.is_some() && records.is_empty() {
-        return Err(ApiError::invalid_field(
-            "/fit",
-            "/fit: a fragility fit needs several records (\"motions\")",
-        ));
-    }
-    if motion.horizontal.peak() <= 0.0 {
-        return Err(ApiError::invalid_field(
-            "/motion/horizontal",
-            "/motion/horizontal: a PGA search scales the horizontal component, which is missing or zero",
-        ));
-    }
-    let (texts, criteria): (Vec<String>, Vec<Criterion>) =
-        parse_criteria(&b.criterion, "/criterion", &scene)?
-            .into_iter()
-            .unzip();
-    let (min, max, tolerance, scan_points) =
-        search_range(&b.range, b.tolerance.as_ref(), b.scan_points, limits)?;
-    let runs = super::budget::search_runs(records.len(), scan_points, max - min, tolerance);
-    // The longest record sets the length of every run (a scene's own duration overrides it).
-    let duration = scene.control.duration.unwrap_or_else(|| {
-        records
-            .iter()
-            .map(|(_, m)| m)
-            .chain(std::iter::once(&motion))
-            .filter_map(|m| m.duration().map(|d| d + 2.0))
-            .fold(0.0, f64::max)
-    });
-    let steps = (duration / scene.control.time_step).ceil();
-    super::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
-    let request = PgaRequest {
-        criteria,
-        combine,
-        min,
-        max,
-        tolerance,
-        scan_points,
-    };
-    let mut motion_summary = motion_summary(&motion);
-    if let (false, Some(obj)) = (records.is_empty(), motion_summary.as_object_mut()) {
-        // The first record's summary, and every record's name and intensity.
-        let list: Vec<Value> = records
-            .iter()
-            .map(|(name, m)| {
-                serde_json::json!({"name": name, "pga": m.pga(), "duration": m.duration(), "provenance": m.provenance})
-            })
-            .collect();
-        obj.insert("records".into(), Value::Array(list));
-    }
-    let joined = texts.join(",");
-    let criterion = match combine {
-        Combine::Any if texts.len() > 1 => format!("any({joined})"),
-        _ => joined,
-    };
-    Ok(Parsed {
-        input: JobInput::PgaSearch {
-            scene,
-            motion,
-            request,
-            criterion,
-            records,
-            fit,
-        },
-        motion_summary,
-    })
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct SiteBody {
-    scene: Value,
-    /// The records (each a ground motion, optionally named), as a multi-record search's.
-    motions: Vec<Value>,
-    observations: Value,
-    range: RangeSpec,
-    #[serde(default)]
-    tolerance: Option<Amplitude>,
-    #[serde(default)]
-    scan_points: Option<usize>,
-}
-
-/// One observation of a site analysis: a criterion and whether its damage was seen.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct ObservationSpec {
-    criterion: Value,
-    /// `true`: the damage is there (a lower bound on the PGA); `false`: it is not (an upper one).
-    observed: bool,
-}
-
-/// Observations of one site analysis: a site's field observations number a handful (docs/
-/// observations.md), and each one is a search per record, so 50 bounds one job to 50 × 100
-/// searches while the work budget bounds their runs.
-pub const MAX_OBSERVATIONS: usize = 50;
-
-/// `POST /v1/site-analyses` body → site analysis input (amplitudes converted to m/s²).
-pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
-    if !body.is_object() {
-        return Err(ApiError::invalid_field(
-            "",
-            "the body must be a JSON object {\"scene\", \"motions\", \"observations\", \"range\"}",
-        ));
-    }
-    let b: SiteBody = typed("", body)?;
-    let (scene, records) = parse_records(&b.scene, &b.motions, limits)?;
-    let items = match &b.observations {
-        Value::Array(v) if !v.is_empty() => v,
-        _ => return Err(ApiError::invalid_field(
-            "/observations",
-            "/observations: give a non-empty array of {\"criterion\": …, \"observed\": true|false}",
-        )),
-    };
-    if items.len() > MAX_OBSERVATIONS {
-        return Err(ApiError::limit_exceeded(
-            "/observations",
-            format!(
-                "/observations: {} observations exceed the limit of {MAX_OBSERVATIONS} per analysis",
-                items.len()
-            ),
-        ));
-    }
-    let mut observations = Vec::new();
-    for (i, item) in items.iter().enumerate() {
-        let p = format!("/observations/{i}");
-        let spec: ObservationSpec = typed(&p, item)?;
-        let cp = format!("{p}/criterion");
-        if spec.criterion.is_array() {
-            return Err(ApiError::invalid_field(
-                cp.clone(),
-                format!(
-                    "{cp}: an observation is one criterion; combine several with a damage object \
-                     ({{\"kind\": \"all\" | \"any\", \"of\": […]}}, docs/format.md §3)"
-                ),
-            ));
-        }
-        let mut parsed = parse_criteria(&spec.criterion, &cp, &scene)?;
-        let (_, criterion) = parsed.remove(0);
-        observations.push(crate::analysis::observations::Observation {
-            criterion,
-            observed: spec.observed,
-        });
-    }
-    let (min, max, tolerance, scan_points) =
-        search_range(&b.range, b.tolerance.as_ref(), b.scan_points, limits)?;
-    // Each observation is one search per record.
-    let runs = observations.len() as f64
-        * super::budget::search_runs(records.len(), scan_points, max - min, tolerance);
-    let duration = scene.control.duration.unwrap_or_else(|| {
-        records
-            .iter()
-            .filter_map(|(_, m)| m.duration().map(|d| d + 2.0))
-            .fold(0.0, f64::max)
-    });
-    let steps = (duration / scene.control.time_step).ceil();
-    super::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
-    let motion = records[0].1.clone();
-    let mut motion_summary = motion_summary(&motion);
-    if let Some(obj) = motion_summary.as_object_mut() {
-        let list: Vec<Value> = records
-            .iter()
-            .map(|(name, m)| {
-                serde_json::json!({"name": name, "pga": m.pga(), "duration": m.duration(), "provenance": m.provenance})
-            })
-            .collect();
-        obj.insert("records".into(), Value::Array(list));
-    }
-    Ok(Parsed {
-        input: JobInput::SiteAnalysis {
-            scene,
-            motion,
-            records,
-            observations,
-            request: PgaRequest {
-                criteria: Vec::new(),
-                combine: Combine::All,
-                min,
-                max,
-                tolerance,
-                scan_points,
-            },
-        },
-        motion_summary,
-    })
-}
-
-/// The searched range of a request (`range`, `tolerance`, `scan_points`), amplitudes in m/s²:
-/// (min, max, tolerance, scan points), each error naming its field.
-fn search_range(
-    range: &RangeSpec,
-    tolerance: Option<&Amplitude>,
-    scan_points: Option<usize>,
-    limits: &Limits,
-) -> Result<(f64, f64, f64, usize), ApiError> {
-    // Amplitudes in m/s² from here on.
-    let units = range.units;
-    let amplitude = |a: &Amplitude, p: &str| {
-        a.to_si(units)
-            .map_err(|e| ApiError::invalid_field(p, format!("{p}: {e}")))
-    };
-    let min = amplitude(&range.min, "/range/min")?;
-    let max = amplitude(&range.max, "/range/max")?;
-    if !(max.is_finite() && max > min) {
-        return Err(ApiError::invalid_field(
-            "/range/max",
-            format!(
-                "/range/max: must be finite and > range.min, got {} m/s² ≤ {} m/s²",
-                crate::quantity::sig(max),
-                crate::quantity::sig(min)
-            ),
-        ));
-    }
-    // Default resolution: 1 % of the searched range.
-    let tolerance = match tolerance {
-        Some(t) => amplitude(t, "/tolerance")?,
-        None => (max - min) / 100.0,
-    };
-    if !(tolerance.is_finite() && tolerance > 0.0) {
-        return Err(ApiError::invalid_field(
-            "/tolerance",
-            "/tolerance: must be a finite amplitude > 0",
-        ));
-    }
-    let scan_points = scan_points.unwrap_or(DEFAULT_SCAN_POINTS);
-    if !(2..=limits.max_scan_points).contains(&scan_points) {
-        return Err(ApiError::invalid_field(
-            "/scan_points",
-            format!(
-                "/scan_points: must lie in 2..={}, got {scan_points}",
-                limits.max_scan_points
-            ),
-        ));
-    }
-    Ok((min, max, tolerance, scan_points))
 }
 
 #[cfg(test)]

@@ -3,15 +3,30 @@
 //! template is cheap (no simulation), so it runs on the request's task.
 use super::problem::ApiError;
 use super::request::json_body;
-use super::routes::AppState;
+use super::state::{check_json_content_type, AppState};
+use super::Route;
 use crate::scene::templates::{self, TemplateError};
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, PathRejection};
 use axum::extract::{Path, State};
-use axum::http::HeaderMap;
+use axum::http::{HeaderMap, Method};
 use axum::response::{IntoResponse, Response};
+use axum::routing::{get, post};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
+
+/// The routes of this resource: method, path, handler.
+pub fn routes() -> Vec<Route> {
+    vec![
+        (Method::GET, "/v1/templates", get(list)),
+        (Method::POST, "/v1/templates/{name}", post(build)),
+    ]
+}
+
+/// This resource's router.
+pub fn router() -> axum::Router<AppState> {
+    super::router_of(routes())
+}
 
 /// `GET /v1/templates`: `{"templates": [{name, description, parameters: [{name, units,
 /// description, default, min, max, choices?}]}]}`.
@@ -35,7 +50,7 @@ pub async fn build(
     let given = if bytes.iter().all(|b| b.is_ascii_whitespace()) {
         BTreeMap::new()
     } else {
-        super::routes::check_json_content_type(&headers)?;
+        check_json_content_type(&headers)?;
         parameters(&json_body(&bytes)?)?
     };
     let (spec, _) = template.build(&given).map_err(|e| match &e {

@@ -1,12 +1,12 @@
 //! Shared artifact storage: where a worker publishes a finished job's files (histories,
-//! MCAP, summary) so that the API process on another machine can serve them. Beside `store`
-//! under `worker`/`routes`; built on `object_store` (a local or shared directory as
+//! MCAP, summary) so that the API process on another machine can serve them. Part of the
+//! worker, imported by the pool and by `http::downloads`, importing neither; built on
+//! `object_store` (a local or shared directory as
 //! `file:///…`, or S3-compatible storage as `s3://bucket/prefix` when built with the `s3`
 //! feature).
 //!
 //! Without `--artifacts`, artifacts stay in each process's `--data DIR/jobs/<uuid>/`, which is
 //! enough when every process is given the same (shared) directory.
-use super::worker::Core;
 use object_store::path::Path as StorePath;
 use object_store::{ObjectStore, PutPayload};
 use std::path::Path;
@@ -242,34 +242,32 @@ fn s3_options(shown: &str, query: Vec<(String, String)>) -> Result<Vec<(String, 
     Ok(opts)
 }
 
-/// Make sure `<data>/jobs/<id>/<name>` exists locally, downloading it from the shared artifact
-/// store when this process did not run the job. Errors are logged; the caller then answers as
-/// if the artifact were missing.
-pub async fn ensure_local(core: &Core, id: Uuid, name: &str) {
-    let Some(a) = &core.artifacts else {
-        return;
-    };
-    let path = core.job_dir(id).join(name);
-    if tokio::fs::try_exists(&path).await.unwrap_or(false) {
-        return;
-    }
-    match a.fetch(id, name).await {
-        Ok(Some(bytes)) => {
-            let dir = core.job_dir(id);
-            // Written under a temporary name then renamed: a concurrent reader never sees half.
-            let tmp = dir.join(format!(".{name}.{}", Uuid::new_v4().simple()));
-            let res = async {
-                tokio::fs::create_dir_all(&dir).await?;
-                tokio::fs::write(&tmp, &bytes).await?;
-                tokio::fs::rename(&tmp, &path).await
-            }
-            .await;
-            if let Err(e) = res {
-                tracing::error!(path = %path.display(), error = %e, "caching an artifact");
-            }
+impl ArtifactStore {
+    /// Make sure `dir/<name>` (the job `id`'s local directory) exists, downloading it from this
+    /// store when this process did not run the job. Errors are logged; the caller then answers
+    /// as if the artifact were missing.
+    pub async fn ensure_local(&self, id: Uuid, dir: &Path, name: &str) {
+        let path = dir.join(name);
+        if tokio::fs::try_exists(&path).await.unwrap_or(false) {
+            return;
         }
-        Ok(None) => {}
-        Err(e) => tracing::error!(error = %e, "fetching an artifact"),
+        match self.fetch(id, name).await {
+            Ok(Some(bytes)) => {
+                // Written under a temporary name then renamed: a concurrent reader never sees half.
+                let tmp = dir.join(format!(".{name}.{}", Uuid::new_v4().simple()));
+                let res = async {
+                    tokio::fs::create_dir_all(dir).await?;
+                    tokio::fs::write(&tmp, &bytes).await?;
+                    tokio::fs::rename(&tmp, &path).await
+                }
+                .await;
+                if let Err(e) = res {
+                    tracing::error!(path = %path.display(), error = %e, "caching an artifact");
+                }
+            }
+            Ok(None) => {}
+            Err(e) => tracing::error!(error = %e, "fetching an artifact"),
+        }
     }
 }
 

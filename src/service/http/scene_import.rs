@@ -6,14 +6,26 @@
 use super::budget::check_ranges;
 use super::problem::{dotted_to_pointer, point_at_named_field, ApiError};
 use super::request::json_body;
-use super::routes::{blocking, check_json_content_type, AppState};
+use super::state::{blocking, check_json_content_type, AppState};
+use super::Route;
 use crate::scene::import::dxf::{self, DxfImportError, ImportOptions};
 use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
 use axum::extract::State;
-use axum::http::HeaderMap;
+use axum::http::{HeaderMap, Method};
 use axum::response::{IntoResponse, Response};
+use axum::routing::post;
 use serde_json::Value;
+
+/// The routes of this resource: method, path, handler.
+pub fn routes() -> Vec<Route> {
+    vec![(Method::POST, "/v1/scenes/import", post(import))]
+}
+
+/// This resource's router.
+pub fn router() -> axum::Router<AppState> {
+    super::router_of(routes())
+}
 
 pub async fn import(
     State(s): State<AppState>,

@@ -1,142 +1,18 @@
 //! Workers: a fixed pool of std threads that claim jobs from the store and run them through a
-//! [`JobRunner`] (the physics never runs on the async runtime). Also the shared core the routes
-//! see ([`Core`]): store, limits, progress hub, the stop switches of running jobs.
-use super::events::{Hub, JobEvent};
-use super::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
-use super::store::{Finish, JobKind, JobRecord, JobStatus, JobStore, NewJob};
-use serde_json::Value;
+//! [`JobRunner`] (`run`; the physics never runs on the async runtime), with the watchdog of each
+//! run's time and disk. Also the shared core the HTTP layer sees ([`Core`]): store, limits,
+//! progress hub, the stop switches of running jobs. A search that fans out goes to `fanout`.
+use super::fanout::{fan_out_search, fans_out, run_child};
+use super::run::{JobRunner, RunHooks, RunnerOutcome};
+use crate::service::events::{Hub, JobEvent};
+use crate::service::http::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
+use crate::service::store::{Finish, JobKind, JobRecord, JobStatus, JobStore};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU8, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 use uuid::Uuid;
-
-/// What a runner is handed besides the input.
-pub struct RunHooks<'a> {
-    /// The job's artifact directory, `<data>/jobs/<uuid>/` (exists, empty on a fresh start).
-    pub out_dir: &'a Path,
-    /// Becomes true when the run must stop (user cancel or server shutdown); checked every step.
-    pub cancel: &'a AtomicBool,
-    /// Simulated time / duration, 0..1.
-    pub progress: &'a (dyn Fn(f64) + Sync),
-}
-
-/// How a runner finished (errors are `Err(message for the user)`).
-#[derive(Debug, Clone, PartialEq)]
-pub enum RunnerOutcome {
-    /// `summary.json` of a run or `result.json` of a PGA search.
-    Completed(Value),
-    /// Stopped through `cancel`; the partial summary where there is one.
-    Cancelled(Option<Value>),
-}
-
-/// The computation behind a job. The default is [`analysis_runner`]; tests use
-/// [`super::fake::fake_runner`].
-pub type JobRunner =
-    Arc<dyn Fn(&JobInput, &RunHooks<'_>) -> Result<RunnerOutcome, String> + Send + Sync>;
-
-/// The real computation: `analysis::run::run` or `analysis::pga::search`.
-pub fn analysis_runner() -> JobRunner {
-    Arc::new(|input: &JobInput, hooks: &RunHooks<'_>| {
-        let opts = crate::analysis::run::RunOptions {
-            out_dir: Some(hooks.out_dir),
-            cancel: Some(hooks.cancel),
-            progress: Some(hooks.progress),
-            ..Default::default()
-        };
-        match input {
-            JobInput::Run {
-                scene,
-                motion,
-                criteria,
-            } => {
-                let out =
-                    crate::analysis::run::run(scene, motion, &opts).map_err(|e| e.to_string())?;
-                let mut summary = serde_json::to_value(&out.summary).map_err(|e| e.to_string())?;
-                // The request's damage criteria, judged on the finished run (`run --criterion`).
-                if !criteria.is_empty() && !out.cancelled {
-                    let v = crate::analysis::pga::verdicts(criteria, &out.summary);
-                    summary["criteria"] = serde_json::to_value(v).map_err(|e| e.to_string())?;
-                }
-                Ok(if out.cancelled {
-                    RunnerOutcome::Cancelled(Some(summary))
-                } else {
-                    RunnerOutcome::Completed(summary)
-                })
-            }
-            JobInput::PgaSearch {
-                scene,
-                request,
-                records,
-                fit,
-                ..
-            } if !records.is_empty() => {
-                // Several records: per-record searches and the fragility curve; the plot is
-                // written beside result.json for `GET .../fragility.svg`.
-                let res =
-                    crate::analysis::pga::search_records(scene, records, request, *fit, &opts);
-                if hooks.cancel.load(Ordering::Relaxed) {
-                    return Ok(RunnerOutcome::Cancelled(None));
-                }
-                let res = res.map_err(|e| e.to_string())?;
-                let value = serde_json::to_value(&res).map_err(|e| e.to_string())?;
-                if let Some(svg) = crate::analysis::pga::fragility_svg(&res) {
-                    std::fs::write(hooks.out_dir.join("fragility.svg"), svg)
-                        .map_err(|e| format!("writing fragility.svg: {e}"))?;
-                }
-                let text = serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?;
-                std::fs::write(hooks.out_dir.join("result.json"), text)
-                    .map_err(|e| format!("writing result.json: {e}"))?;
-                Ok(RunnerOutcome::Completed(value))
-            }
-            JobInput::SiteAnalysis {
-                scene,
-                records,
-                observations,
-                request,
-                ..
-            } => {
-                // Per record the interval, over them the distribution (docs/observations.md).
-                let res = crate::analysis::observations::site_analysis(
-                    scene,
-                    records,
-                    observations,
-                    request,
-                    &opts,
-                );
-                if hooks.cancel.load(Ordering::Relaxed) {
-                    return Ok(RunnerOutcome::Cancelled(None));
-                }
-                let res = res.map_err(|e| e.to_string())?;
-                let value = serde_json::to_value(&res).map_err(|e| e.to_string())?;
-                let text = serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?;
-                std::fs::write(hooks.out_dir.join("result.json"), text)
-                    .map_err(|e| format!("writing result.json: {e}"))?;
-                Ok(RunnerOutcome::Completed(value))
-            }
-            JobInput::PgaSearch {
-                scene,
-                motion,
-                request,
-                ..
-            } => {
-                let res = crate::analysis::pga::search(scene, motion, request, &opts);
-                if hooks.cancel.load(Ordering::Relaxed) {
-                    return Ok(RunnerOutcome::Cancelled(None));
-                }
-                let res = res.map_err(|e| e.to_string())?;
-                let value = serde_json::to_value(&res).map_err(|e| e.to_string())?;
-                let path = hooks.out_dir.join("result.json");
-                if !path.exists() {
-                    let text = serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?;
-                    std::fs::write(&path, text).map_err(|e| format!("writing result.json: {e}"))?;
-                }
-                Ok(RunnerOutcome::Completed(value))
-            }
-        }
-    })
-}
 
 /// Why a running job's stop switch was thrown.
 const STOP_NONE: u8 = 0;
@@ -242,7 +118,7 @@ pub struct Core {
     /// `data_dir`, which all processes then share).
     pub artifacts: Option<Arc<super::artifacts::ArtifactStore>>,
     /// Connection and timeout settings of the HTTP server (the routes read the body timeout).
-    pub server: super::server::ServerParams,
+    pub server: crate::service::server::ServerParams,
     /// Large request bodies read and parsed at once: each can cost up to a few hundred MB
     /// while parsed, so their number is what bounds the server's memory.
     pub large_bodies: Arc<tokio::sync::Semaphore>,
@@ -283,7 +159,7 @@ impl Core {
             store_healthy: AtomicBool::new(true),
             remote_workers: AtomicBool::new(false),
             artifacts: None,
-            server: super::server::ServerParams::default(),
+            server: crate::service::server::ServerParams::default(),
             large_bodies: Arc::new(tokio::sync::Semaphore::new(LARGE_BODIES)),
             disk_used: Mutex::new(None),
         }
@@ -325,6 +201,23 @@ impl Core {
             *g = Some((Instant::now(), total));
         }
         total
+    }
+
+    /// Remove a deleted job's artifacts: its local directory and, with `--artifacts`, what was
+    /// published to shared storage (`DELETE` of a job and the retention sweeper). Blocking.
+    pub fn remove_artifacts(&self, id: Uuid) {
+        if let Some(a) = &self.artifacts {
+            if let Err(e) = a.remove(id) {
+                tracing::warn!(%id, error = %e, "removing a deleted job's published artifacts");
+            }
+        }
+        let dir = self.job_dir(id);
+        if let Err(e) = std::fs::remove_dir_all(&dir) {
+            if e.kind() != std::io::ErrorKind::NotFound {
+                tracing::warn!(dir = %dir.display(), error = %e, "removing a deleted job's artifacts");
+            }
+        }
+        self.forget_artifact_bytes();
     }
 
     /// Forget the cached artifact total (after a delete).
@@ -415,7 +308,11 @@ impl Core {
         }
     }
 
-    fn store_result<T>(&self, what: &str, r: Result<T, super::store::StoreError>) -> Option<T> {
+    fn store_result<T>(
+        &self,
+        what: &str,
+        r: Result<T, crate::service::store::StoreError>,
+    ) -> Option<T> {
         match r {
             Ok(v) => {
                 self.store_healthy.store(true, Ordering::Relaxed);
@@ -779,257 +676,4 @@ fn watchdog(core: &Core, dir: &Path, ctl: &RunControl, done: &AtomicBool) {
             return;
         }
     }
-}
-
-/// What a child run (`pga_run`) is asked: one amplitude of one record of its search. The
-/// amplitude travels as its bits so that the replaying search finds exactly the value it
-/// planned (a decimal round trip through JSON could move it by one ULP).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ChildRequest {
-    pub parent: Uuid,
-    /// Index of the record in the search's `motions` (0 for a single-record search).
-    pub record: usize,
-    /// m/s², for people reading the store; `pga_bits` is what counts.
-    pub pga: f64,
-    pub pga_bits: u64,
-    /// Interior points per k-section round, fixed by the search's first fan-out so that every
-    /// replay plans the same batches.
-    pub width: usize,
-    /// This run's share of the search's progress (1 / expected runs).
-    pub progress_step: f64,
-}
-
-/// A child's `result`.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ChildResult {
-    pub pga: f64,
-    pub failed: bool,
-}
-
-/// Does this search fan out: configured to, or fanned out already (then it must replay).
-fn fans_out(core: &Core, job: &JobRecord) -> bool {
-    core.params.fanout_width.is_some_and(|w| w > 0)
-        || core
-            .store
-            .children(job.id)
-            .map(|c| !c.is_empty())
-            .unwrap_or(false)
-}
-
-fn store_msg(e: super::store::StoreError) -> String {
-    tracing::error!(error = %e, "job store");
-    "the job store failed while running the search; see the server log".into()
-}
-
-/// One step of a fanned-out search: replay its planner from its children's outcomes; finish
-/// (`Some`) or enqueue the next batch as child jobs and park the search (`None`).
-fn fan_out_search(
-    core: &Core,
-    job: &JobRecord,
-    input: &JobInput,
-    hooks: &RunHooks<'_>,
-) -> Result<Option<RunnerOutcome>, String> {
-    use crate::analysis::pga;
-    use std::collections::{HashMap, HashSet};
-    let JobInput::PgaSearch {
-        scene,
-        motion,
-        request,
-        records,
-        fit,
-        ..
-    } = input
-    else {
-        return Err("not a PGA search".into());
-    };
-    if records.is_empty() {
-        pga::validate_search(scene, motion, request)
-    } else {
-        pga::validate_records(scene, records, request)
-    }
-    .map_err(|e| e.to_string())?;
-    let mut width = None;
-    let mut known: HashMap<(usize, u64), bool> = HashMap::new();
-    let mut unfinished: HashSet<(usize, u64)> = HashSet::new();
-    for ch in core.store.children(job.id).map_err(store_msg)? {
-        let spec: ChildRequest = serde_json::from_value(ch.request.clone())
-            .map_err(|e| format!("a child run of this search is corrupt in the store: {e}"))?;
-        width.get_or_insert(spec.width);
-        let key = (spec.record, spec.pga_bits);
-        match ch.status {
-            JobStatus::Succeeded => {
-                let r: ChildResult = serde_json::from_str(ch.result.as_deref().unwrap_or(""))
-                    .map_err(|e| format!("a child run's result is corrupt in the store: {e}"))?;
-                known.insert(key, r.failed);
-            }
-            JobStatus::Failed | JobStatus::Cancelled => {
-                return Err(super::store::child_error(ch.status.as_str(), ch.error))
-            }
-            _ => {
-                unfinished.insert(key);
-            }
-        }
-    }
-    if hooks.cancel.load(Ordering::SeqCst) {
-        return Ok(Some(RunnerOutcome::Cancelled(None)));
-    }
-    let width = width
-        .or(core.params.fanout_width)
-        .filter(|w| *w > 0)
-        .unwrap_or_else(|| rayon::current_num_threads().max(1));
-    let look = |i: usize, p: f64| known.get(&(i, p.to_bits())).copied();
-    let step = if records.is_empty() {
-        match pga::plan(request, width, &|p| look(0, p)) {
-            pga::Step::Done(r) => pga::Step::Done(vec![r]),
-            pga::Step::Pending { batch, done } => pga::Step::Pending { batch, done },
-        }
-    } else {
-        pga::plan_records(records.len(), request, width, &look)
-    };
-    match step {
-        pga::Step::Done(results) => finish_search(results, records, request, *fit, hooks).map(Some),
-        pga::Step::Pending { batch, done } => {
-            let expected = pga::expected_runs(request, width) * records.len().max(1) as f64;
-            let children: Vec<NewJob> = batch
-                .iter()
-                .filter(|(i, p)| !unfinished.contains(&(*i, p.to_bits())))
-                .map(|&(record, pga)| NewJob {
-                    id: Uuid::new_v4(),
-                    kind: JobKind::PgaRun,
-                    request: serde_json::json!(ChildRequest {
-                        parent: job.id,
-                        record,
-                        pga,
-                        pga_bits: pga.to_bits(),
-                        width,
-                        progress_step: 1.0 / expected,
-                    }),
-                    motion: serde_json::json!({ "pga": pga }),
-                    owner: None,
-                })
-                .collect();
-            let progress = (done as f64 / expected).min(0.99);
-            if !core
-                .store
-                .fan_out(job.id, &children, progress)
-                .map_err(store_msg)?
-            {
-                tracing::warn!(id = %job.id, "the search was no longer ours to fan out (lease lost)");
-            }
-            for _ in 0..children.len().min(core.params.workers) {
-                core.notify_work();
-            }
-            Ok(None)
-        }
-    }
-}
-
-/// The finished search's result (and its files), as the in-process runner writes them.
-fn finish_search(
-    mut results: Vec<crate::analysis::pga::PgaResult>,
-    records: &[(String, crate::motion::GroundMotion)],
-    request: &crate::analysis::pga::PgaRequest,
-    fit: crate::analysis::fragility::Method,
-    hooks: &RunHooks<'_>,
-) -> Result<RunnerOutcome, String> {
-    use crate::analysis::pga;
-    let value = if records.is_empty() {
-        let r = results.pop().ok_or("the search has no result")?;
-        serde_json::to_value(&r).map_err(|e| e.to_string())?
-    } else {
-        let recs = records
-            .iter()
-            .zip(results)
-            .map(|((name, _), result)| pga::RecordResult {
-                motion: name.clone(),
-                result,
-            })
-            .collect();
-        let res = pga::multi_result(recs, request, fit);
-        if let Some(svg) = pga::fragility_svg(&res) {
-            std::fs::write(hooks.out_dir.join("fragility.svg"), svg)
-                .map_err(|e| format!("writing fragility.svg: {e}"))?;
-        }
-        serde_json::to_value(&res).map_err(|e| e.to_string())?
-    };
-    let text = serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?;
-    std::fs::write(hooks.out_dir.join("result.json"), text)
-        .map_err(|e| format!("writing result.json: {e}"))?;
-    Ok(RunnerOutcome::Completed(value))
-}
-
-/// A child run: one amplitude of one record of its search, whose request (scene, records,
-/// criteria) is read from the search's row. With process isolation it runs in a child process
-/// like any job ([`super::runner::run_pga_run_in_child`]), so that a run that crashes or
-/// exhausts memory fails this child (and through it its search, with the amplitude named), never
-/// the worker.
-fn run_child(core: &Core, job: &JobRecord, hooks: &RunHooks<'_>) -> Result<RunnerOutcome, String> {
-    let spec: ChildRequest = serde_json::from_value(job.request.clone())
-        .map_err(|e| format!("the stored child run is corrupt: {e}"))?;
-    let parent = core
-        .store
-        .get(spec.parent)
-        .map_err(store_msg)?
-        .ok_or("the search of this run no longer exists")?;
-    match &core.params.isolation {
-        super::runner::Isolation::Process(p) => {
-            super::runner::run_pga_run_in_child(p, &parent.request, &spec, &core.limits, hooks)
-                .map_err(|msg| {
-                    format!(
-                        "the search's run at {} m/s² (record {}) failed: {msg}",
-                        f64::from_bits(spec.pga_bits),
-                        spec.record
-                    )
-                })
-        }
-        super::runner::Isolation::Thread => {
-            let input = parse_pga(&parent.request, &core.limits)
-                .map_err(|e| format!("the stored request is no longer accepted: {}", e.detail))?
-                .input;
-            evaluate_child(&input, &spec, hooks.cancel)
-        }
-    }
-}
-
-/// The verdict of one child run (`pga_run`) of the search `input`: on the worker thread, or in
-/// the child process of [`super::runner`].
-pub(crate) fn evaluate_child(
-    input: &JobInput,
-    spec: &ChildRequest,
-    cancel: &AtomicBool,
-) -> Result<RunnerOutcome, String> {
-    use crate::analysis::pga;
-    let JobInput::PgaSearch {
-        scene,
-        motion,
-        request,
-        records,
-        ..
-    } = input
-    else {
-        return Err("the parent of a child run is not a PGA search".into());
-    };
-    let pga = f64::from_bits(spec.pga_bits);
-    let (name, gm) = if records.is_empty() {
-        (None, motion)
-    } else {
-        let (n, g) = records
-            .get(spec.record)
-            .ok_or_else(|| format!("the search has no record {}", spec.record))?;
-        (Some(n), g)
-    };
-    let failed = pga::evaluate_combined(
-        scene,
-        gm,
-        &request.criteria,
-        request.combine,
-        pga,
-        Some(cancel),
-    )
-    .map_err(|e| match name {
-        Some(n) => pga::record_error(n, e).to_string(),
-        None => e.to_string(),
-    })?;
-    let value = serde_json::to_value(ChildResult { pga, failed }).map_err(|e| e.to_string())?;
-    Ok(RunnerOutcome::Completed(value))
 }

@@ -2,9 +2,9 @@
 //! listens for wake-ups and cancels from other processes, and keeps its leases (heartbeats)
 //! and reaps expired ones. It drives the worker (`worker::Core`) from the store's signals, so it
 //! sits above both: the store never imports the worker.
-use super::store::postgres::{PgStore, CHANNEL_CANCEL, CHANNEL_WORK};
-use super::store::JobStore;
-use super::worker::Core;
+use super::pool::Core;
+use crate::service::store::postgres::{PgStore, CHANNEL_CANCEL, CHANNEL_WORK};
+use crate::service::store::JobStore;
 use postgres::fallible_iterator::FallibleIterator;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;

@@ -1,0 +1,131 @@
+//! Request bodies: `POST /v1/site-analyses`, observations (each a criterion) × records.
+use super::pga::{parse_records, search_range, RangeSpec};
+use super::{motion_summary, parse_criteria, typed, JobInput, Limits, Parsed};
+use crate::analysis::pga::{Combine, PgaRequest};
+use crate::motion::Amplitude;
+use crate::service::http::problem::ApiError;
+use serde::Deserialize;
+use serde_json::Value;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SiteBody {
+    scene: Value,
+    /// The records (each a ground motion, optionally named), as a multi-record search's.
+    motions: Vec<Value>,
+    observations: Value,
+    range: RangeSpec,
+    #[serde(default)]
+    tolerance: Option<Amplitude>,
+    #[serde(default)]
+    scan_points: Option<usize>,
+}
+
+/// One observation of a site analysis: a criterion and whether its damage was seen.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ObservationSpec {
+    criterion: Value,
+    /// `true`: the damage is there (a lower bound on the PGA); `false`: it is not (an upper one).
+    observed: bool,
+}
+
+/// Observations of one site analysis: a site's field observations number a handful (docs/
+/// observations.md), and each one is a search per record, so 50 bounds one job to 50 × 100
+/// searches while the work budget bounds their runs.
+pub const MAX_OBSERVATIONS: usize = 50;
+
+/// `POST /v1/site-analyses` body → site analysis input (amplitudes converted to m/s²).
+pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
+    if !body.is_object() {
+        return Err(ApiError::invalid_field(
+            "",
+            "the body must be a JSON object {\"scene\", \"motions\", \"observations\", \"range\"}",
+        ));
+    }
+    let b: SiteBody = typed("", body)?;
+    let (scene, records) = parse_records(&b.scene, &b.motions, limits)?;
+    let items = match &b.observations {
+        Value::Array(v) if !v.is_empty() => v,
+        _ => return Err(ApiError::invalid_field(
+            "/observations",
+            "/observations: give a non-empty array of {\"criterion\": …, \"observed\": true|false}",
+        )),
+    };
+    if items.len() > MAX_OBSERVATIONS {
+        return Err(ApiError::limit_exceeded(
+            "/observations",
+            format!(
+                "/observations: {} observations exceed the limit of {MAX_OBSERVATIONS} per analysis",
+                items.len()
+            ),
+        ));
+    }
+    let mut observations = Vec::new();
+    for (i, item) in items.iter().enumerate() {
+        let p = format!("/observations/{i}");
+        let spec: ObservationSpec = typed(&p, item)?;
+        let cp = format!("{p}/criterion");
+        if spec.criterion.is_array() {
+            return Err(ApiError::invalid_field(
+                cp.clone(),
+                format!(
+                    "{cp}: an observation is one criterion; combine several with a damage object \
+                     ({{\"kind\": \"all\" | \"any\", \"of\": […]}}, docs/format.md §3)"
+                ),
+            ));
+        }
+        let mut parsed = parse_criteria(&spec.criterion, &cp, &scene)?;
+        let (_, criterion) = parsed.remove(0);
+        observations.push(crate::analysis::observations::Observation {
+            criterion,
+            observed: spec.observed,
+        });
+    }
+    let (min, max, tolerance, scan_points) =
+        search_range(&b.range, b.tolerance.as_ref(), b.scan_points, limits)?;
+    // Each observation is one search per record.
+    let runs = observations.len() as f64
+        * crate::service::http::budget::search_runs(
+            records.len(),
+            scan_points,
+            max - min,
+            tolerance,
+        );
+    let duration = scene.control.duration.unwrap_or_else(|| {
+        records
+            .iter()
+            .filter_map(|(_, m)| m.duration().map(|d| d + 2.0))
+            .fold(0.0, f64::max)
+    });
+    let steps = (duration / scene.control.time_step).ceil();
+    crate::service::http::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
+    let motion = records[0].1.clone();
+    let mut motion_summary = motion_summary(&motion);
+    if let Some(obj) = motion_summary.as_object_mut() {
+        let list: Vec<Value> = records
+            .iter()
+            .map(|(name, m)| {
+                serde_json::json!({"name": name, "pga": m.pga(), "duration": m.duration(), "provenance": m.provenance})
+            })
+            .collect();
+        obj.insert("records".into(), Value::Array(list));
+    }
+    Ok(Parsed {
+        input: JobInput::SiteAnalysis {
+            scene,
+            motion,
+            records,
+            observations,
+            request: PgaRequest {
+                criteria: Vec::new(),
+                combine: Combine::All,
+                min,
+                max,
+                tolerance,
+                scan_points,
+            },
+        },
+        motion_summary,
+    })
+}
