@@ -202,7 +202,7 @@ impl Default for Control {
             // the rule's bound (1e-4 of the lever arms that decide toppling), deformable
             // elsewhere. The study (docs/accuracy-vs-speed.md) finds deformable stone within
             // 0.006 % of rigid at 17–23 % more time on its benchmarks and 23–31× per step on a
-            // 410-stone wall (issue 21), so stone gains nothing from deformable blocks.
+            // 410-stone wall (docs/contact-solve.md), so stone gains nothing from deformable blocks.
             block_model: BlockModelChoice::Auto,
             // The lightest model that represents the scene: the speed/accuracy study
             // (docs/accuracy-vs-speed.md) finds the reduced rocking/sliding models within

@@ -8,7 +8,7 @@
 //!   (derived again in `frame_p2`). Overturning amplitude under Yagoda-Biran & Hatzor's half-sine pulse,
 //!   within 2 % (docs/verification.md's tolerance); and its peak rotation under the shared
 //!   records (data/ground-motions) against the equivalent column integrated by RK4 with the
-//!   frame's impact law, within 5 % (issue 25).
+//!   frame's impact law, within 5 % (peak rotations through impacts).
 //! - **Pier of three stacked blocks** with friction high enough that it moves as one body: its
 //!   overturning amplitude equals the monolithic column's (Housner), within 2 %; the test first
 //!   checks along the reference motion that every bed joint stays closed and does not slip (the
@@ -901,7 +901,7 @@ fn frame_records_scan() {
 }
 
 /// The frame's peak rotation under a record at `pga` g against the equivalent column with the
-/// frame's impact law; returns the relative error of the peak. Tolerance 5 % (issue 25: peak
+/// frame's impact law; returns the relative error of the peak. Tolerance 5 % (peak
 /// rotations through impacts; the single column's `tests/engine/records_housner.rs` uses the
 /// same figure). The points are chosen where the reference is well conditioned (asserted): the
 /// frame survives with a peak above 0.02 rad, and its peak moves by at most 3 % for ±1 % of

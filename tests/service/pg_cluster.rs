@@ -1171,7 +1171,7 @@ fn owners_quotas_and_retention_lookup_match_the_embedded_store() {
     assert!(s.finished_before(0, 10).expect("finished").is_empty());
 }
 
-/// Isolation in cluster mode (issue 23): `ashlar worker --isolation process` runs every job AND
+/// Isolation in cluster mode: `ashlar worker --isolation process` runs every job AND
 /// every `pga_run` child of a fanned-out search in its own `ashlar internal-run-job` process
 /// with resource limits. A search whose runs crash (SIGSEGV) or exhaust their memory fails with
 /// the cause and the amplitude named, a run that aborts fails alone, and meanwhile a good run and
