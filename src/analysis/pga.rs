@@ -416,7 +416,7 @@ pub fn evaluate_with_summary(
     };
     let out = run(scene, &gm, &opts)?;
     if out.cancelled {
-        return Err(RunError::Invalid("cancelled".into()));
+        return Err(RunError::Cancelled);
     }
     let s = out.summary;
     // The verdict from the final state; a run stopped early was stopped because every
@@ -626,7 +626,7 @@ pub fn search(
             Step::Pending { batch, .. } => batch,
         };
         if done > 0 && cancel.is_some_and(|c| c.load(std::sync::atomic::Ordering::Relaxed)) {
-            return Err(RunError::Invalid("cancelled".into()));
+            return Err(RunError::Cancelled);
         }
         let outcomes: Vec<bool> = batch
             .par_iter()
@@ -723,7 +723,7 @@ pub fn for_each_record<T: Send>(
 /// A record's error in a multi-record search names the record (a cancel stays a cancel).
 pub fn record_error(name: &str, e: RunError) -> RunError {
     match e {
-        RunError::Invalid(m) if m == "cancelled" => RunError::Invalid(m),
+        RunError::Cancelled => RunError::Cancelled,
         RunError::Invalid(m) => RunError::Invalid(format!("record {name:?}: {m}")),
         RunError::Simulation(source) => RunError::RecordSimulation {
             record: name.into(),

@@ -60,6 +60,10 @@ pub enum RunError {
     /// unknown history block, a PGA request out of range).
     #[error("{0}")]
     Invalid(String),
+    /// The caller's cancel flag stopped a search between its runs (the text is what the
+    /// service's job shows).
+    #[error("cancelled")]
+    Cancelled,
     /// `control.model` forces a reduced model (`"rocking"`, `"sliding"`) that cannot represent
     /// the scene; `why` says what disqualifies it.
     #[error("control.model: the scene does not qualify for the reduced {model:?} model: {why}")]

@@ -7,6 +7,10 @@
 //! `message_id` / `lineage` fields that recent schema releases append are left out: nothing
 //! here fills them and older viewers do not know them. Every array field is present in every
 //! message, even empty, because the published schemas list them as required.
+//!
+//! Length (over 600 lines, about 40 of them tests): the schemas are long JSON literals, one per
+//! message type, kept beside the message structs they describe so that a field is changed in
+//! both at once.
 use serde::Serialize;
 use serde_json::{json, Value};
 

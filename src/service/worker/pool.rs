@@ -2,6 +2,9 @@
 //! [`JobRunner`] (`run`; the physics never runs on the async runtime), with the watchdog of each
 //! run's time and disk. Also the shared core the HTTP layer sees ([`Core`]): store, limits,
 //! progress hub, the stop switches of running jobs. A search that fans out goes to `fanout`.
+//!
+//! Length (over 600 lines): `Core` and the pool's threads and watchdog read and write the same
+//! running-job table and stop switches; `Core` could move to its own file.
 use super::fanout::{fan_out_search, fans_out, run_child};
 use super::run::{JobRunner, RunHooks, RunnerOutcome};
 use crate::service::events::{Hub, JobEvent};

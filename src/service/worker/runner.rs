@@ -14,6 +14,10 @@
 //! RLIMIT_FSIZE), asks the kernel to kill it when the worker thread that started it dies
 //! (PR_SET_PDEATHSIG, Linux), and checks its parent is still the server (else exits). Unix only;
 //! elsewhere `ashlar serve` runs jobs in-process.
+//!
+//! Length (over 600 lines): both sides of one protocol, the parent (spawn, limits, the child's
+//! lines, its exit as a failure) and the child (`child_main`), kept together so that a change to
+//! the protocol is made in one place.
 use super::fanout::ChildRequest;
 use super::run::{RunHooks, RunnerOutcome};
 use crate::service::http::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
