@@ -14,15 +14,9 @@ use ashlar::scene::parse_scene;
 
 const G: f64 = 9.80665;
 
-/// CPU seconds of this thread (`/proc/thread-self/schedstat`; on this machine's kernel it
-/// moves in 4 ms ticks, so a single run's figure is 0 or 4 ms and only sums over many runs are
-/// meaningful); 0 where not available.
-fn cpu() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        .map_or(0.0, |ns| ns * 1e-9)
-}
+#[path = "support/thread_cpu.rs"]
+mod thread_cpu;
+use thread_cpu::cpu;
 
 fn main() {
     let only = std::env::args().nth(1);

@@ -25,14 +25,9 @@ use std::time::Instant;
 
 const G: f64 = 9.80665;
 
-/// CPU seconds of this thread (`/proc/thread-self/schedstat`; on this machine's kernel it
-/// moves in 4 ms ticks, so only sums over many runs are meaningful); 0 where not available.
-fn cpu() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        .map_or(0.0, |ns| ns * 1e-9)
-}
+#[path = "support/thread_cpu.rs"]
+mod thread_cpu;
+use thread_cpu::cpu;
 
 /// Minimum over `reps` of the wall time of one full run on this thread, and the run's summary
 /// (the thread's CPU count moves in 4 ms ticks on this kernel, too coarse for a 1 ms run; the

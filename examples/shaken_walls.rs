@@ -47,21 +47,6 @@ fn record() -> GroundMotion {
         .scaled_to_pga(0.3 * motion::STANDARD_GRAVITY)
 }
 
-/// Time of the record's peak horizontal acceleration, s.
-fn peak_time(gm: &GroundMotion) -> f64 {
-    let (mut best, mut at) = (0.0, 0.0);
-    let mut t = 0.0;
-    while t < gm.duration().unwrap_or(0.0) {
-        let a = gm.acceleration(t)[0].abs();
-        if a > best {
-            best = a;
-            at = t;
-        }
-        t += 1e-3;
-    }
-    at
-}
-
 /// Runs the tight reference (Δt = 1e-4 s fixed, the previous open–close loop run to
 /// convergence) over the same simulated time as `sim` and prints the largest difference of a
 /// stone's position (any vertex, m) and the deepest penetration of both.
@@ -130,7 +115,7 @@ fn main() {
     // whole-record run of docs/contact-solve.md §8: `--record-start 0 --seconds 20`).
     let rec_start = arg("--record-start")
         .map(|v| v.parse().expect("--record-start"))
-        .unwrap_or_else(|| (peak_time(&rec) - 0.2).max(0.0));
+        .unwrap_or_else(|| (motion::peak_time(&rec, 1e-3) - 0.2).max(0.0));
     let seconds: Option<f64> = arg("--seconds").map(|v| v.parse().expect("--seconds"));
     println!(
         "| stones | motion | steps | s/step | linear solves/step | open–close iterations/step | Δt cuts | min Δt (s) | max penetration (m) |"

@@ -178,6 +178,22 @@ fn sampled_series(
     }
 }
 
+/// Time (s) of the largest horizontal ground acceleration, the motion sampled every `every`
+/// seconds over its duration (0 for a motion without one): where a short window of a long
+/// record is cut for tests and benchmarks.
+pub fn peak_time(gm: &GroundMotion, every: f64) -> f64 {
+    let (mut best, mut at, mut t) = (0.0, 0.0, 0.0);
+    while t < gm.duration().unwrap_or(0.0) {
+        let a = gm.acceleration(t)[0].abs();
+        if a > best {
+            best = a;
+            at = t;
+        }
+        t += every;
+    }
+    at
+}
+
 /// `n` periods log-spaced from `lo` to `hi` inclusive.
 pub fn log_periods(lo: f64, hi: f64, n: usize) -> Vec<f64> {
     if n <= 1 {

@@ -19,8 +19,8 @@ pub mod options;
 mod process;
 mod text;
 pub use intensity::{
-    cumulative_arias, intensity_units, log_periods, mean_period, oscillator_peak, report,
-    report_with, response_spectrum, significant_duration, spectrum_svg, IntensityMeasures,
+    cumulative_arias, intensity_units, log_periods, mean_period, oscillator_peak, peak_time,
+    report, report_with, response_spectrum, significant_duration, spectrum_svg, IntensityMeasures,
     ReportParams, Spectrum,
 };
 pub use json::{

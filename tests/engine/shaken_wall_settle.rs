@@ -27,15 +27,7 @@ fn wall() -> Scene {
 fn record() -> (GroundMotion, f64) {
     let gm = crate::common::record("northridge-1994-mulholland-009.at2")
         .scaled_to_pga(0.3 * motion::STANDARD_GRAVITY);
-    let (mut best, mut at, mut t) = (0.0, 0.0, 0.0);
-    while t < gm.duration().unwrap_or(0.0) {
-        let a = gm.acceleration(t)[0].abs();
-        if a > best {
-            best = a;
-            at = t;
-        }
-        t += 1e-3;
-    }
+    let at = motion::peak_time(&gm, 1e-3);
     (gm, (at - 0.2_f64).max(0.0))
 }
 
