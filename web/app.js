@@ -273,7 +273,11 @@ function clearErrors(slots) {
     const slot = e.id.replace(/-error$/, "");
     if (!slots || slots.includes(slot)) e.textContent = "";
   }
+  // Only the fields whose error is cleared: clearing one slot must not un-mark another slot's
+  // field while its message stays (CI saw a scene's clear un-mark the DXF field's error).
   for (const e of document.querySelectorAll("[aria-invalid=true]")) {
+    const slot = (e.getAttribute("aria-describedby") || "").replace(/-error$/, "");
+    if (slots && !slots.includes(slot)) continue;
     e.removeAttribute("aria-invalid");
     e.removeAttribute("aria-describedby");
   }
