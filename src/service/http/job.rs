@@ -372,6 +372,53 @@ pub(super) async fn get(
     ))
 }
 
+/// The paths of a job kind's resource: the collection (`POST` submits) and a job in it (`GET`
+/// reads, `DELETE` removes), its event stream and its cancel.
+pub(super) struct KindPaths {
+    pub collection: &'static str,
+    pub item: &'static str,
+    pub events: &'static str,
+    pub cancel: &'static str,
+}
+
+/// The five routes every job kind's resource has (submit, read, events, cancel, delete), each
+/// handled by this module with `kind`.
+pub(super) fn kind_routes(kind: JobKind, p: KindPaths) -> Vec<super::Route> {
+    use axum::extract::{Request, State};
+    use axum::http::Method;
+    use axum::routing::{delete as delete_route, get as get_route, post};
+    type Id = Result<Path<String>, PathRejection>;
+    vec![
+        (
+            Method::POST,
+            p.collection,
+            post(move |State(s): State<AppState>, a: Access, r: Request| submit(s, a, r, kind)),
+        ),
+        (
+            Method::GET,
+            p.item,
+            get_route(move |State(s): State<AppState>, a: Access, id: Id| get(s, a, id, kind)),
+        ),
+        (
+            Method::GET,
+            p.events,
+            get_route(move |State(s): State<AppState>, a: Access, id: Id| events(s, a, id, kind)),
+        ),
+        (
+            Method::POST,
+            p.cancel,
+            post(move |State(s): State<AppState>, a: Access, id: Id| cancel(s, a, id, kind)),
+        ),
+        (
+            Method::DELETE,
+            p.item,
+            delete_route(move |State(s): State<AppState>, a: Access, id: Id| {
+                delete(s, a, id, kind)
+            }),
+        ),
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,65 +1,23 @@
 //! HTTP layer: `/v1/site-analyses`: a site analysis (observations × records).
-use super::state::{ApiResult, AppState};
-use super::{job, Route};
-use crate::service::auth::Access;
+use super::job::{kind_routes, KindPaths};
+use super::state::AppState;
+use super::Route;
 use crate::service::store::JobKind;
-use axum::extract::rejection::PathRejection;
-use axum::extract::{Path, State};
-use axum::http::Method;
-use axum::routing::{delete, get, post};
 
-/// The routes of this resource: method, path, handler.
+/// The routes of this resource: method, path, handler (those of every job kind, `job`).
 pub fn routes() -> Vec<Route> {
-    vec![
-        (Method::POST, "/v1/site-analyses", post(submit)),
-        (Method::GET, "/v1/site-analyses/{id}", get(read)),
-        (Method::GET, "/v1/site-analyses/{id}/events", get(events)),
-        (Method::POST, "/v1/site-analyses/{id}/cancel", post(cancel)),
-        (Method::DELETE, "/v1/site-analyses/{id}", delete(remove)),
-    ]
+    kind_routes(
+        JobKind::SiteAnalysis,
+        KindPaths {
+            collection: "/v1/site-analyses",
+            item: "/v1/site-analyses/{id}",
+            events: "/v1/site-analyses/{id}/events",
+            cancel: "/v1/site-analyses/{id}/cancel",
+        },
+    )
 }
 
 /// This resource's router.
 pub fn router() -> axum::Router<AppState> {
     super::router_of(routes())
-}
-
-async fn submit(
-    State(s): State<AppState>,
-    access: Access,
-    req: axum::extract::Request,
-) -> ApiResult {
-    job::submit(s, access, req, JobKind::SiteAnalysis).await
-}
-
-async fn read(
-    State(s): State<AppState>,
-    access: Access,
-    id: Result<Path<String>, PathRejection>,
-) -> ApiResult {
-    job::get(s, access, id, JobKind::SiteAnalysis).await
-}
-
-async fn events(
-    State(s): State<AppState>,
-    access: Access,
-    id: Result<Path<String>, PathRejection>,
-) -> ApiResult {
-    job::events(s, access, id, JobKind::SiteAnalysis).await
-}
-
-async fn cancel(
-    State(s): State<AppState>,
-    access: Access,
-    id: Result<Path<String>, PathRejection>,
-) -> ApiResult {
-    job::cancel(s, access, id, JobKind::SiteAnalysis).await
-}
-
-async fn remove(
-    State(s): State<AppState>,
-    access: Access,
-    id: Result<Path<String>, PathRejection>,
-) -> ApiResult {
-    job::delete(s, access, id, JobKind::SiteAnalysis).await
 }
