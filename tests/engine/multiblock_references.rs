@@ -1007,8 +1007,8 @@ fn frame_peak_rotation_under_records_penalty() {
 
 /// Kobe 0.7 g did not converge (the left column–cap contact) until landings were grouped;
 /// Loma Prieta 0.6 g then still stalled at the right column–cap corner pair, a phantom
-/// penetration of a corner beside the cap's end (`frame_loma_prieta_dual_stall` prints the
-/// contacts; docs/dual.md), until the dual solver stopped asserting it.
+/// penetration of a corner beside the cap's end (a temporary print of
+/// the contacts showed it; docs/dual.md), until the dual solver stopped asserting it.
 #[test]
 fn frame_peak_rotation_under_records_dual() {
     frame_record_point(1.0, "dual", FRIULI, 0.7, REGRESSION_FRAME_FRIULI_07_DUAL);

@@ -5,7 +5,7 @@
 //! at the right column–cap contact (2 Δt cuts to 1.6e-9 s, 20,000 iterations, violation
 //! 3.5e-8 m), where the penalty solver completes.
 //!
-//! Cause as found (`multiblock_references::frame_loma_prieta_dual_stall` prints the contacts):
+//! Cause as found (a temporary print of the contacts when the solve failed):
 //! the cap's bottom corners and the columns' top outer corners coincide at rest. Rocking, the
 //! right column's top corner was 87 µm beyond the end of the cap's bottom edge, outside the
 //! cap, and 0.36 µm below that edge's line; detection keeps such a vertex (a vertex–vertex
