@@ -308,21 +308,28 @@ struct FirstStage {
     k: State,
 }
 
-/// One adaptive step of `f` from (t, y), whose f(t, y) is `k1`, ending at `end` at the latest.
-/// `h` is the step-size proposal, updated for the next step. Returns the step taken, the new
-/// state, whether the step was cut short to end exactly on `end` (the caller then sets its
-/// time to `end`), and f at the step's end ([`ode::step_from`]).
+/// One adaptive step of `f` from (t, y), ending at `end` at the latest. f(t, y) is taken from
+/// `first` when the last step (of the same phase `tag`) ended exactly at (t, y), and `first`
+/// is set to this step's end ([`ode::step_from`] returns f there). `h` is the step-size
+/// proposal, updated for the next step. Returns the step taken, the new state, whether the
+/// step was cut short to end exactly on `end` (the caller then sets its time to `end`), and
+/// f(t, y) (for locating an event within the step).
 #[allow(clippy::too_many_arguments)]
 fn ode_step(
     h: &mut f64,
     stats: &mut ReducedStats,
+    first: &mut Option<FirstStage>,
+    tag: u8,
     params: &ReducedParams,
     f: &impl Fn(f64, State) -> State,
     t: f64,
     y: State,
-    k1: State,
     end: f64,
 ) -> (f64, State, bool, State) {
+    let k1 = match *first {
+        Some(fs) if fs.t == t && fs.y == y && fs.tag == tag => fs.k,
+        _ => f(t, y),
+    };
     loop {
         let proposal = h.min(params.max_step);
         let clipped = proposal >= end - t;
@@ -337,7 +344,13 @@ fn ode_step(
                 stats.min_dt = stats.min_dt.min(step);
                 stats.max_dt = stats.max_dt.max(step);
             }
-            return (step, y1, clipped, k7);
+            *first = Some(FirstStage {
+                t: t + step,
+                y: y1,
+                tag,
+                k: k7,
+            });
+            return (step, y1, clipped, k1);
         }
         stats.rejected_steps += 1;
         *h = ode::next_h(step, err);
@@ -624,18 +637,17 @@ impl Reduced {
         let on_side = |y: &State| clearance(y) < 0.0;
         let y0 = [theta, omega];
         let tag = k as u8;
-        let k1 = match self.first_stage {
-            Some(fs) if fs.t == t0 && fs.y == y0 && fs.tag == tag => fs.k,
-            _ => f(t0, y0),
-        };
-        let (h, y1, clipped, k7) =
-            ode_step(&mut self.h, &mut self.stats, &params, &f, t0, y0, k1, end);
-        self.first_stage = Some(FirstStage {
-            t: t0 + h,
-            y: y1,
+        let (h, y1, clipped, k1) = ode_step(
+            &mut self.h,
+            &mut self.stats,
+            &mut self.first_stage,
             tag,
-            k: k7,
-        });
+            &params,
+            &f,
+            t0,
+            y0,
+            end,
+        );
         if landed(&y1) {
             let (h, y) = locate(&f, params.tolerance, t0, y0, k1, h, landing, landed);
             self.time += h;
@@ -714,18 +726,17 @@ impl Reduced {
         let stopped = |y: &State| speed(y) <= 0.0;
         let y0 = [self.slip, rate];
         let tag = if dir > 0.0 { 3 } else { 2 };
-        let k1 = match self.first_stage {
-            Some(fs) if fs.t == t0 && fs.y == y0 && fs.tag == tag => fs.k,
-            _ => f(t0, y0),
-        };
-        let (h, y1, clipped, k7) =
-            ode_step(&mut self.h, &mut self.stats, &params, &f, t0, y0, k1, end);
-        self.first_stage = Some(FirstStage {
-            t: t0 + h,
-            y: y1,
+        let (h, y1, clipped, k1) = ode_step(
+            &mut self.h,
+            &mut self.stats,
+            &mut self.first_stage,
             tag,
-            k: k7,
-        });
+            &params,
+            &f,
+            t0,
+            y0,
+            end,
+        );
         let (t1, y1) = if stopped(&y1) {
             let (h, y) = locate(&f, params.tolerance, t0, y0, k1, h, speed, stopped);
             (t0 + h, y)
