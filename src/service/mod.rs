@@ -10,6 +10,7 @@ pub mod fake;
 pub mod histories;
 pub mod http;
 pub mod jobs;
+pub mod request;
 pub mod retention;
 pub mod serve;
 pub mod server;
@@ -18,13 +19,14 @@ pub mod worker;
 
 // The paths the CLI, the tests and the store use from before the layering (service/http/,
 // service/worker/, service/store/), kept so that their callers need not change.
-pub use http::{budget, problem, request};
+pub use http::problem;
+pub use request::budget;
 pub use store::{postgres as pg_store, tls as pg_tls};
 pub use worker::{artifacts, runner};
 
 pub use http::problem::ApiError;
-pub use http::request::Limits;
 pub use http::{app, route_table, AppState, OPENAPI_YAML};
+pub use request::Limits;
 pub use serve::{isolation_for, serve_cli, IsolationFlag, ServeArgs, ServeError};
 pub use store::{JobStore, SqliteStore, StoreError};
 pub use worker::{analysis_runner, JobRunner, RunHooks, RunnerOutcome, WorkerParams};

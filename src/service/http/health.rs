@@ -39,7 +39,7 @@ async fn get_limits(State(s): State<AppState>) -> ApiResult {
         "max_block_frames": l.max_block_frames,
         "max_search_block_steps": l.max_search_block_steps,
         "max_scan_points": l.max_scan_points,
-        "max_records": super::request::MAX_RECORDS,
+        "max_records": crate::service::request::MAX_RECORDS,
         "max_queued_jobs": l.max_queued_jobs,
         "max_queued_jobs_per_token": l.max_queued_jobs_per_token,
         "max_queued_searches_per_token": l.max_queued_searches_per_token,
@@ -53,7 +53,7 @@ async fn get_limits(State(s): State<AppState>) -> ApiResult {
         "idle_timeout_s": p.idle_timeout.as_secs_f64(),
         "max_header_bytes": p.max_header_bytes,
         "max_headers": p.max_headers,
-        "ranges": super::budget::ranges_json(),
+        "ranges": crate::service::request::budget::ranges_json(),
     });
     if let Some(o) = body.as_object_mut() {
         o.extend(process_limits(&s.core));

@@ -1,14 +1,14 @@
 //! HTTP layer: what every job kind's resource does alike (submit, read, cancel, delete,
 //! follow its events) and a job's JSON with its links. `jobs`, `pga` and `site` route to these
 //! with their kind.
-use super::budget;
 use super::problem::ApiError;
-use super::request::{json_body, parse_pga, parse_run, parse_site};
 use super::state::{
     blocking, check_json_content_type, json_response, load, parse_id, ApiResult, AppState,
 };
 use crate::service::auth::Access;
 use crate::service::events::{job_stream, EventParams, JobEvent};
+use crate::service::request::budget;
+use crate::service::request::{json_body, parse_pga, parse_run, parse_site};
 use crate::service::store::{
     rfc3339, CancelOutcome, DeleteOutcome, JobKind, JobRecord, JobStatus, NewJob, QueueFull,
 };

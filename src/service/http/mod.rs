@@ -2,11 +2,10 @@
 //! the store on the blocking pool, and answer; no simulation work happens here. One module per
 //! resource, each with its `routes()` and `router()`, merged by [`app`], which adds the layers
 //! every request crosses (authorization, header limits, body limit, CORS, problem bodies for
-//! axum's bare errors). `request` parses submissions into `JobInput`s, `problem` is the HTTP
-//! edge of every error. Imports go resource → `job`/`state` → store and worker; `web` and the
-//! resources never import this module's assembly, nor each other except `motion` → `web`'s
-//! plotting helpers.
-pub mod budget;
+//! axum's bare errors). `service::request` (beside `jobs`, shared with the worker) parses
+//! submissions into `JobInput`s; `problem` is the HTTP edge of every error. Imports go
+//! resource → `job`/`state` → store and worker; `web` and the resources never import this
+//! module's assembly, nor each other except `motion` → `web`'s plotting helpers.
 mod downloads;
 mod fragility;
 mod health;
@@ -16,7 +15,6 @@ mod motion;
 mod openapi;
 mod pga;
 pub mod problem;
-pub mod request;
 pub mod scene_import;
 mod site;
 mod state;

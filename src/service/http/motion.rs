@@ -2,11 +2,11 @@
 //! scaled series before a job is submitted (the `ashlar motion` JSON). Errors point into the
 //! body, which is the ground motion itself.
 use super::problem::{dotted_to_pointer, ApiError};
-use super::request::json_body;
 use super::state::{blocking, check_json_content_type, ApiResult, AppState};
 use super::web::{ground_series, query_usize, WebParams};
 use super::Route;
 use crate::motion::{report_with, ReportParams, Signal};
+use crate::service::request::json_body;
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, QueryRejection};
 use axum::extract::{Query, State};
@@ -90,7 +90,7 @@ pub fn inspect_motion(
     }
     // Values outside docs/format.md "Ranges", as a submission's motion (pointers relative to
     // the body: `/horizontal/pulse/amplitude`).
-    super::budget::check_motion_ranges("", body)?;
+    crate::service::request::budget::check_motion_ranges("", body)?;
     // Read as a `MotionSpec` (unknown members, members of another form and nulls refused),
     // without the command-line extension `processing`.
     let problem = |e: crate::motion::MotionError| {

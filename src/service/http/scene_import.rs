@@ -3,12 +3,12 @@
 //! null}`; a refused drawing is a 422 at `/dxf` whose detail names the entity handle and layer, a
 //! bad option a 422 at `/options/...`. Importing runs no simulation; its validation is the one a
 //! submitted scene gets, run on the blocking pool.
-use super::budget::check_ranges;
 use super::problem::{dotted_to_pointer, point_at_named_field, ApiError};
-use super::request::json_body;
 use super::state::{blocking, check_json_content_type, AppState};
 use super::Route;
 use crate::scene::import::dxf::{self, DxfImportError, ImportOptions};
+use crate::service::request::budget::check_ranges;
+use crate::service::request::json_body;
 use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
 use axum::extract::State;

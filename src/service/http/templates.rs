@@ -2,10 +2,10 @@
 //! `scene::templates` over HTTP (docs/templates.md). Thin: parameters in, scene JSON out; building a
 //! template is cheap (no simulation), so it runs on the request's task.
 use super::problem::ApiError;
-use super::request::json_body;
 use super::state::{check_json_content_type, AppState};
 use super::Route;
 use crate::scene::templates::{self, TemplateError};
+use crate::service::request::json_body;
 use axum::body::Bytes;
 use axum::extract::rejection::{BytesRejection, PathRejection};
 use axum::extract::{Path, State};

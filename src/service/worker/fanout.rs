@@ -4,7 +4,7 @@
 //! process through `runner`).
 use super::pool::Core;
 use super::run::{RunHooks, RunnerOutcome};
-use crate::service::http::request::{parse_pga, JobInput};
+use crate::service::request::{parse_pga, JobInput};
 use crate::service::store::{JobKind, JobRecord, JobStatus, NewJob};
 use std::sync::atomic::{AtomicBool, Ordering};
 use uuid::Uuid;

@@ -8,7 +8,7 @@
 use super::fanout::{fan_out_search, fans_out, run_child};
 use super::run::{JobRunner, RunHooks, RunnerOutcome};
 use crate::service::events::{Hub, JobEvent};
-use crate::service::http::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
+use crate::service::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
 use crate::service::store::{Finish, JobKind, JobRecord, JobStatus, JobStore};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

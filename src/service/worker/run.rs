@@ -1,7 +1,7 @@
 //! Workers: the computation behind a job, a [`JobRunner`] over `analysis` (`analysis::run::run`,
 //! `pga::search*`, `site::analyse`), with the hooks a worker hands it (output directory, stop
 //! switch, progress).
-use crate::service::http::request::JobInput;
+use crate::service::request::JobInput;
 use serde_json::Value;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};

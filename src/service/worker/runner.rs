@@ -20,7 +20,7 @@
 //! the protocol is made in one place.
 use super::fanout::ChildRequest;
 use super::run::{RunHooks, RunnerOutcome};
-use crate::service::http::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
+use crate::service::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
 use crate::service::store::JobKind;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;

@@ -4,8 +4,8 @@
 //! documented ranges are refused with their JSON pointer, and the work estimate of a run
 //! (blocks × steps, blocks × recorded frames) or of a search (runs × blocks × steps) is held to
 //! the server's limits (`ashlar serve --max-*`, reported by `GET /v1/limits`).
-use super::problem::ApiError;
-use super::request::Limits;
+use super::Limits;
+use crate::service::http::problem::ApiError;
 use serde::de::{DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde_json::Value;
 use std::cell::{Cell, RefCell};
@@ -103,12 +103,12 @@ impl<'de> Visitor<'de> for Scan<'_> {
                     ),
                 )));
             }
-            if self.at == At::Motions && n > super::request::MAX_RECORDS {
+            if self.at == At::Motions && n > super::MAX_RECORDS {
                 return Err(self.refuse(ApiError::limit_exceeded(
                     "/motions",
                     format!(
                         "/motions: more than {} records exceed the limit per search",
-                        super::request::MAX_RECORDS
+                        super::MAX_RECORDS
                     ),
                 )));
             }

@@ -86,7 +86,7 @@ pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
         search_range(&b.range, b.tolerance.as_ref(), b.scan_points, limits)?;
     // Each observation is one search per record.
     let runs = observations.len() as f64
-        * crate::service::http::budget::search_runs(
+        * crate::service::request::budget::search_runs(
             records.len(),
             scan_points,
             max - min,
@@ -99,7 +99,7 @@ pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
             .fold(0.0, f64::max)
     });
     let steps = (duration / scene.control.time_step).ceil();
-    crate::service::http::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
+    crate::service::request::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
     let motion = records[0].1.clone();
     let mut motion_summary = motion_summary(&motion);
     if let Some(obj) = motion_summary.as_object_mut() {

@@ -1,9 +1,13 @@
-//! Request bodies of the service: JSON text → validated [`JobInput`], with the server's limits
-//! applied. Used twice with the same rules: by the routes when a job is submitted (errors become
+//! Service: request bodies, JSON text → validated [`JobInput`], with the server's limits
+//! applied (`budget`: the pre-scan, ranges and work estimates). Beside `jobs`, below `http` and
+//! `worker`, which both import it; its errors are already the HTTP problems
+//! (`http::problem::ApiError`, the one HTTP type it uses), which the worker reads as text.
+//! Used twice with the same rules: by the routes when a job is submitted (errors become
 //! 400/413/422 problems naming the field) and by a worker when it starts the stored job.
 //! This module holds what the three kinds share (limits, the scene and motion checks, criteria);
 //! `run`, `pga` and `site` parse each kind's body. Over 600 lines with its tests, which cover
 //! the three parsers through their shared checks.
+pub mod budget;
 mod pga;
 mod run;
 mod site;
@@ -378,9 +382,9 @@ pub(super) fn scene_and_motion(
 ) -> Result<(Scene, GroundMotion), ApiError> {
     check_shapes(scene, motion)?;
     check_sizes(scene, motion, limits)?;
-    crate::service::http::budget::check_ranges(scene)?;
+    super::budget::check_ranges(scene)?;
     if let Some(m) = motion {
-        crate::service::http::budget::check_motion_ranges("/motion", m)?;
+        super::budget::check_motion_ranges("/motion", m)?;
     }
     if let Some(n) = scene.get("blocks").and_then(Value::as_array).map(Vec::len) {
         if n > limits.max_blocks {
@@ -427,9 +431,9 @@ pub(super) fn scene_and_motion(
             format!(
                 "/scene/control/duration: {} s at a time step of {} s is {} steps, over the server's limit of {} \
                  (ashlar serve --max-total-steps); shorten the duration or lengthen control.time_step",
-                crate::service::http::budget::num(duration),
-                crate::service::http::budget::num(scene.control.time_step),
-                crate::service::http::budget::num(steps),
+                super::budget::num(duration),
+                super::budget::num(scene.control.time_step),
+                super::budget::num(steps),
                 limits.max_total_steps
             ),
         ));
@@ -441,14 +445,14 @@ pub(super) fn scene_and_motion(
             format!(
                 "/scene/control/output_interval: {} s recorded every {} s is {} frames, over the server's \
                  limit of {} (ashlar serve --max-total-steps)",
-                crate::service::http::budget::num(duration),
-                crate::service::http::budget::num(scene.control.output_interval),
-                crate::service::http::budget::num(frames),
+                super::budget::num(duration),
+                super::budget::num(scene.control.output_interval),
+                super::budget::num(frames),
                 limits.max_total_steps
             ),
         ));
     }
-    crate::service::http::budget::check_run_work(scene.blocks.len(), steps, frames, limits)?;
+    super::budget::check_run_work(scene.blocks.len(), steps, frames, limits)?;
     scene.control.max_steps = scene
         .control
         .max_steps

@@ -198,8 +198,12 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
             .unzip();
     let (min, max, tolerance, scan_points) =
         search_range(&b.range, b.tolerance.as_ref(), b.scan_points, limits)?;
-    let runs =
-        crate::service::http::budget::search_runs(records.len(), scan_points, max - min, tolerance);
+    let runs = crate::service::request::budget::search_runs(
+        records.len(),
+        scan_points,
+        max - min,
+        tolerance,
+    );
     // The longest record sets the length of every run (a scene's own duration overrides it).
     let duration = scene.control.duration.unwrap_or_else(|| {
         records
@@ -210,7 +214,7 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
             .fold(0.0, f64::max)
     });
     let steps = (duration / scene.control.time_step).ceil();
-    crate::service::http::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
+    crate::service::request::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
     let request = PgaRequest {
         criteria,
         combine,
