@@ -17,6 +17,7 @@
 //! searched range under a uniform prior. The product assumes the observations independent given
 //! the PGA (not one record shared by every structure); the per-record intervals assume that.
 use super::fragility::{fit_interval, probability, Capacity, FitParams, Fragility};
+use super::pga::SearchError;
 use super::pga::{search, Combine, Criterion, PgaRequest};
 use super::run::{RunError, RunOptions};
 use crate::motion::GroundMotion;
@@ -66,9 +67,7 @@ pub fn site_interval(
     opts: &RunOptions,
 ) -> Result<SiteInterval, RunError> {
     if observations.is_empty() {
-        return Err(RunError::Invalid(
-            "observations: at least one is required".into(),
-        ));
+        return Err(SearchError::NoObservations.into());
     }
     let (mut lower, mut upper) = (base.min, base.max);
     let mut results = Vec::new();
@@ -406,9 +405,7 @@ pub fn site_analysis(
     opts: &RunOptions,
 ) -> Result<SiteAnalysis, RunError> {
     if records.is_empty() {
-        return Err(RunError::Invalid(
-            "records: at least one is required".into(),
-        ));
+        return Err(SearchError::NoSiteRecords.into());
     }
     let intervals = super::pga::for_each_record(records, opts, |name, gm, sub| {
         site_interval(scene, gm, observations, base, sub).map(|interval| RecordInterval {

@@ -45,6 +45,36 @@ pub enum Criterion {
 }
 
 /// A criterion that does not parse: the text as given and what is wrong with it.
+/// What a PGA search, a multi-record search or a site analysis cannot do as asked, by cause
+/// (`RunError::Search`, or `RunError::RecordSearch` naming the record); each message names the
+/// field.
+#[derive(Debug, thiserror::Error)]
+pub enum SearchError {
+    #[error("criterion: at least one is required")]
+    NoCriterion,
+    /// A damage criterion does not fit the scene (its path and what is wrong).
+    #[error(transparent)]
+    Damage(#[from] super::criteria::CriterionError),
+    #[error("criterion {criterion:?}: no free block with id {id:?}")]
+    CriterionBlock { criterion: String, id: String },
+    /// The amplitude range (m/s²).
+    #[error("range: need 0 ≤ min < max, got min {min} max {max}")]
+    Range { min: f64, max: f64 },
+    /// The bisection's tolerance (m/s²).
+    #[error("tolerance: must be > 0, got {0}")]
+    Tolerance(f64),
+    #[error("scan_points: must lie in 2..=1000, got {0}")]
+    ScanPoints(usize),
+    #[error("motion: the horizontal record is zero everywhere and cannot be scaled to a PGA")]
+    ZeroMotion,
+    #[error("motions: give at least one record")]
+    NoRecords,
+    #[error("observations: at least one is required")]
+    NoObservations,
+    #[error("records: at least one is required")]
+    NoSiteRecords,
+}
+
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum CriterionParseError {
     /// A JSON damage criterion (docs/format.md §3) that does not parse; names the path.
@@ -319,52 +349,40 @@ pub fn bracket_of(runs: &[PgaRun]) -> (Option<f64>, Option<f64>, bool) {
     (safe, failing, monotonic)
 }
 
-fn validate(scene: &Scene, motion: &GroundMotion, req: &PgaRequest) -> Result<(), RunError> {
+fn validate(scene: &Scene, motion: &GroundMotion, req: &PgaRequest) -> Result<(), SearchError> {
     if req.criteria.is_empty() {
-        return Err(RunError::Invalid(
-            "criterion: at least one is required".into(),
-        ));
+        return Err(SearchError::NoCriterion);
     }
     for c in &req.criteria {
         if let Criterion::Damage { damage } = c {
-            damage
-                .check(scene)
-                .map_err(|e| RunError::Invalid(e.to_string()))?;
+            damage.check(scene)?;
         }
         for id in c.blocks() {
             if scene
                 .block_index(id)
                 .is_none_or(|b| !matches!(scene.blocks[b].kind, crate::scene::BlockKind::Free(_)))
             {
-                return Err(RunError::Invalid(format!(
-                    "criterion {:?}: no free block with id {id:?}",
-                    c.text()
-                )));
+                return Err(SearchError::CriterionBlock {
+                    criterion: c.text(),
+                    id: id.to_string(),
+                });
             }
         }
     }
     if !(req.min.is_finite() && req.max.is_finite() && req.min >= 0.0 && req.max > req.min) {
-        return Err(RunError::Invalid(format!(
-            "range: need 0 ≤ min < max, got min {} max {}",
-            req.min, req.max
-        )));
+        return Err(SearchError::Range {
+            min: req.min,
+            max: req.max,
+        });
     }
     if !(req.tolerance.is_finite() && req.tolerance > 0.0) {
-        return Err(RunError::Invalid(format!(
-            "tolerance: must be > 0, got {}",
-            req.tolerance
-        )));
+        return Err(SearchError::Tolerance(req.tolerance));
     }
     if req.scan_points < 2 || req.scan_points > 1000 {
-        return Err(RunError::Invalid(format!(
-            "scan_points: must lie in 2..=1000, got {}",
-            req.scan_points
-        )));
+        return Err(SearchError::ScanPoints(req.scan_points));
     }
     if motion.horizontal.peak() <= 0.0 {
-        return Err(RunError::Invalid(
-            "motion: the horizontal record is zero everywhere and cannot be scaled to a PGA".into(),
-        ));
+        return Err(SearchError::ZeroMotion);
     }
     Ok(())
 }
@@ -724,7 +742,10 @@ pub fn for_each_record<T: Send>(
 pub fn record_error(name: &str, e: RunError) -> RunError {
     match e {
         RunError::Cancelled => RunError::Cancelled,
-        RunError::Invalid(m) => RunError::Invalid(format!("record {name:?}: {m}")),
+        RunError::Search(source) => RunError::RecordSearch {
+            record: name.into(),
+            source,
+        },
         RunError::Simulation(source) => RunError::RecordSimulation {
             record: name.into(),
             source,
@@ -772,12 +793,13 @@ pub fn validate_records(
     req: &PgaRequest,
 ) -> Result<(), RunError> {
     if records.is_empty() {
-        return Err(RunError::Invalid(
-            "motions: give at least one record".into(),
-        ));
+        return Err(SearchError::NoRecords.into());
     }
     for (name, gm) in records {
-        validate(scene, gm, req).map_err(|e| RunError::Invalid(format!("record {name:?}: {e}")))?;
+        validate(scene, gm, req).map_err(|source| RunError::RecordSearch {
+            record: name.clone(),
+            source,
+        })?;
     }
     Ok(())
 }
@@ -788,7 +810,7 @@ pub fn validate_search(
     motion: &GroundMotion,
     req: &PgaRequest,
 ) -> Result<(), RunError> {
-    validate(scene, motion, req)
+    Ok(validate(scene, motion, req)?)
 }
 
 /// The fragility plot of a multi-record result (`None` when no curve was fitted).

@@ -56,10 +56,23 @@ pub struct RunOptions<'a> {
 /// How a run can fail, by cause; each message names where (docs/architecture.md, "Errors").
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
-    /// The inputs cannot run as given; the message names the field (a missing duration, an
-    /// unknown history block, a PGA request out of range).
-    #[error("{0}")]
-    Invalid(String),
+    /// The scene gives no `control.duration` and the motion has no record length to take it
+    /// from.
+    #[error("control.duration: required when the ground motion has no record length")]
+    NoDuration,
+    /// A history block asked for (`RunOptions::history_blocks`) is not a free block.
+    #[error("history block {id:?}: no free block with that id")]
+    HistoryBlock { id: String },
+    /// A PGA search, multi-record search or site analysis asked for something it cannot do.
+    #[error(transparent)]
+    Search(#[from] super::pga::SearchError),
+    /// A multi-record search's request fails on one record.
+    #[error("record {record:?}: {source}")]
+    RecordSearch {
+        record: String,
+        #[source]
+        source: super::pga::SearchError,
+    },
     /// The caller's cancel flag stopped a search between its runs (the text is what the
     /// service's job shows).
     #[error("cancelled")]
@@ -203,9 +216,7 @@ pub fn duration(scene: &Scene, motion: &GroundMotion) -> Result<f64, RunError> {
     match (scene.control.duration, motion.duration()) {
         (Some(d), _) => Ok(d),
         (None, Some(r)) => Ok(r + 2.0),
-        (None, None) => Err(RunError::Invalid(
-            "control.duration: required when the ground motion has no record length".into(),
-        )),
+        (None, None) => Err(RunError::NoDuration),
     }
 }
 
@@ -520,11 +531,7 @@ fn header(
                 scene
                     .block_index(id)
                     .filter(|&b| sim.mobility()[b] == Mobility::Free)
-                    .ok_or_else(|| {
-                        RunError::Invalid(format!(
-                            "history block {id:?}: no free block with that id"
-                        ))
-                    })
+                    .ok_or_else(|| RunError::HistoryBlock { id: id.clone() })
             })
             .collect::<Result<Vec<_>, _>>()?,
     };

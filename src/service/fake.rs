@@ -8,7 +8,7 @@
 //! stops at the next frame when cancelled (writing the frames done so far). A scene named
 //! `fake:fail` fails with a message; `fake:panic` panics (to test the worker's guard).
 use super::request::JobInput;
-use super::worker::{JobRunner, RunHooks, RunnerOutcome};
+use super::worker::{JobError, JobRunner, RunHooks, RunnerOutcome};
 use crate::analysis::pga::{PgaResult, PgaRun};
 use crate::analysis::run::{summary_units, BlockSummary, Diagnostics, Summary, RUN_OUTPUTS_FORMAT};
 use std::sync::atomic::Ordering;
@@ -78,9 +78,13 @@ pub fn fake_runner(wall_per_simulated_second: Duration) -> JobRunner {
                 failing_intervals: vec![[hi, request.max]],
                 runs,
             };
-            let value = serde_json::to_value(&result).map_err(|e| e.to_string())?;
-            std::fs::write(hooks.out_dir.join("result.json"), value.to_string())
-                .map_err(|e| e.to_string())?;
+            let value = serde_json::to_value(&result)?;
+            std::fs::write(hooks.out_dir.join("result.json"), value.to_string()).map_err(
+                |source| JobError::Write {
+                    file: "result.json",
+                    source,
+                },
+            )?;
             Ok(RunnerOutcome::Completed(value))
         }
     })
@@ -90,11 +94,11 @@ fn fake_run(
     input: &JobInput,
     hooks: &RunHooks<'_>,
     slowness: Duration,
-) -> Result<RunnerOutcome, String> {
+) -> Result<RunnerOutcome, JobError> {
     let scene = input.scene();
     let motion = input.motion();
     match scene.name.as_str() {
-        "fake:fail" => return Err("fake failure requested by the scene name".into()),
+        "fake:fail" => return Err(JobError::Fake),
         "fake:panic" => panic!("fake panic requested by the scene name"),
         _ => {}
     }
@@ -135,9 +139,17 @@ fn fake_run(
             std::thread::sleep(slowness.mul_f64(dt));
         }
     }
-    std::fs::write(hooks.out_dir.join("histories.csv"), csv).map_err(|e| e.to_string())?;
+    std::fs::write(hooks.out_dir.join("histories.csv"), csv).map_err(|source| JobError::Write {
+        file: "histories.csv",
+        source,
+    })?;
     let traj: Vec<u8> = (0..FAKE_TRAJECTORY_LEN).map(|k| (k % 251) as u8).collect();
-    std::fs::write(hooks.out_dir.join("trajectory.mcap"), traj).map_err(|e| e.to_string())?;
+    std::fs::write(hooks.out_dir.join("trajectory.mcap"), traj).map_err(|source| {
+        JobError::Write {
+            file: "trajectory.mcap",
+            source,
+        }
+    })?;
     let summary = Summary {
         format: RUN_OUTPUTS_FORMAT.into(),
         completed: !cancelled,
@@ -170,9 +182,13 @@ fn fake_run(
         settled: !cancelled,
         events: Vec::new(),
     };
-    let value = serde_json::to_value(&summary).map_err(|e| e.to_string())?;
-    std::fs::write(hooks.out_dir.join("summary.json"), value.to_string())
-        .map_err(|e| e.to_string())?;
+    let value = serde_json::to_value(&summary)?;
+    std::fs::write(hooks.out_dir.join("summary.json"), value.to_string()).map_err(|source| {
+        JobError::Write {
+            file: "summary.json",
+            source,
+        }
+    })?;
     Ok(if cancelled {
         RunnerOutcome::Cancelled(Some(value))
     } else {
@@ -189,7 +205,7 @@ fn fake_site(
     request: &crate::analysis::pga::PgaRequest,
     hooks: &RunHooks<'_>,
     slowness: Duration,
-) -> Result<RunnerOutcome, String> {
+) -> Result<RunnerOutcome, JobError> {
     use crate::analysis::observations::{
         criterion_records, distribution, DistributionParams, ObservationResult, RecordInterval,
         SiteAnalysis, SiteInterval,
@@ -240,8 +256,12 @@ fn fake_site(
         ),
         records: out,
     };
-    let value = serde_json::to_value(&result).map_err(|e| e.to_string())?;
-    std::fs::write(hooks.out_dir.join("result.json"), value.to_string())
-        .map_err(|e| e.to_string())?;
+    let value = serde_json::to_value(&result)?;
+    std::fs::write(hooks.out_dir.join("result.json"), value.to_string()).map_err(|source| {
+        JobError::Write {
+            file: "result.json",
+            source,
+        }
+    })?;
     Ok(RunnerOutcome::Completed(value))
 }

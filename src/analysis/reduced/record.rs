@@ -148,9 +148,7 @@ fn header(
     if let Some(ids) = &opts.history_blocks {
         for id in ids {
             if scene.block_index(id) != Some(b.free) {
-                return Err(RunError::Invalid(format!(
-                    "history block {id:?}: no free block with that id"
-                )));
+                return Err(RunError::HistoryBlock { id: id.clone() });
             }
         }
     }

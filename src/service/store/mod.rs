@@ -10,7 +10,6 @@ pub mod postgres;
 mod sqlite;
 pub mod tls;
 
-pub(crate) use super::jobs::child_error;
 pub use super::jobs::{CancelOutcome, JobStatus};
 pub use sqlite::SqliteStore;
 

@@ -2,6 +2,7 @@
 //! child `pga_run` jobs that any worker claims, the replay that plans the next batch from the
 //! children's verdicts, and one child run's verdict (on the worker thread or in a child
 //! process through `runner`).
+use super::error::{Inconsistent, JobError};
 use super::pool::Core;
 use super::run::{RunHooks, RunnerOutcome};
 use crate::service::request::{parse_pga, JobInput};
@@ -44,11 +45,6 @@ pub(super) fn fans_out(core: &Core, job: &JobRecord) -> bool {
             .unwrap_or(false)
 }
 
-fn store_msg(e: crate::service::store::StoreError) -> String {
-    tracing::error!(error = %e, "job store");
-    "the job store failed while running the search; see the server log".into()
-}
-
 /// One step of a fanned-out search: replay its planner from its children's outcomes; finish
 /// (`Some`) or enqueue the next batch as child jobs and park the search (`None`).
 pub(super) fn fan_out_search(
@@ -56,7 +52,7 @@ pub(super) fn fan_out_search(
     job: &JobRecord,
     input: &JobInput,
     hooks: &RunHooks<'_>,
-) -> Result<Option<RunnerOutcome>, String> {
+) -> Result<Option<RunnerOutcome>, JobError> {
     use crate::analysis::pga;
     use std::collections::{HashMap, HashSet};
     let JobInput::PgaSearch {
@@ -68,33 +64,38 @@ pub(super) fn fan_out_search(
         ..
     } = input
     else {
-        return Err("not a PGA search".into());
+        return Err(Inconsistent::NotASearch.into());
     };
     if records.is_empty() {
         pga::validate_search(scene, motion, request)
     } else {
         pga::validate_records(scene, records, request)
-    }
-    .map_err(|e| e.to_string())?;
+    }?;
     let mut width = None;
     let mut known: HashMap<(usize, u64), bool> = HashMap::new();
     let mut unfinished: HashSet<(usize, u64)> = HashSet::new();
-    for ch in core.store.children(job.id).map_err(store_msg)? {
-        let spec: ChildRequest = serde_json::from_value(ch.request.clone())
-            .map_err(|e| format!("a child run of this search is corrupt in the store: {e}"))?;
+    for ch in core.store.children(job.id).map_err(JobError::store)? {
+        let spec: ChildRequest =
+            serde_json::from_value(ch.request.clone()).map_err(|source| JobError::Corrupt {
+                what: "a child run of this search is corrupt in the store",
+                source,
+            })?;
         width.get_or_insert(spec.width);
         let key = (spec.record, spec.pga_bits);
         match ch.status {
             JobStatus::Succeeded => {
                 let r: ChildResult = serde_json::from_str(ch.result.as_deref().unwrap_or(""))
-                    .map_err(|e| format!("a child run's result is corrupt in the store: {e}"))?;
+                    .map_err(|source| JobError::Corrupt {
+                        what: "a child run's result is corrupt in the store",
+                        source,
+                    })?;
                 known.insert(key, r.failed);
             }
             JobStatus::Failed | JobStatus::Cancelled => {
-                return Err(crate::service::store::child_error(
-                    ch.status.as_str(),
-                    ch.error,
-                ))
+                return Err(JobError::ChildEnded {
+                    status: ch.status.as_str(),
+                    error: ch.error,
+                })
             }
             _ => {
                 unfinished.insert(key);
@@ -143,7 +144,7 @@ pub(super) fn fan_out_search(
             if !core
                 .store
                 .fan_out(job.id, &children, progress)
-                .map_err(store_msg)?
+                .map_err(JobError::store)?
             {
                 tracing::warn!(id = %job.id, "the search was no longer ours to fan out (lease lost)");
             }
@@ -162,11 +163,11 @@ fn finish_search(
     request: &crate::analysis::pga::PgaRequest,
     fit: crate::analysis::fragility::Method,
     hooks: &RunHooks<'_>,
-) -> Result<RunnerOutcome, String> {
+) -> Result<RunnerOutcome, JobError> {
     use crate::analysis::pga;
     let value = if records.is_empty() {
-        let r = results.pop().ok_or("the search has no result")?;
-        serde_json::to_value(&r).map_err(|e| e.to_string())?
+        let r = results.pop().ok_or(Inconsistent::NoResult)?;
+        serde_json::to_value(&r)?
     } else {
         let recs = records
             .iter()
@@ -178,14 +179,20 @@ fn finish_search(
             .collect();
         let res = pga::multi_result(recs, request, fit);
         if let Some(svg) = pga::fragility_svg(&res) {
-            std::fs::write(hooks.out_dir.join("fragility.svg"), svg)
-                .map_err(|e| format!("writing fragility.svg: {e}"))?;
+            std::fs::write(hooks.out_dir.join("fragility.svg"), svg).map_err(|source| {
+                JobError::Write {
+                    file: "fragility.svg",
+                    source,
+                }
+            })?;
         }
-        serde_json::to_value(&res).map_err(|e| e.to_string())?
+        serde_json::to_value(&res)?
     };
-    let text = serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?;
-    std::fs::write(hooks.out_dir.join("result.json"), text)
-        .map_err(|e| format!("writing result.json: {e}"))?;
+    let text = serde_json::to_string_pretty(&value)?;
+    std::fs::write(hooks.out_dir.join("result.json"), text).map_err(|source| JobError::Write {
+        file: "result.json",
+        source,
+    })?;
     Ok(RunnerOutcome::Completed(value))
 }
 
@@ -198,28 +205,29 @@ pub(super) fn run_child(
     core: &Core,
     job: &JobRecord,
     hooks: &RunHooks<'_>,
-) -> Result<RunnerOutcome, String> {
-    let spec: ChildRequest = serde_json::from_value(job.request.clone())
-        .map_err(|e| format!("the stored child run is corrupt: {e}"))?;
+) -> Result<RunnerOutcome, JobError> {
+    let spec: ChildRequest =
+        serde_json::from_value(job.request.clone()).map_err(|source| JobError::Corrupt {
+            what: "the stored child run is corrupt",
+            source,
+        })?;
     let parent = core
         .store
         .get(spec.parent)
-        .map_err(store_msg)?
-        .ok_or("the search of this run no longer exists")?;
+        .map_err(JobError::store)?
+        .ok_or(Inconsistent::ParentGone)?;
     match &core.params.isolation {
         super::runner::Isolation::Process(p) => {
             super::runner::run_pga_run_in_child(p, &parent.request, &spec, &core.limits, hooks)
-                .map_err(|msg| {
-                    format!(
-                        "the search's run at {} m/s² (record {}) failed: {msg}",
-                        f64::from_bits(spec.pga_bits),
-                        spec.record
-                    )
+                .map_err(|e| JobError::ChildRun {
+                    pga: f64::from_bits(spec.pga_bits),
+                    record: spec.record,
+                    source: Box::new(e),
                 })
         }
         super::runner::Isolation::Thread => {
             let input = parse_pga(&parent.request, &core.limits)
-                .map_err(|e| format!("the stored request is no longer accepted: {}", e.detail))?
+                .map_err(JobError::rejected)?
                 .input;
             evaluate_child(&input, &spec, hooks.cancel)
         }
@@ -232,7 +240,7 @@ pub(crate) fn evaluate_child(
     input: &JobInput,
     spec: &ChildRequest,
     cancel: &AtomicBool,
-) -> Result<RunnerOutcome, String> {
+) -> Result<RunnerOutcome, JobError> {
     use crate::analysis::pga;
     let JobInput::PgaSearch {
         scene,
@@ -242,7 +250,7 @@ pub(crate) fn evaluate_child(
         ..
     } = input
     else {
-        return Err("the parent of a child run is not a PGA search".into());
+        return Err(Inconsistent::ParentNotASearch.into());
     };
     let pga = f64::from_bits(spec.pga_bits);
     let (name, gm) = if records.is_empty() {
@@ -250,7 +258,7 @@ pub(crate) fn evaluate_child(
     } else {
         let (n, g) = records
             .get(spec.record)
-            .ok_or_else(|| format!("the search has no record {}", spec.record))?;
+            .ok_or(Inconsistent::NoRecord(spec.record))?;
         (Some(n), g)
     };
     let failed = pga::evaluate_combined(
@@ -262,9 +270,9 @@ pub(crate) fn evaluate_child(
         Some(cancel),
     )
     .map_err(|e| match name {
-        Some(n) => pga::record_error(n, e).to_string(),
-        None => e.to_string(),
+        Some(n) => pga::record_error(n, e),
+        None => e,
     })?;
-    let value = serde_json::to_value(ChildResult { pga, failed }).map_err(|e| e.to_string())?;
+    let value = serde_json::to_value(ChildResult { pga, failed })?;
     Ok(RunnerOutcome::Completed(value))
 }

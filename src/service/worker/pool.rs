@@ -5,6 +5,7 @@
 //!
 //! Length (over 600 lines): `Core` and the pool's threads and watchdog read and write the same
 //! running-job table and stop switches; `Core` could move to its own file.
+use super::error::{Inconsistent, JobError};
 use super::fanout::{fan_out_search, fans_out, run_child};
 use super::run::{JobRunner, RunHooks, RunnerOutcome};
 use crate::service::events::{Hub, JobEvent};
@@ -404,16 +405,14 @@ fn worker_loop(core: &Core) {
     core.workers_alive.fetch_sub(1, Ordering::SeqCst);
 }
 
-fn parse_stored(core: &Core, job: &JobRecord) -> Result<JobInput, String> {
+fn parse_stored(core: &Core, job: &JobRecord) -> Result<JobInput, JobError> {
     let parsed = match job.kind {
         JobKind::Run => parse_run(&job.request, &core.limits),
         JobKind::PgaSearch => parse_pga(&job.request, &core.limits),
         JobKind::SiteAnalysis => parse_site(&job.request, &core.limits),
-        JobKind::PgaRun => return Err("a child run has no request of its own".into()),
+        JobKind::PgaRun => return Err(Inconsistent::ChildHasNoRequest.into()),
     };
-    parsed
-        .map(|p| p.input)
-        .map_err(|e| format!("the stored request is no longer accepted: {}", e.detail))
+    parsed.map(|p| p.input).map_err(JobError::rejected)
 }
 
 /// Run one claimed job to a terminal status (or back to the queue on shutdown).
@@ -493,7 +492,9 @@ fn run_job(core: &Core, job: JobRecord) {
             if ctl.reason.load(Ordering::SeqCst) != STOP_SHUTDOWN
                 && job.kind != JobKind::PgaRun =>
         {
-            a.publish_dir(id, &dir).map(|()| o)
+            a.publish_dir(id, &dir)
+                .map(|()| o)
+                .map_err(JobError::Publish)
         }
         (o, _) => o,
     };
@@ -535,7 +536,8 @@ fn run_job(core: &Core, job: JobRecord) {
         ),
         Ok(RunnerOutcome::Cancelled(partial)) => Finish::Cancelled(partial),
         Err(_) if reason == STOP_USER => Finish::Cancelled(None),
-        Err(msg) => Finish::Failed(msg),
+        // The one place a job's error becomes text: the job's `error` field.
+        Err(e) => Finish::Failed(e.to_string()),
     };
     let (status, progress) = match &finish {
         Finish::Succeeded(_) => (JobStatus::Succeeded, 1.0),
@@ -554,17 +556,23 @@ fn run_job(core: &Core, job: JobRecord) {
     core.hub.publish(id, JobEvent { status, progress });
 }
 
-fn prepare_dir(dir: &Path) -> Result<(), String> {
+fn prepare_dir(dir: &Path) -> Result<(), JobError> {
     // A rerun (after a crash) starts from a clean directory so no stale artifact survives.
     if dir.exists() {
         std::fs::remove_dir_all(dir).map_err(|e| {
             tracing::error!(dir = %dir.display(), error = %e, "clearing a job directory");
-            "the server could not prepare the job's output directory".to_string()
+            JobError::Directory {
+                clear: true,
+                source: e,
+            }
         })?;
     }
     std::fs::create_dir_all(dir).map_err(|e| {
         tracing::error!(dir = %dir.display(), error = %e, "creating a job directory");
-        "the server could not create the job's output directory".to_string()
+        JobError::Directory {
+            clear: false,
+            source: e,
+        }
     })
 }
 
@@ -575,8 +583,8 @@ fn execute<T>(
     id: Uuid,
     dir: &Path,
     ctl: &RunControl,
-    work: impl FnOnce(&RunHooks<'_>) -> Result<T, String>,
-) -> Result<T, String> {
+    work: impl FnOnce(&RunHooks<'_>) -> Result<T, JobError>,
+) -> Result<T, JobError> {
     let last_write = Mutex::new(Instant::now());
     let progress = |p: f64| {
         let p = if p.is_finite() {
@@ -624,10 +632,7 @@ fn execute<T>(
                 .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
                 .unwrap_or_default();
             tracing::error!(%id, panic = %msg, "the runner panicked");
-            Err(
-                "the computation crashed (an internal error in ashlar; the cause has been logged)"
-                    .into(),
-            )
+            Err(JobError::Panicked)
         }
     }
 }

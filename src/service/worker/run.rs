@@ -1,6 +1,7 @@
 //! Workers: the computation behind a job, a [`JobRunner`] over `analysis` (`analysis::run::run`,
 //! `pga::search*`, `site::analyse`), with the hooks a worker hands it (output directory, stop
 //! switch, progress).
+use super::error::JobError;
 use crate::service::request::JobInput;
 use serde_json::Value;
 use std::path::Path;
@@ -17,7 +18,7 @@ pub struct RunHooks<'a> {
     pub progress: &'a (dyn Fn(f64) + Sync),
 }
 
-/// How a runner finished (errors are `Err(message for the user)`).
+/// How a runner finished (a failure is a [`JobError`], whose text the job shows).
 #[derive(Debug, Clone, PartialEq)]
 pub enum RunnerOutcome {
     /// `summary.json` of a run or `result.json` of a PGA search.
@@ -29,7 +30,7 @@ pub enum RunnerOutcome {
 /// The computation behind a job. The default is [`analysis_runner`]; tests use
 /// [`crate::service::fake::fake_runner`].
 pub type JobRunner =
-    Arc<dyn Fn(&JobInput, &RunHooks<'_>) -> Result<RunnerOutcome, String> + Send + Sync>;
+    Arc<dyn Fn(&JobInput, &RunHooks<'_>) -> Result<RunnerOutcome, JobError> + Send + Sync>;
 
 /// The real computation: `analysis::run::run` or `analysis::pga::search`.
 pub fn analysis_runner() -> JobRunner {
@@ -46,13 +47,12 @@ pub fn analysis_runner() -> JobRunner {
                 motion,
                 criteria,
             } => {
-                let out =
-                    crate::analysis::run::run(scene, motion, &opts).map_err(|e| e.to_string())?;
-                let mut summary = serde_json::to_value(&out.summary).map_err(|e| e.to_string())?;
+                let out = crate::analysis::run::run(scene, motion, &opts)?;
+                let mut summary = serde_json::to_value(&out.summary)?;
                 // The request's damage criteria, judged on the finished run (`run --criterion`).
                 if !criteria.is_empty() && !out.cancelled {
                     let v = crate::analysis::pga::verdicts(criteria, &out.summary);
-                    summary["criteria"] = serde_json::to_value(v).map_err(|e| e.to_string())?;
+                    summary["criteria"] = serde_json::to_value(v)?;
                 }
                 Ok(if out.cancelled {
                     RunnerOutcome::Cancelled(Some(summary))
@@ -74,15 +74,23 @@ pub fn analysis_runner() -> JobRunner {
                 if hooks.cancel.load(Ordering::Relaxed) {
                     return Ok(RunnerOutcome::Cancelled(None));
                 }
-                let res = res.map_err(|e| e.to_string())?;
-                let value = serde_json::to_value(&res).map_err(|e| e.to_string())?;
+                let res = res?;
+                let value = serde_json::to_value(&res)?;
                 if let Some(svg) = crate::analysis::pga::fragility_svg(&res) {
-                    std::fs::write(hooks.out_dir.join("fragility.svg"), svg)
-                        .map_err(|e| format!("writing fragility.svg: {e}"))?;
+                    std::fs::write(hooks.out_dir.join("fragility.svg"), svg).map_err(|source| {
+                        JobError::Write {
+                            file: "fragility.svg",
+                            source,
+                        }
+                    })?;
                 }
-                let text = serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?;
-                std::fs::write(hooks.out_dir.join("result.json"), text)
-                    .map_err(|e| format!("writing result.json: {e}"))?;
+                let text = serde_json::to_string_pretty(&value)?;
+                std::fs::write(hooks.out_dir.join("result.json"), text).map_err(|source| {
+                    JobError::Write {
+                        file: "result.json",
+                        source,
+                    }
+                })?;
                 Ok(RunnerOutcome::Completed(value))
             }
             JobInput::SiteAnalysis {
@@ -103,11 +111,15 @@ pub fn analysis_runner() -> JobRunner {
                 if hooks.cancel.load(Ordering::Relaxed) {
                     return Ok(RunnerOutcome::Cancelled(None));
                 }
-                let res = res.map_err(|e| e.to_string())?;
-                let value = serde_json::to_value(&res).map_err(|e| e.to_string())?;
-                let text = serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?;
-                std::fs::write(hooks.out_dir.join("result.json"), text)
-                    .map_err(|e| format!("writing result.json: {e}"))?;
+                let res = res?;
+                let value = serde_json::to_value(&res)?;
+                let text = serde_json::to_string_pretty(&value)?;
+                std::fs::write(hooks.out_dir.join("result.json"), text).map_err(|source| {
+                    JobError::Write {
+                        file: "result.json",
+                        source,
+                    }
+                })?;
                 Ok(RunnerOutcome::Completed(value))
             }
             JobInput::PgaSearch {
@@ -120,12 +132,15 @@ pub fn analysis_runner() -> JobRunner {
                 if hooks.cancel.load(Ordering::Relaxed) {
                     return Ok(RunnerOutcome::Cancelled(None));
                 }
-                let res = res.map_err(|e| e.to_string())?;
-                let value = serde_json::to_value(&res).map_err(|e| e.to_string())?;
+                let res = res?;
+                let value = serde_json::to_value(&res)?;
                 let path = hooks.out_dir.join("result.json");
                 if !path.exists() {
-                    let text = serde_json::to_string_pretty(&value).map_err(|e| e.to_string())?;
-                    std::fs::write(&path, text).map_err(|e| format!("writing result.json: {e}"))?;
+                    let text = serde_json::to_string_pretty(&value)?;
+                    std::fs::write(&path, text).map_err(|source| JobError::Write {
+                        file: "result.json",
+                        source,
+                    })?;
                 }
                 Ok(RunnerOutcome::Completed(value))
             }

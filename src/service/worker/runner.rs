@@ -18,6 +18,7 @@
 //! Length (over 600 lines): both sides of one protocol, the parent (spawn, limits, the child's
 //! lines, its exit as a failure) and the child (`child_main`), kept together so that a change to
 //! the protocol is made in one place.
+use super::error::{Inconsistent, JobError, ProcessEnd, ProcessError};
 use super::fanout::ChildRequest;
 use super::run::{RunHooks, RunnerOutcome};
 use crate::service::request::{parse_pga, parse_run, parse_site, JobInput, Limits};
@@ -170,7 +171,7 @@ pub fn run_in_child(
     request: &Value,
     limits: &Limits,
     hooks: &RunHooks<'_>,
-) -> Result<RunnerOutcome, String> {
+) -> Result<RunnerOutcome, JobError> {
     run_spec_in_child(params, kind, request, None, limits, hooks)
 }
 
@@ -183,7 +184,7 @@ pub fn run_pga_run_in_child(
     run: &ChildRequest,
     limits: &Limits,
     hooks: &RunHooks<'_>,
-) -> Result<RunnerOutcome, String> {
+) -> Result<RunnerOutcome, JobError> {
     run_spec_in_child(
         params,
         JobKind::PgaRun,
@@ -201,7 +202,7 @@ fn run_spec_in_child(
     pga_run: Option<ChildRequest>,
     limits: &Limits,
     hooks: &RunHooks<'_>,
-) -> Result<RunnerOutcome, String> {
+) -> Result<RunnerOutcome, JobError> {
     use std::process::{Command, Stdio};
     let spec = ChildSpec {
         kind: kind.as_str().to_string(),
@@ -215,7 +216,7 @@ fn run_spec_in_child(
         fake_ms: params.fake.map(|d| d.as_millis() as u64),
         parent_pid: std::process::id(),
     };
-    let mut line = serde_json::to_vec(&spec).map_err(|e| e.to_string())?;
+    let mut line = serde_json::to_vec(&spec)?;
     line.push(b'\n');
     let mut cmd = Command::new(&params.exe);
     cmd.arg("internal-run-job")
@@ -230,7 +231,7 @@ fn run_spec_in_child(
     }
     let mut child = cmd.spawn().map_err(|e| {
         tracing::error!(exe = %params.exe.display(), error = %e, "starting a job's process");
-        "the server could not start the job's process; see the server log".to_string()
+        ProcessError::Spawn(e)
     })?;
     let pid = child.id();
     let (Some(mut stdin), Some(stdout), Some(stderr)) =
@@ -238,7 +239,7 @@ fn run_spec_in_child(
     else {
         let _ = child.kill();
         let _ = child.wait();
-        return Err("the server could not talk to the job's process".into());
+        return Err(ProcessError::Pipes.into());
     };
     // A 16 MB request is more than a pipe holds: write it from a thread while we read.
     let writer = std::thread::spawn(move || {
@@ -315,7 +316,7 @@ fn run_spec_in_child(
     }
     let status = child.wait().map_err(|e| {
         tracing::error!(pid, error = %e, "waiting for a job's process");
-        "the server lost track of the job's process; see the server log".to_string()
+        ProcessError::Wait(e)
     })?;
     drop(stdin);
     if let Some(w) = writer {
@@ -334,12 +335,12 @@ fn run_spec_in_child(
             if !tail.trim().is_empty() {
                 tracing::error!(pid, stderr = %tail.trim(), "a job's run failed");
             }
-            Err(message)
+            Err(ProcessError::Reported(message).into())
         }
         _ => {
             let msg = exit_cause(params, limits, status, &tail, killed);
             tracing::error!(pid, status = %status, stderr = %tail.trim(), "a job's process ended abnormally: {msg}");
-            Err(msg)
+            Err(ProcessError::Ended(msg).into())
         }
     }
 }
@@ -351,41 +352,37 @@ fn exit_cause(
     status: std::process::ExitStatus,
     stderr: &str,
     killed: bool,
-) -> String {
+) -> ProcessEnd {
     let out_of_memory = stderr.contains("memory allocation of")
         || stderr.contains("Cannot allocate memory")
         || stderr.contains("out of memory");
     let sig = signal_of(status);
     if out_of_memory {
         return if params.memory_limit > 0 {
-            format!(
-                "the run exceeded the job memory limit of {} bytes ({}) (ashlar serve --job-memory-limit) and was stopped",
-                params.memory_limit,
-                human_bytes(params.memory_limit)
-            )
+            ProcessEnd::MemoryLimit {
+                bytes: params.memory_limit,
+                human: human_bytes(params.memory_limit),
+            }
         } else {
-            "the run ran out of memory".to_string()
+            ProcessEnd::OutOfMemory
         };
     }
     match sig {
-        Some(9) if killed => "the run did not stop when asked and was killed".into(),
-        Some(9) => "the run was killed (signal 9, SIGKILL; e.g. by the system's out-of-memory killer)".into(),
-        Some(24) => format!(
-            "the run exceeded the job CPU-time limit of {} s (ashlar serve --job-cpu-seconds) and was stopped",
-            params.cpu_seconds
-        ),
-        Some(25) => format!(
-            "the run wrote a file over the server's limit of {} bytes per job (ashlar serve --max-job-artifact-bytes) and was stopped",
-            limits.max_job_artifact_bytes
-        ),
-        Some(s) => format!(
-            "the run crashed (signal {s}, {}): an internal error in ashlar, the cause has been logged",
-            signal_name(s)
-        ),
-        None => format!(
-            "the run's process ended with exit status {} without a result: an internal error in ashlar, the cause has been logged",
-            status.code().unwrap_or(-1)
-        ),
+        Some(9) if killed => ProcessEnd::KilledAfterCancel,
+        Some(9) => ProcessEnd::Killed,
+        Some(24) => ProcessEnd::CpuLimit {
+            seconds: params.cpu_seconds,
+        },
+        Some(25) => ProcessEnd::FileLimit {
+            bytes: limits.max_job_artifact_bytes,
+        },
+        Some(s) => ProcessEnd::Crashed {
+            signal: s,
+            name: signal_name(s),
+        },
+        None => ProcessEnd::Exited {
+            code: status.code().unwrap_or(-1),
+        },
     }
 }
 
@@ -499,7 +496,9 @@ pub fn child_main() -> Result<(), ChildError> {
     let out = Mutex::new(std::io::stdout());
     let msg = match std::panic::catch_unwind(|| run_spec(&spec, &out)) {
         Ok(Ok(m)) => m,
-        Ok(Err(message)) => ChildMessage::Error { message },
+        Ok(Err(e)) => ChildMessage::Error {
+            message: e.to_string(),
+        },
         Err(_) => ChildMessage::Error {
             message:
                 "the computation crashed (an internal error in ashlar; the cause has been logged)"
@@ -510,15 +509,12 @@ pub fn child_main() -> Result<(), ChildError> {
     Ok(())
 }
 
-fn run_spec(spec: &ChildSpec, out: &Mutex<std::io::Stdout>) -> Result<ChildMessage, String> {
+fn run_spec(spec: &ChildSpec, out: &Mutex<std::io::Stdout>) -> Result<ChildMessage, JobError> {
     let limits = limits_from_value(&spec.limits);
     if spec.kind == "pga_run" {
-        let run = spec
-            .pga_run
-            .as_ref()
-            .ok_or("a pga_run job's process was not told which run")?;
+        let run = spec.pga_run.as_ref().ok_or(Inconsistent::ChildNotTold)?;
         let input = parse_pga(&spec.request, &limits)
-            .map_err(|e| format!("the stored request is no longer accepted: {}", e.detail))?
+            .map_err(JobError::rejected)?
             .input;
         test_fault(&input.scene().name);
         return Ok(match super::fanout::evaluate_child(&input, run, &CANCEL)? {
@@ -530,9 +526,9 @@ fn run_spec(spec: &ChildSpec, out: &Mutex<std::io::Stdout>) -> Result<ChildMessa
         "run" => parse_run(&spec.request, &limits),
         "pga_search" => parse_pga(&spec.request, &limits),
         "site_analysis" => parse_site(&spec.request, &limits),
-        k => return Err(format!("a job of kind {k} does not run in a child process")),
+        k => return Err(Inconsistent::NotInChild(k.to_string()).into()),
     }
-    .map_err(|e| format!("the stored request is no longer accepted: {}", e.detail))?;
+    .map_err(JobError::rejected)?;
     let input: JobInput = parsed.input;
     test_fault(&input.scene().name);
     let runner = match spec.fake_ms {
