@@ -60,11 +60,63 @@ fn hex32(s: &str) -> Option<[u8; 32]> {
     Some(out)
 }
 
+/// What is wrong in a `--tokens` file's text (the line, 1-based).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TokensError {
+    #[error("line {line}: expected `ROLE TOKEN` (ROLE user or admin)")]
+    Form { line: usize },
+    #[error("line {line}: role {role:?} is not user or admin")]
+    Role { line: usize, role: String },
+    #[error("line {line}: sha256: must be followed by 64 hex digits")]
+    Digest { line: usize },
+    #[error("line {line}: a token must have at least 16 characters")]
+    Short { line: usize },
+    #[error("no token in the file")]
+    Empty,
+}
+
+/// `--tokens FILE` unreadable or malformed (the file, then the cause).
+#[derive(Debug, thiserror::Error)]
+pub enum TokensFileError {
+    #[error("--tokens {}: {source}", path.display())]
+    Read {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+    #[error("--tokens {}: {source}", path.display())]
+    Parse {
+        path: std::path::PathBuf,
+        source: TokensError,
+    },
+}
+
+/// A signing key too short to be safe (bytes after trimming whitespace; 32 needed).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SigningKeyError {
+    #[error("the signing key has {bytes} bytes; give at least 32 (e.g. `head -c 32 /dev/urandom | base64`)")]
+    Short { bytes: usize },
+}
+
+/// `--signing-key-file FILE` unreadable or too short (the file, then the cause).
+#[derive(Debug, thiserror::Error)]
+pub enum SigningKeyFileError {
+    #[error("--signing-key-file {}: {source}", path.display())]
+    Read {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+    #[error("--signing-key-file {}: {source}", path.display())]
+    Key {
+        path: std::path::PathBuf,
+        source: SigningKeyError,
+    },
+}
+
 impl Tokens {
     /// One token a line: `ROLE TOKEN`, ROLE `user` or `admin`, TOKEN either the token itself
     /// (at least 16 characters; hashed when read) or `sha256:HEX`, its digest (so that the
     /// file need not hold the secret). Blank lines and `#` comments are skipped.
-    pub fn parse(text: &str) -> Result<Self, String> {
+    pub fn parse(text: &str) -> Result<Self, TokensError> {
         let mut entries = Vec::new();
         for (n, line) in text.lines().enumerate() {
             let line = line.trim();
@@ -73,45 +125,43 @@ impl Tokens {
             }
             let mut parts = line.split_whitespace();
             let (Some(role), Some(token), None) = (parts.next(), parts.next(), parts.next()) else {
-                return Err(format!(
-                    "line {}: expected `ROLE TOKEN` (ROLE user or admin)",
-                    n + 1
-                ));
+                return Err(TokensError::Form { line: n + 1 });
             };
             let role = match role {
                 "user" => Role::User,
                 "admin" => Role::Admin,
                 other => {
-                    return Err(format!(
-                        "line {}: role {other:?} is not user or admin",
-                        n + 1
-                    ))
+                    return Err(TokensError::Role {
+                        line: n + 1,
+                        role: other.to_string(),
+                    })
                 }
             };
             let d = match token.strip_prefix("sha256:") {
-                Some(h) => hex32(&h.to_ascii_lowercase()).ok_or_else(|| {
-                    format!("line {}: sha256: must be followed by 64 hex digits", n + 1)
-                })?,
-                None if token.chars().count() >= 16 => digest(token),
-                None => {
-                    return Err(format!(
-                        "line {}: a token must have at least 16 characters",
-                        n + 1
-                    ))
+                Some(h) => {
+                    hex32(&h.to_ascii_lowercase()).ok_or(TokensError::Digest { line: n + 1 })?
                 }
+                None if token.chars().count() >= 16 => digest(token),
+                None => return Err(TokensError::Short { line: n + 1 }),
             };
             entries.push((d, role));
         }
         if entries.is_empty() {
-            return Err("no token in the file".into());
+            return Err(TokensError::Empty);
         }
         Ok(Self { entries })
     }
 
-    pub fn load(path: &Path) -> Result<Self, String> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("--tokens {}: {e}", path.display()))?;
-        Self::parse(&text).map_err(|e| format!("--tokens {}: {e}", path.display()))
+    pub fn load(path: &Path) -> Result<Self, TokensFileError> {
+        let path_buf = || path.to_path_buf();
+        let text = std::fs::read_to_string(path).map_err(|source| TokensFileError::Read {
+            path: path_buf(),
+            source,
+        })?;
+        Self::parse(&text).map_err(|source| TokensFileError::Parse {
+            path: path_buf(),
+            source,
+        })
     }
 
     /// The role of a presented token; every entry is compared in full, in constant time, so
@@ -238,13 +288,10 @@ pub const SIGNED_URL_SECONDS: u64 = 900;
 impl SigningKey {
     /// A key from `--signing-key-file` (its bytes, surrounding whitespace trimmed; at least
     /// 32 bytes so that it cannot be guessed).
-    pub fn from_bytes(key: &[u8], validity: std::time::Duration) -> Result<Self, String> {
+    pub fn from_bytes(key: &[u8], validity: std::time::Duration) -> Result<Self, SigningKeyError> {
         let key = key.trim_ascii();
         if key.len() < 32 {
-            return Err(format!(
-                "the signing key has {} bytes; give at least 32 (e.g. `head -c 32 /dev/urandom | base64`)",
-                key.len()
-            ));
+            return Err(SigningKeyError::Short { bytes: key.len() });
         }
         Ok(Self {
             key: key.to_vec(),
@@ -252,11 +299,15 @@ impl SigningKey {
         })
     }
 
-    pub fn load(path: &Path, validity: std::time::Duration) -> Result<Self, String> {
-        let bytes = std::fs::read(path)
-            .map_err(|e| format!("--signing-key-file {}: {e}", path.display()))?;
-        Self::from_bytes(&bytes, validity)
-            .map_err(|e| format!("--signing-key-file {}: {e}", path.display()))
+    pub fn load(path: &Path, validity: std::time::Duration) -> Result<Self, SigningKeyFileError> {
+        let bytes = std::fs::read(path).map_err(|source| SigningKeyFileError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::from_bytes(&bytes, validity).map_err(|source| SigningKeyFileError::Key {
+            path: path.to_path_buf(),
+            source,
+        })
     }
 
     /// A fresh random key (256 bits from the OS's generator, through two v4 UUIDs: 244 random

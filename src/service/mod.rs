@@ -205,36 +205,54 @@ pub enum Database {
     Postgres(String),
 }
 
+/// A `--database` URL that names no store this ashlar opens.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DatabaseError {
+    #[error("--database sqlite:PATH: the path is empty")]
+    EmptyPath,
+    #[error("--database {url:?}: expected sqlite:PATH or postgres://USER@HOST:PORT/DBNAME")]
+    Scheme { url: String },
+    /// A PostgreSQL URL or its TLS parameters do not parse (`store::postgres::parse_url`,
+    /// whose messages are still text; they name the parameter, never the credentials).
+    #[error("{0}")]
+    Postgres(String),
+}
+
+/// `--lease` outside 1 s … a day.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("--lease must be a number of seconds between 1 and 86400, got {seconds}")]
+pub struct LeaseError {
+    pub seconds: f64,
+}
+
 /// Parse a `--database` URL.
-pub fn parse_database(url: &str) -> Result<Database, String> {
+pub fn parse_database(url: &str) -> Result<Database, DatabaseError> {
     if url.starts_with("postgres://") || url.starts_with("postgresql://") {
-        store::postgres::parse_url(url)?;
+        store::postgres::parse_url(url).map_err(DatabaseError::Postgres)?;
         return Ok(Database::Postgres(url.to_string()));
     }
     database_path(url).map(Database::Sqlite)
 }
 
-fn database_path(url: &str) -> Result<PathBuf, String> {
+fn database_path(url: &str) -> Result<PathBuf, DatabaseError> {
     if let Some(p) = url
         .strip_prefix("sqlite://")
         .or_else(|| url.strip_prefix("sqlite:"))
     {
         if p.is_empty() {
-            return Err("--database sqlite:PATH: the path is empty".into());
+            return Err(DatabaseError::EmptyPath);
         }
         return Ok(PathBuf::from(p));
     }
-    Err(format!(
-        "--database {url:?}: expected sqlite:PATH or postgres://USER@HOST:PORT/DBNAME"
-    ))
+    Err(DatabaseError::Scheme {
+        url: url.to_string(),
+    })
 }
 
 /// `--lease SECONDS` as lease parameters.
-pub fn lease_params(secs: f64) -> Result<store::postgres::LeaseParams, String> {
+pub fn lease_params(secs: f64) -> Result<store::postgres::LeaseParams, LeaseError> {
     if !(secs.is_finite() && (1.0..=86_400.0).contains(&secs)) {
-        return Err(format!(
-            "--lease must be a number of seconds between 1 and 86400, got {secs}"
-        ));
+        return Err(LeaseError { seconds: secs });
     }
     Ok(store::postgres::LeaseParams::with_lease(
         Duration::from_secs_f64(secs),

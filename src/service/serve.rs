@@ -16,12 +16,12 @@ use std::time::Duration;
 /// Why `ashlar serve` or `ashlar internal-run-job` stopped before serving (or while serving).
 #[derive(Debug, thiserror::Error)]
 pub enum ServeError {
-    /// `--database`: not a `sqlite:PATH` or PostgreSQL URL (the text names the option).
-    #[error("{0}")]
-    Database(String),
-    /// `--lease`: out of range (the text names the option and the value).
-    #[error("{0}")]
-    Lease(String),
+    /// `--database`: not a `sqlite:PATH` or PostgreSQL URL.
+    #[error(transparent)]
+    Database(#[from] super::DatabaseError),
+    /// `--lease`: out of range.
+    #[error(transparent)]
+    Lease(#[from] super::LeaseError),
     /// A duration option (`--header-timeout`, `--body-timeout`, `--idle-timeout`) out of range.
     #[error("--{option} must be a number of seconds between 0.1 and 86400, got {value}")]
     Seconds { option: &'static str, value: f64 },
@@ -33,15 +33,15 @@ pub enum ServeError {
         "--cors-origin {origin:?}: expected an origin, scheme://host[:port], e.g. https://app.foxglove.dev"
     )]
     CorsOrigin { origin: String },
-    /// `--tokens FILE`: unreadable or malformed (the text names the file and the line).
-    #[error("{0}")]
-    Tokens(String),
+    /// `--tokens FILE`: unreadable or malformed (the file and the line).
+    #[error(transparent)]
+    Tokens(#[from] auth::TokensFileError),
     /// `--signed-url-seconds` outside 1 s … a week.
     #[error("--signed-url-seconds must be between 1 and 604800 (a week), got {0}")]
     SignedUrlSeconds(u64),
-    /// `--signing-key-file`: unreadable or too short (the text names the file).
-    #[error("{0}")]
-    SigningKey(String),
+    /// `--signing-key-file`: unreadable or too short (the file).
+    #[error(transparent)]
+    SigningKey(#[from] auth::SigningKeyFileError),
     /// `--workers 0` without a PostgreSQL database (nothing would run the jobs).
     #[error("--workers must be at least 1 (0 only with a PostgreSQL --database, whose `ashlar worker` processes run the jobs)")]
     NoWorkers,
