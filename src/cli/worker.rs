@@ -46,24 +46,9 @@ pub struct WorkerArgs {
     /// round (default: the number of cores; 0: a search runs on the worker that claims it).
     #[arg(long)]
     pub fanout_width: Option<usize>,
-    /// Wall-clock seconds one job (or one run of a fanned-out search) may run before it is
-    /// stopped and failed (this worker enforces it, not the API process).
-    #[arg(long, default_value_t = Limits::default().max_job_seconds)]
-    pub max_job_seconds: u64,
-    /// Bytes of artifacts one job may write before it is stopped and failed.
-    #[arg(long, default_value_t = Limits::default().max_job_artifact_bytes)]
-    pub max_job_artifact_bytes: u64,
-    /// Where jobs run: `process` (a child process per job and per run of a fanned-out search,
-    /// with the limits below: a crash or exhausted memory fails that job only, never this
-    /// worker) or `thread`. As `ashlar serve --isolation`.
-    #[arg(long, value_enum, default_value_t = service::IsolationFlag::default())]
-    pub isolation: service::IsolationFlag,
-    /// Address space of a job's process (RLIMIT_AS), bytes or with K/M/G; 0: no limit.
-    #[arg(long, default_value = "8G", value_parser = service::runner::parse_bytes)]
-    pub job_memory_limit: u64,
-    /// CPU seconds of a job's process (RLIMIT_CPU; default: --max-job-seconds × cores).
-    #[arg(long)]
-    pub job_cpu_seconds: Option<u64>,
+    /// The job flags `ashlar serve` has too (limits, isolation); this worker enforces them.
+    #[command(flatten)]
+    pub jobs: service::serve::JobRunArgs,
 }
 
 pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
@@ -94,8 +79,8 @@ pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
         max_blocks: args.max_blocks,
         max_record_samples: args.max_record_samples,
         max_total_steps: args.max_total_steps,
-        max_job_seconds: args.max_job_seconds,
-        max_job_artifact_bytes: args.max_job_artifact_bytes,
+        max_job_seconds: args.jobs.max_job_seconds,
+        max_job_artifact_bytes: args.jobs.max_job_artifact_bytes,
         ..Limits::default()
     };
     if let Some(n) = args.workers {
@@ -124,9 +109,9 @@ pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
     // copy is scratch, removed once the job ends (else it would fill this machine's disk).
     config.workers.discard_local_artifacts = config.artifacts.is_some();
     config.workers.isolation = service::isolation_for(
-        args.isolation,
-        args.job_memory_limit,
-        args.job_cpu_seconds,
+        args.jobs.isolation,
+        args.jobs.job_memory_limit,
+        args.jobs.job_cpu_seconds,
         &config.limits,
         args.fake_runner_ms.map(Duration::from_millis),
     )?;

@@ -136,12 +136,6 @@ pub struct ServeArgs {
     /// Most JSON values in a request body, counted while reading (422 beyond).
     #[arg(long, default_value_t = Limits::default().max_json_values)]
     pub max_json_values: usize,
-    /// Wall-clock seconds one job may run before it is stopped and failed.
-    #[arg(long, default_value_t = Limits::default().max_job_seconds)]
-    pub max_job_seconds: u64,
-    /// Bytes of artifacts one job may write before it is stopped and failed.
-    #[arg(long, default_value_t = Limits::default().max_job_artifact_bytes)]
-    pub max_job_artifact_bytes: u64,
     /// Bytes of all jobs' artifacts under --data; submissions get 507 beyond.
     #[arg(long, default_value_t = Limits::default().max_artifact_bytes)]
     pub max_artifact_bytes: u64,
@@ -194,8 +188,25 @@ pub struct ServeArgs {
     /// embedded store's default).
     #[arg(long)]
     pub fanout_width: Option<usize>,
-    /// Where jobs run: `process` (a child process per job or search, with the limits below: a
-    /// crash or exhausted memory fails that job only) or `thread` (on the worker threads).
+    #[command(flatten)]
+    pub jobs: JobRunArgs,
+}
+
+/// The flags of how one job runs, shared by `ashlar serve` and `ashlar worker`
+/// (`#[command(flatten)]` in both): its time and artifact limits, where it runs, and its
+/// process's resource limits.
+#[derive(Debug, Clone, clap::Args)]
+pub struct JobRunArgs {
+    /// Wall-clock seconds one job (or one run of a fanned-out search) may run before it is
+    /// stopped and failed (the process that runs it enforces it).
+    #[arg(long, default_value_t = Limits::default().max_job_seconds)]
+    pub max_job_seconds: u64,
+    /// Bytes of artifacts one job may write before it is stopped and failed.
+    #[arg(long, default_value_t = Limits::default().max_job_artifact_bytes)]
+    pub max_job_artifact_bytes: u64,
+    /// Where jobs run: `process` (a child process per job and per run of a fanned-out search,
+    /// with the limits below: a crash or exhausted memory fails that job only, never the
+    /// process that runs it) or `thread` (on the worker threads).
     #[arg(long, value_enum, default_value_t = IsolationFlag::default())]
     pub isolation: IsolationFlag,
     /// Address space of a job's process (RLIMIT_AS), bytes or with K/M/G; 0: no limit.
@@ -262,8 +273,8 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), ServeError> {
         max_block_frames: args.max_block_frames,
         max_search_block_steps: args.max_search_block_steps,
         max_json_values: args.max_json_values,
-        max_job_seconds: args.max_job_seconds,
-        max_job_artifact_bytes: args.max_job_artifact_bytes,
+        max_job_seconds: args.jobs.max_job_seconds,
+        max_job_artifact_bytes: args.jobs.max_job_artifact_bytes,
         max_artifact_bytes: args.max_artifact_bytes,
         retain_finished: args.retain_finished,
         ..Limits::default()
@@ -386,9 +397,9 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), ServeError> {
 /// The isolation a `serve` command line asks for.
 fn isolation(args: &ServeArgs, limits: &Limits) -> Result<runner::Isolation, ServeError> {
     isolation_for(
-        args.isolation,
-        args.job_memory_limit,
-        args.job_cpu_seconds,
+        args.jobs.isolation,
+        args.jobs.job_memory_limit,
+        args.jobs.job_cpu_seconds,
         limits,
         args.fake_runner.then(|| Duration::from_millis(200)),
     )
