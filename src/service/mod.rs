@@ -58,6 +58,9 @@ pub struct ServiceConfig {
     /// Shared artifact storage URL (see [`artifacts::ArtifactStore::open`]).
     pub artifacts: Option<String>,
     pub lease: store::postgres::LeaseParams,
+    /// This process takes submissions (`ashlar serve`): on a PostgreSQL store it publishes its
+    /// limits as the API's, which workers compare theirs with.
+    pub api: bool,
 }
 
 impl ServiceConfig {
@@ -70,6 +73,7 @@ impl ServiceConfig {
             postgres: None,
             artifacts: None,
             lease: store::postgres::LeaseParams::default(),
+            api: false,
         }
     }
 }
@@ -98,6 +102,7 @@ pub struct Service {
     pool: worker::Pool,
     cluster: Option<worker::cluster::ClusterThreads>,
     sweeper: Option<retention::Sweeper>,
+    cache_sweeper: Option<retention::CacheSweeper>,
 }
 
 impl Service {
@@ -141,6 +146,7 @@ impl Service {
                 "recovered jobs left running by a previous server"
             );
         }
+        let api = config.api;
         let mut core = worker::Core::new(
             store,
             config.data_dir,
@@ -159,7 +165,7 @@ impl Service {
         let core = Arc::new(core);
         let cluster = match pg {
             Some(pg) => Some(
-                worker::cluster::ClusterThreads::start(core.clone(), pg)
+                worker::cluster::ClusterThreads::start(core.clone(), pg, api)
                     .map_err(StartError::Component)?,
             ),
             None => None,
@@ -171,11 +177,19 @@ impl Service {
             .map(|keep| retention::Sweeper::start(core.clone(), keep))
             .transpose()
             .map_err(StartError::Component)?;
+        // With shared artifact storage, cached copies of jobs deleted elsewhere are removed.
+        let cache_sweeper = core
+            .artifacts
+            .is_some()
+            .then(|| retention::CacheSweeper::start(core.clone(), retention::CACHE_SWEEP_EVERY))
+            .transpose()
+            .map_err(StartError::Component)?;
         Ok(Self {
             state: AppState { core },
             pool,
             cluster,
             sweeper,
+            cache_sweeper,
         })
     }
 
@@ -186,6 +200,9 @@ impl Service {
     /// Stop gracefully (see [`worker::Pool::shutdown`]); returns how many jobs were requeued.
     pub fn shutdown(self, grace: Duration) -> usize {
         if let Some(s) = self.sweeper {
+            s.stop();
+        }
+        if let Some(s) = self.cache_sweeper {
             s.stop();
         }
         let n = self.pool.shutdown(grace);
