@@ -60,6 +60,9 @@ pub struct ServiceConfig {
     /// Shared artifact storage URL (see [`artifacts::ArtifactStore::open`]).
     pub artifacts: Option<String>,
     pub lease: store::postgres::LeaseParams,
+    /// This process takes submissions (`ashlar serve`): on a PostgreSQL store it publishes its
+    /// limits as the API's, which workers compare theirs with.
+    pub api: bool,
 }
 
 impl ServiceConfig {
@@ -72,6 +75,7 @@ impl ServiceConfig {
             postgres: None,
             artifacts: None,
             lease: store::postgres::LeaseParams::default(),
+            api: false,
         }
     }
 }
@@ -100,6 +104,7 @@ pub struct Service {
     pool: worker::Pool,
     cluster: Option<worker::cluster::ClusterThreads>,
     sweeper: Option<retention::Sweeper>,
+    cache_sweeper: Option<retention::CacheSweeper>,
 }
 
 impl Service {
@@ -143,6 +148,7 @@ impl Service {
                 "recovered jobs left running by a previous server"
             );
         }
+        let api = config.api;
         let mut core = worker::Core::new(
             store,
             config.data_dir,
@@ -161,7 +167,7 @@ impl Service {
         let core = Arc::new(core);
         let cluster = match pg {
             Some(pg) => Some(
-                worker::cluster::ClusterThreads::start(core.clone(), pg)
+                worker::cluster::ClusterThreads::start(core.clone(), pg, api)
                     .map_err(StartError::Component)?,
             ),
             None => None,
@@ -173,11 +179,19 @@ impl Service {
             .map(|keep| retention::Sweeper::start(core.clone(), keep))
             .transpose()
             .map_err(StartError::Component)?;
+        // With shared artifact storage, cached copies of jobs deleted elsewhere are removed.
+        let cache_sweeper = core
+            .artifacts
+            .is_some()
+            .then(|| retention::CacheSweeper::start(core.clone(), retention::CACHE_SWEEP_EVERY))
+            .transpose()
+            .map_err(StartError::Component)?;
         Ok(Self {
             state: AppState { core },
             pool,
             cluster,
             sweeper,
+            cache_sweeper,
         })
     }
 
@@ -188,6 +202,9 @@ impl Service {
     /// Stop gracefully (see [`worker::Pool::shutdown`]); returns how many jobs were requeued.
     pub fn shutdown(self, grace: Duration) -> usize {
         if let Some(s) = self.sweeper {
+            s.stop();
+        }
+        if let Some(s) = self.cache_sweeper {
             s.stop();
         }
         let n = self.pool.shutdown(grace);

@@ -122,6 +122,86 @@ impl Sweeper {
     }
 }
 
+/// How often a process with shared `--artifacts` storage looks for cached copies of deleted
+/// jobs: a job deleted through another API process (or by its sweeper) leaves this process's
+/// cached copy behind, which this sweep removes. Serving never depends on it: every download
+/// route loads the job from the store first, so a deleted job already answers 404 here.
+pub const CACHE_SWEEP_EVERY: Duration = Duration::from_secs(60);
+
+/// Remove the local directories (`--data/jobs/<uuid>/`) of jobs the store no longer has:
+/// another process's `DELETE`, or its retention sweeper, removed the job and its published
+/// files but could not reach this process's cached copy. Returns how many went. A directory
+/// whose job the store cannot be asked about is kept.
+pub fn sweep_cache(core: &Core) -> usize {
+    let Ok(entries) = std::fs::read_dir(core.data_dir.join("jobs")) else {
+        return 0;
+    };
+    let mut removed = 0;
+    for e in entries.flatten() {
+        let Some(id) = e
+            .file_name()
+            .to_str()
+            .and_then(|n| uuid::Uuid::try_parse(n).ok())
+        else {
+            continue;
+        };
+        match core.store.get(id) {
+            Ok(None) => {
+                let dir = e.path();
+                match std::fs::remove_dir_all(&dir) {
+                    Ok(()) => removed += 1,
+                    Err(err) if err.kind() == std::io::ErrorKind::NotFound => {}
+                    Err(err) => {
+                        tracing::warn!(dir = %dir.display(), error = %err, "removing a deleted job's cached artifacts")
+                    }
+                }
+            }
+            Ok(Some(_)) => {}
+            Err(err) => {
+                tracing::warn!(error = %err, "cache sweep: looking up a job");
+                return removed;
+            }
+        }
+    }
+    if removed > 0 {
+        core.forget_artifact_bytes();
+    }
+    removed
+}
+
+/// The cache sweeper thread of a process with shared `--artifacts` storage; stopped on
+/// shutdown.
+#[derive(Debug)]
+pub struct CacheSweeper {
+    stop: mpsc::Sender<()>,
+    thread: JoinHandle<()>,
+}
+
+impl CacheSweeper {
+    pub fn start(core: Arc<Core>, every: Duration) -> Result<Self, String> {
+        let (stop, rx) = mpsc::channel::<()>();
+        let thread = std::thread::Builder::new()
+            .name("ashlar-cache-sweep".into())
+            .spawn(move || loop {
+                match rx.recv_timeout(every) {
+                    Err(mpsc::RecvTimeoutError::Timeout) => {}
+                    _ => return,
+                }
+                let n = sweep_cache(&core);
+                if n > 0 {
+                    tracing::info!(removed = n, "removed cached artifacts of deleted jobs");
+                }
+            })
+            .map_err(|e| format!("starting the cache sweeper: {e}"))?;
+        Ok(Self { stop, thread })
+    }
+
+    pub fn stop(self) {
+        let _ = self.stop.send(());
+        let _ = self.thread.join();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

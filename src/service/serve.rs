@@ -260,6 +260,7 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), ServeError> {
         None => {}
     }
     config.artifacts = args.artifacts.clone();
+    config.api = true;
     config.lease = lease_params(args.lease).map_err(ServeError::Lease)?;
     config.limits = Limits {
         max_body_bytes: args.max_body_bytes,

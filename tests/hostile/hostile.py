@@ -10,6 +10,7 @@ import hashlib
 import hmac
 import json
 import os
+import resource
 import socket
 import subprocess
 import sys
@@ -32,7 +33,7 @@ def check(cond, what):
 
 
 class Server:
-    def __init__(self, *args, runner="real", env=None, data=None):
+    def __init__(self, *args, runner="real", env=None, data=None, nofile=None):
         self.dir = tempfile.mkdtemp(prefix="ashlar-hostile-")
         self.data_dir = data or os.path.join(self.dir, "data")
         cmd = [BIN, "serve", "--addr", "127.0.0.1:0", "--data", self.data_dir, *args]
@@ -40,7 +41,13 @@ class Server:
             cmd.append("--fake-runner")
         self.out = open(os.path.join(self.dir, "stdout"), "w+")
         self.err = open(os.path.join(self.dir, "stderr"), "w+")
-        self.proc = subprocess.Popen(cmd, stdout=self.out, stderr=self.err, env=dict(os.environ, **(env or {})))
+        def limit_fds():
+            # The machine: 1024 file descriptors for the server.
+            if nofile:
+                resource.setrlimit(resource.RLIMIT_NOFILE, (nofile, resource.getrlimit(resource.RLIMIT_NOFILE)[1]))
+
+        self.proc = subprocess.Popen(cmd, stdout=self.out, stderr=self.err, env=dict(os.environ, **(env or {})),
+                                     preexec_fn=limit_fds)
         self.addr = None
         for _ in range(400):
             self.out.seek(0)
@@ -400,8 +407,13 @@ def main():
     check(allow is None, f"a preflight from https://evil.example is not allowed ({allow})")
     origin_check.stop()
 
+    # The suite opens 1100 connections at once (the flood): its own descriptor limit
+    # must allow them; the server keeps the 1024.
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if soft < 4096 and (hard == resource.RLIM_INFINITY or hard >= 4096):
+        resource.setrlimit(resource.RLIMIT_NOFILE, (4096, hard))
     s = Server("--workers", "1", "--max-queued-jobs", "20", "--max-job-seconds", "5",
-               "--header-timeout", "2", "--body-timeout", "2", "--max-connections", "200")
+               "--header-timeout", "2", "--body-timeout", "2", "--max-connections", "200", nofile=1024)
     hz = Healthz(s)
     hz.start()
 
@@ -584,6 +596,36 @@ def main():
         check(st == 406, f"the same history as JSON: 406 pointing to CSV or ?every ({st})")
         st, h, b = call(s, "GET", f"/v1/jobs/{jid}/histories?every=1000")
         check(st == 200 and len(json.loads(b)["time"]) > 100, f"as JSON with ?every=1000: 200 ({st})")
+        # Eight clients ask at once for a 31 MB history as JSON (under the 32 MiB JSON ceiling):
+        # each answer is written from the numbers as it is sent, and at most two are built at
+        # once (before: 4.7 GB peak, each request holding text, numbers and a JSON tree).
+        other = wait_status(s, f"/v1/jobs/{queued[-2]}", {"succeeded"}, 300) if len(queued) > 1 else None
+        if other:
+            p31 = os.path.join(s.data(), "jobs", other["id"], "histories.csv")
+            with open(p31) as f:
+                lines = f.read().splitlines()
+            with open(p31, "w") as f:
+                f.write(lines[0] + "\n")
+                block = (lines[1] + "\n") * 10000
+                n = 0
+                while n < (31 << 20):
+                    f.write(block)
+                    n += len(block)
+            rows = n // len(lines[1] + "\n")
+            res = []
+            th = [threading.Thread(target=lambda: res.append(
+                call(s, "GET", f"/v1/jobs/{other['id']}/histories", timeout=300))) for _ in range(8)]
+            t = time.perf_counter()
+            for x in th:
+                x.start()
+            for x in th:
+                x.join()
+            ok = all(r[0] == 200 and len(json.loads(r[2])["time"]) == rows for r in res)
+            check(ok and len({r[2] for r in res}) == 1,
+                  f"8 concurrent JSON histories of a 31 MB CSV: 200, {rows} frames each, in "
+                  f"{time.perf_counter() - t:.1f} s; peak RSS now {s.hwm_mb():.0f} MB")
+        else:
+            check(False, "a second job to read histories from succeeded")
         print(f"info peak RSS after streaming: {s.hwm_mb():.0f} MB", flush=True)
     else:
         check(False, "a job to stream artifacts from succeeded")
@@ -593,16 +635,19 @@ def main():
     check(st == 408, f"a body that stops arriving: 408 after --body-timeout ({st})")
     hz.paused = True
     socks = []
-    for _ in range(600):
+    cut = 0  # connections the server closed at once (over --max-connections)
+    for _ in range(1100):
         try:
             c = socket.create_connection((s.host, s.port), timeout=5)
-            c.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Slow: ")
             socks.append(c)
+            c.sendall(b"GET /healthz HTTP/1.1\r\nHost: x\r\nX-Slow: ")
         except OSError:
-            break
+            cut += 1
     time.sleep(0.5)
     fds = s.fds()
-    check(fds < 200 + 60, f"600 half-sent requests: the server holds {fds} descriptors (limit 200 connections)")
+    check(len(socks) == 1100 and fds < 200 + 60,
+          f"{len(socks)} half-sent requests ({cut} cut at once; server limited to 1024 descriptors): "
+          f"it holds {fds} descriptors (limit 200 connections)")
     t = time.time()
     ok = False
     while time.time() - t < 15:
@@ -638,6 +683,35 @@ def main():
     check(j is not None and j["status"] == "failed" and "max-job-artifact-bytes" in (j.get("error") or ""),
           f"a job writing over --max-job-artifact-bytes fails with the limit named ({j and j.get('error')})")
     a.stop()
+
+    # --- 2. Shared artifact storage (--artifacts, as API processes of a cluster): a trajectory
+    # this process has not cached is downloaded to disk in chunks, once for concurrent readers
+    # (before: each request held the whole file in memory, 3.3 GB for these eight).
+    shared = tempfile.mkdtemp(prefix="ashlar-hostile-shared-")
+    c = Server("--workers", "1", "--artifacts", "file://" + shared, runner="fake")
+    st, _, b = call(c, "POST", "/v1/jobs", {"scene": column, "motion": pulse})
+    jid = json.loads(b)["id"] if st == 202 else "none"
+    if wait_status(c, f"/v1/jobs/{jid}", {"succeeded"}, 60):
+        import shutil
+        shutil.rmtree(os.path.join(c.data(), "jobs", jid), ignore_errors=True)  # not cached here
+        with open(os.path.join(shared, "jobs", jid, "trajectory.mcap"), "r+b") as f:
+            f.truncate(300 << 20)
+        rss0 = c.hwm_mb()
+        res = []
+        th = [threading.Thread(target=lambda: res.append(call(
+            c, "GET", f"/v1/jobs/{jid}/trajectory.mcap", headers={"Range": "bytes=0-99"}, timeout=300)))
+            for _ in range(8)]
+        for x in th:
+            x.start()
+        for x in th:
+            x.join()
+        hwm = c.hwm_mb()
+        check(all(r[0] == 206 and len(r[2]) == 100 for r in res) and hwm < RSS_BOUND_MB,
+              f"8 concurrent ranges of a 300 MB trajectory in shared storage, not cached: 206 × "
+              f"{sum(r[0] == 206 for r in res)}, peak RSS {rss0:.0f} → {hwm:.0f} MB (bound {RSS_BOUND_MB} MB)")
+    else:
+        check(False, "a job publishing to shared storage succeeded")
+    c.stop()
 
     isolation()
 

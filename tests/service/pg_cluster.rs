@@ -1339,3 +1339,88 @@ fn crashing_runs_and_search_runs_fail_alone_on_isolated_workers() {
     drop(api);
     std::fs::remove_dir_all(root).ok();
 }
+
+/// docs/cluster.md, "Limits": an API-only process (`--workers 0`) reports in `/v1/limits` the
+/// limits its workers apply, not its own flags (before: its own `--isolation process` and
+/// `--max-job-seconds` while the worker ran jobs in threads for 50 s at most), lists every
+/// distinct setting of the live workers, and a worker whose flags differ from the API's warns
+/// at start, naming each flag. A worker that stops takes its setting with it.
+#[test]
+fn an_api_only_process_reports_its_workers_limits() {
+    let Some(base) = base_url("an_api_only_process_reports_its_workers_limits") else {
+        return;
+    };
+    let url = fresh_db(&base, "limits");
+    let root = temp_dir("pg-limits");
+    let api = Server::start(
+        &root.join("api"),
+        &[
+            "--database",
+            &url,
+            "--workers",
+            "0",
+            "--lease",
+            "2",
+            "--isolation",
+            "process",
+            "--max-job-seconds",
+            "100",
+        ],
+    );
+    let alone = get_json(&api.addr, "/v1/limits");
+    assert_eq!(alone["isolation"], "process", "{alone}");
+    assert_eq!(alone["max_job_seconds"], 100, "{alone}");
+    assert_eq!(alone["worker_limits"], json!([]), "{alone}");
+    let w = Worker::start(
+        &url,
+        &root.join("w0"),
+        &[
+            "--workers",
+            "1",
+            "--lease",
+            "2",
+            "--isolation",
+            "thread",
+            "--max-job-seconds",
+            "50",
+        ],
+    );
+    let l = get_json(&api.addr, "/v1/limits");
+    assert_eq!(l["isolation"], "thread", "{l}");
+    assert_eq!(l["max_job_seconds"], 50, "{l}");
+    assert!(l["job_memory_limit_bytes"].is_null(), "{l}");
+    assert_eq!(
+        l["max_blocks"], alone["max_blocks"],
+        "submission limits stay the API's"
+    );
+    let sets = l["worker_limits"].as_array().expect("worker_limits");
+    assert_eq!(sets.len(), 1, "{l}");
+    assert_eq!(sets[0]["processes"], 1, "{l}");
+    assert_eq!(sets[0]["max_job_seconds"], 50, "{l}");
+    let log = std::fs::read_to_string(root.join("w0/worker.log")).expect("worker log");
+    assert!(
+        log.contains("--max-job-seconds 50 differs from the API process"),
+        "no warning about the differing flag: {log}"
+    );
+    assert!(
+        !log.contains("--max-blocks"),
+        "a flag that agrees was named: {log}"
+    );
+    // A second worker with other limits: both settings listed, the API's fields follow one.
+    let w2 = Worker::start(
+        &url,
+        &root.join("w1"),
+        &["--workers", "1", "--lease", "2", "--max-job-seconds", "100"],
+    );
+    let l = get_json(&api.addr, "/v1/limits");
+    assert_eq!(l["worker_limits"].as_array().map(Vec::len), Some(2), "{l}");
+    let log = std::fs::read_to_string(root.join("w1/worker.log")).expect("worker log");
+    assert!(!log.contains("differs from the API"), "flags agree: {log}");
+    assert!(w.terminate().success());
+    assert!(w2.terminate().success());
+    let back = get_json(&api.addr, "/v1/limits");
+    assert_eq!(back["worker_limits"], json!([]), "{back}");
+    assert_eq!(back["isolation"], "process", "{back}");
+    drop(api);
+    std::fs::remove_dir_all(root).ok();
+}

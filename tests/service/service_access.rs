@@ -500,3 +500,92 @@ async fn deleting_a_job_removes_its_published_artifacts() {
     svc.shutdown(Duration::from_secs(5));
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// Two API processes on one store and one shared artifact storage (here two services on one
+/// SQLite file, as two `ashlar serve --workers 0` on PostgreSQL): a job deleted through one
+/// answers 404 through the other at once (every download loads the job first), and the other's
+/// cached copy is removed by its cache sweep (before: it stayed in its `--data` for ever).
+#[tokio::test]
+async fn a_job_deleted_through_one_api_process_leaves_no_cached_copy_in_another() {
+    let dir = temp_dir("access-two-apis");
+    let shared = format!("file://{}", dir.join("shared").display());
+    let config = |data: &str, workers: usize| {
+        let mut cfg = ServiceConfig::new(dir.join(data));
+        cfg.database = Some(dir.join("jobs.sqlite"));
+        cfg.artifacts = Some(shared.clone());
+        cfg.workers = WorkerParams {
+            workers,
+            idle_poll: Duration::from_millis(50),
+            discard_local_artifacts: true,
+            ..WorkerParams::default()
+        };
+        cfg
+    };
+    // Both started before any job exists: a starting embedded store requeues running jobs.
+    let a = Service::start(config("a", 1), fake_runner(Duration::from_millis(1))).expect("a");
+    let b = Service::start(config("b", 0), fake_runner(Duration::from_millis(1))).expect("b");
+    let (app_a, app_b) = (app(a.state()), app(b.state()));
+    let r = call(
+        &app_a,
+        post_json(
+            "/v1/jobs",
+            &json!({"scene": column_scene(1.0), "motion": pulse(3.0)}),
+        ),
+    )
+    .await;
+    assert_eq!(r.status, 202, "{}", r.text());
+    let id = r.json()["id"].as_str().expect("id").to_string();
+    let j = wait_for(
+        &app_a,
+        &format!("/v1/jobs/{id}"),
+        Duration::from_secs(30),
+        is_terminal,
+    )
+    .await;
+    assert_eq!(j["status"], "succeeded", "{j}");
+    // B serves the trajectory from the shared storage and keeps a copy.
+    let r = call(&app_b, get(&format!("/v1/jobs/{id}/trajectory.mcap"))).await;
+    assert_eq!(r.status, 200, "{}", r.text());
+    let cached = dir.join("b/jobs").join(&id);
+    assert!(cached.join("trajectory.mcap").is_file(), "B did not cache");
+    let delete = Request::builder()
+        .method("DELETE")
+        .uri(format!("/v1/jobs/{id}"))
+        .body(Body::empty())
+        .expect("request");
+    assert_eq!(call(&app_a, delete).await.status, 204);
+    // B never serves its stale copy...
+    for tail in ["/trajectory.mcap", "/histories", ""] {
+        let r = call(&app_b, get(&format!("/v1/jobs/{id}{tail}"))).await;
+        assert_eq!(r.status, 404, "{tail}: {}", r.text());
+    }
+    // ...and its cache sweep removes it, keeping the directories of jobs that exist.
+    let r = call(
+        &app_a,
+        post_json(
+            "/v1/jobs",
+            &json!({"scene": column_scene(1.0), "motion": pulse(3.0)}),
+        ),
+    )
+    .await;
+    let live = r.json()["id"].as_str().expect("id").to_string();
+    let live_dir = dir.join("b/jobs").join(&live);
+    std::fs::create_dir_all(&live_dir).expect("dir");
+    std::fs::create_dir_all(dir.join("b/jobs/not-a-job")).expect("dir");
+    assert!(cached.is_dir(), "the copy is still there before the sweep");
+    let core = b.state().core;
+    let removed =
+        tokio::task::spawn_blocking(move || ashlar::service::retention::sweep_cache(&core))
+            .await
+            .expect("sweep");
+    assert_eq!(removed, 1);
+    assert!(!cached.exists(), "B's cached copy of the deleted job stays");
+    assert!(live_dir.is_dir(), "a live job's directory was removed");
+    assert!(
+        dir.join("b/jobs/not-a-job").is_dir(),
+        "a foreign directory was removed"
+    );
+    a.shutdown(Duration::from_secs(5));
+    b.shutdown(Duration::from_secs(5));
+    std::fs::remove_dir_all(dir).ok();
+}

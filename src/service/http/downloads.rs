@@ -174,33 +174,36 @@ pub(super) async fn get_histories(
                      (after ?every=N). Ask for format=csv (streamed), a larger ?every, or fewer ?block="
                 )));
             }
-            let mut text = header.clone();
-            let mut lines = reader.lines();
-            let mut row = 0u64;
-            while let Some(line) = lines
-                .next_line()
-                .await
-                .map_err(|e| ApiError::internal(format!("{}: {e}", path.display())))?
-            {
-                if line.trim().is_empty() {
-                    continue;
-                }
-                if row % every == 0 {
-                    text.push_str(&line);
-                    text.push('\n');
-                }
-                row += 1;
-            }
-            let json = blocking(move || {
-                let h = Histories::parse_csv(&text)?;
-                let h = h
-                    .select(&blocks)
-                    .map_err(|b| format!("block {b:?} vanished"))?;
-                Ok::<_, String>(h.to_json())
-            })
-            .await?
-            .map_err(ApiError::internal)?;
-            Ok(axum::Json(json).into_response())
+            // At most JSON_BUILDS at once: a JSON answer holds its kept rows as text (the
+            // selected fields only, at most about 32 MiB) plus one offset a row while it is
+            // written, so concurrent requests for large histories wait instead of adding up
+            // (eight 31 MB histories at once took 4.7 GB when each built its text, a parsed
+            // copy and a JSON tree, and 381 MB with two at once holding parsed numbers).
+            let _permit = json_builds().acquire().await.map_err(ApiError::internal)?;
+            // The rows the reader already buffered after the header, then the rest of the file.
+            let buffered = reader.buffer().to_vec();
+            let rest = reader.into_inner().into_std().await;
+            let reader = std::io::Read::chain(std::io::Cursor::new(buffered), rest);
+            // Blocks in file order: the fields of each kept row are then read left to right.
+            selected.sort_unstable();
+            let cols = selected.clone();
+            let capacity = usize::try_from(size / every)
+                .unwrap_or(usize::MAX)
+                .min(MAX_JSON_HISTORY_BYTES as usize)
+                + CHUNK;
+            let rows = blocking(move || KeptRows::read(reader, &cols, every, capacity))
+                .await?
+                .map_err(ApiError::internal)?;
+            let names: Vec<String> = selected.iter().map(|&k| ids[k].clone()).collect();
+            let mut r = Body::from_stream(futures_util::stream::iter(
+                json_chunks(names, rows).map(Ok::<_, std::io::Error>),
+            ))
+            .into_response();
+            r.headers_mut().insert(
+                header::CONTENT_TYPE,
+                HeaderValue::from_static("application/json"),
+            );
+            Ok(r)
         }
         HistoryFormat::Csv => {
             let mut first =
@@ -266,6 +269,145 @@ pub(super) async fn get_histories(
             Ok(r)
         }
     }
+}
+
+/// JSON histories built at once (see `get_histories`).
+const JSON_BUILDS: usize = 2;
+
+fn json_builds() -> &'static tokio::sync::Semaphore {
+    static S: std::sync::OnceLock<tokio::sync::Semaphore> = std::sync::OnceLock::new();
+    S.get_or_init(|| tokio::sync::Semaphore::new(JSON_BUILDS))
+}
+
+/// The kept rows of a history, for its JSON form: each row's time and the `x, y, rotation`
+/// fields of the selected blocks, as the CSV's text (`t,x,y,r,…\n`), and where each row's next
+/// unread field starts. Columns are then written one after the other, each row's offset moving
+/// one field right per column: memory is the kept text plus 4 bytes a row.
+struct KeptRows {
+    text: String,
+    next: Vec<u32>,
+}
+
+impl KeptRows {
+    /// Read every `every`-th row of `reader` (positioned after the header line), keeping the
+    /// fields of the blocks at `selected` (header indices, increasing). Every kept field must be
+    /// a number (the file is ours: an error names the line, as an internal error).
+    fn read(
+        reader: impl std::io::Read,
+        selected: &[usize],
+        every: u64,
+        capacity: usize,
+    ) -> Result<Self, String> {
+        use std::io::BufRead;
+        let wanted: Vec<usize> = std::iter::once(0)
+            .chain(selected.iter().flat_map(|&k| 1 + 3 * k..4 + 3 * k))
+            .collect();
+        let mut text = String::with_capacity(capacity);
+        let mut next = Vec::new();
+        let mut row = 0u64;
+        for (n, line) in std::io::BufReader::with_capacity(CHUNK, reader)
+            .lines()
+            .enumerate()
+        {
+            let line = line.map_err(|e| format!("histories.csv line {}: {e}", n + 2))?;
+            if line.trim().is_empty() {
+                continue;
+            }
+            let keep = row % every == 0;
+            row += 1;
+            if !keep {
+                continue;
+            }
+            let start = u32::try_from(text.len())
+                .map_err(|_| "the kept histories exceed 4 GiB".to_string())?;
+            next.push(start);
+            let mut fields = line.split(',').enumerate();
+            for (i, &k) in wanted.iter().enumerate() {
+                let v = fields
+                    .find(|(j, _)| *j == k)
+                    .map(|(_, v)| v.trim())
+                    .filter(|v| v.parse::<f64>().is_ok())
+                    .ok_or_else(|| {
+                        format!("histories.csv line {}: column {} unreadable", n + 2, k + 1)
+                    })?;
+                if i > 0 {
+                    text.push(',');
+                }
+                text.push_str(v);
+            }
+            text.push('\n');
+        }
+        Ok(Self { text, next })
+    }
+
+    /// The next field of row `r` as a number, moving the row's offset past it.
+    fn take(&mut self, r: usize) -> f64 {
+        let start = self.next[r] as usize;
+        let rest = &self.text[start..];
+        let len = rest.find([',', '\n']).unwrap_or(rest.len());
+        // +1: past the separator.
+        self.next[r] = u32::try_from(start + len + 1).unwrap_or(u32::MAX);
+        rest[..len].parse().unwrap_or(f64::NAN)
+    }
+}
+
+/// The JSON form of the histories (`{"time": […], "blocks": {"id": {"x": […], "y": […],
+/// "rotation": […]}}, "units": {…}}`, the same object as `Histories::to_json`, blocks in file
+/// order) as a sequence of chunks of about [`CHUNK`] bytes, written from the kept rows as the
+/// body is sent. `names`: the kept blocks, in the order of their fields.
+fn json_chunks(names: Vec<String>, mut rows: KeptRows) -> impl Iterator<Item = Bytes> {
+    // The text before each column; the columns follow the rows' fields left to right.
+    let mut prefixes: Vec<String> = vec!["{\"time\":[".to_string()];
+    for (i, name) in names.iter().enumerate() {
+        let key = serde_json::to_string(name).unwrap_or_default();
+        let open = if i == 0 { "],\"blocks\":{" } else { "]}," };
+        prefixes.push(format!("{open}{key}:{{\"x\":["));
+        prefixes.push("],\"y\":[".to_string());
+        prefixes.push("],\"rotation\":[".to_string());
+    }
+    let tail = if names.is_empty() {
+        "],\"blocks\":{},\"units\":"
+    } else {
+        "]}},\"units\":"
+    };
+    let tail = format!("{tail}{{\"time\":\"s\",\"x\":\"m\",\"y\":\"m\",\"rotation\":\"rad\"}}}}");
+    let n_rows = rows.next.len();
+    let mut prefixes = prefixes.into_iter();
+    // Inside a column: the next row to write.
+    let mut at: Option<usize> = None;
+    let mut finished = false;
+    std::iter::from_fn(move || {
+        if finished {
+            return None;
+        }
+        let mut out: Vec<u8> = Vec::with_capacity(CHUNK + 64);
+        while out.len() < CHUNK {
+            match at {
+                Some(r) if r < n_rows => {
+                    if r > 0 {
+                        out.push(b',');
+                    }
+                    // Printed as `Histories::to_json` prints it (serde_json's shortest form).
+                    if serde_json::to_writer(&mut out, &rows.take(r)).is_err() {
+                        out.extend_from_slice(b"null");
+                    }
+                    at = Some(r + 1);
+                }
+                _ => match prefixes.next() {
+                    Some(prefix) => {
+                        out.extend_from_slice(prefix.as_bytes());
+                        at = Some(0);
+                    }
+                    None => {
+                        out.extend_from_slice(tail.as_bytes());
+                        finished = true;
+                        break;
+                    }
+                },
+            }
+        }
+        Some(Bytes::from(out))
+    })
 }
 
 /// `len` bytes of `file` from `start`, read and sent in chunks of [`CHUNK`]: memory stays
@@ -419,6 +561,73 @@ pub(super) async fn ensure_local(core: &Core, id: Uuid, name: &str) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The streamed JSON equals `Histories::to_json` of the same selection (several blocks,
+    /// not in id order, over many chunks), also with `every`.
+    #[test]
+    fn json_histories_are_written_as_to_json_builds_them() {
+        let mut csv = String::from(
+            "time_s,zeta.x_m,zeta.y_m,zeta.rotation_rad,alpha.x_m,alpha.y_m,alpha.rotation_rad,m.id.x_m,m.id.y_m,m.id.rotation_rad\n",
+        );
+        for i in 0..5000 {
+            let t = f64::from(i) * 0.01;
+            csv.push_str(&format!(
+                "{t},{},{},{},{},{},{},0,0,{}\n",
+                t.sin() * 1e-3,
+                -t / 7.0,
+                1e-9 * t,
+                t.cos(),
+                3.0,
+                -0.25 * t,
+                0.1 / (1.0 + t)
+            ));
+        }
+        let rows = csv.split_once('\n').expect("header").1.to_string();
+        for (ask, every) in [
+            (vec!["m.id", "zeta"], 1u64),
+            (vec![], 3),
+            (vec!["alpha"], 7),
+        ] {
+            let ask: Vec<String> = ask.into_iter().map(String::from).collect();
+            let all = Histories::parse_csv(&csv).expect("parse");
+            let ids: Vec<String> = all.block_ids().map(String::from).collect();
+            let selected: Vec<usize> = if ask.is_empty() {
+                (0..ids.len()).collect()
+            } else {
+                ask.iter()
+                    .map(|a| ids.iter().position(|i| i == a).expect("id"))
+                    .collect()
+            };
+            let kept: String = csv
+                .lines()
+                .skip(1)
+                .step_by(usize::try_from(every).expect("small"))
+                .map(|l| format!("{l}\n"))
+                .collect();
+            let header = csv.lines().next().expect("header");
+            let want = Histories::parse_csv(&format!("{header}\n{kept}"))
+                .expect("parse")
+                .select(&ask)
+                .expect("select")
+                .to_json();
+            let mut selected = selected;
+            selected.sort_unstable();
+            let kept = KeptRows::read(std::io::Cursor::new(rows.clone()), &selected, every, 0)
+                .expect("read");
+            let names = selected.iter().map(|&k| ids[k].clone()).collect();
+            let chunks: Vec<Bytes> = json_chunks(names, kept).collect();
+            if every == 1 {
+                assert!(chunks.len() > 3, "{} chunks", chunks.len());
+            }
+            let got: Vec<u8> = chunks.concat();
+            let got: serde_json::Value = serde_json::from_slice(&got).expect("valid JSON");
+            // Both read back by the same parser from their text: serde_json's default float
+            // parser may be one ULP off, the same way for the same digits.
+            let want: serde_json::Value =
+                serde_json::from_slice(&serde_json::to_vec(&want).expect("text")).expect("JSON");
+            assert_eq!(got, want, "blocks {ask:?}, every {every}");
+        }
+    }
 
     #[test]
     fn byte_ranges() {

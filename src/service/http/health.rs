@@ -1,7 +1,7 @@
 //! HTTP layer: `GET /healthz` (answered from memory) and `GET /v1/limits` (what a client may
 //! send, and how this process runs jobs).
 use super::problem::ApiError;
-use super::state::{ApiResult, AppState};
+use super::state::{blocking, ApiResult, AppState};
 use super::Route;
 use crate::service::worker::Core;
 use axum::extract::State;
@@ -57,8 +57,55 @@ async fn get_limits(State(s): State<AppState>) -> ApiResult {
     });
     if let Some(o) = body.as_object_mut() {
         o.extend(process_limits(&s.core));
+        let store = s.core.store.clone();
+        let published = blocking(move || store.published_limits("worker"))
+            .await?
+            .unwrap_or_else(|e| {
+                tracing::warn!(error = %e, "reading the workers' published limits");
+                Vec::new()
+            });
+        let sets = worker_limit_sets(published);
+        // An API-only process runs no job: what a job gets is what its workers apply (the
+        // setting most of them share; `worker_limits` lists every one).
+        if s.core.params.workers == 0 {
+            if let Some(most) = sets.first() {
+                for k in [
+                    "isolation",
+                    "job_memory_limit_bytes",
+                    "job_cpu_seconds",
+                    "max_job_seconds",
+                    "max_job_artifact_bytes",
+                ] {
+                    if let Some(v) = most.get(k) {
+                        o.insert(k.into(), v.clone());
+                    }
+                }
+            }
+        }
+        o.insert("worker_limits".into(), Value::Array(sets));
     }
     Ok(axum::Json(body).into_response())
+}
+
+/// The distinct limit settings of a cluster's live workers (published `(process, JSON)`
+/// pairs), each with the number of worker processes applying it, the most common first.
+fn worker_limit_sets(published: Vec<(String, String)>) -> Vec<Value> {
+    let mut counts: std::collections::BTreeMap<String, u64> = Default::default();
+    for (_, text) in published {
+        *counts.entry(text).or_default() += 1;
+    }
+    let mut sets: Vec<(u64, Value)> = counts
+        .into_iter()
+        .filter_map(|(text, n)| match serde_json::from_str::<Value>(&text) {
+            Ok(Value::Object(mut m)) => {
+                m.insert("processes".into(), json!(n));
+                Some((n, Value::Object(m)))
+            }
+            _ => None,
+        })
+        .collect();
+    sets.sort_by(|a, b| b.0.cmp(&a.0));
+    sets.into_iter().map(|(_, v)| v).collect()
 }
 
 /// The limits of this process's job runs and of its request handling not in `Limits`: where

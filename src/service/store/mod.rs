@@ -278,6 +278,13 @@ pub trait JobStore: Send + Sync {
     /// cancelled).
     fn recover(&self, max_attempts: u32) -> Result<(usize, usize), StoreError>;
     fn counts(&self) -> Result<Counts, StoreError>;
+    /// The limits published by the live processes of a cluster in `role` (`api` or `worker`):
+    /// (process name, JSON object as text). None for the embedded store, whose one process
+    /// runs every job itself.
+    fn published_limits(&self, role: &str) -> Result<Vec<(String, String)>, StoreError> {
+        let _ = role;
+        Ok(Vec::new())
+    }
     /// The most recent jobs, newest first, at most `limit`, optionally of one kind, for the
     /// web page's queue (`GET /v1/jobs`). Their `request` is left out (`Null`): a record
     /// embedded in it can be megabytes, and a listing never needs it.

@@ -39,10 +39,14 @@ pub const MIGRATIONS: &[(i32, &str)] = &[
     (1, include_str!("../migrations/postgres/0001_jobs.sql")),
     (2, include_str!("../migrations/postgres/0002_leases.sql")),
     (3, include_str!("../migrations/postgres/0003_owner.sql")),
+    (
+        4,
+        include_str!("../migrations/postgres/0004_process_limits.sql"),
+    ),
 ];
 
 /// The schema version this binary works with.
-pub const SCHEMA_VERSION: i32 = 3;
+pub const SCHEMA_VERSION: i32 = 4;
 
 /// Advisory-lock key serialising migrations of concurrently starting processes ("ashlar" in ASCII).
 const MIGRATION_LOCK: i64 = 0x61_73_68_6c_61_72;
@@ -239,6 +243,30 @@ impl PgStore {
         if let Ok(mut t) = self.tokens.lock() {
             t.remove(&id);
         }
+    }
+
+    /// Record (or refresh) the limits this process enforces in `role` (`api` or `worker`),
+    /// a JSON object as text, under its name (`host:pid`).
+    pub fn publish_limits(&self, role: &str, limits: &str) -> Result<(), StoreError> {
+        self.with(|c| {
+            c.execute(
+                "INSERT INTO process_limits (process, role, limits) VALUES ($1, $2, $3)
+                 ON CONFLICT (process, role) DO UPDATE SET limits = $3, seen_at = now()",
+                &[&self.worker_name(), &role, &limits],
+            )?;
+            Ok(())
+        })
+    }
+
+    /// Remove this process's published limits (a clean stop).
+    pub fn withdraw_limits(&self) -> Result<(), StoreError> {
+        self.with(|c| {
+            c.execute(
+                "DELETE FROM process_limits WHERE process = $1",
+                &[&self.worker_name()],
+            )?;
+            Ok(())
+        })
     }
 
     /// The installed schema version (0 when none).
@@ -802,6 +830,22 @@ impl JobStore for PgStore {
         self.with(|c| {
             let sql = format!("SELECT {COLUMNS} FROM jobs WHERE parent = $1 ORDER BY seq");
             c.query(&sql, &[&id])?.iter().map(row_to_record).collect()
+        })
+    }
+
+    fn published_limits(&self, role: &str) -> Result<Vec<(String, String)>, StoreError> {
+        // Refreshed every lease/2: a process unseen for three leases is gone.
+        let fresh = self.lease_params().lease.as_secs_f64() * 3.0;
+        self.with(|c| {
+            let rows = c.query(
+                "SELECT process, limits FROM process_limits
+                 WHERE role = $1 AND seen_at > now() - make_interval(secs => $2)
+                 ORDER BY process",
+                &[&role, &fresh],
+            )?;
+            rows.iter()
+                .map(|r| Ok((r.try_get(0)?, r.try_get(1)?)))
+                .collect()
         })
     }
 

@@ -202,7 +202,8 @@ impl ArtifactStore {
         Ok(())
     }
 
-    /// Download one artifact, None when absent.
+    /// Download one artifact whole into memory, None when absent. For small files and tests:
+    /// serving goes through [`ArtifactStore::ensure_local`], which streams to disk.
     pub async fn fetch(&self, id: Uuid, name: &str) -> Result<Option<bytes::Bytes>, String> {
         let loc = self.location(id, name);
         let store = self.store.clone();
@@ -217,6 +218,41 @@ impl ArtifactStore {
         task.await
             .map_err(|e| format!("artifact fetch task: {e}"))?
             .map_err(|e| format!("{}: {e}", self.url))
+    }
+
+    /// Download one artifact into the file `to`, chunk by chunk as the store hands them over:
+    /// memory stays one chunk whatever the artifact's size (a 300 MB trajectory asked for by
+    /// eight clients at once must not cost 2.4 GB). `Ok(false)` when absent.
+    pub async fn fetch_to(&self, id: Uuid, name: &str, to: &Path) -> Result<bool, String> {
+        let loc = self.location(id, name);
+        let store = self.store.clone();
+        let to = to.to_path_buf();
+        let url = self.url.clone();
+        let task = runtime()?.spawn(async move {
+            use futures_util::StreamExt;
+            use tokio::io::AsyncWriteExt;
+            let got = match store.get(&loc).await {
+                Ok(r) => r,
+                Err(object_store::Error::NotFound { .. }) => return Ok(false),
+                Err(e) => return Err(format!("{url}: {e}")),
+            };
+            let mut file = tokio::fs::File::create(&to)
+                .await
+                .map_err(|e| format!("{}: {e}", to.display()))?;
+            let mut chunks = got.into_stream();
+            while let Some(chunk) = chunks.next().await {
+                let chunk = chunk.map_err(|e| format!("{url}: {e}"))?;
+                file.write_all(&chunk)
+                    .await
+                    .map_err(|e| format!("{}: {e}", to.display()))?;
+            }
+            file.flush()
+                .await
+                .map_err(|e| format!("{}: {e}", to.display()))?;
+            Ok(true)
+        });
+        task.await
+            .map_err(|e| format!("artifact fetch task: {e}"))?
     }
 }
 
@@ -244,30 +280,68 @@ fn s3_options(shown: &str, query: Vec<(String, String)>) -> Result<Vec<(String, 
 
 impl ArtifactStore {
     /// Make sure `dir/<name>` (the job `id`'s local directory) exists, downloading it from this
-    /// store when this process did not run the job. Errors are logged; the caller then answers
+    /// store when this process did not run the job. Streamed to disk (see
+    /// [`ArtifactStore::fetch_to`]); concurrent requests for the same file wait for one
+    /// download instead of each starting its own. Errors are logged; the caller then answers
     /// as if the artifact were missing.
     pub async fn ensure_local(&self, id: Uuid, dir: &Path, name: &str) {
         let path = dir.join(name);
         if tokio::fs::try_exists(&path).await.unwrap_or(false) {
             return;
         }
-        match self.fetch(id, name).await {
-            Ok(Some(bytes)) => {
-                // Written under a temporary name then renamed: a concurrent reader never sees half.
-                let tmp = dir.join(format!(".{name}.{}", Uuid::new_v4().simple()));
-                let res = async {
-                    tokio::fs::create_dir_all(dir).await?;
-                    tokio::fs::write(&tmp, &bytes).await?;
-                    tokio::fs::rename(&tmp, &path).await
-                }
-                .await;
-                if let Err(e) = res {
+        let gate = download_gate(id, name);
+        {
+            let _one_at_a_time = gate.lock().await;
+            // Another request may have downloaded it meanwhile.
+            if !tokio::fs::try_exists(&path).await.unwrap_or(false) {
+                self.download(id, dir, name).await;
+            }
+        }
+        release_gate(id, name, gate);
+    }
+
+    /// Download `name` into `dir` under a temporary name, then rename it into place: a
+    /// concurrent reader never sees half a file.
+    async fn download(&self, id: Uuid, dir: &Path, name: &str) {
+        let path = dir.join(name);
+        let tmp = dir.join(format!(".{name}.{}", Uuid::new_v4().simple()));
+        if let Err(e) = tokio::fs::create_dir_all(dir).await {
+            tracing::error!(dir = %dir.display(), error = %e, "caching an artifact");
+            return;
+        }
+        match self.fetch_to(id, name, &tmp).await {
+            Ok(true) => {
+                if let Err(e) = tokio::fs::rename(&tmp, &path).await {
                     tracing::error!(path = %path.display(), error = %e, "caching an artifact");
                 }
             }
-            Ok(None) => {}
+            Ok(false) => {}
             Err(e) => tracing::error!(error = %e, "fetching an artifact"),
         }
+        let _ = tokio::fs::remove_file(&tmp).await;
+    }
+}
+
+/// One async lock per artifact being downloaded (see [`ArtifactStore::ensure_local`]).
+type Gates =
+    std::sync::Mutex<std::collections::HashMap<(Uuid, String), Arc<tokio::sync::Mutex<()>>>>;
+
+fn gates() -> &'static Gates {
+    static GATES: OnceLock<Gates> = OnceLock::new();
+    GATES.get_or_init(Default::default)
+}
+
+fn download_gate(id: Uuid, name: &str) -> Arc<tokio::sync::Mutex<()>> {
+    let mut g = gates().lock().unwrap_or_else(|p| p.into_inner());
+    g.entry((id, name.to_string())).or_default().clone()
+}
+
+/// Drop the gate once nobody else holds or waits on it (the map keeps no entry per download).
+fn release_gate(id: Uuid, name: &str, gate: Arc<tokio::sync::Mutex<()>>) {
+    let mut g = gates().lock().unwrap_or_else(|p| p.into_inner());
+    // Ours and the map's: nobody else waits.
+    if Arc::strong_count(&gate) <= 2 {
+        g.remove(&(id, name.to_string()));
     }
 }
 

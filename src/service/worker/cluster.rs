@@ -19,8 +19,16 @@ pub struct ClusterThreads {
 }
 
 impl ClusterThreads {
-    /// Start both threads for `core`, whose store is `store`.
-    pub fn start(core: Arc<Core>, store: Arc<PgStore>) -> Result<Self, String> {
+    /// Start both threads for `core`, whose store is `store`; `api`: this process takes
+    /// submissions (`ashlar serve`). First publishes the limits this process enforces (see
+    /// [`publish`]) and, in a worker, warns about each that differs from the API's.
+    pub fn start(core: Arc<Core>, store: Arc<PgStore>, api: bool) -> Result<Self, String> {
+        let roles = publish(&core, &store, api);
+        if roles.contains(&"worker") && !api {
+            for line in differences_from_api(&core, &store) {
+                tracing::warn!("{line}");
+            }
+        }
         let stop = Arc::new(AtomicBool::new(false));
         let mut handles = Vec::new();
         {
@@ -37,7 +45,12 @@ impl ClusterThreads {
             handles.push(
                 std::thread::Builder::new()
                     .name("ashlar-lease".into())
-                    .spawn(move || keeper_loop(&core, &store, &stop2))
+                    .spawn(move || {
+                        keeper_loop(&core, &store, &stop2, &roles);
+                        if let Err(e) = store.withdraw_limits() {
+                            tracing::warn!(error = %e, "withdrawing this process's limits");
+                        }
+                    })
                     .map_err(|e| format!("starting the lease thread: {e}"))?,
             );
         }
@@ -93,7 +106,7 @@ fn listen_loop(core: &Core, store: &PgStore, stop: &AtomicBool) {
     }
 }
 
-fn keeper_loop(core: &Core, store: &PgStore, stop: &AtomicBool) {
+fn keeper_loop(core: &Core, store: &PgStore, stop: &AtomicBool, roles: &[&str]) {
     let p = store.lease_params().clone();
     let mut next_beat = Instant::now() + p.heartbeat;
     let mut next_reap = Instant::now();
@@ -120,7 +133,92 @@ fn keeper_loop(core: &Core, store: &PgStore, stop: &AtomicBool) {
             if let Err(e) = store.recover(core.params.max_attempts) {
                 tracing::warn!(error = %e, "reaping expired leases failed");
             }
+            let limits = job_limits(core).to_string();
+            for role in roles {
+                if let Err(e) = store.publish_limits(role, &limits) {
+                    tracing::warn!(error = %e, "refreshing this process's published limits");
+                }
+            }
         }
         std::thread::sleep(Duration::from_millis(100).min(p.heartbeat));
     }
+}
+
+/// The limits a process applies to the jobs it runs and checks at submission (its `--isolation`,
+/// `--job-memory-limit`, `--job-cpu-seconds`, `--max-job-seconds`, `--max-job-artifact-bytes`,
+/// `--max-blocks`, `--max-record-samples`, `--max-total-steps`), as published in the store and
+/// reported by `GET /v1/limits`.
+pub fn job_limits(core: &Core) -> serde_json::Value {
+    use super::runner::Isolation;
+    let (mode, memory, cpu) = match &core.params.isolation {
+        Isolation::Thread => ("thread", None, None),
+        Isolation::Process(p) => ("process", Some(p.memory_limit), Some(p.cpu_seconds)),
+    };
+    let l = &core.limits;
+    serde_json::json!({
+        "isolation": mode,
+        "job_memory_limit_bytes": memory,
+        "job_cpu_seconds": cpu,
+        "max_job_seconds": l.max_job_seconds,
+        "max_job_artifact_bytes": l.max_job_artifact_bytes,
+        "max_blocks": l.max_blocks,
+        "max_record_samples": l.max_record_samples,
+        "max_total_steps": l.max_total_steps,
+    })
+}
+
+/// Publish this process's limits in the roles it has (`worker` when it runs jobs, `api` when
+/// it takes submissions); returns the roles. A failure is logged: reporting must not stop a
+/// process that can serve.
+fn publish(core: &Core, store: &PgStore, api: bool) -> Vec<&'static str> {
+    let mut roles = Vec::new();
+    if core.params.workers > 0 {
+        roles.push("worker");
+    }
+    if api {
+        roles.push("api");
+    }
+    let limits = job_limits(core).to_string();
+    for role in &roles {
+        if let Err(e) = store.publish_limits(role, &limits) {
+            tracing::warn!(error = %e, role, "publishing this process's limits");
+        }
+    }
+    roles
+}
+
+/// One line per limit in which this worker differs from a live API process's published flags
+/// (a job the API accepts could then be refused or stopped here, or the other way round).
+fn differences_from_api(core: &Core, store: &PgStore) -> Vec<String> {
+    let mine = job_limits(core);
+    let apis = match store.published_limits("api") {
+        Ok(a) => a,
+        Err(e) => {
+            tracing::warn!(error = %e, "reading the API processes' limits");
+            return Vec::new();
+        }
+    };
+    let flags = [
+        ("max_blocks", "--max-blocks"),
+        ("max_record_samples", "--max-record-samples"),
+        ("max_total_steps", "--max-total-steps"),
+        ("max_job_seconds", "--max-job-seconds"),
+        ("max_job_artifact_bytes", "--max-job-artifact-bytes"),
+    ];
+    let mut out = Vec::new();
+    for (process, text) in apis {
+        let Ok(theirs) = serde_json::from_str::<serde_json::Value>(&text) else {
+            continue;
+        };
+        for (key, flag) in flags {
+            if theirs.get(key) != mine.get(key) {
+                out.push(format!(
+                    "this worker's {flag} {} differs from the API process {process}'s {}: give every process the same value (GET /v1/limits reports the workers')",
+                    mine.get(key).unwrap_or(&serde_json::Value::Null),
+                    theirs.get(key).unwrap_or(&serde_json::Value::Null),
+                ));
+            }
+        }
+    }
+    out
 }
