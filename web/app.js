@@ -28,6 +28,7 @@ const state = {
   showSeq: 0, // bumped by every show(): an older show() still waiting on the server gives up
   view: null, // the run being animated
   observations: [], // [{criterion, observed}] of the site analysis being prepared
+  criteria: [], // the criteria a run is judged by, or a search combines, when more than the builder's one
 };
 
 // What a job is called on the page.
@@ -695,6 +696,32 @@ function currentCriterion() {
   return criterion;
 }
 
+// ---------- several criteria (a run's verdicts, a search's combination) ----------
+
+function addCriterion() {
+  clearErrors(["criterion"]);
+  const criterion = currentCriterion();
+  if (criterion === null) return;
+  state.criteria.push(criterion);
+  renderCriteria();
+}
+
+function renderCriteria() {
+  const rows = state.criteria.map((c, k) => el("tr", { class: "crit" },
+    el("td", {}, el("code", { text: c })),
+    el("td", { class: "actions" }, el("button", { type: "button", class: "secondary", "aria-label": `Remove criterion ${k + 1}`, text: "Remove", onclick: () => { state.criteria.splice(k, 1); renderCriteria(); } }))));
+  $("crit-body").replaceChildren(...rows);
+  $("crit-table").hidden = rows.length === 0;
+}
+
+// What the job's `criterion` is: the list when one was made (the API takes an array,
+// openapi.yaml), else the builder's one criterion; null after showing why it is not valid.
+function criteriaToSend() {
+  if (state.criteria.length > 1) return [...state.criteria];
+  if (state.criteria.length === 1) return state.criteria[0];
+  return currentCriterion();
+}
+
 // ---------- site observations ----------
 
 function addObservation(observed) {
@@ -783,15 +810,16 @@ async function onSubmit(ev) {
     if (motions[0]) body.motion = motions[0];
     // Optional: the finished run's summary then says whether the criterion was met.
     if ($("run-judge").checked) {
-      const criterion = currentCriterion();
+      const criterion = criteriaToSend();
       if (criterion === null) return;
       body.criterion = criterion;
     }
   } else {
     url = "/v1/pga-searches";
-    const criterion = currentCriterion();
+    const criterion = criteriaToSend();
     if (criterion === null) return;
     body = { scene, criterion, range: rangeSpec() };
+    if (Array.isArray(criterion)) body.combine = $("crit-combine").value;
     if ($("tolerance").value !== "") body.tolerance = Number($("tolerance").value);
     if ($("scan-points").value !== "") body.scan_points = Number($("scan-points").value);
     if (!motions[0]) { showFieldError("motion", "A PGA search needs a ground motion to scale."); return; }
@@ -1329,6 +1357,10 @@ function syncVisibility() {
   // One criterion builder: a search's or site's criterion, or the one a single run is judged by.
   $("criterion-box").hidden = !(pga || (run && $("run-judge").checked));
   $("site-box").hidden = !site;
+  // A site's observations are their own list; a run's and a search's criteria this one.
+  $("criteria-list-box").hidden = site;
+  $("crit-combine").hidden = !pga;
+  $("crit-combine-label").hidden = !pga;
   // A PGA search scales the record itself: no scale of its own.
   $("scale-mode-row").hidden = pga;
   if (pga) $("scale-row").hidden = true;
@@ -1373,6 +1405,7 @@ async function init() {
   $("criterion-kind").addEventListener("change", syncVisibility);
   $("run-judge").addEventListener("change", syncVisibility);
   $("job-form").addEventListener("submit", onSubmit);
+  $("crit-add").addEventListener("click", addCriterion);
   $("obs-add-fell").addEventListener("click", () => addObservation(true));
   $("obs-add-stood").addEventListener("click", () => addObservation(false));
   $("site-example").addEventListener("click", fillSiteExample);

@@ -80,6 +80,40 @@ fn list_and_build_and_refuse() {
     }
 }
 
+/// The messages read as a user reads them: a ratio's units (`1`) were printed after its range
+/// ("must be in [0.02, 0.5] 1, got 0.9", "expected a number in 1"), and openings that do not fit
+/// were "piers of -0.433333333 m".
+#[test]
+fn refusals_read_without_stray_units_or_negative_lengths() {
+    for (args, want) in [
+        (
+            vec!["scene", "arch", "--set", "thickness_ratio=0.9"],
+            "ashlar: scene arch: parameter thickness_ratio: must be in [0.02, 0.5], got 0.9",
+        ),
+        (
+            vec!["scene", "arch", "--set", "thickness_ratio=thin"],
+            "ashlar: scene arch: parameter thickness_ratio: expected a number, got \"thin\"",
+        ),
+        (
+            vec!["scene", "arch", "--set", "radius=50"],
+            "ashlar: scene arch: parameter radius: must be in [0.2, 30] m, got 50",
+        ),
+        (
+            vec!["scene", "arch", "--set", "radius=wide"],
+            "ashlar: scene arch: parameter radius: expected a number in m, got \"wide\"",
+        ),
+        (
+            vec!["scene", "wall", "--set", "openings=9"],
+            "ashlar: scene wall: parameter opening_width: 9 opening(s) 0.9 m wide do not fit side by side in a wall 4.2 m long",
+        ),
+    ] {
+        let o = ashlar(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert_eq!(err.trim_end(), want, "{args:?}");
+    }
+}
+
 #[test]
 fn run_evaluates_a_damage_criterion_on_heymans_arch() {
     let dir = temp("heyman");

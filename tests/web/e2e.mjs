@@ -735,18 +735,19 @@ try {
       const prev = ((await page.textContent("#submit-status")).match(/Queued run (\w+)/) || [])[1];
       await page.click("#submit-button");
       const body = (await sent).postDataJSON();
-      assert(body.criterion === expect.criterion && body.motion.horizontal.pulse.amplitude === 7, `sent: ${JSON.stringify({ criterion: body.criterion, motion: body.motion })}`);
+      assert(JSON.stringify(body.criterion) === JSON.stringify(expect.criterion) && body.motion.horizontal.pulse.amplitude === 7, `sent: ${JSON.stringify({ criterion: body.criterion, motion: body.motion })}`);
       await page.waitForFunction((prev) => { const m = document.getElementById("submit-status").textContent.match(/Queued run (\w+)/); return m && m[1] !== prev; }, prev, { timeout: 20000 });
       const id = (await page.textContent("#submit-status")).match(/Queued run (\w+)/)[1];
       await page.waitForFunction((id) => new RegExp(`Run ${id}: succeeded`).test(document.getElementById("result-head").textContent) && !document.getElementById("run-view").hidden, id, { timeout: 180000 });
       const rows = await page.$$eval("#criteria tbody tr", (rs) => rs.map((r) => [r.querySelector("code").textContent, r.querySelector(".badge").textContent, r.dataset.met]));
       // The service gives a criterion back in its own text form (compact JSON for a damage object).
-      const want = [[expect.shown, expect.met ? "met" : "not met", String(expect.met)]];
+      const shown = [].concat(expect.shown), met = [].concat(expect.met);
+      const want = shown.map((c, k) => [c, met[k] ? "met" : "not met", String(met[k])]);
       assert(JSON.stringify(rows) === JSON.stringify(want), `shown ${JSON.stringify(rows)}, want ${JSON.stringify(want)}`);
       // What the page shows is the stored summary, and agrees with the per-block table.
       const job = await (await fetch(`${base}/v1/jobs?kind=run&limit=1`)).json();
       const s = job.jobs[0].summary;
-      assert(job.jobs[0].id.startsWith(id) && JSON.stringify(s.criteria) === JSON.stringify([{ criterion: expect.shown, met: expect.met }]), `stored: ${JSON.stringify(s.criteria)}`);
+      assert(job.jobs[0].id.startsWith(id) && JSON.stringify(s.criteria) === JSON.stringify(shown.map((c, k) => ({ criterion: c, met: met[k] }))), `stored: ${JSON.stringify(s.criteria)}`);
       const toppled = Object.fromEntries(s.blocks.map((b) => [b.id, b.toppled]));
       assert(toppled.A === true && toppled.B === false, `A and B at 7 m/s²: ${JSON.stringify(toppled)}`);
       console.log(`     ${expect.criterion}: ${rows[0][1]} (run ${id}, failure mode ${s.failure_mode})`);
@@ -765,6 +766,35 @@ try {
     await page.keyboard.press("End");
     await page.keyboard.type("]}");
     await judged({ criterion: '{"kind": "fallen", "blocks": ["B"]}', shown: '{"kind":"fallen","blocks":["B"]}', met: false });
+    // Several criteria in one run (the API's array): both added to the list, both judged.
+    assert(!(await page.isHidden("#crit-add")) && await page.isHidden("#crit-combine"), "the list's controls in run mode");
+    await page.click("#crit-add");
+    await page.selectOption("#criterion-kind", "toppled");
+    await page.click('#scene-svg polygon[data-id="A"]');
+    await page.click("#crit-add");
+    assert((await page.$$("#crit-body tr")).length === 2, "two criteria listed");
+    await judged({
+      criterion: ['{"kind": "fallen", "blocks": ["B"]}', "toppled:A"],
+      shown: ['{"kind":"fallen","blocks":["B"]}', "toppled:A"], met: [false, true],
+    });
+    // A PGA search sends the list with how it combines (checked on the request; not run here).
+    await page.check('input[name="analysis"][value="pga"]');
+    assert(!(await page.isHidden("#crit-combine")), "no combine control in a PGA search");
+    await page.selectOption("#crit-combine", "any");
+    let searched = null;
+    await page.route("**/v1/pga-searches", async (route) => { searched = route.request().postDataJSON(); await route.abort(); });
+    try {
+      await page.click("#submit-button");
+      for (let i = 0; i < 50 && searched === null; i++) await new Promise((r) => setTimeout(r, 100));
+    } finally {
+      await page.unroute("**/v1/pga-searches");
+    }
+    assert(searched && JSON.stringify(searched.criterion) === JSON.stringify(['{"kind": "fallen", "blocks": ["B"]}', "toppled:A"]) && searched.combine === "any",
+      `search sent: ${JSON.stringify(searched && { criterion: searched.criterion, combine: searched.combine })}`);
+    await page.check('input[name="analysis"][value="run"]');
+    await page.click('button[aria-label="Remove criterion 2"]');
+    await page.click('button[aria-label="Remove criterion 1"]');
+    assert(await page.isHidden("#crit-table"), "the emptied list still shows");
     await page.selectOption("#criterion-kind", "toppled");
     await page.uncheck("#run-judge");
     assert(await page.isHidden("#criterion-box"), "the criterion builder stays after unticking");

@@ -320,7 +320,22 @@ fn as_number(p: &Param, v: &Value) -> Result<f64, TemplateError> {
     };
     match x {
         Some(x) if x.is_finite() => Ok(x),
-        _ => Err(bad(p, format!("expected a number in {}, got {v}", p.units))),
+        _ => Err(bad(
+            p,
+            format!(
+                "expected a number{}, got {v}",
+                in_units(p).replace(' ', " in ")
+            ),
+        )),
+    }
+}
+
+/// " m", " deg", …: the units as they follow a number in a message; nothing for a ratio (`1`)
+/// or a count, whose units would read as a stray number ("[0.02, 0.5] 1").
+fn in_units(p: &Param) -> String {
+    match p.units {
+        "" | "1" | "count" => String::new(),
+        u => format!(" {u}"),
     }
 }
 
@@ -331,7 +346,7 @@ fn resolve_one(p: &Param, v: &Value) -> Result<Resolved, TemplateError> {
             if !(min..=max).contains(&x) {
                 return Err(bad(
                     p,
-                    format!("must be in [{min}, {max}] {}, got {x}", p.units),
+                    format!("must be in [{min}, {max}]{}, got {x}", in_units(p)),
                 ));
             }
             Ok(Resolved::Number(x))

@@ -87,6 +87,15 @@ pub fn wall(v: &Values) -> Result<SceneSpec, TemplateError> {
     if n_open > 0 {
         // Room for the lintels' bearings and a stone's worth of pier between openings.
         let pier = length / n_open as f64 - w;
+        if pier <= 0.0 {
+            // Not "piers of −0.4 m": the openings overlap.
+            return Err(TemplateError::geometry(
+                "opening_width",
+                format!(
+                    "{n_open} opening(s) {w} m wide do not fit side by side in a wall {length} m long"
+                ),
+            ));
+        }
         if pier < 2.0 * bearing + 0.4 * l {
             return Err(TemplateError::geometry(
                 "opening_width",
