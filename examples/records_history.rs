@@ -7,10 +7,14 @@
 //! the impact (ω after it differs with ω before equal), the free rocking (the peak differs with
 //! the start equal) or the lift-off (the first half-cycle).
 //! Run: `cargo run --example records_history -- [column 0|1] [record] [PGA g] [variant]`
-//! (default: 0, Friuli, 0.6; variant as in `records_dt`: `new`, `old`, `rock:C`, `trap`, `err:R`,
-//! `dt:S`; the 1e-4 s run and the variants other than `new` and `rock:C` have the rocking control off).
+//! (default: 0, Friuli, 0.6; variant: `new` (the defaults) or modifiers joined by `+`: `trap`
+//! (trapezoidal rule), `stale` (`restart_after_impact` off: the trapezoidal rule as it was before
+//! session 31), `avg` (`average_ground_load`), `rigid` (block model), `rock:C`, `err:R`, `nm:G` (Newmark γ = G,
+//! β = (G + ½)²/4), `slow:F` (`impact.slow_factor`), `dt:S` (the coarse run's step), `fine:S` (the reference run's
+//! step, 1e-4 s unless given); the reference run takes the same modifiers except `rock`, `err`, `dt`).
 use ashlar::analysis::reference::{housner_rocking, HousnerColumn};
 use ashlar::analysis::study_records::{self as sr, COLUMNS};
+use ashlar::assembly::Newmark;
 use ashlar::scene::scene_from_value;
 use ashlar::simulation::{SimParams, Simulation};
 use serde_json::json;
@@ -58,39 +62,65 @@ fn main() {
                 break;
             }
         }
-        (h, sim.stats().steps)
+        (h, sim.stats().steps, sim.stats().impacts)
     };
-    // The defaults before the rocking step control.
-    let old = SimParams {
-        rocking_velocity_change: None,
-        ..SimParams::default()
-    };
-    let (coarse_c, coarse_p) = match variant {
-        "new" => (json!({}), SimParams::default()),
-        "old" => (json!({}), old),
-        "trap" => (json!({ "integrator": "trapezoidal" }), old),
-        v if v.starts_with("rock:") => (
-            json!({}),
-            SimParams {
-                rocking_velocity_change: Some(v[5..].parse().expect("ratio")),
-                ..SimParams::default()
-            },
-        ),
-        v if v.starts_with("err:") => (
-            json!({}),
-            SimParams {
-                local_error_ratio: Some(v[4..].parse().expect("ratio")),
-                ..old
-            },
-        ),
-        v if v.starts_with("dt:") => (
-            json!({ "time_step": v[3..].parse::<f64>().expect("dt") }),
-            old,
-        ),
-        v => panic!("unknown variant {v}"),
-    };
-    let (coarse, n_coarse) = run(coarse_c, coarse_p);
-    let (fine, n_fine) = run(json!({ "time_step": 1e-4 }), old);
+    // The variant: modifiers joined by '+', each applied to the defaults in turn; the 1e-4 s
+    // run takes the same ones except the step ones (`rock:`, `dt:`).
+    let mut coarse_c = json!({});
+    let mut coarse_p = SimParams::default();
+    let mut fine_p = SimParams::default();
+    let mut fine_c = json!({ "time_step": 1e-4 });
+    for v in variant.split('+') {
+        match v {
+            "new" | "old" => {}
+            "trap" => {
+                coarse_c["integrator"] = json!("trapezoidal");
+                fine_c["integrator"] = json!("trapezoidal");
+            }
+            "avg" => {
+                coarse_p.average_ground_load = true;
+                fine_p.average_ground_load = true;
+            }
+            "stale" => {
+                coarse_p.restart_after_impact = false;
+                fine_p.restart_after_impact = false;
+            }
+            "rigid" => {
+                coarse_c["block_model"] = json!("rigid");
+                fine_c["block_model"] = json!("rigid");
+            }
+            v if v.starts_with("rock:") => {
+                coarse_p.rocking_velocity_change = Some(v[5..].parse().expect("ratio"))
+            }
+            v if v.starts_with("nm:") => {
+                // Newmark γ with β = (γ + ½)²/4 (second order at γ = ½, damped above).
+                let gamma: f64 = v[3..].parse().expect("gamma");
+                let nm = Newmark {
+                    beta: 0.25 * (gamma + 0.5).powi(2),
+                    gamma,
+                };
+                coarse_p.newmark = Some(nm);
+                fine_p.newmark = Some(nm);
+            }
+            v if v.starts_with("slow:") => {
+                let f = v[5..].parse().expect("factor");
+                coarse_p.impact.slow_factor = f;
+                fine_p.impact.slow_factor = f;
+            }
+            v if v.starts_with("err:") => {
+                coarse_p.local_error_ratio = Some(v[4..].parse().expect("ratio"))
+            }
+            v if v.starts_with("dt:") => {
+                coarse_c["time_step"] = json!(v[3..].parse::<f64>().expect("dt"))
+            }
+            v if v.starts_with("fine:") => {
+                fine_c["time_step"] = json!(v[5..].parse::<f64>().expect("dt"))
+            }
+            v => panic!("unknown variant {v}"),
+        }
+    }
+    let (coarse, n_coarse, i_coarse) = run(coarse_c, coarse_p);
+    let (fine, n_fine, i_fine) = run(fine_c, fine_p);
     let mut hh = Vec::new();
     housner_rocking(
         &HousnerColumn {
@@ -108,8 +138,16 @@ fn main() {
     );
     let (a, b, c) = (half_cycles(&coarse), half_cycles(&fine), half_cycles(&hh));
     println!(
-        "{} {rec} {pga} g, {variant}: {n_coarse} steps, 1e-4 s: {n_fine} steps",
+        "{} {rec} {pga} g, {variant}: {n_coarse} steps {i_coarse} impacts, fine: {n_fine} steps {i_fine} impacts",
         col.name
+    );
+    let peak = |h: &[(f64, f64, f64)]| h.iter().fold(0.0f64, |m, x| m.max(x.1.abs()));
+    let (pc, pf, ph) = (peak(&coarse), peak(&fine), peak(&hh));
+    println!(
+        "peak {variant} {pc:.5} ({:+.2} % vs Housner, {:+.2} % vs fine) | fine {pf:.5} ({:+.2} % vs Housner) | Housner {ph:.5}",
+        100.0 * (pc / ph - 1.0),
+        100.0 * (pc / pf - 1.0),
+        100.0 * (pf / ph - 1.0)
     );
     println!("k | start s: {variant} / 1e-4 / Housner | |ω| at start rad/s | peak |θ| rad | peak {variant} vs 1e-4");
     for k in 0..a.len().max(b.len()).max(c.len()) {

@@ -89,7 +89,28 @@ impl Simulation {
             .min(max_dt)
             .min(self.rotation_bound())
             .min(self.rocking_bound());
+        let impacts_before = self.stepper.stats.impacts;
         let dt = self.restitution(dt);
+        // The trapezoidal rule averages a₀, the acceleration stored at the last step's end,
+        // which an impact just made stale (it is the motion before the impulse: a rocking
+        // column's θ̈ about the pivot it left); the step after an impact then takes DDA's rule,
+        // which does not read a₀ (`SimParams::restart_after_impact`).
+        let restart = self.params.restart_after_impact
+            && self.stepper.stats.impacts > impacts_before
+            && self.stepper.newmark.gamma != 1.0;
+        let saved = (self.stepper.newmark, self.stepper.springs.release_weight);
+        if restart {
+            self.stepper.newmark = crate::assembly::Newmark::of(crate::scene::Integrator::Dda);
+            self.stepper.springs.release_weight = 0.0;
+        }
+        let taken = self.solve_and_integrate(dt);
+        self.stepper.newmark = saved.0;
+        self.stepper.springs.release_weight = saved.1;
+        taken
+    }
+
+    /// The step from its solve on (see [`Simulation::step`]).
+    fn solve_and_integrate(&mut self, dt: f64) -> Result<f64, SimError> {
         let (dt, cuts) = self.solve_with_cuts(dt)?;
         if let Some(e) = self.too_soft(dt) {
             return Err(e);

@@ -126,7 +126,7 @@ impl Simulation {
         }
         let t_end = self.state.time + dt;
         let ground = match self.state.scene.excitation {
-            Excitation::BaseAcceleration => self.state.motion.acceleration(t_end),
+            Excitation::BaseAcceleration => self.ground_load(t_end, dt),
             Excitation::DrivenBlock(b) => {
                 let d0 = self.state.motion.state(self.state.time)[2];
                 let d1 = self.state.motion.state(t_end)[2];
@@ -154,6 +154,19 @@ impl Simulation {
             }
         }
         self.stepper.profile.assemble += t.elapsed();
+    }
+
+    /// The ground acceleration the step's inertial load uses, m/s² ([x, y]): with DDA's rule
+    /// (γ = 1, `SimParams::average_ground_load`) its average over the step, else its value at
+    /// the step's end.
+    fn ground_load(&self, t_end: f64, dt: f64) -> [f64; 2] {
+        let motion = &self.state.motion;
+        if !(self.params.average_ground_load && self.stepper.newmark.gamma == 1.0 && dt > 0.0) {
+            return motion.acceleration(t_end);
+        }
+        let v0 = motion.state(self.state.time)[1];
+        let v1 = motion.state(t_end)[1];
+        [(v1[0] - v0[0]) / dt, (v1[1] - v0[1]) / dt]
     }
 
     pub(super) fn open_close(&mut self) -> Result<OpenClose, SimError> {

@@ -50,7 +50,9 @@ impl Stepper {
         let scene = &state.scene;
         let smallest_free_block = state.smallest_free_block();
         let penalty = resolve_penalty(scene);
-        let newmark = Newmark::of(scene.control.integrator);
+        let newmark = params
+            .newmark
+            .unwrap_or_else(|| Newmark::of(scene.control.integrator));
         let springs = SpringParams {
             normal: penalty,
             shear: penalty * params.shear_ratio,
