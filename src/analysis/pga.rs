@@ -408,10 +408,13 @@ pub fn evaluate_with_summary(
             .decided(criteria.iter().map(|c| c.decided(tr)))
             .is_some()
     };
+    // The verdict is all a search needs: `auto`'s fallback to the engine may start from the
+    // last rest of the block instead of t = 0 (`RunOptions::fallback_from_rest`).
     let opts = RunOptions {
         stop_when: Some(&decided),
         cancel,
         no_trajectory: true,
+        fallback_from_rest: true,
         ..Default::default()
     };
     let out = run(scene, &gm, &opts)?;

@@ -470,6 +470,37 @@ impl GroundMotion {
         out.scale = if peak > 0.0 { target / peak } else { 0.0 };
         out
     }
+
+    /// The motion from `t0` (s) on, as a motion starting at 0: a(t) of the copy is a(t0 + t)
+    /// of this one. Only for records whose components are sampled with a sample at `t0`
+    /// (within 1e-9 of a sample interval) or zero: the copy is then the samples from there,
+    /// exact; `None` otherwise (curved signals, or `t0` between samples). The copy's ground
+    /// velocity and displacement start again at zero: it is meant for a base-acceleration
+    /// scene, where only the acceleration loads the blocks (a run restarted from a state at
+    /// rest relative to the base, `analysis::run`'s fallback).
+    pub fn from_sample_at(&self, t0: f64) -> Option<Self> {
+        let shift = |s: &Signal| -> Option<Signal> {
+            match s {
+                Signal::Zero => Some(Signal::Zero),
+                Signal::Sampled(r) => {
+                    let x = t0 / r.dt;
+                    let k = x.round();
+                    if !(k >= 0.0 && (x - k).abs() <= 1e-9 && (k as usize) + 1 < r.accel.len()) {
+                        return None;
+                    }
+                    Some(Signal::Sampled(Sampled::new(
+                        r.dt,
+                        r.accel[k as usize..].to_vec(),
+                    )))
+                }
+                Signal::Pulse { .. } | Signal::Sine { .. } => None,
+            }
+        };
+        let mut out = self.clone();
+        out.horizontal = shift(&self.horizontal)?;
+        out.vertical = shift(&self.vertical)?;
+        Some(out)
+    }
 }
 
 /// Options for reading a record file.
