@@ -666,6 +666,31 @@ mod kink_tests {
     use super::*;
 
     #[test]
+    fn the_motion_from_a_sample_on_is_the_same_acceleration_shifted() {
+        // Reference: a(t0 + t) of the whole record, piecewise linear between the samples.
+        let s = Sampled::new(0.1, vec![0.0, 1.0, -1.0, 0.5, 2.0, 0.0]);
+        let gm = GroundMotion::horizontal(Signal::Sampled(s)).scaled(2.0);
+        let from = gm.from_sample_at(0.2).expect("0.2 s is a sample");
+        assert_eq!(from.duration(), Some(0.30000000000000004));
+        for k in 0..=40 {
+            let t = 0.3 * k as f64 / 40.0;
+            let (a, b) = (from.acceleration(t)[0], gm.acceleration(0.2 + t)[0]);
+            assert!((a - b).abs() <= 1e-12, "t = {t}: {a} against {b}");
+        }
+        assert_eq!(from.pga(), 4.0, "the scale is kept");
+        // Between samples, at or past the last sample, or a curved signal: no exact copy.
+        assert!(gm.from_sample_at(0.25).is_none());
+        assert!(gm.from_sample_at(0.5).is_none());
+        let pulse = GroundMotion::horizontal(Signal::Pulse {
+            amplitude: 1.0,
+            period: 1.0,
+            cycles: 1.0,
+            phase: 0.0,
+        });
+        assert!(pulse.from_sample_at(0.2).is_none());
+    }
+
+    #[test]
     fn kinks_are_the_samples_then_the_end_of_the_record() {
         // dt = 0.1 s, 4 samples: kinks at 0.1, 0.2, 0.3 (the end), then none. 0.3 / 0.1 rounds
         // below 3 in floating point: the kink after 0.2 must still be 0.3, not 0.2 again.

@@ -1,22 +1,27 @@
-//! `auto`'s fallback to the full engine in a PGA search starts at the last record sample where
-//! the reduced model had the block at rest (`RunOptions::fallback_from_rest`,
-//! `analysis::run_fallback`), not at t = 0. Reference: the full engine run from t = 0 on the
-//! whole record (`"model": "dda"`), the run the fallback replaces, at the default Δt and at a
-//! finer one.
+//! `auto`'s fallback to the full engine in a PGA search starts from the reduced model's state
+//! at the last record sample it passed within its assumptions (at rest, or rocking with the
+//! pivot within friction: the block's pose and velocity, the record from that sample on;
+//! `RunOptions::fallback_from_rest`, `analysis::run_fallback`), not from t = 0. Reference: the
+//! full engine run from t = 0 over the whole record (`"model": "dda"`, the run the fallback
+//! replaced), at the default Δt (1 ms) and at 0.25 ms.
 //!
 //! Scene: the 0.4 × 1.2 m column of `examples/column.json` (friction 40°), under records and
 //! amplitudes where its pivot slips while rocking (the runs the search's time went to,
 //! docs/speed.md "Reduced models on records"). Per case, with the search's early stop (60°):
-//! - the warm-started run did start late (t₀ > 0 in `model_reason`) and is cheaper;
+//! - the run did hand over late (t₀ > 0 in `model_reason`);
 //! - the same verdict as the engine from t = 0;
 //! - where both overturn, the time the column passes 60° (the run's end) within the distance
-//!   between the engine's own runs at Δt = 1 ms and 0.25 ms, plus 20 ms. Why: up to t₀ both
-//!   models have the block at rest, so the warm start changes only the engine's start-up (its
-//!   penalty contacts settling under gravity at t₀ instead of at 0). What follows is a rocking
-//!   episode whose timing depends on the engine's own discretization; a warm start that
-//!   mapped the state wrongly (a shifted record, a moved block, a lost slip) changes the
-//!   episode by far more (the record's samples are 5–10 ms apart: a one-sample shift already
-//!   moves the load under the block).
+//!   between the engine's own runs from t = 0 at 1 ms and 0.25 ms, plus 20 ms. Why: the
+//!   reduced model solves the rocking up to t₀ to 1e-10 (its tests: Housner's equation), the
+//!   engine from t = 0 with its own Δt error (docs/accuracy-vs-speed.md), so the two may differ
+//!   by the engine's Δt error; 20 ms (2–4 record samples) covers the engine's start-up at t₀
+//!   (its contacts start unloaded). A wrong state mapping (the record shifted by a sample, the
+//!   block's pose or velocity lost, a sign) changes the episode by far more: the first version
+//!   of this fallback, starting the engine at the last rest (an earlier, valid state) instead,
+//!   ended 1.3 s later than the engine at 1.3 g and failed this check. Measured
+//!   (debug build, 2026-11-26): Imperial Valley 0.8 / 1.0 / 1.3 g end at 6.496 / 6.537 /
+//!   5.697 s, the engine from t = 0 at 6.480 / 6.537 / 6.011 s and at 0.25 ms at 6.491 / 6.539
+//!   / 5.697 s; Irpinia 1.3 g 5.840 s, 5.837 s, 5.840 s.
 use crate::common::*;
 use ashlar::analysis::pga::{evaluate_with_summary, Combine, Criterion};
 use ashlar::analysis::run::{run, RunOptions, Tracker};
@@ -24,7 +29,7 @@ use ashlar::scene::{parse_scene, ModelChoice, Scene};
 
 const G: f64 = 9.80665;
 
-/// The column under `name` at `g` × g with the search's early stop: (failed, end time s, steps, reason).
+/// The column under `name` at `g` × g with the search's early stop: (failed, end time s, steps).
 fn from_zero(scene: &Scene, name: &str, g: f64) -> (bool, f64, u64) {
     let gm = record(name).scaled_to_pga(g * G);
     let stop = |tr: &Tracker| tr.final_rotation[0].abs() > std::f64::consts::FRAC_PI_3;
