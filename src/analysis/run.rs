@@ -52,8 +52,8 @@ pub struct RunOptions<'a> {
     /// Knobs of the end of the run: settling, continuation cap (defaults when `None`).
     pub run_end: Option<RunEndParams>,
     /// When `auto`'s reduced model meets a case it does not represent, start the full engine
-    /// at the last record sample where the block was at rest instead of at t = 0
-    /// (`analysis::run_fallback`). Set by the PGA search, whose runs need only the verdict;
+    /// from the reduced model's state at the last record sample it passed within its
+    /// assumptions instead of at t = 0 (`analysis::run_fallback`). Set by the PGA search, whose runs need only the verdict;
     /// off by default so that a run's histories and trajectory come from one model. Ignored
     /// when the run writes frames.
     pub fallback_from_rest: bool,

@@ -10,7 +10,8 @@
 //! corner tips the block, sliding when the tangential load exceeds friction; both at once, slip
 //! of the pivot while rocking, a sliding block whose leading corner lifts, or loss of contact
 //! are the coupled cases the reduced models do not represent (a *violation*: `auto` then runs
-//! the full engine).
+//! the full engine; in a PGA search from the model's state at the last record sample before
+//! the violation, [`HandOver`], `analysis::run_fallback`).
 //!
 //! Length (over 600 lines): the four-state machine (`Reduced`: the step, the transitions
 //! between the states, event location, impacts) is one piece whose transitions are read
