@@ -408,13 +408,14 @@ pub fn evaluate_with_summary(
             .decided(criteria.iter().map(|c| c.decided(tr)))
             .is_some()
     };
-    // The verdict is all a search needs: `auto`'s fallback to the engine may start from the
-    // last rest of the block instead of t = 0 (`RunOptions::fallback_from_rest`).
+    // `auto`'s fallback to the engine starts at t = 0 here as in `ashlar run`
+    // (`RunOptions::fallback_from_rest` off): with the hand-over on, a bracket end's verdict
+    // differed from `ashlar run`'s at the same amplitude (tests/analysis/pga_honesty.rs,
+    // Friuli, the slender column; docs/speed.md, session 31).
     let opts = RunOptions {
         stop_when: Some(&decided),
         cancel,
         no_trajectory: true,
-        fallback_from_rest: true,
         ..Default::default()
     };
     let out = run(scene, &gm, &opts)?;
