@@ -22,7 +22,7 @@ pub enum ReducedError {
     /// An `Auto` run met a case the reduced models do not represent; where the full engine
     /// may take over without starting again from t = 0 (`None` when the block was never at
     /// rest on a record sample, e.g. under a pulse).
-    Violation(Violation, Option<Resume>),
+    Violation(Violation, Option<Box<Resume>>),
     Run(RunError),
 }
 
@@ -317,7 +317,7 @@ pub fn run(
                 then.phase = h.phase;
                 then.slip = h.slip;
                 let now = block_now(&then, true);
-                Resume {
+                Box::new(Resume {
                     time: h.time,
                     free: m.block.free,
                     outline: now
@@ -333,7 +333,7 @@ pub fn run(
                     max_rotation: tr.max_rotation[0],
                     max_displacement: tr.max_displacement[0],
                     steps: m.stats.steps,
-                }
+                })
             });
             return Err(ReducedError::Violation(v, resume));
         }
