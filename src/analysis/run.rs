@@ -51,6 +51,12 @@ pub struct RunOptions<'a> {
     pub reduced_params: Option<ReducedParams>,
     /// Knobs of the end of the run: settling, continuation cap (defaults when `None`).
     pub run_end: Option<RunEndParams>,
+    /// When `auto`'s reduced model meets a case it does not represent, start the full engine
+    /// from the reduced model's state at the last record sample it passed within its
+    /// assumptions instead of at t = 0 (`analysis::run_fallback`). Set by the PGA search, whose runs need only the verdict;
+    /// off by default so that a run's histories and trajectory come from one model. Ignored
+    /// when the run writes frames.
+    pub fallback_from_rest: bool,
 }
 
 /// How a run can fail, by cause; each message names where (docs/architecture.md, "Errors").
@@ -406,21 +412,22 @@ pub fn run(
         } => match reduced::record::run(scene, motion, opts, *block, modes, rparams, &reason) {
             Ok(outcome) => Ok(outcome),
             Err(ReducedError::Run(e)) => Err(e),
-            Err(ReducedError::Violation(v)) => run_dda(
-                scene,
-                motion,
-                opts,
-                format!(
+            Err(ReducedError::Violation(v, resume)) => {
+                let reason = format!(
                     "control.model is \"auto\" and the scene is one block on a base, but the first-motion check found a case the reduced models do not represent ({}): the full DDA engine ran",
                     v.what
-                ),
-            ),
+                );
+                match resume.filter(|_| opts.fallback_from_rest) {
+                    Some(r) => super::run_fallback::from_rest(scene, motion, opts, reason, &r),
+                    None => run_dda(scene, motion, opts, reason),
+                }
+            }
         },
     }
 }
 
 /// Run the full DDA engine.
-fn run_dda(
+pub(crate) fn run_dda(
     scene: &Scene,
     motion: &GroundMotion,
     opts: &RunOptions,

@@ -470,6 +470,37 @@ impl GroundMotion {
         out.scale = if peak > 0.0 { target / peak } else { 0.0 };
         out
     }
+
+    /// The motion from `t0` (s) on, as a motion starting at 0: a(t) of the copy is a(t0 + t)
+    /// of this one. Only for records whose components are sampled with a sample at `t0`
+    /// (within 1e-9 of a sample interval) or zero: the copy is then the samples from there,
+    /// exact; `None` otherwise (curved signals, or `t0` between samples). The copy's ground
+    /// velocity and displacement start again at zero: it is meant for a base-acceleration
+    /// scene, where only the acceleration loads the blocks (a run restarted from a state at
+    /// rest relative to the base, `analysis::run`'s fallback).
+    pub fn from_sample_at(&self, t0: f64) -> Option<Self> {
+        let shift = |s: &Signal| -> Option<Signal> {
+            match s {
+                Signal::Zero => Some(Signal::Zero),
+                Signal::Sampled(r) => {
+                    let x = t0 / r.dt;
+                    let k = x.round();
+                    if !(k >= 0.0 && (x - k).abs() <= 1e-9 && (k as usize) + 1 < r.accel.len()) {
+                        return None;
+                    }
+                    Some(Signal::Sampled(Sampled::new(
+                        r.dt,
+                        r.accel[k as usize..].to_vec(),
+                    )))
+                }
+                Signal::Pulse { .. } | Signal::Sine { .. } => None,
+            }
+        };
+        let mut out = self.clone();
+        out.horizontal = shift(&self.horizontal)?;
+        out.vertical = shift(&self.vertical)?;
+        Some(out)
+    }
 }
 
 /// Options for reading a record file.
@@ -633,6 +664,31 @@ pub fn load_path_with(path: &Path, params: &LoadParams) -> Result<GroundMotion, 
 #[cfg(test)]
 mod kink_tests {
     use super::*;
+
+    #[test]
+    fn the_motion_from_a_sample_on_is_the_same_acceleration_shifted() {
+        // Reference: a(t0 + t) of the whole record, piecewise linear between the samples.
+        let s = Sampled::new(0.1, vec![0.0, 1.0, -1.0, 0.5, 2.0, 0.0]);
+        let gm = GroundMotion::horizontal(Signal::Sampled(s)).scaled(2.0);
+        let from = gm.from_sample_at(0.2).expect("0.2 s is a sample");
+        assert_eq!(from.duration(), Some(0.30000000000000004));
+        for k in 0..=40 {
+            let t = 0.3 * k as f64 / 40.0;
+            let (a, b) = (from.acceleration(t)[0], gm.acceleration(0.2 + t)[0]);
+            assert!((a - b).abs() <= 1e-12, "t = {t}: {a} against {b}");
+        }
+        assert_eq!(from.pga(), 4.0, "the scale is kept");
+        // Between samples, at or past the last sample, or a curved signal: no exact copy.
+        assert!(gm.from_sample_at(0.25).is_none());
+        assert!(gm.from_sample_at(0.5).is_none());
+        let pulse = GroundMotion::horizontal(Signal::Pulse {
+            amplitude: 1.0,
+            period: 1.0,
+            cycles: 1.0,
+            phase: 0.0,
+        });
+        assert!(pulse.from_sample_at(0.2).is_none());
+    }
 
     #[test]
     fn kinks_are_the_samples_then_the_end_of_the_record() {

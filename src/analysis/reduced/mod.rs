@@ -10,7 +10,8 @@
 //! corner tips the block, sliding when the tangential load exceeds friction; both at once, slip
 //! of the pivot while rocking, a sliding block whose leading corner lifts, or loss of contact
 //! are the coupled cases the reduced models do not represent (a *violation*: `auto` then runs
-//! the full engine).
+//! the full engine; in a PGA search from the model's state at the last record sample before
+//! the violation, [`HandOver`], `analysis::run_fallback`).
 //!
 //! Length (over 600 lines): the four-state machine (`Reduced`: the step, the transitions
 //! between the states, event location, impacts) is one piece whose transitions are read
@@ -201,6 +202,21 @@ pub struct Violation {
     pub what: String,
 }
 
+/// The model's state at the last record sample it passed within its assumptions (at rest,
+/// rocking with the pivot's friction demand within μ, or sliding flat): a state the full engine
+/// can start from (the block's pose and velocity, the record from `time` on), which
+/// `analysis::run`'s fallback uses (`analysis::run_fallback`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HandOver {
+    /// s; a sample of the record (or 0).
+    pub time: f64,
+    pub phase: Phase,
+    /// Accumulated slip along the local t axis, m.
+    pub slip: f64,
+    /// Total sliding distance so far, m.
+    pub slid: f64,
+}
+
 /// Counters of a reduced run.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct ReducedStats {
@@ -238,6 +254,10 @@ pub struct Reduced {
     /// Violations met so far (only the first stops an `Auto` run; the forced models keep
     /// going and report them).
     pub violations: Vec<Violation>,
+    /// The state at the last record sample (or t = 0) the model passed within its
+    /// assumptions: kept only under piecewise-linear motions, whose samples the model's steps
+    /// end on.
+    pub hand_over: Option<HandOver>,
 }
 
 /// What would start at an instant: rocking on a pivot, sliding in a direction, loss of contact.
@@ -449,6 +469,12 @@ impl Reduced {
                 ..Default::default()
             },
             violations: Vec::new(),
+            hand_over: (phase == Phase::Rest).then_some(HandOver {
+                time: 0.0,
+                phase,
+                slip: 0.0,
+                slid: 0.0,
+            }),
         }
     }
 
@@ -456,6 +482,19 @@ impl Reduced {
     /// load −a_g of the moving base.
     pub fn load(&self, t: f64) -> Vector2<f64> {
         load_at(&self.block, &self.motion, t)
+    }
+
+    /// Keep the state now as the hand-over point (called at record samples where the state is
+    /// within the model's assumptions).
+    fn keep_hand_over(&mut self) {
+        if self.motion.piecewise_linear() {
+            self.hand_over = Some(HandOver {
+                time: self.time,
+                phase: self.phase,
+                slip: self.slip,
+                slid: self.slid,
+            });
+        }
     }
 
     fn violate(&mut self, time: f64, what: String) -> bool {
@@ -519,8 +558,9 @@ impl Reduced {
         }
         // Records: to the next sample (exact, see `ReducedParams::rest_scan`); curved motions:
         // one scan step.
+        let kink = self.motion.next_kink(t0);
         let t1 = if self.motion.piecewise_linear() {
-            self.motion.next_kink(t0).min(target)
+            kink.min(target)
         } else {
             (t0 + self.params.rest_scan).min(target)
         };
@@ -528,6 +568,9 @@ impl Reduced {
         self.stats.steps += 1;
         if self.quiet(&end) {
             self.time = t1;
+            if t1 == kink {
+                self.keep_hand_over();
+            }
             return false;
         }
         // Bisection for each condition separately, so "both at once" is decided at the
@@ -626,7 +669,8 @@ impl Reduced {
             return false;
         };
         let (b, motion, params, t0) = (&self.block, &self.motion, self.params, self.time);
-        let end = target.min(motion.next_kink(t0));
+        let motion_kink = motion.next_kink(t0);
+        let end = target.min(motion_kink);
         let load = StepLoad::new(b, motion, t0, end);
         let f = |t: f64, y: State| [y[1], rocking::angular_acceleration(b, k, y[0], load.at(t))];
         let s = rocking::side(k);
@@ -711,6 +755,9 @@ impl Reduced {
                 return self.violate(t, what);
             }
         }
+        if clipped && end == motion_kink {
+            self.keep_hand_over();
+        }
         false
     }
 
@@ -719,7 +766,8 @@ impl Reduced {
             return false;
         };
         let (b, motion, params, t0) = (&self.block, &self.motion, self.params, self.time);
-        let end = target.min(motion.next_kink(t0));
+        let motion_kink = motion.next_kink(t0);
+        let end = target.min(motion_kink);
         let load = StepLoad::new(b, motion, t0, end);
         let f = |t: f64, y: State| [y[1], sliding::acceleration(b, dir, load.at(t))];
         let speed = |y: &State| dir * y[1];
@@ -764,6 +812,9 @@ impl Reduced {
                 t,
                 format!("the block loses contact (vertical load exceeds gravity) at t = {t:.6} s"),
             );
+        }
+        if self.time == motion_kink {
+            self.keep_hand_over();
         }
         false
     }

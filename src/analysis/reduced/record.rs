@@ -19,9 +19,39 @@ use std::time::Instant;
 /// How a reduced run ended when it did not produce an outcome.
 #[derive(Debug)]
 pub enum ReducedError {
-    /// An `Auto` run met a case the reduced models do not represent.
-    Violation(Violation),
+    /// An `Auto` run met a case the reduced models do not represent; where the full engine
+    /// may take over without starting again from t = 0 (`None` when the block was never at
+    /// rest on a record sample, e.g. under a pulse).
+    Violation(Violation, Option<Box<Resume>>),
     Run(RunError),
+}
+
+/// Where a reduced run that met a violation can hand over to the full engine: its state at
+/// the last record sample it passed within its assumptions ([`super::HandOver`]), in world
+/// terms, and what the run had seen up to the violation. Only on a fixed base (under a driven
+/// base the engine would need the base's motion at that instant too).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Resume {
+    /// s, a sample of the record.
+    pub time: f64,
+    /// Scene index of the free block.
+    pub free: usize,
+    /// The block's outline then, world coordinates, m (the scene's vertex order).
+    pub outline: Vec<Vector2<f64>>,
+    /// Centroid displacement from the scene's place (m), rotation (rad, counter-clockwise),
+    /// centroid velocity (m/s) and angular velocity (rad/s) then.
+    pub displacement: Vector2<f64>,
+    pub rotation: f64,
+    pub velocity: Vector2<f64>,
+    pub omega: f64,
+    /// Sliding distance up to then, m.
+    pub slid: f64,
+    /// Largest |rotation| (rad) and centroid displacement (m) at the frames up to the
+    /// violation.
+    pub max_rotation: f64,
+    pub max_displacement: f64,
+    /// Steps of the reduced run.
+    pub steps: u64,
 }
 
 impl From<RunError> for ReducedError {
@@ -279,7 +309,31 @@ pub fn run(
             ((frame_index + 1) as f64 * interval).min(run_end::horizon(m.time, duration, cap));
         if let Err(v) = m.advance(next) {
             writers.finish()?;
-            return Err(ReducedError::Violation(v));
+            let resume = m.hand_over.filter(|_| !m.block.driven).map(|h| {
+                let mut then = m.clone();
+                then.time = h.time;
+                then.phase = h.phase;
+                then.slip = h.slip;
+                let now = block_now(&then, true);
+                Box::new(Resume {
+                    time: h.time,
+                    free: m.block.free,
+                    outline: now
+                        .outline
+                        .iter()
+                        .map(|p| Vector2::new(p[0], p[1]))
+                        .collect(),
+                    displacement: now.d,
+                    rotation: now.rotation,
+                    velocity: now.v,
+                    omega: now.omega,
+                    slid: h.slid,
+                    max_rotation: tr.max_rotation[0],
+                    max_displacement: tr.max_displacement[0],
+                    steps: m.stats.steps,
+                })
+            });
+            return Err(ReducedError::Violation(v, resume));
         }
         frame_index += 1;
         let wanted = writers.wants_frames(opts);
