@@ -95,7 +95,9 @@ pub struct OpenCloseParams {
     /// `force_tolerance` × that scale. The change is still taken into the contact's state, for
     /// the next iteration if one follows, else for the next step. A contact that carries its
     /// stone (a block's base, a rocking pivot, a landing corner) is never light, so the
-    /// decisions of few-block structures always iterate. See docs/contact-solve.md §11.
+    /// decisions of few-block structures always iterate. Default on: every engine benchmark
+    /// passes at its tolerance with it, and it cuts the solves of the shaken 410-stone wall under
+    /// the 1 m/s² 1 Hz sine from 1.78 to 1.49 a step (docs/contact-solve.md §11).
     pub light_state_changes: bool,
 }
 
@@ -115,7 +117,7 @@ impl Default for OpenCloseParams {
             anderson_keep: true,
             settle_tolerance: 0.0,
             settle_after: 20,
-            light_state_changes: false,
+            light_state_changes: true,
         }
     }
 }
