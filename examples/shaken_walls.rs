@@ -10,7 +10,7 @@
 //! `cargo run --release --example shaken_walls -- [--sizes 100,400,1600] [--steps 300]
 //!  [--motions rest,sine,record] [--diag] [--tight] [--block-model rigid|deformable] [--poisson V]
 //!  [--anderson DEPTH] [--anderson-restart] [--legacy] [--reference] [--record-start T]
-//!  [--seconds S] [--settle TOL] [--settle-after K]`
+//!  [--seconds S] [--settle TOL] [--settle-after K] [--light-states on|off]`
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
 //! fixed-point loop); `--anderson-restart` restarts its history whenever a contact changes state.
@@ -184,6 +184,11 @@ fn main() {
             if let Some(v) = arg("--settle-after") {
                 params.open_close.settle_after = v.parse().expect("--settle-after");
             }
+            // `--light-states on|off`: state changes of lightly loaded contacts skip the solve
+            // below the force tolerance (`OpenCloseParams::light_state_changes`, §11).
+            if let Some(v) = arg("--light-states") {
+                params.open_close.light_state_changes = v == "on";
+            }
             if let Some(v) = arg("--friction-tol") {
                 params.open_close.friction_tolerance = v.parse().expect("--friction-tol");
             }
@@ -265,8 +270,8 @@ fn main() {
                     );
                 }
                 eprintln!(
-                    "  last iteration by force decade (1e-3.. N): {:?}; settled {}",
-                    ch.last_force, ch.settled
+                    "  last iteration by force decade (1e-3.. N): {:?}; settled {}; light state changes taken {}",
+                    ch.last_force, ch.settled, ch.light
                 );
                 eprintln!("  changes by force decade (1e-3.. N): {:?}", ch.by_force);
             }
