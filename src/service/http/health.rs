@@ -104,7 +104,7 @@ fn worker_limit_sets(published: Vec<(String, String)>) -> Vec<Value> {
             _ => None,
         })
         .collect();
-    sets.sort_by(|a, b| b.0.cmp(&a.0));
+    sets.sort_by_key(|b| std::cmp::Reverse(b.0));
     sets.into_iter().map(|(_, v)| v).collect()
 }
 
