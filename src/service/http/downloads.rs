@@ -77,7 +77,7 @@ fn history_format(
 
 /// Largest history (bytes of `histories.csv`, after `every`) answered as JSON: the JSON form is
 /// built in memory (~3× the text). Larger ones come as CSV, which is streamed.
-pub const MAX_JSON_HISTORY_BYTES: u64 = 32 << 20;
+pub const MAX_JSON_HISTORY_BYTES: u64 = 8 << 20;
 
 /// Bytes per chunk of a streamed file or history.
 const CHUNK: usize = 64 * 1024;
@@ -175,11 +175,17 @@ pub(super) async fn get_histories(
                 )));
             }
             // At most JSON_BUILDS at once: a JSON answer holds its kept rows as text (the
-            // selected fields only, at most about 32 MiB) plus one offset a row while it is
+            // selected fields only, at most about 8 MiB) plus one offset a row while it is
             // written, so concurrent requests for large histories wait instead of adding up
             // (eight 31 MB histories at once took 4.7 GB when each built its text, a parsed
             // copy and a JSON tree, and 381 MB with two at once holding parsed numbers).
-            let _permit = json_builds().acquire().await.map_err(ApiError::internal)?;
+            // The permit goes into the body's stream: it is held until the answer is sent (or
+            // the client leaves), since the kept rows live as long as the stream.
+            let permit = json_builds()
+                .clone()
+                .acquire_owned()
+                .await
+                .map_err(ApiError::internal)?;
             // The rows the reader already buffered after the header, then the rest of the file.
             let buffered = reader.buffer().to_vec();
             let rest = reader.into_inner().into_std().await;
@@ -196,7 +202,10 @@ pub(super) async fn get_histories(
                 .map_err(ApiError::internal)?;
             let names: Vec<String> = selected.iter().map(|&k| ids[k].clone()).collect();
             let mut r = Body::from_stream(futures_util::stream::iter(
-                json_chunks(names, rows).map(Ok::<_, std::io::Error>),
+                json_chunks(names, rows).map(move |chunk| {
+                    let _held = &permit;
+                    Ok::<_, std::io::Error>(chunk)
+                }),
             ))
             .into_response();
             r.headers_mut().insert(
@@ -274,9 +283,10 @@ pub(super) async fn get_histories(
 /// JSON histories built at once (see `get_histories`).
 const JSON_BUILDS: usize = 2;
 
-fn json_builds() -> &'static tokio::sync::Semaphore {
-    static S: std::sync::OnceLock<tokio::sync::Semaphore> = std::sync::OnceLock::new();
-    S.get_or_init(|| tokio::sync::Semaphore::new(JSON_BUILDS))
+fn json_builds() -> &'static std::sync::Arc<tokio::sync::Semaphore> {
+    static S: std::sync::OnceLock<std::sync::Arc<tokio::sync::Semaphore>> =
+        std::sync::OnceLock::new();
+    S.get_or_init(|| std::sync::Arc::new(tokio::sync::Semaphore::new(JSON_BUILDS)))
 }
 
 /// The kept rows of a history, for its JSON form: each row's time and the `x, y, rotation`
