@@ -5,6 +5,15 @@
 use crate::analysis::run::RunError;
 use crate::service::store::StoreError;
 
+/// Write an artifact `file` into the job's directory `dir`, naming the file if it fails.
+pub(crate) fn write_artifact(
+    dir: &std::path::Path,
+    file: &'static str,
+    contents: impl AsRef<[u8]>,
+) -> Result<(), JobError> {
+    std::fs::write(dir.join(file), contents).map_err(|source| JobError::Write { file, source })
+}
+
 /// Why a job's computation failed. Its `Display` is what the user reads in the job's `error`.
 #[derive(Debug, thiserror::Error)]
 pub enum JobError {

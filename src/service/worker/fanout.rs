@@ -2,7 +2,7 @@
 //! child `pga_run` jobs that any worker claims, the replay that plans the next batch from the
 //! children's verdicts, and one child run's verdict (on the worker thread or in a child
 //! process through `runner`).
-use super::error::{Inconsistent, JobError};
+use super::error::{write_artifact, Inconsistent, JobError};
 use super::pool::Core;
 use super::run::{RunHooks, RunnerOutcome};
 use crate::service::request::{parse_pga, JobInput};
@@ -179,20 +179,12 @@ fn finish_search(
             .collect();
         let res = pga::multi_result(recs, request, fit);
         if let Some(svg) = pga::fragility_svg(&res) {
-            std::fs::write(hooks.out_dir.join("fragility.svg"), svg).map_err(|source| {
-                JobError::Write {
-                    file: "fragility.svg",
-                    source,
-                }
-            })?;
+            write_artifact(hooks.out_dir, "fragility.svg", svg)?;
         }
         serde_json::to_value(&res)?
     };
     let text = serde_json::to_string_pretty(&value)?;
-    std::fs::write(hooks.out_dir.join("result.json"), text).map_err(|source| JobError::Write {
-        file: "result.json",
-        source,
-    })?;
+    write_artifact(hooks.out_dir, "result.json", text)?;
     Ok(RunnerOutcome::Completed(value))
 }
 

@@ -1,7 +1,7 @@
 //! Workers: the computation behind a job, a [`JobRunner`] over `analysis` (`analysis::run::run`,
 //! `pga::search*`, `site::analyse`), with the hooks a worker hands it (output directory, stop
 //! switch, progress).
-use super::error::JobError;
+use super::error::{write_artifact, JobError};
 use crate::service::request::JobInput;
 use serde_json::Value;
 use std::path::Path;
@@ -77,20 +77,10 @@ pub fn analysis_runner() -> JobRunner {
                 let res = res?;
                 let value = serde_json::to_value(&res)?;
                 if let Some(svg) = crate::analysis::pga::fragility_svg(&res) {
-                    std::fs::write(hooks.out_dir.join("fragility.svg"), svg).map_err(|source| {
-                        JobError::Write {
-                            file: "fragility.svg",
-                            source,
-                        }
-                    })?;
+                    write_artifact(hooks.out_dir, "fragility.svg", svg)?;
                 }
                 let text = serde_json::to_string_pretty(&value)?;
-                std::fs::write(hooks.out_dir.join("result.json"), text).map_err(|source| {
-                    JobError::Write {
-                        file: "result.json",
-                        source,
-                    }
-                })?;
+                write_artifact(hooks.out_dir, "result.json", text)?;
                 Ok(RunnerOutcome::Completed(value))
             }
             JobInput::SiteAnalysis {
@@ -114,12 +104,7 @@ pub fn analysis_runner() -> JobRunner {
                 let res = res?;
                 let value = serde_json::to_value(&res)?;
                 let text = serde_json::to_string_pretty(&value)?;
-                std::fs::write(hooks.out_dir.join("result.json"), text).map_err(|source| {
-                    JobError::Write {
-                        file: "result.json",
-                        source,
-                    }
-                })?;
+                write_artifact(hooks.out_dir, "result.json", text)?;
                 Ok(RunnerOutcome::Completed(value))
             }
             JobInput::PgaSearch {
@@ -134,13 +119,9 @@ pub fn analysis_runner() -> JobRunner {
                 }
                 let res = res?;
                 let value = serde_json::to_value(&res)?;
-                let path = hooks.out_dir.join("result.json");
-                if !path.exists() {
+                if !hooks.out_dir.join("result.json").exists() {
                     let text = serde_json::to_string_pretty(&value)?;
-                    std::fs::write(&path, text).map_err(|source| JobError::Write {
-                        file: "result.json",
-                        source,
-                    })?;
+                    write_artifact(hooks.out_dir, "result.json", text)?;
                 }
                 Ok(RunnerOutcome::Completed(value))
             }
