@@ -195,3 +195,25 @@ pub fn listed_names(list: &Value) -> Vec<&str> {
         .filter_map(|t| t["name"].as_str())
         .collect()
 }
+
+/// Block `block`'s angular velocity just before and just after the first impact within 2 s
+/// (rad/s). Before: at the start of the step whose impact law fired (the velocity the impulse
+/// acts on). After: at the end of that step, less the change over the next step (the gravity
+/// torque's share within the step, extrapolated linearly: error O(θ⃛ Δt²)).
+pub fn first_impact_angular_velocities(s: &mut Simulation, block: usize) -> (f64, f64) {
+    let mut before = None;
+    let mut history = Vec::new();
+    while s.time() < 2.0 && history.len() < 2 {
+        let w0 = s.block_velocity(block)[2];
+        let n0 = s.stats().impacts;
+        s.step(f64::INFINITY).expect("step");
+        if before.is_some() {
+            history.push(s.block_velocity(block)[2]);
+        } else if s.stats().impacts > n0 {
+            before = Some(w0);
+            history.push(s.block_velocity(block)[2]);
+        }
+    }
+    let before = before.expect("no impact within 2 s");
+    (before, 2.0 * history[0] - history[1])
+}

@@ -85,22 +85,7 @@ fn engine_rocking_ratio(b: f64, h: f64, control: Value) -> (f64, f64) {
     let theta0 = 0.5 * (b / h).atan();
     let scene = column(b, h, theta0, control);
     let mut s = sim(&scene, &GroundMotion::none());
-    let mut before = None;
-    let mut history = Vec::new();
-    while s.time() < 2.0 && history.len() < 2 {
-        let w0 = s.block_velocity(1)[2];
-        let n0 = s.stats().impacts;
-        s.step(f64::INFINITY).expect("step");
-        if before.is_some() {
-            history.push(s.block_velocity(1)[2]);
-        } else if s.stats().impacts > n0 {
-            before = Some(w0);
-            history.push(s.block_velocity(1)[2]);
-        }
-    }
-    let before = before.expect("no impact within 2 s");
-    let after = 2.0 * history[0] - history[1];
-    (before, after)
+    first_impact_angular_velocities(&mut s, 1)
 }
 
 /// Tolerance 1e-4 × v0 on both velocities: Newton's law is applied exactly (to 1e-12) to the

@@ -43,21 +43,8 @@ fn rocking_ratio(params: SimParams) -> f64 {
         json!({ "model": "dda", "duration": 2.0, "integrator": "trapezoidal" }),
     ));
     let mut s = Simulation::new(&scene, &GroundMotion::none(), params);
-    let mut before = None;
-    let mut after = Vec::new();
-    while s.time() < 2.0 && after.len() < 2 {
-        let w0 = s.block_velocity(1)[2];
-        let n0 = s.stats().impacts;
-        s.step(f64::INFINITY).expect("step");
-        if before.is_some() {
-            after.push(s.block_velocity(1)[2]);
-        } else if s.stats().impacts > n0 {
-            before = Some(w0);
-            after.push(s.block_velocity(1)[2]);
-        }
-    }
-    let before = before.expect("no impact within 2 s");
-    (2.0 * after[0] - after[1]) / before
+    let (before, after) = common::first_impact_angular_velocities(&mut s, 1);
+    after / before
 }
 
 #[test]
