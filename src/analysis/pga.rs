@@ -206,6 +206,13 @@ impl Criterion {
     }
 }
 
+/// A `combine` that is neither `all` nor `any` (the text given).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("combine: expected \"all\" or \"any\", got {got:?}")]
+pub struct CombineParseError {
+    pub got: String,
+}
+
 /// How several criteria combine into one verdict "failed".
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -220,13 +227,13 @@ pub enum Combine {
 
 impl Combine {
     /// Parse `all` / `any`.
-    pub fn parse(text: &str) -> Result<Self, String> {
+    pub fn parse(text: &str) -> Result<Self, CombineParseError> {
         match text {
             "all" => Ok(Combine::All),
             "any" => Ok(Combine::Any),
-            other => Err(format!(
-                "combine: expected \"all\" or \"any\", got {other:?}"
-            )),
+            other => Err(CombineParseError {
+                got: other.to_string(),
+            }),
         }
     }
 

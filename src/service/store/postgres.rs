@@ -168,9 +168,9 @@ fn row_to_record(row: &Row) -> Result<JobRecord, StoreError> {
 
 /// Check a `--database` URL names PostgreSQL and parse it, TLS parameters included
 /// (credentials are never echoed).
-pub fn parse_url(url: &str) -> Result<super::tls::PgTarget, String> {
+pub fn parse_url(url: &str) -> Result<super::tls::PgTarget, super::tls::PgUrlError> {
     if !(url.starts_with("postgres://") || url.starts_with("postgresql://")) {
-        return Err("--database: expected postgres://USER@HOST:PORT/DBNAME".into());
+        return Err(super::tls::PgUrlError::Scheme);
     }
     super::tls::parse(url)
 }
@@ -178,7 +178,8 @@ pub fn parse_url(url: &str) -> Result<super::tls::PgTarget, String> {
 impl PgStore {
     /// Connect, create or upgrade the schema, and return the store.
     pub fn open(url: &str, params: LeaseParams) -> Result<Self, StoreError> {
-        let target = parse_url(url).map_err(StoreError::Config)?;
+        // StoreError is Clone and compared in the store's tests: the URL's error is kept as text.
+        let target = parse_url(url).map_err(|e| StoreError::Config(e.to_string()))?;
         let host = std::env::var("HOSTNAME")
             .ok()
             .or_else(|| {
@@ -210,9 +211,9 @@ impl PgStore {
 
     /// A new connection (also used for `LISTEN`).
     pub fn connect(&self) -> Result<Client, StoreError> {
-        self.target.connect().map_err(|detail| StoreError::Busy {
+        self.target.connect().map_err(|e| StoreError::Busy {
             database: Backend::Postgres,
-            detail,
+            detail: e.to_string(),
         })
     }
 
