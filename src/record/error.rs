@@ -111,7 +111,10 @@ pub enum FrameProblem {
     BlockCount { blocks: usize, listed: usize },
     /// A ground value (`ground.acceleration`, …) is not finite.
     #[error("{field} is not finite ({value:?})")]
-    Ground { field: &'static str, value: [f64; 2] },
+    Ground {
+        field: &'static str,
+        value: [f64; 2],
+    },
     /// A block's value (`x`, `rotation`, …) is not finite.
     #[error("block {id:?}: {field} is not finite ({value})")]
     Block {

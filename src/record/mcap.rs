@@ -129,8 +129,7 @@ impl<W: Write + Seek> McapRecorder<W> {
         let no_meta = BTreeMap::new();
         let mut channel = |topic: &str, schema: serde_json::Value| -> Result<u16, RecordError> {
             let name = schema["title"].as_str().unwrap_or_default().to_string();
-            let data = serde_json::to_vec(&schema)
-                .map_err(|e| RecordError::invalid(&path, e))?;
+            let data = serde_json::to_vec(&schema).map_err(|e| RecordError::invalid(&path, e))?;
             let schema_id = writer
                 .add_schema(&name, "jsonschema", &data)
                 .map_err(mcap_err)?;
@@ -255,8 +254,7 @@ fn write_json<W: Write + Seek, T: serde::Serialize>(
     msg: &T,
 ) -> Result<(), RecordError> {
     buf.clear();
-    serde_json::to_writer(&mut *buf, msg)
-        .map_err(|e| RecordError::invalid(path, e))?;
+    serde_json::to_writer(&mut *buf, msg).map_err(|e| RecordError::invalid(path, e))?;
     let header = MessageHeader {
         channel_id: channel,
         sequence: seq,

@@ -161,17 +161,17 @@ impl Service {
         );
         core.server = server_params;
         if let Some(url) = &config.artifacts {
-            core.artifacts = Some(Arc::new(
-                artifacts::ArtifactStore::open(url)?,
-            ));
+            core.artifacts = Some(Arc::new(artifacts::ArtifactStore::open(url)?));
         }
         core.remote_workers
             .store(pg.is_some(), std::sync::atomic::Ordering::SeqCst);
         let core = Arc::new(core);
         let cluster = match pg {
-            Some(pg) => Some(
-                worker::cluster::ClusterThreads::start(core.clone(), pg, api)?,
-            ),
+            Some(pg) => Some(worker::cluster::ClusterThreads::start(
+                core.clone(),
+                pg,
+                api,
+            )?),
             None => None,
         };
         let pool = worker::Pool::start(core.clone())?;

@@ -319,7 +319,10 @@ impl KeptRows {
             .lines()
             .enumerate()
         {
-            let line = line.map_err(|source| HistoriesError::Read { line: n + 2, source })?;
+            let line = line.map_err(|source| HistoriesError::Read {
+                line: n + 2,
+                source,
+            })?;
             if line.trim().is_empty() {
                 continue;
             }

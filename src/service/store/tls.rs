@@ -52,7 +52,10 @@ pub enum PgUrlError {
          first); use sslmode=prefer or sslmode=disable"
     )]
     SslModeAllow,
-    #[error("--database: sslmode={mode:?} is not a known sslmode (expected one of {})", SslMode::NAMES)]
+    #[error(
+        "--database: sslmode={mode:?} is not a known sslmode (expected one of {})",
+        SslMode::NAMES
+    )]
     SslModeUnknown { mode: String },
     /// The client library does not parse the rest of the URL.
     #[error("--database: not a valid PostgreSQL URL: {0}")]
@@ -143,7 +146,7 @@ pub enum PgUrlError {
 pub struct ConnectError {
     pub hosts: String,
     pub mode: SslMode,
-    pub failure: ConnectFailure,
+    pub failure: Box<ConnectFailure>,
     /// The plain-text retry's failure (`failure` then is the TLS attempt's).
     pub plain_retry: Option<String>,
 }
@@ -595,9 +598,7 @@ fn parse_params(
     p: TlsParams,
     default_root: Option<PathBuf>,
 ) -> Result<PgTarget, PgUrlError> {
-    let mut config = rest
-        .parse::<postgres::Config>()
-        .map_err(PgUrlError::Url)?;
+    let mut config = rest.parse::<postgres::Config>().map_err(PgUrlError::Url)?;
     let system = p.sslrootcert.as_deref() == Some("system");
     let mode = match p.sslmode.as_deref() {
         Some(m) => SslMode::parse(m)?,
@@ -787,7 +788,7 @@ impl PgTarget {
         ConnectError {
             hosts: self.hosts.clone(),
             mode: self.mode,
-            failure,
+            failure: Box::new(failure),
             plain_retry: None,
         }
     }

@@ -45,7 +45,9 @@ pub enum ArtifactError {
     #[error("starting the artifact runtime: {0}")]
     Runtime(#[source] Arc<std::io::Error>),
     /// `--artifacts` is not a URL (`url` as given).
-    #[error("--artifacts {url:?}: not a URL ({source}); expected file:///DIR or s3://BUCKET/PREFIX")]
+    #[error(
+        "--artifacts {url:?}: not a URL ({source}); expected file:///DIR or s3://BUCKET/PREFIX"
+    )]
     NotAUrl {
         url: String,
         #[source]
@@ -62,7 +64,9 @@ pub enum ArtifactError {
     },
     #[error("--artifacts {url}: not a local directory")]
     NotLocal { url: String },
-    #[error("--artifacts {url}: this ashlar was built without S3 support (cargo build --features s3)")]
+    #[error(
+        "--artifacts {url}: this ashlar was built without S3 support (cargo build --features s3)"
+    )]
     NoS3 { url: String },
     /// A query option of an `s3://` URL that `object_store` does not know (`option` as given).
     #[error("--artifacts {url}: unknown S3 option {option:?} in the URL (expected object_store's names: endpoint, region, allow_http, virtual_hosted_style_request, skip_signature, …)")]
@@ -175,11 +179,10 @@ impl ArtifactStore {
             let dir = parsed
                 .to_file_path()
                 .map_err(|()| ArtifactError::NotLocal { url: shown.clone() })?;
-            object_store::local::LocalFileSystem::new_with_prefix(dir)
-                .map(|fs| {
-                    let fs: Box<dyn ObjectStore> = Box::new(fs.with_automatic_cleanup(true));
-                    (fs, StorePath::default())
-                })
+            object_store::local::LocalFileSystem::new_with_prefix(dir).map(|fs| {
+                let fs: Box<dyn ObjectStore> = Box::new(fs.with_automatic_cleanup(true));
+                (fs, StorePath::default())
+            })
         } else {
             object_store::parse_url(&parsed)
         }
@@ -293,11 +296,7 @@ impl ArtifactStore {
 
     /// Download one artifact whole into memory, None when absent. For small files and tests:
     /// serving goes through [`ArtifactStore::ensure_local`], which streams to disk.
-    pub async fn fetch(
-        &self,
-        id: Uuid,
-        name: &str,
-    ) -> Result<Option<bytes::Bytes>, ArtifactError> {
+    pub async fn fetch(&self, id: Uuid, name: &str) -> Result<Option<bytes::Bytes>, ArtifactError> {
         let loc = self.location(id, name);
         let store = self.store.clone();
         // On the artifact runtime: an S3 client's connections belong to one runtime.

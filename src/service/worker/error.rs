@@ -38,10 +38,9 @@ pub enum JobError {
         #[source]
         source: std::io::Error,
     },
-    /// This version's parser no longer accepts the stored request; `detail` is the problem's
-    /// text (`ApiError::detail`), naming the field.
-    #[error("the stored request is no longer accepted: {detail}")]
-    Rejected { detail: String },
+    /// This version's parser no longer accepts the stored request (the cause names the field).
+    #[error("the stored request is no longer accepted: {0}")]
+    Rejected(#[source] crate::service::request::RequestError),
     /// The store failed while a search read or wrote its child runs; the cause is logged.
     #[error("the job store failed while running the search; see the server log")]
     Store(#[source] StoreError),
@@ -138,8 +137,8 @@ impl JobError {
     }
 
     /// A stored request the parser now refuses.
-    pub(crate) fn rejected(e: crate::service::http::problem::ApiError) -> Self {
-        JobError::Rejected { detail: e.detail }
+    pub(crate) fn rejected(e: crate::service::request::RequestError) -> Self {
+        JobError::Rejected(e)
     }
 }
 
