@@ -62,7 +62,7 @@ pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
         // Colour codes only for a terminal: a log written to a file or a pipe stays plain text.
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .try_init();
-    let url = match service::parse_database(&args.database).map_err(|e| CliError::Usage(e.to_string()))? {
+    let url = match service::parse_database(&args.database)? {
         service::Database::Postgres(url) => url,
         service::Database::Sqlite(_) => {
             return Err(CliError::Usage(
@@ -74,7 +74,7 @@ pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
     let mut config = ServiceConfig::new(&args.data);
     config.postgres = Some(url);
     config.artifacts = args.artifacts.clone();
-    config.lease = service::lease_params(args.lease).map_err(|e| CliError::Usage(e.to_string()))?;
+    config.lease = service::lease_params(args.lease)?;
     config.limits = Limits {
         max_blocks: args.max_blocks,
         max_record_samples: args.max_record_samples,

@@ -369,6 +369,7 @@ impl From<RequestError> for ApiError {
             | E::RecordName { .. }
             | E::RecordMissing { .. }
             | E::DuplicateRecord { .. }
+            // `cause()` looks through a record's error: its type is its cause's.
             | E::InRecord { .. }
             | E::ZeroHorizontal { .. }
             | E::MotionAndMotions
@@ -458,5 +459,54 @@ mod tests {
             (StatusCode::INTERNAL_SERVER_ERROR, "internal")
         );
         assert!(!corrupt.detail.contains("lost"), "{}", corrupt.detail);
+    }
+
+    /// A refused request becomes one problem type per cause, at the pointer the cause names;
+    /// an error of record `i` of a search keeps its cause's type, re-pointed at `/motions/i`.
+    #[test]
+    fn request_errors_become_a_problem_per_cause() {
+        let problem = |e: RequestError| {
+            let p = ApiError::from(e);
+            (p.status.as_u16(), p.kind, p.pointer, p.detail)
+        };
+        let (status, kind, pointer, detail) = problem(RequestError::EmptyBody);
+        assert_eq!(
+            (status, kind, pointer.as_deref()),
+            (400, "malformed-json", Some(""))
+        );
+        assert_eq!(detail, "the request body is empty; expected a JSON object");
+        let steps = RequestError::Steps {
+            duration: 10.0,
+            time_step: 1e-3,
+            steps: 10_000.0,
+            limit: 999,
+        };
+        let (status, kind, pointer, _) = problem(steps);
+        assert_eq!(
+            (status, kind, pointer.as_deref()),
+            (422, "limit-exceeded", Some("/scene/control/duration"))
+        );
+        let motion = RequestError::Motion {
+            pointer: "/motion/horizontal/dt".into(),
+            source: MotionError::new("motion.horizontal.dt", None, "must be > 0"),
+        };
+        let (status, kind, pointer, detail) = problem(RequestError::InRecord {
+            index: 2,
+            source: Box::new(motion),
+        });
+        assert_eq!(
+            (status, kind, pointer.as_deref()),
+            (422, "invalid-motion", Some("/motions/2/horizontal/dt"))
+        );
+        assert_eq!(detail, "/motions/2/horizontal/dt: must be > 0");
+        let (_, kind, pointer, detail) = problem(RequestError::Tolerance);
+        assert_eq!(
+            (kind, pointer.as_deref()),
+            ("invalid-field", Some("/tolerance"))
+        );
+        assert!(detail.starts_with("/tolerance: "), "{detail}");
+        // A refusal of the model other than "not applicable" is the server's bug.
+        let (status, kind, pointer, _) = problem(RequestError::Model(RunError::NoDuration));
+        assert_eq!((status, kind, pointer), (500, "internal", None));
     }
 }
