@@ -7,7 +7,6 @@
 //! failures are logged with their cause and reported to the client without it.
 use crate::analysis::run::RunError;
 use crate::motion::MotionError;
-use crate::scene::SceneError;
 pub use crate::service::request::pointer::{dotted_to_pointer, point_at_named_field};
 use crate::service::request::RequestError;
 use crate::service::store::StoreError;
@@ -104,21 +103,13 @@ impl ApiError {
         .with_parameter(name)
     }
 
-    /// The scene reader refused the scene ([`SceneError`]); `pointer` names the field.
-    pub fn scene(pointer: impl Into<String>, e: &SceneError) -> Self {
-        RequestError::Scene {
-            pointer: pointer.into(),
-            source: e.clone(),
-        }
-        .into()
-    }
-
     /// The ground-motion reader refused the motion ([`MotionError`]): `pointer` names the
-    /// member, the detail also the line of an embedded record.
-    pub fn motion(pointer: impl Into<String>, e: &MotionError) -> Self {
+    /// member, the detail also the line of an embedded record (`POST /motion`, whose body is
+    /// the motion; as a job's motion, through [`RequestError::Motion`]).
+    pub fn motion(pointer: impl Into<String>, e: MotionError) -> Self {
         RequestError::Motion {
             pointer: pointer.into(),
-            source: e.clone(),
+            source: e,
         }
         .into()
     }
