@@ -20,8 +20,9 @@
 //! ignored, as in libpq. A parameter the URL does not set is taken, as libpq does, from the
 //! environment: `PGSSLMODE`, `PGSSLROOTCERT`, `PGSSLCERT`, `PGSSLKEY`, `PGSSLCRL` (empty means unset).
 //!
-//! Over 600 lines: the `sslmode` table, certificate and revocation-list loading, the verifier
-//! and their unit tests belong together.
+//! Over 600 lines: the `sslmode` table, certificate and revocation-list loading, the verifier,
+//! their typed errors (`PgUrlError`, `ConnectError`, one variant per parameter or cause) and
+//! their unit tests belong together.
 use postgres::config::{Host, SslMode as PgSslMode};
 use postgres::{Client, NoTls};
 use rustls::client::danger::{HandshakeSignatureValid, ServerCertVerified, ServerCertVerifier};
