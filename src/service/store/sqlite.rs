@@ -7,10 +7,15 @@
 //! Over 600 lines because its unit tests (queue order, recovery, quotas, cancel, the schemas of
 //! older files) sit beside it; the store itself is about 670 lines, one transaction per method.
 use super::{
-    now_ms, Backend, CancelOutcome, Counts, DeleteOutcome, Finish, JobKind, JobRecord, JobStatus,
-    JobStore, NewJob, QueueFull, StoreError,
+    now_ms, set_sql, Backend, CancelOutcome, Counts, DeleteOutcome, Finish, JobKind, JobRecord,
+    JobStatus, JobStore, NewJob, QueueFull, StoreError,
 };
 use crate::service::jobs::{self, Event};
+
+/// The `SET` of `event` in SQLite's SQL ([`super::set_sql`]).
+fn set(event: &Event, to: Option<JobStatus>) -> String {
+    set_sql(Backend::Sqlite, event, to)
+}
 use rusqlite::{params, Connection, OptionalExtension};
 use std::path::Path;
 use std::sync::Mutex;
@@ -260,11 +265,11 @@ impl JobStore for SqliteStore {
     fn finished_before(&self, cutoff_ms: i64, limit: usize) -> Result<Vec<Uuid>, StoreError> {
         let limit = i64::try_from(limit).unwrap_or(i64::MAX);
         self.read(|c| {
-            let mut st = c.prepare(
-                "SELECT id FROM jobs WHERE parent IS NULL AND finished_ms < ?1
-                   AND status IN ('succeeded', 'failed', 'cancelled')
+            let mut st = c.prepare(&format!(
+                "SELECT id FROM jobs WHERE parent IS NULL AND finished_ms < ?1 AND {}
                  ORDER BY finished_ms LIMIT ?2",
-            )?;
+                jobs::terminal_sql()
+            ))?;
             let ids: Vec<String> = st
                 .query_map(params![cutoff_ms, limit], |r| r.get(0))?
                 .collect::<Result<_, _>>()?;
@@ -315,10 +320,11 @@ impl JobStore for SqliteStore {
         self.write(|c| {
             // One statement: atomic even with other processes writing the same file.
             let sql = format!(
-                "UPDATE jobs SET status = 'running', attempts = attempts + 1, started_ms = ?1,
+                "UPDATE jobs SET {}, started_ms = ?1,
                         progress = CASE WHEN kind = 'pga_search' THEN progress ELSE 0 END
                  WHERE seq = (SELECT seq FROM jobs WHERE {} ORDER BY seq LIMIT 1)
                  RETURNING {COLUMNS}",
+                set(&Event::Claim, None),
                 jobs::guard(&Event::Claim)
             );
             c.query_row(&sql, params![now_ms()], row_to_record)
@@ -343,16 +349,17 @@ impl JobStore for SqliteStore {
     fn finish(&self, id: Uuid, finish: &Finish) -> Result<(), StoreError> {
         let end = finish.end();
         let (result, error, progress) = finish.columns();
-        let status = end.status().as_str();
+        let event = Event::Finish(end);
         self.write(|c| {
             let tx = c.transaction()?;
             let n = tx.execute(
                 &format!(
-                    "UPDATE jobs SET status = ?2, result = ?3, error = ?4, progress = COALESCE(?5, progress), finished_ms = ?6
+                    "UPDATE jobs SET {}, result = ?2, error = ?3, progress = COALESCE(?4, progress), finished_ms = ?5
                      WHERE id = ?1 AND {}",
-                    jobs::guard(&Event::Finish(end))
+                    set(&event, None),
+                    jobs::guard(&event)
                 ),
-                params![id.to_string(), status, result, error, progress, now_ms()],
+                params![id.to_string(), result, error, progress, now_ms()],
             )?;
             if n == 1 {
                 child_ended(&tx, id, end)?;
@@ -363,15 +370,15 @@ impl JobStore for SqliteStore {
     }
 
     fn requeue(&self, id: Uuid, refund: bool) -> Result<(), StoreError> {
+        let event = Event::Requeue { refund };
         self.write(|c| {
             c.execute(
                 &format!(
-                    "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL,
-                            attempts = CASE WHEN ?2 THEN MAX(attempts - 1, 0) ELSE attempts END
-                     WHERE id = ?1 AND {}",
-                    jobs::guard(&Event::Requeue { refund })
+                    "UPDATE jobs SET {}, progress = 0, started_ms = NULL WHERE id = ?1 AND {}",
+                    set(&event, None),
+                    jobs::guard(&event)
                 ),
-                params![id.to_string(), refund],
+                params![id.to_string()],
             )?;
             Ok(())
         })
@@ -392,7 +399,10 @@ impl JobStore for SqliteStore {
                 // No worker holds a queued job, nor a waiting search: it ends now.
                 CancelOutcome::CancelledQueued => {
                     tx.execute(
-                        "UPDATE jobs SET status = 'cancelled', cancel_requested = 1, finished_ms = ?2 WHERE id = ?1",
+                        &format!(
+                            "UPDATE jobs SET {}, cancel_requested = 1, finished_ms = ?2 WHERE id = ?1",
+                            set(&Event::Cancel, Some(JobStatus::Cancelled))
+                        ),
                         params![id.to_string(), now_ms()],
                     )?;
                 }
@@ -428,24 +438,27 @@ impl JobStore for SqliteStore {
             let (mut requeued, mut ended) = (0, 0);
             for (seq, attempts, cancel) in running {
                 let attempts = u32::try_from(attempts).unwrap_or(u32::MAX);
-                match jobs::recover(attempts, max_attempts, cancel, jobs::Abandoned::ServerStopped) {
+                let decision =
+                    jobs::recover(attempts, max_attempts, cancel, jobs::Abandoned::ServerStopped);
+                let set = set(&Event::Recover(decision.clone()), None);
+                match decision {
                     jobs::Recovery::Requeue => {
                         tx.execute(
-                            "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL WHERE seq = ?1",
+                            &format!("UPDATE jobs SET {set}, progress = 0, started_ms = NULL WHERE seq = ?1"),
                             params![seq],
                         )?;
                         requeued += 1;
                     }
                     jobs::Recovery::Fail(error) => {
                         tx.execute(
-                            "UPDATE jobs SET status = 'failed', finished_ms = ?2, error = ?3 WHERE seq = ?1",
+                            &format!("UPDATE jobs SET {set}, finished_ms = ?2, error = ?3 WHERE seq = ?1"),
                             params![seq, now_ms(), error],
                         )?;
                         ended += 1;
                     }
                     jobs::Recovery::Cancel => {
                         tx.execute(
-                            "UPDATE jobs SET status = 'cancelled', finished_ms = ?2 WHERE seq = ?1",
+                            &format!("UPDATE jobs SET {set}, finished_ms = ?2 WHERE seq = ?1"),
                             params![seq, now_ms()],
                         )?;
                         ended += 1;
@@ -498,8 +511,8 @@ impl JobStore for SqliteStore {
             let tx = c.transaction()?;
             let n = tx.execute(
                 &format!(
-                    "UPDATE jobs SET status = 'waiting', attempts = MAX(attempts - 1, 0), progress = MAX(progress, ?2)
-                     WHERE id = ?1 AND {}",
+                    "UPDATE jobs SET {}, progress = MAX(progress, ?2) WHERE id = ?1 AND {}",
+                    set(&Event::FanOut, None),
                     jobs::guard(&Event::FanOut)
                 ),
                 params![id.to_string(), progress.clamp(0.0, 1.0)],
@@ -631,17 +644,19 @@ fn settle(tx: &rusqlite::Transaction<'_>, parent: Uuid) -> Result<(), StoreError
             .transpose()?,
         unfinished: u64::try_from(unfinished).unwrap_or(0),
     };
-    match jobs::settle(&children) {
+    let decision = jobs::settle(&children);
+    let set = set(&Event::Settle(decision.clone()), None);
+    match decision {
         jobs::Settlement::Wait => {}
         jobs::Settlement::Requeue => {
             tx.execute(
-                "UPDATE jobs SET status = 'queued', started_ms = NULL WHERE id = ?1",
+                &format!("UPDATE jobs SET {set}, started_ms = NULL WHERE id = ?1"),
                 params![p],
             )?;
         }
         jobs::Settlement::Fail(error) => {
             tx.execute(
-                "UPDATE jobs SET status = 'failed', error = ?2, finished_ms = ?3 WHERE id = ?1",
+                &format!("UPDATE jobs SET {set}, error = ?2, finished_ms = ?3 WHERE id = ?1"),
                 params![p, error, now_ms()],
             )?;
             cancel_children(tx, parent)?;
@@ -656,7 +671,8 @@ fn cancel_children(tx: &rusqlite::Transaction<'_>, parent: Uuid) -> Result<(), S
     let p = parent.to_string();
     tx.execute(
         &format!(
-            "UPDATE jobs SET status = 'cancelled', cancel_requested = 1, finished_ms = ?2 WHERE parent = ?1 AND {}",
+            "UPDATE jobs SET {}, cancel_requested = 1, finished_ms = ?2 WHERE parent = ?1 AND {}",
+            set(&Event::Cancel, Some(JobStatus::Cancelled)),
             jobs::guard_to(&Event::Cancel, JobStatus::Cancelled)
         ),
         params![p, now_ms()],
