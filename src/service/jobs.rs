@@ -13,10 +13,12 @@
 //!   cancel: queued | waiting ──▶ cancelled; running ──▶ running with a cancel request
 //! ```
 //!
-//! [`next`] is the transition table; the deciders ([`cancel`], [`settle`], [`recover`]) turn
-//! the facts a store read into the event it applies; [`guard`] / [`guard_to`] give the SQL
-//! condition on the current status under which an event applies, generated from the table, so
-//! that every `UPDATE … WHERE status …` of both stores is the table's own.
+//! [`transition`] is the transition table (the status after an event and its effect on the
+//! attempts count); the deciders ([`cancel`], [`settle`], [`recover`]) turn the facts a store
+//! read into the event it applies; [`guard`] / [`guard_to`] give the SQL condition on the
+//! current status under which an event applies and [`effect`] what it writes (the stores'
+//! `SET`, `store::set_sql`), both generated from the table, so that every
+//! `UPDATE … SET status … WHERE status …` of both stores is the table's own.
 use serde::Serialize;
 
 /// Life cycle: `queued → running → succeeded | failed | cancelled`; `running → queued` when a

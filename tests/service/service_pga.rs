@@ -36,29 +36,6 @@ fn multi_body(duration: f64) -> Value {
     })
 }
 
-fn events_of(text: &str) -> Vec<(String, Value)> {
-    text.split("\n\n")
-        .filter(|b| b.contains("data:"))
-        .map(|block| {
-            let name = block
-                .lines()
-                .find_map(|l| l.strip_prefix("event:"))
-                .unwrap_or("")
-                .trim()
-                .to_string();
-            let data = block
-                .lines()
-                .find_map(|l| l.strip_prefix("data:"))
-                .unwrap_or("")
-                .trim();
-            (
-                name,
-                serde_json::from_str(data).expect("event data is JSON"),
-            )
-        })
-        .collect()
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn multi_record_search_streams_progress_and_serves_its_fragility() {
     let (svc, app, dir) = start("pga-multi");
@@ -72,7 +49,7 @@ async fn multi_record_search_streams_progress_and_serves_its_fragility() {
     }
     let stream = call(&app, get(&format!("/v1/pga-searches/{id}/events"))).await;
     assert_eq!(stream.status, 200);
-    let ev = events_of(&stream.text());
+    let ev = sse_events(&stream.text());
     let (last_name, last) = ev.last().expect("events");
     assert_eq!(
         (last_name.as_str(), last["status"].as_str()),

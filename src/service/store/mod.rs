@@ -171,6 +171,21 @@ pub struct Counts {
     pub waiting: u64,
 }
 
+impl Counts {
+    /// Record that `n` jobs are in `status` (one row of a `GROUP BY status`).
+    pub(crate) fn set(&mut self, status: JobStatus, n: u64) {
+        let field = match status {
+            JobStatus::Queued => &mut self.queued,
+            JobStatus::Running => &mut self.running,
+            JobStatus::Succeeded => &mut self.succeeded,
+            JobStatus::Failed => &mut self.failed,
+            JobStatus::Cancelled => &mut self.cancelled,
+            JobStatus::Waiting => &mut self.waiting,
+        };
+        *field = n;
+    }
+}
+
 /// Which database a [`StoreError`] came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Backend {

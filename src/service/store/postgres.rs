@@ -878,14 +878,7 @@ impl JobStore for PgStore {
                 let s: String = r.try_get(0)?;
                 let n: i64 = r.try_get(1)?;
                 let n = u64::try_from(n).unwrap_or(0);
-                match JobStatus::parse(&s)? {
-                    JobStatus::Queued => out.queued = n,
-                    JobStatus::Running => out.running = n,
-                    JobStatus::Succeeded => out.succeeded = n,
-                    JobStatus::Failed => out.failed = n,
-                    JobStatus::Cancelled => out.cancelled = n,
-                    JobStatus::Waiting => out.waiting = n,
-                }
+                out.set(JobStatus::parse(&s)?, n);
             }
             Ok(out)
         })

@@ -4,8 +4,10 @@
 //! `PRAGMA user_version`; files created before the migrations existed (version 0) are
 //! recognised by their columns.
 //!
-//! Over 600 lines because its unit tests (queue order, recovery, quotas, cancel, the schemas of
-//! older files) sit beside it; the store itself is about 670 lines, one transaction per method.
+//! Over 600 lines: the store itself is about 680 lines, one transaction per method, and the
+//! tests of what only this store has (reopening a file, the schemas of older files) sit beside
+//! it. Its behaviour as a [`JobStore`] is checked on both stores by
+//! `tests/service/store_contract.rs`.
 use super::{
     now_ms, set_sql, Backend, CancelOutcome, Counts, DeleteOutcome, Finish, JobKind, JobRecord,
     JobStatus, JobStore, NewJob, QueueFull, StoreError,
@@ -493,14 +495,7 @@ impl JobStore for SqliteStore {
                 let s: String = r.get(0)?;
                 let n: i64 = r.get(1)?;
                 let n = u64::try_from(n).unwrap_or(0);
-                match JobStatus::parse(&s)? {
-                    JobStatus::Queued => out.queued = n,
-                    JobStatus::Running => out.running = n,
-                    JobStatus::Succeeded => out.succeeded = n,
-                    JobStatus::Failed => out.failed = n,
-                    JobStatus::Cancelled => out.cancelled = n,
-                    JobStatus::Waiting => out.waiting = n,
-                }
+                out.set(JobStatus::parse(&s)?, n);
             }
             Ok(out)
         })
@@ -711,25 +706,6 @@ mod tests {
     }
 
     #[test]
-    fn claims_in_submission_order_and_once() {
-        let (s, dir) = temp_store();
-        let a = job(JobKind::Run);
-        let b = job(JobKind::PgaSearch);
-        s.insert(&a).expect("insert");
-        s.insert(&b).expect("insert");
-        let first = s.claim().expect("claim").expect("a job");
-        assert_eq!(first.id, a.id);
-        assert_eq!(first.status, JobStatus::Running);
-        assert_eq!(first.attempts, 1);
-        let second = s.claim().expect("claim").expect("a job");
-        assert_eq!(second.id, b.id);
-        assert_eq!(second.kind, JobKind::PgaSearch);
-        assert!(s.claim().expect("claim").is_none());
-        assert_eq!(s.counts().expect("counts").running, 2);
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
     fn survives_reopen_and_recovers_running_jobs() {
         let (s, dir) = temp_store();
         let a = job(JobKind::Run);
@@ -746,188 +722,6 @@ mod tests {
         assert_eq!(s.claim().expect("claim").expect("job").id, a.id);
         std::fs::remove_dir_all(dir).ok();
     }
-
-    #[test]
-    fn a_job_that_keeps_killing_the_server_fails_after_max_attempts() {
-        let (s, dir) = temp_store();
-        let a = job(JobKind::Run);
-        s.insert(&a).expect("insert");
-        // max_attempts = 3: the first two crashes requeue, the third fails the job.
-        for _ in 0..2 {
-            s.claim().expect("claim").expect("job");
-            assert_eq!(s.recover(3).expect("recover"), (1, 0));
-        }
-        s.claim().expect("claim").expect("job");
-        assert_eq!(s.recover(3).expect("recover"), (0, 1));
-        let r = s.get(a.id).expect("get").expect("exists");
-        assert_eq!(r.status, JobStatus::Failed);
-        assert!(r.error.unwrap_or_default().contains("3 times"));
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn recovery_honours_a_cancel_requested_before_the_crash() {
-        let (s, dir) = temp_store();
-        let (a, b) = (job(JobKind::Run), job(JobKind::Run));
-        s.insert(&a).expect("insert");
-        s.insert(&b).expect("insert");
-        s.claim().expect("claim");
-        s.claim().expect("claim");
-        s.request_cancel(a.id).expect("cancel");
-        s.request_cancel(b.id).expect("cancel");
-        // `a` at its first start, `b` at max_attempts = 1: both end cancelled, as the
-        // cluster store's reaper does (the cancel wins over the attempts limit).
-        assert_eq!(s.recover(1).expect("recover"), (0, 2));
-        for id in [a.id, b.id] {
-            let r = s.get(id).expect("get").expect("job");
-            assert_eq!((r.status, r.error), (JobStatus::Cancelled, None));
-        }
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn bounded_insert_is_atomic_under_concurrency() {
-        let (s, dir) = temp_store();
-        let s = std::sync::Arc::new(s);
-        let accepted = std::sync::atomic::AtomicUsize::new(0);
-        std::thread::scope(|sc| {
-            for _ in 0..12 {
-                sc.spawn(|| {
-                    for _ in 0..5 {
-                        if s.insert_bounded(&job(JobKind::Run), 20)
-                            .expect("insert")
-                            .is_none()
-                        {
-                            accepted.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                        }
-                    }
-                });
-            }
-        });
-        assert_eq!(accepted.into_inner(), 20);
-        assert_eq!(s.counts().expect("counts").queued, 20);
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn owner_quota_and_listing() {
-        let (s, dir) = temp_store();
-        let mine = |kind| NewJob {
-            owner: Some("aaaa".into()),
-            ..job(kind)
-        };
-        assert_eq!(s.insert_quota(&mine(JobKind::Run), 10, 2).expect("i"), None);
-        assert_eq!(s.insert_quota(&mine(JobKind::Run), 10, 2).expect("i"), None);
-        assert_eq!(
-            s.insert_quota(&mine(JobKind::Run), 10, 2).expect("i"),
-            Some(QueueFull::Owner(2))
-        );
-        // Another kind, another owner, no owner: their own counts.
-        assert_eq!(
-            s.insert_quota(&mine(JobKind::PgaSearch), 10, 2).expect("i"),
-            None
-        );
-        let theirs = NewJob {
-            owner: Some("bbbb".into()),
-            ..job(JobKind::Run)
-        };
-        assert_eq!(s.insert_quota(&theirs, 10, 2).expect("i"), None);
-        assert_eq!(s.insert_quota(&job(JobKind::Run), 10, 0).expect("i"), None);
-        assert_eq!(
-            s.insert_quota(&theirs, 5, 2).expect("i"),
-            Some(QueueFull::Server(5))
-        );
-        assert_eq!(s.list_owned(10, None, Some("aaaa")).expect("list").len(), 3);
-        assert_eq!(s.list_owned(10, None, Some("bbbb")).expect("list").len(), 1);
-        assert_eq!(s.list_recent(10, None).expect("list").len(), 5);
-        let first = s.list_owned(10, None, Some("bbbb")).expect("list")[0].clone();
-        assert_eq!(first.owner.as_deref(), Some("bbbb"));
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn only_finished_jobs_are_deleted() {
-        let (s, dir) = temp_store();
-        let a = job(JobKind::Run);
-        s.insert(&a).expect("insert");
-        assert_eq!(
-            s.delete(a.id).expect("delete"),
-            DeleteOutcome::NotFinished(JobStatus::Queued)
-        );
-        s.request_cancel(a.id).expect("cancel");
-        assert_eq!(s.delete(a.id).expect("delete"), DeleteOutcome::Deleted);
-        assert!(s.get(a.id).expect("get").is_none());
-        assert_eq!(s.delete(a.id).expect("delete"), DeleteOutcome::NotFound);
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn cancel_paths() {
-        let (s, dir) = temp_store();
-        let q = job(JobKind::Run);
-        s.insert(&q).expect("insert");
-        assert_eq!(
-            s.request_cancel(q.id).expect("cancel"),
-            CancelOutcome::CancelledQueued
-        );
-        assert_eq!(
-            s.get(q.id).expect("get").expect("job").status,
-            JobStatus::Cancelled
-        );
-        assert!(
-            s.claim().expect("claim").is_none(),
-            "a cancelled job is never claimed"
-        );
-        let r = job(JobKind::Run);
-        s.insert(&r).expect("insert");
-        s.claim().expect("claim");
-        assert_eq!(
-            s.request_cancel(r.id).expect("cancel"),
-            CancelOutcome::Requested
-        );
-        assert!(s.get(r.id).expect("get").expect("job").cancel_requested);
-        s.finish(r.id, &Finish::Cancelled(None)).expect("finish");
-        assert_eq!(
-            s.request_cancel(r.id).expect("cancel"),
-            CancelOutcome::AlreadyFinished(JobStatus::Cancelled)
-        );
-        assert_eq!(
-            s.request_cancel(Uuid::new_v4()).expect("cancel"),
-            CancelOutcome::NotFound
-        );
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn finish_and_requeue_only_touch_running_jobs() {
-        let (s, dir) = temp_store();
-        let a = job(JobKind::Run);
-        s.insert(&a).expect("insert");
-        // Not running yet: finish is a no-op.
-        s.finish(a.id, &Finish::Failed("x".into())).expect("finish");
-        assert_eq!(
-            s.get(a.id).expect("get").expect("job").status,
-            JobStatus::Queued
-        );
-        s.claim().expect("claim");
-        s.set_progress(a.id, 0.5).expect("progress");
-        assert_eq!(s.get(a.id).expect("get").expect("job").progress, 0.5);
-        s.requeue(a.id, true).expect("requeue");
-        let r = s.get(a.id).expect("get").expect("job");
-        assert_eq!(
-            (r.status, r.attempts, r.progress),
-            (JobStatus::Queued, 0, 0.0)
-        );
-        s.claim().expect("claim");
-        s.finish(a.id, &Finish::Succeeded(serde_json::json!({"ok": true})))
-            .expect("finish");
-        let r = s.get(a.id).expect("get").expect("job");
-        assert_eq!(r.status, JobStatus::Succeeded);
-        assert_eq!(r.progress, 1.0);
-        assert_eq!(r.result.as_deref(), Some(r#"{"ok":true}"#));
-        assert!(r.finished_ms.is_some());
-        std::fs::remove_dir_all(dir).ok();
-    }
 }
 
 /// Databases created before the migrations were numbered must still open.
@@ -936,26 +730,9 @@ mod legacy_schema_tests {
     use super::*;
 
     /// The schema exactly as the code before numbered migrations built it on open (its
-    /// `SCHEMA` constant, copied verbatim), without the columns added later.
-    const OLD_SCHEMA_V1: &str = "
-CREATE TABLE IF NOT EXISTS jobs (
-    seq INTEGER PRIMARY KEY AUTOINCREMENT,
-    id TEXT NOT NULL UNIQUE,
-    kind TEXT NOT NULL,
-    status TEXT NOT NULL,
-    request TEXT NOT NULL,
-    motion TEXT NOT NULL,
-    progress REAL NOT NULL DEFAULT 0,
-    result TEXT,
-    error TEXT,
-    cancel_requested INTEGER NOT NULL DEFAULT 0,
-    attempts INTEGER NOT NULL DEFAULT 0,
-    created_ms INTEGER NOT NULL,
-    started_ms INTEGER,
-    finished_ms INTEGER
-);
-CREATE INDEX IF NOT EXISTS jobs_status_seq ON jobs(status, seq);
-";
+    /// `SCHEMA` constant), without the columns added later: migration 1 is that constant
+    /// verbatim, and a released migration never changes.
+    const OLD_SCHEMA_V1: &str = MIGRATIONS[0].1;
     /// What that code's open then added (`add_column_if_missing` and the index constants).
     const OLD_PARENT: &str = "ALTER TABLE jobs ADD COLUMN parent TEXT;
 CREATE INDEX IF NOT EXISTS jobs_parent ON jobs(parent) WHERE parent IS NOT NULL;";
