@@ -9,8 +9,6 @@
 //! cargo run --release --example load_test -- --addr 127.0.0.1:8080   # an already running server
 //! options: --jobs N (500) --clients N (50) --workers N (cores) --wait (until all jobs finish)
 //! ```
-use std::io::{Read, Write};
-use std::net::TcpStream;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};

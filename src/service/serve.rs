@@ -196,15 +196,15 @@ pub struct ProcessArgs {
     /// embedded store's default).
     #[arg(long)]
     pub fanout_width: Option<usize>,
-    /// Most blocks in a scene (422 beyond; a worker's must match its API processes').
+    /// Most blocks in a scene (the API answers 422 beyond; give workers the API's value).
     #[arg(long, default_value_t = Limits::default().max_blocks)]
     pub max_blocks: usize,
-    /// Most samples in a ground-motion record, both components together (422 beyond; a
-    /// worker's must match its API processes').
+    /// Most samples in a ground-motion record, both components together (the API answers 422
+    /// beyond; give workers the API's value).
     #[arg(long, default_value_t = Limits::default().max_record_samples)]
     pub max_record_samples: usize,
-    /// Most steps of one run, duration / time_step (422 beyond; a worker's must match its API
-    /// processes').
+    /// Most steps of one run, duration / time_step (the API answers 422 beyond; give workers
+    /// the API's value).
     #[arg(long, default_value_t = Limits::default().max_total_steps)]
     pub max_total_steps: u64,
 }
