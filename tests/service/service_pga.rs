@@ -12,18 +12,6 @@ fn start(tag: &str) -> (ashlar::service::Service, axum::Router, std::path::PathB
     start_analysis(tag, ashlar::service::Limits::default())
 }
 
-fn rigid_column(duration: f64) -> Value {
-    let mut s = column_scene(duration);
-    s["control"]["block_model"] = json!("rigid");
-    // The full engine (the default `auto` would run the reduced rocking model on one column).
-    s["control"]["model"] = json!("dda");
-    s
-}
-
-fn half_sine(period: f64, name: &str) -> Value {
-    json!({"name": name, "horizontal": {"pulse": {"amplitude": 1.0, "period": period, "cycles": 0.5, "units": "m/s2"}}})
-}
-
 fn multi_body(duration: f64) -> Value {
     json!({
         "scene": rigid_column(duration),

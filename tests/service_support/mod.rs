@@ -28,6 +28,46 @@ pub fn pulse(amplitude: f64) -> Value {
     ashlar::presets::half_sine_json(amplitude, 0.4)
 }
 
+/// [`column_scene`] with rigid blocks on the full engine (the default `auto` would run the
+/// reduced rocking model on one column): the scene of the real-engine PGA searches.
+pub fn rigid_column(duration: f64) -> Value {
+    let mut s = column_scene(duration);
+    s["control"]["block_model"] = serde_json::json!("rigid");
+    s["control"]["model"] = serde_json::json!("dda");
+    s
+}
+
+/// A named motion of one half-sine pulse of 1 m/s² and `period` s, as a search's `motions`
+/// entry.
+pub fn half_sine(period: f64, name: &str) -> Value {
+    serde_json::json!({"name": name, "horizontal": {"pulse": {"amplitude": 1.0, "period": period, "cycles": 0.5, "units": "m/s2"}}})
+}
+
+/// Equal structure and strings; numbers within `rel` of each other (relative to the larger,
+/// with 1e-300 absolute so exact zeros compare). `rel = 0` demands identical numbers.
+pub fn close_num(a: f64, b: f64, rel: f64) -> bool {
+    a == b || (a - b).abs() <= rel * a.abs().max(b.abs()) + 1e-300
+}
+
+pub fn close_json(a: &Value, b: &Value, rel: f64) -> bool {
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => close_num(
+            x.as_f64().unwrap_or(f64::NAN),
+            y.as_f64().unwrap_or(f64::NAN),
+            rel,
+        ),
+        (Value::Array(x), Value::Array(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(p, q)| close_json(p, q, rel))
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            x.len() == y.len()
+                && x.iter()
+                    .all(|(k, v)| y.get(k).is_some_and(|w| close_json(v, w, rel)))
+        }
+        _ => a == b,
+    }
+}
+
 /// A response with its body collected.
 pub struct Reply {
     pub status: u16,

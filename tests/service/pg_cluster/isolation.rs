@@ -18,20 +18,7 @@ fn crashing_runs_and_search_runs_fail_alone_on_isolated_workers() {
     };
     let url = fresh_db(&base, "isolation");
     let root = temp_dir("pg-isolation");
-    let shared = format!("file://{}", root.join("shared").display());
-    let api = Server::start(
-        &root.join("api"),
-        &[
-            "--database",
-            &url,
-            "--workers",
-            "0",
-            "--lease",
-            "2",
-            "--artifacts",
-            &shared,
-        ],
-    );
+    let (api, shared) = api_process(&url, &root);
     let width = rayon::current_num_threads().to_string();
     // 512 MiB of address space: a column run's process needs well under that (VmPeak ~100 MB,
     // tests/service/service_isolation.rs), the allocating fault passes it within a second.

@@ -68,24 +68,23 @@ fn sql(url: &str) -> postgres::Client {
     postgres::Client::connect(url, NoTls).expect("connect")
 }
 
+/// An API process (`--workers 0`, 2 s leases) on `url`, its --data `root/api`, its artifacts
+/// in `root/shared` through the object store; returns it and that storage's URL.
+fn api_process(url: &str, root: &Path) -> (Server, String) {
+    let shared = format!("file://{}", root.join("shared").display());
+    let args = ["--database", url, "--workers", "0", "--lease", "2"];
+    let api = Server::start(
+        &root.join("api"),
+        &[&args[..], &["--artifacts", &shared]].concat(),
+    );
+    (api, shared)
+}
+
 /// One API process (`--workers 0`) and `n` single-thread worker processes (2 s leases, `extra`
 /// further worker arguments) on `url`. Every process has its own --data under `root` (as on
 /// separate machines); artifacts meet in `root/shared` through the object store.
 fn cluster(url: &str, root: &Path, n: usize, extra: &[&str]) -> (Server, Vec<Worker>) {
-    let shared = format!("file://{}", root.join("shared").display());
-    let api = Server::start(
-        &root.join("api"),
-        &[
-            "--database",
-            url,
-            "--workers",
-            "0",
-            "--lease",
-            "2",
-            "--artifacts",
-            &shared,
-        ],
-    );
+    let (api, shared) = api_process(url, root);
     let mut args = vec!["--workers", "1", "--lease", "2", "--artifacts", &shared];
     args.extend_from_slice(extra);
     let workers = (0..n)
@@ -169,28 +168,6 @@ fn comparable(text: &str) -> Value {
     v
 }
 
-/// Equal structure and strings; numbers within `rel` (relative to the larger).
-fn close_json(a: &Value, b: &Value, rel: f64) -> bool {
-    match (a, b) {
-        (Value::Number(x), Value::Number(y)) => {
-            let (x, y) = (
-                x.as_f64().unwrap_or(f64::NAN),
-                y.as_f64().unwrap_or(f64::NAN),
-            );
-            x == y || (x - y).abs() <= rel * x.abs().max(y.abs()) + 1e-300
-        }
-        (Value::Array(x), Value::Array(y)) => {
-            x.len() == y.len() && x.iter().zip(y).all(|(p, q)| close_json(p, q, rel))
-        }
-        (Value::Object(x), Value::Object(y)) => {
-            x.len() == y.len()
-                && x.iter()
-                    .all(|(k, v)| y.get(k).is_some_and(|w| close_json(v, w, rel)))
-        }
-        _ => a == b,
-    }
-}
-
 /// The same 100 jobs through the embedded (SQLite) store, in process: the reference.
 fn embedded_results(bodies: &[Value]) -> Vec<String> {
     let dir = temp_dir("pg-embedded-ref");
@@ -237,18 +214,6 @@ fn embedded_results(bodies: &[Value]) -> Vec<String> {
     svc.shutdown(Duration::from_secs(5));
     std::fs::remove_dir_all(dir).ok();
     out
-}
-
-fn rigid_column(duration: f64) -> Value {
-    let mut s = column_scene(duration);
-    s["control"]["block_model"] = json!("rigid");
-    // The full engine, as in the other real-engine tests here.
-    s["control"]["model"] = json!("dda");
-    s
-}
-
-fn half_sine(period: f64, name: &str) -> Value {
-    json!({"name": name, "horizontal": {"pulse": {"amplitude": 1.0, "period": period, "cycles": 0.5, "units": "m/s2"}}})
 }
 
 /// The two searches the fan-out tests submit: one record, and two records with two criteria
