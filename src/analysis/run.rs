@@ -53,9 +53,10 @@ pub struct RunOptions<'a> {
     pub run_end: Option<RunEndParams>,
     /// When `auto`'s reduced model meets a case it does not represent, start the full engine
     /// from the reduced model's state at the last record sample it passed within its
-    /// assumptions instead of at t = 0 (`analysis::run_fallback`). Set by the PGA search, whose runs need only the verdict;
-    /// off by default so that a run's histories and trajectory come from one model. Ignored
-    /// when the run writes frames.
+    /// assumptions instead of at t = 0 (`analysis::run_fallback`; a run that writes frames
+    /// gets the reduced model's before that sample, the engine's after). Runs and PGA searches
+    /// take it alike (the search's runs use the default), so a run at a bracket end reproduces
+    /// the search's verdict.
     pub fallback_from_rest: bool,
 }
 
