@@ -1,6 +1,6 @@
 //! One run, `auto`'s fallback to the full engine started where the reduced model last was
 //! within its assumptions: sits between `analysis::run` (which calls it when the reduced model
-//! meets a case it does not represent and `RunOptions::fallback_from_rest` is set) and the
+//! meets a case it does not represent, unless `RunOptions::fallback_from_zero` is set) and the
 //! engine loop `run::run_dda`, which it runs on the scene and record from that instant. A run
 //! that writes outputs (`ashlar run`, the service's run jobs) takes the same path as a PGA
 //! search's run (same engine start, same steps, same verdict) and writes the reduced model's
@@ -260,7 +260,7 @@ pub(crate) fn from_rest(
         on_frame: frames.then_some(&engine_frame as &(dyn Fn(&Frame) + Sync)),
         reduced_params: opts.reduced_params,
         run_end: opts.run_end,
-        fallback_from_rest: false,
+        fallback_from_zero: false,
     };
     let mut out = run_dda(&s, &gm, &sub, reason)?;
     if let Some(m) = stitched {

@@ -1,7 +1,7 @@
 //! `auto`'s fallback to the full engine in a PGA search starts from the reduced model's state
 //! at the last record sample it passed within its assumptions (at rest, or rocking with the
 //! pivot within friction: the block's pose and velocity, the record from that sample on;
-//! `RunOptions::fallback_from_rest`, `analysis::run_fallback`), not from t = 0. Reference: the
+//! the default; `RunOptions::fallback_from_zero` off, `analysis::run_fallback`), not from t = 0. Reference: the
 //! full engine run from t = 0 over the whole record (`"model": "dda"`, the run the fallback
 //! replaced), at the default Δt (1 ms) and at 0.25 ms.
 //!
@@ -65,7 +65,6 @@ fn fallback_from_the_last_rest_matches_the_engine_from_zero() {
             let opts = RunOptions {
                 stop_when: Some(&decided),
                 no_trajectory: true,
-                fallback_from_rest: true,
                 ..Default::default()
             };
             let s = run(&auto, &scaled, &opts).expect("run").summary;
@@ -135,7 +134,6 @@ fn a_run_that_writes_outputs_hands_over_like_a_search_run() {
         &gm,
         &RunOptions {
             out_dir: Some(&dir),
-            fallback_from_rest: true,
             ..Default::default()
         },
     )
@@ -146,7 +144,6 @@ fn a_run_that_writes_outputs_hands_over_like_a_search_run() {
         &gm,
         &RunOptions {
             no_trajectory: true,
-            fallback_from_rest: true,
             ..Default::default()
         },
     )
