@@ -1,5 +1,5 @@
 //! Is `auto`'s hand-over to the engine (the default; `RunOptions::fallback_from_zero` turns it off) as accurate as the
-//! fallback from t = 0? (docs/speed.md, "Session 32: the hand-over made the default".) For the
+//! fallback from t = 0? (docs/speed.md, "Reduced models on records", session 32.) For the
 //! bundled column (`examples/column.json`, 0.4 × 1.2 m, φ = 40°) and the slender column of
 //! `tests/analysis/pga_honesty.rs` (0.24 × 1.6 m, φ = 75°) under every record in
 //! `data/ground-motions/` (and the slender one over the records' first 9 s, as `pga_honesty`
@@ -13,7 +13,7 @@
 //! ran) and the counts: verdicts of (a) and (b) equal to (c)'s, peaks within 5 % of (c)'s
 //! where (c) stands with more than 0.02 rad.
 //!
-//! Run: `cargo run --release --example handover_study` (about 2 min of CPU at 2 threads).
+//! Run: `cargo run --release --example handover_study` (about 5 min at 2 threads, loaded).
 use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};
 use ashlar::analysis::run::{run, RunOptions, Summary, Tracker};
 use ashlar::motion::GroundMotion;
