@@ -429,7 +429,7 @@ pub fn evaluate_with_summary(
     // `auto`'s fallback to the engine starts at t = 0 here as in `ashlar run`
     // (`RunOptions::fallback_from_rest` off): with the hand-over on, a bracket end's verdict
     // differed from `ashlar run`'s at the same amplitude (tests/analysis/pga_honesty.rs,
-    // Friuli, the slender column; docs/speed.md, session 31).
+    // Friuli, the slender column; docs/speed.md).
     let opts = RunOptions {
         stop_when: Some(&decided),
         cancel,

@@ -3,7 +3,7 @@
 use ashlar::motion::GroundMotion;
 use ashlar::scene::{parse_scene, Scene};
 use ashlar::simulation::{SimParams, Simulation};
-use serde_json::{json, Value};
+use serde_json::Value;
 
 #[allow(unused_imports)] // each test binary uses a different subset
 pub use ashlar::presets::{half_sine, incline, rect, rocking_pulse, scene_json, sine, Column, G};

@@ -54,7 +54,7 @@ fn shaken_wall() -> Scene {
         30.0,
         // Deformable by name, as written (then the default). With rigid stones ("auto") the two
         // solvers' runs differ by 1.33e-7 m after 100 steps, above this test's 1e-7 m bound
-        // (session 29; not investigated: the rigid wall's contact forces are less determined).
+        // (measured when this was written; not investigated: the rigid wall's contact forces are less determined).
         json!({ "time_step": 1e-3, "contact_solver": "dual", "duration": 1.0, "block_model": "deformable" }),
     ))
 }

@@ -94,8 +94,8 @@ fn check_point(col: &RecordColumn, record: &str, pga: f64, regression: Option<f6
         &m,
         sr::run_length(&m),
         // Deformable by name: the points and bounds below were measured with the deformable
-        // block, the default when this was written. With rigid blocks (the "auto" default
-        // since session 29) the 0.4 × 1.2 m column under Friuli at 0.5 / 0.9 g is −7.6 % off
+        // block, the default when this was written. With rigid blocks (what "auto" now
+        // chooses for it, docs/format.md) the 0.4 × 1.2 m column under Friuli at 0.5 / 0.9 g is −7.6 % off
         // Housner's peak at one of them (5 % tolerance): not yet understood.
         &json!({ "block_model": "deformable" }),
         SimParams::default(),

@@ -1,28 +1,25 @@
 //! The rocking frame of Makris & Vassiliou (2013): overturning amplitude, history to the first
 //! impact and restitution against the equivalent column.
 use super::*;
+use super::frame_records::frame_restitution_law;
 
 // ---------------------------------------------------------------------------------------------
 // Rocking frame
 // ---------------------------------------------------------------------------------------------
-
-/// Columns: half-width b, half-height h (Yagoda-Biran & Hatzor's column); cap beam: mass γ × both columns.
-const B: f64 = 0.2;
-const H: f64 = 0.6;
 
 /// p̂² of the rocking frame, derived by Lagrange's equations (N columns of mass m, moment of
 /// inertia (4/3) m R² about the pivot; the cap of mass M = γ N m translates with the columns'
 /// top corners, at distance 2R from the pivots: speed 2Rθ̇, height 2R cos(α − θ)):
 /// (4/3 N m + 4M) R² θ̈ = −(N m + 2M) g R [sin(α − θ) − (a_g/g) cos(α − θ)], so
 /// p̂² = (3g/4R) (1 + 2γ)/(1 + 3γ), Makris & Vassiliou's result.
-fn frame_p2(gamma: f64) -> f64 {
+pub(super) fn frame_p2(gamma: f64) -> f64 {
     let r = B.hypot(H);
     3.0 * G / (4.0 * r) * (1.0 + 2.0 * gamma) / (1.0 + 3.0 * gamma)
 }
 
 /// The frame of `ashlar::presets::RockingFrame::SEED` (columns b = B, h = H centred at
 /// x = ±0.8 m, the cap spanning their outer faces, φ = 75°) with cap mass ratio γ.
-fn frame_scene(gamma: f64, solver: &str) -> ashlar::scene::Scene {
+pub(super) fn frame_scene(gamma: f64, solver: &str) -> ashlar::scene::Scene {
     let frame = ashlar::presets::RockingFrame::SEED.gamma(gamma);
     assert_eq!((frame.half_width, frame.half_height), (B, H));
     parse(&frame.json(json!({ "model": "dda", "duration": 4.0, "contact_solver": solver })))

@@ -10,7 +10,7 @@ use super::frame::*;
 
 /// Makris & Vassiliou's (2013) ratio of angular velocities across an impact of the rocking
 /// frame, r = (1 − 1.5 sin²α + 3γ cos 2α)/(1 + 3γ) (γ = 0: Housner's column).
-fn frame_restitution_law(gamma: f64, alpha: f64) -> f64 {
+pub(super) fn frame_restitution_law(gamma: f64, alpha: f64) -> f64 {
     (1.0 - 1.5 * alpha.sin().powi(2) + 3.0 * gamma * (2.0 * alpha).cos()) / (1.0 + 3.0 * gamma)
 }
 

@@ -200,6 +200,11 @@ fn engine_overturns(
     fell
 }
 
+/// Columns: half-width b, half-height h (Yagoda-Biran & Hatzor's column); the
+/// frame's columns and the pier's.
+const B: f64 = 0.2;
+const H: f64 = 0.6;
+
 mod frame;
 mod frame_records;
 mod pier;

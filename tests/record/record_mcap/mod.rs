@@ -3,11 +3,9 @@
 //! checked against the frames, the CSV written from the same frames, their embedded schemas
 //! and a golden digest.
 use ashlar::record::mcap::{log_time_ns, TOPIC_BLOCKS, TOPIC_GROUND, TOPIC_SCENE, TOPIC_TF};
-use ashlar::record::messages::fill_color;
 use ashlar::record::synthetic::RockingSquare;
-use ashlar::record::triangulate::signed_area;
 use ashlar::record::{
-    BlockMotionState, Frame, FrameBlockKind, HistoryWriter, McapParams, McapRecorder, RecordError,
+    Frame, HistoryWriter, McapParams, McapRecorder, RecordError,
     RecordHeader,
 };
 use serde_json::Value;

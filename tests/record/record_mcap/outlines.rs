@@ -1,5 +1,8 @@
 //! The scene channel's outlines against the block states of the same frames.
 use super::*;
+use ashlar::record::messages::fill_color;
+use ashlar::record::triangulate::signed_area;
+use ashlar::record::{BlockMotionState, FrameBlockKind};
 
 fn centroid(p: &[[f64; 2]]) -> [f64; 2] {
     let a = signed_area(p);
@@ -121,7 +124,3 @@ fn scene_outlines_agree_with_block_states() {
     .collect();
     assert_eq!(colours.len(), 4);
 }
-
-/// A small JSON Schema checker (the subset the recording's schemas use): `type`, `required`,
-/// `properties` (and no property the schema does not declare), `items`, `enum`, `oneOf` of
-/// consts, `minimum`, `maximum`.

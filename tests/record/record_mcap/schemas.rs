@@ -1,6 +1,9 @@
 //! Every message against its embedded JSON schema, and the Foxglove schemas' published fields.
 use super::*;
 
+/// A small JSON Schema checker (the subset the recording's schemas use): `type`, `required`,
+/// `properties` (and no property the schema does not declare), `items`, `enum`, `oneOf` of
+/// consts, `minimum`, `maximum`.
 fn validate(schema: &Value, v: &Value, at: &str) -> Result<(), String> {
     if let Some(ty) = schema.get("type").and_then(Value::as_str) {
         let ok = match ty {
