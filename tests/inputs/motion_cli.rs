@@ -1,8 +1,8 @@
 //! `ashlar motion RECORD [--svg FILE]`: the JSON has exactly the docs/format.md §3 fields (plus the
 //! documented extensions) and the SVG is written.
+use crate::common::MOTION_REPORT_FIELDS;
 use ashlar::cli::motion::{report_json, MotionArgs};
 use ashlar::motion::RecordArgs;
-use crate::common::MOTION_REPORT_FIELDS;
 use std::path::PathBuf;
 
 fn args(record: &str) -> MotionArgs {

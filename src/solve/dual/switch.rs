@@ -173,7 +173,6 @@ fn admissible(g: &BlockGeometry, v: usize, n: &Vector2<f64>, sin_tol: f64) -> bo
     e1.dot(n) >= -sin_tol * e1.norm() && e2.dot(n) >= -sin_tol * e2.norm()
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,7 +1,7 @@
 //! The rocking frame of Makris & Vassiliou (2013): overturning amplitude, history to the first
 //! impact and restitution against the equivalent column.
-use super::*;
 use super::frame_records::frame_restitution_law;
+use super::*;
 
 // ---------------------------------------------------------------------------------------------
 // Rocking frame

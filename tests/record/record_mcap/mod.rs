@@ -4,10 +4,7 @@
 //! and a golden digest.
 use ashlar::record::mcap::{log_time_ns, TOPIC_BLOCKS, TOPIC_GROUND, TOPIC_SCENE, TOPIC_TF};
 use ashlar::record::synthetic::RockingSquare;
-use ashlar::record::{
-    Frame, HistoryWriter, McapParams, McapRecorder, RecordError,
-    RecordHeader,
-};
+use ashlar::record::{Frame, HistoryWriter, McapParams, McapRecorder, RecordError, RecordHeader};
 use serde_json::Value;
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::Cursor;
