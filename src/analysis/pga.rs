@@ -428,7 +428,7 @@ pub fn evaluate_with_summary(
     };
     // `auto`'s fallback to the engine hands over as in `ashlar run` (both take the default of
     // `RunOptions::fallback_from_zero`), so a full run at a bracket end reproduces its verdict
-    // (tests/analysis/pga_honesty.rs; docs/speed.md, session 32).
+    // (tests/analysis/pga_honesty.rs; docs/speed.md, "Reduced models on records").
     let opts = RunOptions {
         stop_when: Some(&decided),
         cancel,
