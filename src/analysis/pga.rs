@@ -433,10 +433,9 @@ pub fn evaluate_with_summary(
             .decided(criteria.iter().map(|c| c.decided(tr)))
             .is_some()
     };
-    // `auto`'s fallback to the engine starts at t = 0 here as in `ashlar run`
-    // (`RunOptions::fallback_from_rest` off): with the hand-over on, a bracket end's verdict
-    // differed from `ashlar run`'s at the same amplitude (tests/analysis/pga_honesty.rs,
-    // Friuli, the slender column; docs/speed.md, session 31).
+    // `auto`'s fallback to the engine hands over as in `ashlar run` (both take the default of
+    // `RunOptions::fallback_from_zero`), so a full run at a bracket end reproduces its verdict
+    // (tests/analysis/pga_honesty.rs; docs/speed.md, "Reduced models on records").
     let opts = RunOptions {
         stop_when: Some(&decided),
         cancel,
