@@ -228,7 +228,7 @@ pub(crate) fn set_sql(database: Backend, event: &Event, to: Option<JobStatus>) -
 /// A store failure, by cause, over both databases. Logged in full; the HTTP edge
 /// (`ApiError::store`) gives clients a problem per cause without internals: `Busy` is
 /// `unavailable` (503, retry), every other cause `internal` (500).
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, thiserror::Error)]
 pub enum StoreError {
     /// The database is busy or unreachable (SQLite locked past its busy timeout; PostgreSQL's
     /// connection lost or refused): a retry may succeed.
@@ -239,16 +239,25 @@ pub enum StoreError {
     Database { database: Backend, detail: String },
     /// The database URL or its TLS settings (`--database postgres://…`) are not usable.
     #[error("job store: {0}")]
-    Config(String),
+    Config(#[from] tls::PgUrlError),
     /// The store file could not be opened.
     #[error("job store: {path}: {detail}")]
     Open { path: String, detail: String },
     /// A stored value this ashlar cannot read (`what`: a column, an id, a kind, a status).
     #[error("job store: corrupt {what}: {detail}")]
     Corrupt { what: String, detail: String },
-    /// The database's schema is newer than this ashlar, or a numbered migration failed.
-    #[error("job store: {0}")]
-    Schema(String),
+    /// The database's schema (version `found`) is newer than this ashlar's (`known`).
+    #[error(
+        "job store: the database schema is version {found}, newer than this ashlar understands ({known}); upgrade ashlar"
+    )]
+    SchemaNewer { found: i32, known: i32 },
+    /// A numbered migration (`version`) failed in `database` (`detail`: the database's message).
+    #[error("job store: schema migration {version}: {database}: {detail}")]
+    Migration {
+        version: i32,
+        database: Backend,
+        detail: String,
+    },
     /// This store does not implement the operation (`what`, e.g. "delete jobs").
     #[error("job store: this job store cannot {0}")]
     Unsupported(&'static str),

@@ -184,7 +184,7 @@ impl PgStore {
     /// Connect, create or upgrade the schema, and return the store.
     pub fn open(url: &str, params: LeaseParams) -> Result<Self, StoreError> {
         // StoreError is Clone and compared in the store's tests: the URL's error is kept as text.
-        let target = parse_url(url).map_err(|e| StoreError::Config(e.to_string()))?;
+        let target = parse_url(url)?;
         let host = std::env::var("HOSTNAME")
             .ok()
             .or_else(|| {
@@ -375,16 +375,21 @@ fn migrate(c: &mut Client) -> Result<(), StoreError> {
         .try_get(0)?;
     let v = v.unwrap_or(0);
     if v > SCHEMA_VERSION {
-        return Err(StoreError::Schema(format!(
-            "the database schema is version {v}, newer than this ashlar understands ({SCHEMA_VERSION}); upgrade ashlar"
-        )));
+        return Err(StoreError::SchemaNewer {
+            found: v,
+            known: SCHEMA_VERSION,
+        });
     }
     for &(version, sql) in MIGRATIONS.iter().filter(|(k, _)| *k > v) {
         tx.batch_execute(sql).map_err(|e| {
             let detail = e
                 .as_db_error()
                 .map_or_else(|| e.to_string(), |db| db.message().to_string());
-            StoreError::Schema(format!("schema migration {version}: postgres: {detail}"))
+            StoreError::Migration {
+                version,
+                database: Backend::Postgres,
+                detail,
+            }
         })?;
         tx.execute(
             "INSERT INTO ashlar_schema_version (version) VALUES ($1)",

@@ -88,13 +88,17 @@ fn migrate(c: &mut Connection) -> Result<(), StoreError> {
         v = legacy_version(&tx)?;
     }
     if v > SCHEMA_VERSION {
-        return Err(StoreError::Schema(format!(
-            "the database schema is version {v}, newer than this ashlar understands ({SCHEMA_VERSION}); upgrade ashlar"
-        )));
+        return Err(StoreError::SchemaNewer {
+            found: v,
+            known: SCHEMA_VERSION,
+        });
     }
     for &(version, sql) in MIGRATIONS.iter().filter(|(k, _)| *k > v) {
-        tx.execute_batch(sql)
-            .map_err(|e| StoreError::Schema(format!("schema migration {version}: sqlite: {e}")))?;
+        tx.execute_batch(sql).map_err(|e| StoreError::Migration {
+            version,
+            database: Backend::Sqlite,
+            detail: e.to_string(),
+        })?;
         tracing::info!(version, "applied schema migration");
     }
     tx.pragma_update(None, "user_version", SCHEMA_VERSION)?;
@@ -877,7 +881,8 @@ CREATE INDEX IF NOT EXISTS jobs_finished ON jobs(finished_ms) WHERE parent IS NU
             Err(e) => e,
         };
         assert!(
-            matches!(&e, StoreError::Schema(m) if m.contains("version 99") && m.contains("upgrade ashlar")),
+            matches!(&e, StoreError::SchemaNewer { found: 99, .. })
+                && e.to_string().contains("upgrade ashlar"),
             "{e}"
         );
         std::fs::remove_dir_all(dir).ok();
