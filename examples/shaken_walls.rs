@@ -205,6 +205,9 @@ fn main() {
             if let Some(v) = arg("--freeze") {
                 params.open_close.freeze_after = v.parse().expect("--freeze");
             }
+            if std::env::args().any(|a| a == "--freeze-hold") {
+                params.open_close.freeze_hold = true;
+            }
             if let Some(v) = arg("--friction-tol") {
                 params.open_close.friction_tolerance = v.parse().expect("--friction-tol");
             }

@@ -128,6 +128,10 @@ pub struct OpenCloseParams {
     /// on with that contact free (up to `max_flips`). 0 = off. Default 0 (opt-in): measured in
     /// docs/contact-solve.md §12.
     pub freeze_after: u32,
+    /// After the flip freeze's end check, hold a contact that took its change at its new state
+    /// for the rest of the step (its later changes are taken into the next step) instead of
+    /// setting it free. Off (measured in docs/contact-solve.md §12).
+    pub freeze_hold: bool,
 }
 
 impl Default for OpenCloseParams {
@@ -150,6 +154,7 @@ impl Default for OpenCloseParams {
             light_state_tilt: std::f64::consts::FRAC_PI_4,
             light_state_interface: true,
             freeze_after: 0,
+            freeze_hold: false,
         }
     }
 }
@@ -378,9 +383,10 @@ pub fn iterate(
                 }
             }
             // Flip freeze: keep what the contact was, to restore it if it changes state again.
-            let frozen =
-                (params.freeze_after > 0 && c.flips >= params.freeze_after && !scratch.checked[k])
-                    .then(|| (c.clone(), *counts));
+            let frozen = (params.freeze_after > 0
+                && c.flips >= params.freeze_after
+                && (!scratch.checked[k] || params.freeze_hold))
+                .then(|| (c.clone(), *counts));
             let update = update_state(
                 c, law, springs, x, dofs, prescribed, params, it, scale, counts,
             );
@@ -389,7 +395,9 @@ pub fn iterate(
                     *c = held;
                     *counts = counted;
                     counts.frozen += 1;
-                    scratch.held.push(k);
+                    if !scratch.checked[k] {
+                        scratch.held.push(k);
+                    }
                     continue;
                 }
             }
