@@ -10,7 +10,8 @@
 //! `cargo run --release --example shaken_walls -- [--sizes 100,400,1600] [--steps 300]
 //!  [--motions rest,sine,record] [--diag] [--tight] [--block-model rigid|deformable] [--poisson V]
 //!  [--anderson DEPTH] [--anderson-restart] [--legacy] [--reference] [--record-start T]
-//!  [--seconds S] [--settle TOL] [--settle-after K] [--light-states on|off]`
+//!  [--seconds S] [--settle TOL] [--settle-after K] [--light-states on|off] [--light-tilt DEG]
+//!  [--light-interface on|off] [--freeze K] [--freeze-hold]`
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
 //! fixed-point loop); `--anderson-restart` restarts its history whenever a contact changes state.
