@@ -7,7 +7,7 @@
 //!   The shaken wall is measured by `examples/wall_probe.rs` (a criterion run would take minutes).
 use ashlar::motion::GroundMotion;
 use ashlar::presets::rocking_pulse;
-use ashlar::scene::generate::{column, running_bond_wall, WallParams};
+use ashlar::scene::generate::column;
 use ashlar::scene::validate;
 use ashlar::simulation::{SimParams, Simulation};
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -37,13 +37,7 @@ fn rocking_column(c: &mut Criterion) {
 }
 
 fn wall(c: &mut Criterion) {
-    let spec = running_bond_wall(&WallParams {
-        courses: 20,
-        blocks_per_course: 20,
-        ..Default::default()
-    });
-    let mut spec = spec;
-    spec.control.time_step = Some(1e-3);
+    let mut spec = ashlar::presets::wall(20, 20);
     spec.control.duration = Some(10.0);
     let scene = validate(&spec).expect("wall scene");
     let mut group = c.benchmark_group("wall");

@@ -2,7 +2,6 @@
 //! rest under gravity (Δt = 1 ms). Prints a Markdown table with the fitted exponent between
 //! successive sizes. Run: `cargo run --release --example engine_scaling`.
 use ashlar::motion::GroundMotion;
-use ashlar::scene::generate::{running_bond_wall, WallParams};
 use ashlar::scene::validate;
 use ashlar::simulation::{SimParams, Simulation};
 use std::time::Instant;
@@ -12,13 +11,7 @@ fn main() {
     println!("|---|---|---|---|---|---|");
     let mut prev: Option<(f64, f64)> = None;
     for (courses, per) in [(10, 10), (20, 20), (40, 40), (80, 80)] {
-        let mut spec = running_bond_wall(&WallParams {
-            courses,
-            blocks_per_course: per,
-            ..Default::default()
-        });
-        spec.control.time_step = Some(1e-3);
-        let scene = validate(&spec).expect("wall");
+        let scene = validate(&ashlar::presets::wall(courses, per)).expect("wall");
         let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
         // Warm up: the first steps settle the wall onto its contact springs (contact detection,
         // the symbolic factorization and a few numeric ones); the table is the steady cost.

@@ -9,8 +9,6 @@
 //! cargo run --release --example load_test -- --addr 127.0.0.1:8080   # an already running server
 //! options: --jobs N (500) --clients N (50) --workers N (cores) --wait (until all jobs finish)
 //! ```
-use std::io::{Read, Write};
-use std::net::TcpStream;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -53,27 +51,10 @@ fn parse_opts() -> Result<Opts, String> {
     Ok(o)
 }
 
-/// One request with `Connection: close`; (status, body).
-fn http(addr: &str, method: &str, path: &str, body: &str) -> std::io::Result<(u16, String)> {
-    let mut s = TcpStream::connect(addr)?;
-    s.set_read_timeout(Some(Duration::from_secs(60)))?;
-    s.set_nodelay(true)?;
-    let req = format!(
-        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}",
-        body.len()
-    );
-    s.write_all(req.as_bytes())?;
-    let mut raw = Vec::new();
-    s.read_to_end(&mut raw)?;
-    let text = String::from_utf8_lossy(&raw).into_owned();
-    let (head, rest) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
-    let status = head
-        .split_whitespace()
-        .nth(1)
-        .and_then(|c| c.parse().ok())
-        .unwrap_or(0);
-    Ok((status, rest.to_string()))
-}
+// The service tests' raw HTTP/1.1 client (std only), one copy for both.
+#[path = "../tests/service_support/http_client.rs"]
+mod http_client;
+use http_client::http;
 
 fn job_body(k: usize) -> String {
     // A column on a plinth under a pulse, 20 s simulated: about 0.1 s of CPU with the engine.
@@ -148,7 +129,7 @@ fn main() -> Result<(), String> {
         std::thread::spawn(move || {
             while !stop.load(Ordering::SeqCst) {
                 let t = Instant::now();
-                let r = http(&addr, "GET", "/healthz", "");
+                let r = http(&addr, "GET", "/healthz", None);
                 let ms = t.elapsed().as_secs_f64() * 1e3;
                 if let Ok((200, body)) = r {
                     let v: serde_json::Value = serde_json::from_str(&body).unwrap_or_default();
@@ -187,7 +168,7 @@ fn main() -> Result<(), String> {
                     break;
                 }
                 let t = Instant::now();
-                match http(&addr, "POST", "/v1/jobs", &job_body(k)) {
+                match http(&addr, "POST", "/v1/jobs", Some(&job_body(k))) {
                     Ok((202, body)) => {
                         let v: serde_json::Value = serde_json::from_str(&body).unwrap_or_default();
                         if let (Some(id), Ok(mut ids)) = (v["id"].as_str(), ids.lock()) {
@@ -221,7 +202,7 @@ fn main() -> Result<(), String> {
     let mut lost = Vec::new();
     let mut by_status = std::collections::BTreeMap::<String, usize>::new();
     for id in &ids {
-        match http(&addr, "GET", &format!("/v1/jobs/{id}"), "") {
+        match http(&addr, "GET", &format!("/v1/jobs/{id}"), None) {
             Ok((200, body)) => {
                 let v: serde_json::Value = serde_json::from_str(&body).unwrap_or_default();
                 *by_status
@@ -237,7 +218,7 @@ fn main() -> Result<(), String> {
             let unfinished = ids
                 .iter()
                 .filter(|id| {
-                    http(&addr, "GET", &format!("/v1/jobs/{id}"), "")
+                    http(&addr, "GET", &format!("/v1/jobs/{id}"), None)
                         .map(|(_, b)| {
                             b.contains("\"status\":\"queued\"")
                                 || b.contains("\"status\":\"running\"")

@@ -9,7 +9,7 @@
 //! Run: `cargo run --example records_history -- [column 0|1] [record] [PGA g] [variant]`
 //! (default: 0, Friuli, 0.6; variant: `new` (the defaults) or modifiers joined by `+`: `trap`
 //! (trapezoidal rule), `stale` (`restart_after_impact` off: the trapezoidal rule as it was before
-//! session 31), `avg` (`average_ground_load`), `rigid` (block model), `rock:C`, `err:R`, `nm:G` (Newmark γ = G,
+//! the restart), `avg` (`average_ground_load`), `rigid` (block model), `rock:C`, `err:R`, `nm:G` (Newmark γ = G,
 //! β = (G + ½)²/4), `slow:F` (`impact.slow_factor`), `dt:S` (the coarse run's step), `fine:S` (the reference run's
 //! step, 1e-4 s unless given); the reference run takes the same modifiers except `rock`, `err`, `dt`).
 use ashlar::analysis::reference::{housner_rocking, HousnerColumn};

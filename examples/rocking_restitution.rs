@@ -4,6 +4,7 @@
 //! coefficient of restitution r, compared with Housner's r = 1 − 1.5 sin²α. Prints a table.
 //! Run: `cargo run --release --example rocking_restitution`
 use ashlar::motion::GroundMotion;
+use ashlar::presets::{scene_json, Column};
 use ashlar::scene::parse_scene;
 use ashlar::simulation::{SimParams, Simulation};
 
@@ -20,16 +21,16 @@ fn measure(b: f64, h: f64, theta0: f64, dt: Option<f64>) -> (f64, f64) {
     if let Some(dt) = dt {
         control["time_step"] = serde_json::json!(dt);
     }
-    let scene = serde_json::json!({
-        "format": "ashlar.scene/1", "gravity": 9.81,
-        "materials": { "stone": { "density": 2500.0, "young_modulus": 2.0e10, "poisson_ratio": 0.2 } },
-        "joints": { "j": { "friction_angle": 85.0 } },
-        "blocks": [
-            { "id": "base", "material": "stone", "fixed": true, "vertices": [[-1.0, -0.5], [1.0, -0.5], [1.0, 0.0], [-1.0, 0.0]] },
-            { "id": "column", "material": "stone", "block_model": "rigid", "vertices": v },
-        ],
-        "control": control,
-    });
+    // The column of `presets::Column::SEED` with half-sizes b × h and φ = 85° (it rocks, never
+    // slides), tilted.
+    let column = Column {
+        half_width: b,
+        half_height: h,
+        ..Column::SEED.friction(85.0)
+    };
+    let mut blocks = column.blocks();
+    blocks[1]["vertices"] = serde_json::json!(v);
+    let scene = scene_json(blocks, column.friction_angle, control);
     let scene = parse_scene(&scene.to_string()).expect("scene");
     let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
     // Upright when the accumulated rotation is +θ0 (counter-clockwise back); after the impact

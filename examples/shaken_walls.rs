@@ -19,11 +19,11 @@
 //! `--tight`: the reference configuration of docs/contact-solve.md (Δt = 1e-4 s, the open–close
 //! loop run to convergence with the previous defaults of `OpenCloseParams::legacy`).
 use ashlar::motion::{self, GroundMotion, Signal};
-use ashlar::scene::generate::{running_bond_wall, WallParams};
+use ashlar::presets;
+use ashlar::scene::generate::WallParams;
 use ashlar::scene::{validate, BlockModel};
 use ashlar::simulation::{SimParams, Simulation};
 use ashlar::solve::open_close::CHANGE_KINDS;
-use std::path::Path;
 use std::time::Instant;
 
 fn arg(name: &str) -> Option<String> {
@@ -41,11 +41,7 @@ fn layout(n: usize) -> (usize, usize) {
 }
 
 fn record() -> GroundMotion {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("data/ground-motions/northridge-1994-mulholland-009.at2");
-    motion::load_path(&path)
-        .expect("the repository's Northridge record")
-        .scaled_to_pga(0.3 * motion::STANDARD_GRAVITY)
+    presets::shaken_wall_record().expect("the repository's Northridge record")
 }
 
 /// Runs the tight reference (Δt = 1e-4 s fixed, the previous open–close loop run to
@@ -125,13 +121,15 @@ fn main() {
     for &n in &sizes {
         let (courses, per) = layout(n);
         for m in motions.split(',') {
-            let mut spec = running_bond_wall(&WallParams {
+            let mut spec = presets::wall_of(&WallParams {
                 courses,
                 blocks_per_course: per,
                 block_model: model,
                 ..Default::default()
             });
-            spec.control.time_step = Some(if tight { 1e-4 } else { 1e-3 });
+            if tight {
+                spec.control.time_step = Some(1e-4);
+            }
             // `--poisson V`: the stones' Poisson ratio (deformable walls: docs/contact-solve.md §7).
             if let Some(v) = arg("--poisson") {
                 for m in spec.materials.values_mut() {

@@ -2,19 +2,12 @@
 //! 2 Hz), with the engine's shortcuts on or off (`plain`: detection every step, a
 //! factorization every solve): `cargo run --release --example wall_probe [-- shaken] [plain]`.
 use ashlar::motion::{GroundMotion, Signal};
-use ashlar::scene::generate::{running_bond_wall, WallParams};
 use ashlar::scene::validate;
 use ashlar::simulation::{SimParams, Simulation};
 use std::time::Instant;
 fn main() {
     let shaken = std::env::args().any(|a| a == "shaken");
-    let mut spec = running_bond_wall(&WallParams {
-        courses: 20,
-        blocks_per_course: 20,
-        ..Default::default()
-    });
-    spec.control.time_step = Some(1e-3);
-    let scene = validate(&spec).expect("wall");
+    let scene = validate(&ashlar::presets::wall(20, 20)).expect("wall");
     let motion = if shaken {
         GroundMotion::horizontal(Signal::Sine {
             amplitude: 3.0,

@@ -6,9 +6,8 @@
 //! `cargo run --release --example wall_stiff_limit [-- DURATION_S]` (default 8 s, as the study).
 use ashlar::analysis::run::{run, RunOptions};
 use ashlar::analysis::study::{wall_record, GROUND_MOTIONS_DIR};
-use ashlar::presets::study_wall;
+use ashlar::presets::study_wall_json;
 use ashlar::record::Frame;
-use ashlar::scene::generate::running_bond_wall;
 use ashlar::scene::scene_from_value;
 use serde_json::json;
 use std::sync::Mutex;
@@ -22,8 +21,7 @@ fn history(s: Setting, duration: f64) -> Result<(Vec<(f64, f64)>, f64), String> 
     let (solver, k, dt, tol) = s;
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(GROUND_MOTIONS_DIR);
     let gm = wall_record(&dir).map_err(|e| e.to_string())?;
-    let wall = running_bond_wall(&study_wall());
-    let mut v = serde_json::to_value(&wall).map_err(|e| e.to_string())?;
+    let mut v = study_wall_json();
     let top = v["blocks"].as_array().map_or(0, |b| b.len() - 1);
     v["control"] = json!({ "duration": duration, "time_step": dt,
         "max_displacement_ratio": dt, "contact_solver": solver, "model": "dda",

@@ -7,7 +7,7 @@
 //! Units: m, s, degrees for friction angles, m/s² for accelerations (along +x).
 use crate::motion::{self, GroundMotion, MotionError, Signal};
 use crate::scene::generate::{self, WallParams};
-use crate::scene::{parse_scene, BlockModel, Scene, SceneError};
+use crate::scene::{parse_scene, BlockModel, Scene, SceneError, SceneSpec};
 use serde_json::{json, Value};
 use std::path::PathBuf;
 
@@ -110,7 +110,7 @@ impl Column {
 /// carrying a free rigid cap beam that spans their outer faces, its thickness chosen so that
 /// its mass is γ × both columns' (blocks `base`, `left`, `right`, `cap`, in the material
 /// `stone` of [`scene_json`]). It rocks as one column of slenderness atan(b/h) with Housner's
-/// p² scaled by (1 + 2γ)/(1 + 3γ) (tests/engine/multiblock_references.rs).
+/// p² scaled by (1 + 2γ)/(1 + 3γ) (tests/engine/multiblock_references/).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RockingFrame {
     /// Half-width b of each column, m.
@@ -195,7 +195,7 @@ pub struct Pier {
 impl Pier {
     /// Yagoda-Biran & Hatzor's column (b = 0.2, h = 0.6 m) cut into three 0.4 × 0.4 m blocks,
     /// on a 4 m base; φ = 75° (μ = 3.7): the joints neither slip nor, below tipping, open, so it
-    /// moves as the monolithic column (tests/engine/multiblock_references.rs checks that).
+    /// moves as the monolithic column (tests/engine/multiblock_references/ checks that).
     pub const SEED: Pier = Pier {
         half_width: 0.2,
         half_height: 0.6,
@@ -225,6 +225,89 @@ impl Pier {
     pub fn json(&self, control: Value) -> Value {
         scene_json(self.blocks(), self.friction_angle, control)
     }
+}
+
+/// Two blocks stacked on a fixed base: `base` (fixed, [−`base_half_width`, `base_half_width`] ×
+/// [−`base_depth`, 0]), `lower` ([−b, b] × [0, `lower_height`]) and `upper` ([−b, b] ×
+/// [`lower_height`, `lower_height` + `upper_height`]). The material and the block model are
+/// the caller's (the scenes that use it differ there): the two-block rocking stack of
+/// tests/engine/stacked_column.rs, the sliding stack of tests/engine/multiblock_references/,
+/// the standard case of tests/engine/extremes/.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stack {
+    /// Half-width b of both blocks, m.
+    pub half_width: f64,
+    /// Height of the lower block, m.
+    pub lower_height: f64,
+    /// Height of the upper block, m.
+    pub upper_height: f64,
+    /// Half-width of the base, m.
+    pub base_half_width: f64,
+    /// Depth of the base below y = 0, m.
+    pub base_depth: f64,
+}
+
+impl Stack {
+    /// The blocks `base`, `lower`, `upper`, all in `material`, the free ones with
+    /// `block_model` (`"rigid"`, `"deformable"` or `"auto"`).
+    pub fn blocks(&self, material: &str, block_model: &str) -> Value {
+        let (b, w, d) = (self.half_width, self.base_half_width, self.base_depth);
+        let (y1, y2) = (self.lower_height, self.lower_height + self.upper_height);
+        json!([
+            { "id": "base", "material": material, "fixed": true, "vertices": rect(-w, -d, w, 0.0) },
+            { "id": "lower", "material": material, "block_model": block_model, "vertices": rect(-b, 0.0, b, y1) },
+            { "id": "upper", "material": material, "block_model": block_model, "vertices": rect(-b, y1, b, y2) },
+        ])
+    }
+}
+
+/// The engine's test wall: `scene::generate::running_bond_wall` of `courses` courses of
+/// `blocks_per_course` stones of [`WallParams::default`] (0.6 × 0.3 m, rigid, 35° dry joints),
+/// Δt = 1 ms. The wall of tests/engine/solver_reuse.rs (5 × 8), shaken_wall_settle.rs and
+/// examples/shaken_walls.rs (10 × 10, 105 stones), benches/engine.rs and examples/wall_probe.rs
+/// (20 × 20), examples/engine_scaling.rs (10 … 80 square).
+pub fn wall(courses: usize, blocks_per_course: usize) -> SceneSpec {
+    wall_of(&WallParams {
+        courses,
+        blocks_per_course,
+        ..Default::default()
+    })
+}
+
+/// [`wall`] of any [`WallParams`] (another block model, block size or friction), Δt = 1 ms.
+pub fn wall_of(p: &WallParams) -> SceneSpec {
+    let mut spec = generate::running_bond_wall(p);
+    spec.control.time_step = Some(1e-3);
+    spec
+}
+
+/// `columns × rows` aligned 0.4 × 0.2 m blocks (`b{row}_{column}`, bottom row 0) in a fixed U
+/// (`floor`, `left`, `right`, 1 m thick), frictionless, under `contact_solver: "dual"` at
+/// Δt = 1 ms, with the top middle block thrown down at 1 m/s: four corners meet at every
+/// interior node (the redundant vertex–vertex contacts of Zheng et al.'s pile).
+pub fn aligned_stack(columns: usize, rows: usize) -> Value {
+    let (w, h) = (0.4, 0.2);
+    let (width, height) = (columns as f64 * w, rows as f64 * h);
+    let mut blocks = vec![
+        json!({ "id": "floor", "material": "stone", "fixed": true, "vertices": rect(-1.0, -1.0, width + 1.0, 0.0) }),
+        json!({ "id": "left", "material": "stone", "fixed": true, "vertices": rect(-1.0, 0.0, 0.0, height + 1.0) }),
+        json!({ "id": "right", "material": "stone", "fixed": true, "vertices": rect(width, 0.0, width + 1.0, height + 1.0) }),
+    ];
+    for r in 0..rows {
+        for c in 0..columns {
+            let (x0, y0) = (c as f64 * w, r as f64 * h);
+            blocks.push(json!({ "id": format!("b{r}_{c}"), "material": "stone",
+                                "vertices": rect(x0, y0, x0 + w, y0 + h) }));
+        }
+    }
+    let mut v = scene_json(
+        json!(blocks),
+        0.0,
+        json!({ "time_step": 1e-3, "contact_solver": "dual", "duration": 1.0 }),
+    );
+    v["initial"] =
+        json!([{ "block": format!("b{}_{}", rows - 1, columns / 2), "velocity": [0.0, -1.0] }]);
+    v
 }
 
 /// `examples/column.json`, the repository's example column (0.4 × 1.2 m, rigid, φ = 40°, on a
@@ -296,6 +379,13 @@ pub fn study_wall() -> WallParams {
     }
 }
 
+/// The study's masonry wall ([`study_wall`]) as scene JSON, without `control` of its own
+/// beyond the generator's (callers set it): the scene of the study's wall bench,
+/// tests/engine/dual_stiff_limit.rs and examples/wall_stiff_limit.rs.
+pub fn study_wall_json() -> Value {
+    serde_json::to_value(generate::running_bond_wall(&study_wall())).expect("a scene spec is JSON")
+}
+
 /// A half-sine pulse: a(t) = `amplitude` sin(2πt/`period`) for 0 ≤ t ≤ `period`/2, m/s².
 pub fn half_sine(amplitude: f64, period: f64) -> GroundMotion {
     GroundMotion::horizontal(Signal::Pulse {
@@ -334,6 +424,12 @@ pub fn records_dir() -> PathBuf {
 /// One of the repository's records by file name (e.g. `northridge-1994-mulholland-009.at2`).
 pub fn record(name: &str) -> Result<GroundMotion, MotionError> {
     motion::load_path(&records_dir().join(name))
+}
+
+/// The record of the shaken walls (examples/shaken_walls.rs, tests/engine/shaken_wall_settle.rs):
+/// Northridge 1994, Mulholland 009, scaled to a PGA of 0.3 g.
+pub fn shaken_wall_record() -> Result<GroundMotion, MotionError> {
+    Ok(record("northridge-1994-mulholland-009.at2")?.scaled_to_pga(0.3 * motion::STANDARD_GRAVITY))
 }
 
 /// Drop the `null` members of every object (a serialized spec's unset options), so that the

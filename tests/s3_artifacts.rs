@@ -304,14 +304,16 @@ fn bad_s3_settings_stop_start_up() {
         &Uuid::new_v4().simple().to_string()[..8],
         s3.endpoint
     ))
-    .expect_err("a missing bucket is refused at start-up");
+    .expect_err("a missing bucket is refused at start-up")
+    .to_string();
     eprintln!("missing bucket: {e}");
     assert!(
         e.contains("no-such-bucket") && e.contains("not reachable"),
         "{e}"
     );
     let e = ArtifactStore::open(&format!("s3://{}/p?endpont={}", s3.bucket, s3.endpoint))
-        .expect_err("a misspelt option is refused");
+        .expect_err("a misspelt option is refused")
+        .to_string();
     eprintln!("misspelt option: {e}");
     assert!(e.contains("\"endpont\""), "{e}");
     // The secret in a URL option never shows in messages.
@@ -319,6 +321,7 @@ fn bad_s3_settings_stop_start_up() {
         "s3://no-such-bucket-x/p?endpoint={}&allow_http=true&secret_access_key=hunter2",
         s3.endpoint
     ))
-    .expect_err("missing bucket");
+    .expect_err("missing bucket")
+    .to_string();
     assert!(!e.contains("hunter2"), "{e}");
 }

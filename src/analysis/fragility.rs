@@ -43,15 +43,20 @@ pub enum Method {
 }
 
 impl Method {
-    pub fn parse(text: &str) -> Result<Self, String> {
+    pub fn parse(text: &str) -> Result<Self, MethodParseError> {
         match text {
             "interval" => Ok(Method::Interval),
             "binary" => Ok(Method::Binary),
-            o => Err(format!(
-                "fit method: expected \"interval\" or \"binary\", got {o:?}"
-            )),
+            o => Err(MethodParseError { got: o.to_string() }),
         }
     }
+}
+
+/// A fit method that is neither `interval` nor `binary` (the text given).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("fit method: expected \"interval\" or \"binary\", got {got:?}")]
+pub struct MethodParseError {
+    pub got: String,
 }
 
 /// A fitted lognormal fragility curve.

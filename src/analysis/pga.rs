@@ -206,6 +206,13 @@ impl Criterion {
     }
 }
 
+/// A `combine` that is neither `all` nor `any` (the text given).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("combine: expected \"all\" or \"any\", got {got:?}")]
+pub struct CombineParseError {
+    pub got: String,
+}
+
 /// How several criteria combine into one verdict "failed".
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -220,13 +227,13 @@ pub enum Combine {
 
 impl Combine {
     /// Parse `all` / `any`.
-    pub fn parse(text: &str) -> Result<Self, String> {
+    pub fn parse(text: &str) -> Result<Self, CombineParseError> {
         match text {
             "all" => Ok(Combine::All),
             "any" => Ok(Combine::Any),
-            other => Err(format!(
-                "combine: expected \"all\" or \"any\", got {other:?}"
-            )),
+            other => Err(CombineParseError {
+                got: other.to_string(),
+            }),
         }
     }
 
@@ -426,10 +433,9 @@ pub fn evaluate_with_summary(
             .decided(criteria.iter().map(|c| c.decided(tr)))
             .is_some()
     };
-    // `auto`'s fallback to the engine starts at t = 0 here as in `ashlar run`
-    // (`RunOptions::fallback_from_rest` off): with the hand-over on, a bracket end's verdict
-    // differed from `ashlar run`'s at the same amplitude (tests/analysis/pga_honesty.rs,
-    // Friuli, the slender column; docs/speed.md, session 31).
+    // `auto`'s fallback to the engine hands over as in `ashlar run` (both take the default of
+    // `RunOptions::fallback_from_zero`), so a full run at a bracket end reproduces its verdict
+    // (tests/analysis/pga_honesty.rs; docs/speed.md, "Reduced models on records").
     let opts = RunOptions {
         stop_when: Some(&decided),
         cancel,

@@ -51,12 +51,14 @@ pub struct RunOptions<'a> {
     pub reduced_params: Option<ReducedParams>,
     /// Knobs of the end of the run: settling, continuation cap (defaults when `None`).
     pub run_end: Option<RunEndParams>,
-    /// When `auto`'s reduced model meets a case it does not represent, start the full engine
+    /// When `auto`'s reduced model meets a case it does not represent, the full engine starts
     /// from the reduced model's state at the last record sample it passed within its
-    /// assumptions instead of at t = 0 (`analysis::run_fallback`). Set by the PGA search, whose runs need only the verdict;
-    /// off by default so that a run's histories and trajectory come from one model. Ignored
-    /// when the run writes frames.
-    pub fallback_from_rest: bool,
+    /// assumptions (`analysis::run_fallback`; a run that writes frames gets the reduced
+    /// model's before that sample, the engine's after). Set this to start it at t = 0 instead
+    /// (as before session 32; as accurate against the engine at Δt = 1e-4 s, 2–4× the CPU:
+    /// docs/speed.md). Runs and PGA searches take the same default (the search's runs use
+    /// it), so a run at a bracket end reproduces the search's verdict.
+    pub fallback_from_zero: bool,
 }
 
 /// How a run can fail, by cause; each message names where (docs/architecture.md, "Errors").
@@ -417,7 +419,7 @@ pub fn run(
                     "control.model is \"auto\" and the scene is one block on a base, but the first-motion check found a case the reduced models do not represent ({}): the full DDA engine ran",
                     v.what
                 );
-                match resume.filter(|_| opts.fallback_from_rest) {
+                match resume.filter(|_| !opts.fallback_from_zero) {
                     Some(r) => super::run_fallback::from_rest(scene, motion, opts, reason, &r),
                     None => run_dda(scene, motion, opts, reason),
                 }

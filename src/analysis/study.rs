@@ -21,7 +21,6 @@ use super::run::{run, RunOptions};
 use crate::motion::{self, GroundMotion, Signal};
 use crate::presets::{self, incline_blocks, rocking_pulse as pulse};
 use crate::record::Frame;
-use crate::scene::generate::running_bond_wall;
 use crate::scene::scene_from_value;
 use serde::Serialize;
 use serde_json::{json, Value};

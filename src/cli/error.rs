@@ -84,6 +84,18 @@ pub enum CliError {
     /// `ashlar study --check`: the points that missed their targets, one line each.
     #[error("study check failed ({} failure{}):\n  {}", .0.len(), if .0.len() == 1 { "" } else { "s" }, .0.join("\n  "))]
     StudyCheck(Vec<String>),
+    /// `--combine` is neither `all` nor `any`.
+    #[error("--{0}")]
+    Combine(#[from] crate::analysis::pga::CombineParseError),
+    /// `--fit` is neither `interval` nor `binary`.
+    #[error("--fit: {0}")]
+    Fit(#[from] crate::analysis::fragility::MethodParseError),
+    /// `ashlar worker --database`: not a PostgreSQL URL this ashlar opens.
+    #[error(transparent)]
+    Database(#[from] crate::service::DatabaseError),
+    /// `ashlar worker --lease`: outside 1 s … a day.
+    #[error(transparent)]
+    Lease(#[from] crate::service::LeaseError),
     /// `ashlar worker`: the service did not start.
     #[error(transparent)]
     ServiceStart(#[from] crate::service::StartError),

@@ -201,9 +201,9 @@ pub fn pga(args: &PgaArgs) -> Result<(), CliError> {
         .iter()
         .map(|c| Criterion::parse(c).map_err(CliError::criterion("--criterion")))
         .collect::<Result<Vec<_>, _>>()?;
-    let combine = Combine::parse(&args.combine).map_err(|e| CliError::Usage(format!("--{e}")))?;
+    let combine = Combine::parse(&args.combine)?;
     let req = args.range.request(criteria, combine, args.scan_points)?;
-    let method = Method::parse(&args.fit).map_err(|e| CliError::Usage(format!("--fit: {e}")))?;
+    let method = Method::parse(&args.fit)?;
     let mut scene = load_scene(&args.scene)?;
     apply_model(&mut scene, args.model.as_deref())?;
     apply_duration(&mut scene, args.duration)?;

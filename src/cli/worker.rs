@@ -2,7 +2,6 @@
 //! `ashlar serve --database postgres://…` and any number of other workers. Thin: the service's
 //! worker pool and cluster threads without the HTTP layer.
 use crate::service::{self, Limits, ServiceConfig};
-use std::path::PathBuf;
 use std::time::Duration;
 
 #[derive(Debug, clap::Args)]
@@ -10,31 +9,9 @@ pub struct WorkerArgs {
     /// The shared queue: postgres://USER@HOST:PORT/DBNAME.
     #[arg(long)]
     pub database: String,
-    /// Local scratch directory for the artifacts of the jobs this worker runs (`jobs/<uuid>/`);
-    /// give every process the same shared directory, or use --artifacts.
-    #[arg(long, default_value = "./ashlar-data")]
-    pub data: PathBuf,
-    /// Shared artifact storage (`file:///DIR`, `s3://BUCKET/PREFIX` with the `s3` feature).
-    #[arg(long)]
-    pub artifacts: Option<String>,
-    /// Jobs run at once (default: the number of cores).
-    #[arg(long)]
-    pub workers: Option<usize>,
-    /// Seconds a claimed job stays leased without a heartbeat (heartbeat: a third of it).
-    #[arg(long, default_value_t = 30.0)]
-    pub lease: f64,
-    /// Seconds running jobs get to finish on SIGINT/SIGTERM before they are requeued.
-    #[arg(long, default_value_t = 20.0)]
-    pub shutdown_grace: f64,
-    /// Most blocks in a scene (must match the API's --max-blocks).
-    #[arg(long, default_value_t = Limits::default().max_blocks)]
-    pub max_blocks: usize,
-    /// Most samples in a record (must match the API's --max-record-samples).
-    #[arg(long, default_value_t = Limits::default().max_record_samples)]
-    pub max_record_samples: usize,
-    /// Most steps of one run (must match the API's --max-total-steps).
-    #[arg(long, default_value_t = Limits::default().max_total_steps)]
-    pub max_total_steps: u64,
+    /// The flags `ashlar serve` has too: directories, threads, lease, fan-out, run limits.
+    #[command(flatten)]
+    pub process: service::serve::ProcessArgs,
     /// Seconds between looks at the queue when no notification came (NOTIFY wakes idle
     /// workers at once; this only bounds the delay if a notification is lost).
     #[arg(long, default_value_t = 5.0)]
@@ -42,10 +19,6 @@ pub struct WorkerArgs {
     /// Testing aid: the service's deterministic fake runner, N ms per simulated second.
     #[arg(long, hide = true)]
     pub fake_runner_ms: Option<u64>,
-    /// PGA searches fan out their runs as child jobs with N interior amplitudes per k-section
-    /// round (default: the number of cores; 0: a search runs on the worker that claims it).
-    #[arg(long)]
-    pub fanout_width: Option<usize>,
     /// The job flags `ashlar serve` has too (limits, isolation); this worker enforces them.
     #[command(flatten)]
     pub jobs: service::serve::JobRunArgs,
@@ -62,7 +35,7 @@ pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
         // Colour codes only for a terminal: a log written to a file or a pipe stays plain text.
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .try_init();
-    let url = match service::parse_database(&args.database).map_err(|e| CliError::Usage(e.to_string()))? {
+    let url = match service::parse_database(&args.database)? {
         service::Database::Postgres(url) => url,
         service::Database::Sqlite(_) => {
             return Err(CliError::Usage(
@@ -71,19 +44,19 @@ pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
             ))
         }
     };
-    let mut config = ServiceConfig::new(&args.data);
+    let mut config = ServiceConfig::new(&args.process.data);
     config.postgres = Some(url);
-    config.artifacts = args.artifacts.clone();
-    config.lease = service::lease_params(args.lease).map_err(|e| CliError::Usage(e.to_string()))?;
+    config.artifacts = args.process.artifacts.clone();
+    config.lease = service::lease_params(args.process.lease)?;
     config.limits = Limits {
-        max_blocks: args.max_blocks,
-        max_record_samples: args.max_record_samples,
-        max_total_steps: args.max_total_steps,
+        max_blocks: args.process.max_blocks,
+        max_record_samples: args.process.max_record_samples,
+        max_total_steps: args.process.max_total_steps,
         max_job_seconds: args.jobs.max_job_seconds,
         max_job_artifact_bytes: args.jobs.max_job_artifact_bytes,
         ..Limits::default()
     };
-    if let Some(n) = args.workers {
+    if let Some(n) = args.process.workers {
         if n == 0 {
             return Err(CliError::Usage("--workers must be at least 1".into()));
         }
@@ -96,14 +69,14 @@ pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
         )));
     }
     config.workers.idle_poll = Duration::from_secs_f64(args.idle_poll);
-    if !(args.shutdown_grace.is_finite() && args.shutdown_grace >= 0.0) {
+    if !(args.process.shutdown_grace.is_finite() && args.process.shutdown_grace >= 0.0) {
         return Err(CliError::Usage(format!(
             "--shutdown-grace must be a number of seconds ≥ 0, got {}",
-            args.shutdown_grace
+            args.process.shutdown_grace
         )));
     }
     if args.fake_runner_ms.is_none() {
-        config.workers.fanout_width = service::fanout_width(args.fanout_width, true);
+        config.workers.fanout_width = service::fanout_width(args.process.fanout_width, true);
     }
     // Published artifacts are served by the API processes from shared storage: the local
     // copy is scratch, removed once the job ends (else it would fill this machine's disk).
@@ -136,9 +109,9 @@ pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
     runtime.block_on(signals.wait());
     tracing::info!(
         "stopping: no new claims; running jobs get {} s",
-        args.shutdown_grace
+        args.process.shutdown_grace
     );
-    let requeued = svc.shutdown(Duration::from_secs_f64(args.shutdown_grace));
+    let requeued = svc.shutdown(Duration::from_secs_f64(args.process.shutdown_grace));
     tracing::info!(requeued, "stopped");
     Ok(())
 }

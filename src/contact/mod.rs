@@ -264,7 +264,7 @@ impl ContactSet {
     /// Compute the per-step linearization of every contact from the geometry at the step start.
     pub fn linearize(&mut self, geoms: &[BlockGeometry]) {
         for c in &mut self.contacts {
-            linearize_one(c, geoms);
+            linearize_contact(c, geoms, ShearReference::FromState);
         }
     }
 }
@@ -313,7 +313,20 @@ pub fn edge_points(g: &BlockGeometry, k: usize) -> (Vector2<f64>, Vector2<f64>) 
     (g.vertices[k], g.vertices[(k + 1) % n])
 }
 
-fn linearize_one(c: &mut Contact, geoms: &[BlockGeometry]) {
+/// Where the shear spring of a contact being linearized is anchored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShearReference {
+    /// By its state: a material point of the edge while locked; follows the vertex while open;
+    /// trails it by the elastic shear displacement while sliding (a detected contact).
+    FromState,
+    /// At the vertex's projection, with no shear displacement (a pair the dual solver has just
+    /// switched onto another edge).
+    AtVertex,
+}
+
+/// The step-start frame of one contact from the geometry: unit tangent t (A → B) and normal n,
+/// the gap g₀, the projection ξ, the shear reference and s₀, and the gap and shear gradients.
+pub fn linearize_contact(c: &mut Contact, geoms: &[BlockGeometry], reference: ShearReference) {
     let gi = &geoms[c.vertex_block];
     let gj = &geoms[c.edge_block];
     let p = gi.vertices[c.vertex];
@@ -326,16 +339,17 @@ fn linearize_one(c: &mut Contact, geoms: &[BlockGeometry]) {
     c.n = n;
     c.g0 = n.dot(&(p - a));
     c.xi = t.dot(&(p - a)) / len;
-    // The shear reference: a material point of the edge while locked; follows the vertex while
-    // open; trails it by the elastic shear displacement while sliding.
-    match c.state {
-        ContactState::Open => c.ref_xi = c.xi,
-        ContactState::Sliding { .. } => c.ref_xi = c.xi - c.slide_offset / len,
-        ContactState::Locked => {}
+    match (reference, c.state) {
+        (ShearReference::AtVertex, _) | (_, ContactState::Open) => c.ref_xi = c.xi,
+        (_, ContactState::Sliding { .. }) => c.ref_xi = c.xi - c.slide_offset / len,
+        (_, ContactState::Locked) => {}
     }
     let q = a + ab * c.xi;
     let qr = a + ab * c.ref_xi;
-    c.s0 = t.dot(&(p - qr));
+    c.s0 = match reference {
+        ShearReference::FromState => t.dot(&(p - qr)),
+        ShearReference::AtVertex => 0.0,
+    };
     let ti = displacement_matrix(p, gi.centroid);
     let tq = displacement_matrix(q, gj.centroid);
     let tqr = displacement_matrix(qr, gj.centroid);

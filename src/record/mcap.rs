@@ -129,8 +129,7 @@ impl<W: Write + Seek> McapRecorder<W> {
         let no_meta = BTreeMap::new();
         let mut channel = |topic: &str, schema: serde_json::Value| -> Result<u16, RecordError> {
             let name = schema["title"].as_str().unwrap_or_default().to_string();
-            let data = serde_json::to_vec(&schema)
-                .map_err(|e| RecordError::invalid(&path, e.to_string()))?;
+            let data = serde_json::to_vec(&schema).map_err(|e| RecordError::invalid(&path, e))?;
             let schema_id = writer
                 .add_schema(&name, "jsonschema", &data)
                 .map_err(mcap_err)?;
@@ -255,7 +254,7 @@ fn write_json<W: Write + Seek, T: serde::Serialize>(
     msg: &T,
 ) -> Result<(), RecordError> {
     buf.clear();
-    serde_json::to_writer(&mut *buf, msg).map_err(|e| RecordError::invalid(path, e.to_string()))?;
+    serde_json::to_writer(&mut *buf, msg).map_err(|e| RecordError::invalid(path, e))?;
     let header = MessageHeader {
         channel_id: channel,
         sequence: seq,
@@ -270,36 +269,46 @@ fn write_json<W: Write + Seek, T: serde::Serialize>(
         })
 }
 
-fn check_params(p: &McapParams) -> Result<(), String> {
+/// Why [`McapParams`] cannot be used.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum McapParamsError {
+    #[error("McapParams.outline_px must be finite and >= 0 (got {0})")]
+    OutlinePx(f64),
+    #[error("McapParams.chunk_size must be > 0")]
+    ChunkSize,
+    #[error("McapParams.compression_level must be 1..=22 or 0 (got {0})")]
+    CompressionLevel(u32),
+}
+
+fn check_params(p: &McapParams) -> Result<(), McapParamsError> {
     if !(p.outline_px.is_finite() && p.outline_px >= 0.0) {
-        return Err(format!(
-            "McapParams.outline_px must be finite and >= 0 (got {})",
-            p.outline_px
-        ));
+        return Err(McapParamsError::OutlinePx(p.outline_px));
     }
     if p.chunk_size == 0 {
-        return Err("McapParams.chunk_size must be > 0".into());
+        return Err(McapParamsError::ChunkSize);
     }
     if p.compression_level > 22 {
-        return Err(format!(
-            "McapParams.compression_level must be 1..=22 or 0 (got {})",
-            p.compression_level
-        ));
+        return Err(McapParamsError::CompressionLevel(p.compression_level));
     }
     Ok(())
 }
 
+/// A time (s) that is no MCAP log time: not finite, negative, or 584 years or more.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("time {time} s cannot be a log time (must be finite, >= 0, < 584 years)")]
+pub struct LogTimeError {
+    pub time: f64,
+}
+
 /// Simulation time (s) to MCAP log time (ns), rounded to the nearest ns so that frames at
 /// `k · output_interval` land on exact ns ticks despite the f64 sum.
-pub fn log_time_ns(t: f64) -> Result<u64, String> {
+pub fn log_time_ns(t: f64) -> Result<u64, LogTimeError> {
     let ns = (t * 1e9).round();
     // u64::MAX as f64 rounds up to 2^64, so `<` keeps the cast in range (584 years of run).
     if t.is_finite() && ns >= 0.0 && ns < u64::MAX as f64 {
         Ok(ns as u64)
     } else {
-        Err(format!(
-            "time {t} s cannot be a log time (must be finite, >= 0, < 584 years)"
-        ))
+        Err(LogTimeError { time: t })
     }
 }
 

@@ -50,40 +50,83 @@ const UNITS: Units = Units {
 const HEADER_V2: [&str; 4] = crate::record::histories::HEADER_COLUMNS;
 const HEADER_V1: [&str; 4] = ["time", ".x", ".y", ".rotation"];
 
+/// Why a `histories.csv` does not read (the file is ours: a bug or a damaged file), naming the
+/// line (1 is the header).
+#[derive(Debug, thiserror::Error)]
+pub enum HistoriesError {
+    #[error("histories.csv is empty")]
+    Empty,
+    #[error("histories.csv line 1: unexpected header {header:?}")]
+    Header { header: String },
+    #[error("histories.csv line 1: column {column:?}")]
+    Column { column: String },
+    #[error("histories.csv line 1: columns of block {id:?} out of order")]
+    Order { id: String },
+    #[error("histories.csv line {line}: {source}")]
+    Number {
+        line: usize,
+        #[source]
+        source: std::num::ParseFloatError,
+    },
+    #[error("histories.csv line {line}: {values} values, expected {expected}")]
+    Count {
+        line: usize,
+        values: usize,
+        expected: usize,
+    },
+    /// The file could not be read at `line`.
+    #[error("histories.csv line {line}: {source}")]
+    Read {
+        line: usize,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A kept field of `line` (its 1-based `column`) is not a number.
+    #[error("histories.csv line {line}: column {column} unreadable")]
+    Unreadable { line: usize, column: usize },
+    /// The kept rows of a JSON answer would not fit the 32-bit offsets they are indexed by.
+    #[error("the kept histories exceed 4 GiB")]
+    TooLarge,
+}
+
+/// A block asked for that the histories do not have.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("no block {id:?} in the histories")]
+pub struct UnknownBlock {
+    pub id: String,
+}
+
 impl Histories {
     /// Parse `histories.csv`. Errors name the line (the file is ours, so an error is a bug or
     /// a damaged file, reported as an internal error).
-    pub fn parse_csv(text: &str) -> Result<Self, String> {
+    pub fn parse_csv(text: &str) -> Result<Self, HistoriesError> {
         let mut lines = text
             .lines()
             .enumerate()
             .filter(|(_, l)| !l.trim().is_empty());
-        let (_, header) = lines.next().ok_or("histories.csv is empty")?;
+        let (_, header) = lines.next().ok_or(HistoriesError::Empty)?;
         let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+        let bad_header = || HistoriesError::Header {
+            header: header.to_string(),
+        };
         let names = match cols.first() {
             Some(&t) if t == HEADER_V2[0] => HEADER_V2,
             Some(&t) if t == HEADER_V1[0] => HEADER_V1,
-            _ => {
-                return Err(format!(
-                    "histories.csv line 1: unexpected header {header:?}"
-                ))
-            }
+            _ => return Err(bad_header()),
         };
         if (cols.len() - 1) % 3 != 0 {
-            return Err(format!(
-                "histories.csv line 1: unexpected header {header:?}"
-            ));
+            return Err(bad_header());
         }
         let mut blocks = Vec::new();
         for triple in cols[1..].chunks(3) {
             let id = triple[0]
                 .strip_suffix(names[1])
-                .ok_or_else(|| format!("histories.csv line 1: column {:?}", triple[0]))?;
+                .ok_or_else(|| HistoriesError::Column {
+                    column: triple[0].to_string(),
+                })?;
             if triple[1] != format!("{id}{}", names[2]) || triple[2] != format!("{id}{}", names[3])
             {
-                return Err(format!(
-                    "histories.csv line 1: columns of block {id:?} out of order"
-                ));
+                return Err(HistoriesError::Order { id: id.to_string() });
             }
             blocks.push((id.to_string(), BlockHistory::default()));
         }
@@ -91,14 +134,16 @@ impl Histories {
         for (n, line) in lines {
             let vals: Result<Vec<f64>, _> =
                 line.split(',').map(|v| v.trim().parse::<f64>()).collect();
-            let vals = vals.map_err(|e| format!("histories.csv line {}: {e}", n + 1))?;
+            let vals = vals.map_err(|source| HistoriesError::Number {
+                line: n + 1,
+                source,
+            })?;
             if vals.len() != cols.len() {
-                return Err(format!(
-                    "histories.csv line {}: {} values, expected {}",
-                    n + 1,
-                    vals.len(),
-                    cols.len()
-                ));
+                return Err(HistoriesError::Count {
+                    line: n + 1,
+                    values: vals.len(),
+                    expected: cols.len(),
+                });
             }
             time.push(vals[0]);
             for (k, (_, b)) in blocks.iter_mut().enumerate() {
@@ -114,8 +159,8 @@ impl Histories {
         self.blocks.iter().map(|(id, _)| id.as_str())
     }
 
-    /// Keep only the named blocks, in the order asked. `Err(id)` names the first unknown one.
-    pub fn select(self, ids: &[String]) -> Result<Self, String> {
+    /// Keep only the named blocks, in the order asked. The error names the first unknown one.
+    pub fn select(self, ids: &[String]) -> Result<Self, UnknownBlock> {
         if ids.is_empty() {
             return Ok(self);
         }
@@ -125,7 +170,9 @@ impl Histories {
             if blocks.iter().any(|(b, _): &(String, BlockHistory)| b == id) {
                 continue;
             }
-            let h = by_id.remove(id).ok_or_else(|| id.clone())?;
+            let h = by_id
+                .remove(id)
+                .ok_or_else(|| UnknownBlock { id: id.clone() })?;
             blocks.push((id.clone(), h));
         }
         Ok(Self {
@@ -197,7 +244,10 @@ mod tests {
         );
         assert_eq!(only.to_json()["units"]["rotation"], "rad");
         assert!(only.to_json()["blocks"].get("col").is_none());
-        assert_eq!(h.select(&["nope".into()]), Err("nope".to_string()));
+        assert_eq!(
+            h.select(&["nope".into()]),
+            Err(UnknownBlock { id: "nope".into() })
+        );
     }
 
     #[test]
@@ -205,8 +255,8 @@ mod tests {
         assert!(Histories::parse_csv("").is_err());
         let e = Histories::parse_csv("time_s,a.x_m,a.y_m,a.rotation_rad\n0,1,2\n")
             .expect_err("short row");
-        assert!(e.contains("line 2"), "{e}");
+        assert!(e.to_string().contains("line 2"), "{e}");
         let e = Histories::parse_csv("time,a.x,a.y\n").expect_err("bad header");
-        assert!(e.contains("line 1"), "{e}");
+        assert!(e.to_string().contains("line 1"), "{e}");
     }
 }

@@ -13,10 +13,15 @@
 //!   cancel: queued | waiting ──▶ cancelled; running ──▶ running with a cancel request
 //! ```
 //!
-//! [`next`] is the transition table; the deciders ([`cancel`], [`settle`], [`recover`]) turn
-//! the facts a store read into the event it applies; [`guard`] / [`guard_to`] give the SQL
-//! condition on the current status under which an event applies, generated from the table, so
-//! that every `UPDATE … WHERE status …` of both stores is the table's own.
+//! [`transition`] is the transition table (the status after an event and its effect on the
+//! attempts count); the deciders ([`cancel`], [`settle`], [`recover`]) turn the facts a store
+//! read into the event it applies; [`guard`] / [`guard_to`] give the SQL condition on the
+//! current status under which an event applies and [`effect`] what it writes (the stores'
+//! `SET`, `store::set_sql`), both generated from the table, so that every
+//! `UPDATE … SET status … WHERE status …` of both stores is the table's own.
+//!
+//! Just over 600 lines: about 280 of code and docs; its tests (the whole table written out
+//! cell by cell, each decider) make up the rest.
 use serde::Serialize;
 
 /// Life cycle: `queued → running → succeeded | failed | cancelled`; `running → queued` when a
@@ -144,41 +149,91 @@ pub enum Event {
     Recover(Recovery),
 }
 
-/// The transition table: the status a job in `from` has after `event`, or `None` when the
+/// What an event does to the attempts count (how many times a worker has started the job).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Attempts {
+    Keep,
+    /// A worker starts the job.
+    Increment,
+    /// The start is given back (a refunded requeue; a fan-out: waiting is not a crash), never
+    /// below zero.
+    Decrement,
+}
+
+impl Attempts {
+    /// The count after the effect.
+    pub fn apply(self, attempts: u32) -> u32 {
+        match self {
+            Attempts::Keep => attempts,
+            Attempts::Increment => attempts.saturating_add(1),
+            Attempts::Decrement => attempts.saturating_sub(1),
+        }
+    }
+}
+
+/// One cell of the transition table: the status after the event and its effect on attempts.
+/// The stores write both from it (`store::set_sql`), so each `SET status = …, attempts = …`
+/// of theirs is the table's own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Transition {
+    pub to: JobStatus,
+    pub attempts: Attempts,
+}
+
+/// The transition table: what becomes of a job in `from` after `event`, or `None` when the
 /// event does not apply (the store then changes nothing). A cancel of a running job leaves it
 /// running with a cancel request: its worker stops it within one step and finishes it
 /// `cancelled`.
-pub fn next(from: JobStatus, event: &Event) -> Option<JobStatus> {
+pub fn transition(from: JobStatus, event: &Event) -> Option<Transition> {
+    use Attempts::{Decrement, Increment, Keep};
     use JobStatus as S;
-    match (from, event) {
-        (S::Queued, Event::Claim) => Some(S::Running),
-        (S::Running, Event::Progress) => Some(S::Running),
-        (S::Running, Event::Finish(end)) => Some(end.status()),
-        (S::Running, Event::Requeue { .. }) => Some(S::Queued),
-        (S::Running, Event::FanOut) => Some(S::Waiting),
-        (S::Queued | S::Waiting, Event::Cancel) => Some(S::Cancelled),
-        (S::Running, Event::Cancel) => Some(S::Running),
-        (S::Waiting, Event::Settle(s)) => Some(match s {
-            Settlement::Wait => S::Waiting,
-            Settlement::Requeue => S::Queued,
-            Settlement::Fail(_) => S::Failed,
-        }),
-        (S::Running, Event::Recover(r)) => Some(match r {
-            Recovery::Requeue => S::Queued,
-            Recovery::Fail(_) => S::Failed,
-            Recovery::Cancel => S::Cancelled,
-        }),
-        _ => None,
-    }
+    let (to, attempts) = match (from, event) {
+        (S::Queued, Event::Claim) => (S::Running, Increment),
+        (S::Running, Event::Progress) => (S::Running, Keep),
+        (S::Running, Event::Finish(end)) => (end.status(), Keep),
+        (S::Running, Event::Requeue { refund: true }) => (S::Queued, Decrement),
+        (S::Running, Event::Requeue { refund: false }) => (S::Queued, Keep),
+        (S::Running, Event::FanOut) => (S::Waiting, Decrement),
+        (S::Queued | S::Waiting, Event::Cancel) => (S::Cancelled, Keep),
+        (S::Running, Event::Cancel) => (S::Running, Keep),
+        (S::Waiting, Event::Settle(s)) => (
+            match s {
+                Settlement::Wait => S::Waiting,
+                Settlement::Requeue => S::Queued,
+                Settlement::Fail(_) => S::Failed,
+            },
+            Keep,
+        ),
+        (S::Running, Event::Recover(r)) => (
+            match r {
+                Recovery::Requeue => S::Queued,
+                Recovery::Fail(_) => S::Failed,
+                Recovery::Cancel => S::Cancelled,
+            },
+            Keep,
+        ),
+        _ => return None,
+    };
+    Some(Transition { to, attempts })
+}
+
+/// The status a job in `from` has after `event` ([`transition`]'s `to`).
+pub fn next(from: JobStatus, event: &Event) -> Option<JobStatus> {
+    transition(from, event).map(|t| t.to)
+}
+
+/// The transition `event` makes from the statuses [`guard_to`]`(event, to)` selects, or from
+/// every status it applies to when `to` is `None` (they then agree: every event but a cancel
+/// has one target and one attempts effect, see the tests). `None`: it applies to no status.
+pub fn effect(event: &Event, to: Option<JobStatus>) -> Option<Transition> {
+    ALL.into_iter()
+        .filter_map(|s| transition(s, event))
+        .find(|t| to.is_none_or(|to| t.to == to))
 }
 
 /// The attempts count after `event` (how many times a worker has started the job).
 pub fn attempts_after(event: &Event, attempts: u32) -> u32 {
-    match event {
-        Event::Claim => attempts.saturating_add(1),
-        Event::Requeue { refund: true } | Event::FanOut => attempts.saturating_sub(1),
-        _ => attempts,
-    }
+    effect(event, None).map_or(attempts, |t| t.attempts.apply(attempts))
 }
 
 /// The statuses `event` applies to.
@@ -246,6 +301,12 @@ pub struct Children {
 /// Statuses of a child that ended badly, and of one not yet ended ([`Children`]).
 pub const CHILD_BAD: [JobStatus; 2] = [JobStatus::Failed, JobStatus::Cancelled];
 pub const CHILD_UNFINISHED: [JobStatus; 2] = [JobStatus::Queued, JobStatus::Running];
+
+/// SQL condition on `status`: the job has ended (no event applies to it any more).
+pub fn terminal_sql() -> String {
+    let ended: Vec<JobStatus> = ALL.into_iter().filter(|s| s.is_terminal()).collect();
+    status_in(&ended)
+}
 
 /// SQL condition on `status` for [`CHILD_BAD`] / [`CHILD_UNFINISHED`].
 pub fn child_bad_sql() -> String {
@@ -376,6 +437,36 @@ mod tests {
         assert_eq!(cells, 6 * 15);
     }
 
+    /// One `SET` per event: every event but a cancel makes the same transition (target status
+    /// and attempts effect) from every status it applies to, so [`effect`] is the whole of it;
+    /// a cancel's two targets are told apart by [`guard_to`].
+    #[test]
+    fn each_event_has_one_effect_but_cancel_two() {
+        for e in events() {
+            let cells: Vec<Transition> =
+                ALL.into_iter().filter_map(|s| transition(s, &e)).collect();
+            assert!(!cells.is_empty(), "{e:?} applies to no status");
+            if e == Event::Cancel {
+                assert_eq!(
+                    effect(&e, Some(S::Cancelled)).map(|t| t.to),
+                    Some(S::Cancelled)
+                );
+                assert_eq!(effect(&e, Some(S::Running)).map(|t| t.to), Some(S::Running));
+                continue;
+            }
+            assert!(cells.iter().all(|t| *t == cells[0]), "{e:?}: {cells:?}");
+            assert_eq!(effect(&e, None), Some(cells[0]), "{e:?}");
+        }
+        assert_eq!(
+            effect(&Event::Claim, None).map(|t| t.attempts),
+            Some(Attempts::Increment)
+        );
+        assert_eq!(
+            effect(&Event::FanOut, None).map(|t| t.attempts),
+            Some(Attempts::Decrement)
+        );
+    }
+
     #[test]
     fn terminal_statuses_never_change() {
         for from in ALL.into_iter().filter(|s| s.is_terminal()) {
@@ -427,6 +518,10 @@ mod tests {
             "status IN ('waiting')"
         );
         assert_eq!(child_bad_sql(), "status IN ('failed', 'cancelled')");
+        assert_eq!(
+            terminal_sql(),
+            "status IN ('succeeded', 'failed', 'cancelled')"
+        );
         assert_eq!(child_unfinished_sql(), "status IN ('queued', 'running')");
     }
 

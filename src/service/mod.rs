@@ -93,10 +93,13 @@ pub enum StartError {
     /// The job store could not be opened or recovered.
     #[error(transparent)]
     Store(#[from] StoreError),
-    /// A part the service starts (the artifact store, the worker pool, the cluster's threads,
-    /// the retention sweeper) failed; its layer still reports text.
-    #[error("{0}")]
-    Component(String),
+    /// The shared artifact storage (`--artifacts`) could not be opened.
+    #[error(transparent)]
+    Artifacts(#[from] worker::artifacts::ArtifactError),
+    /// A thread of the service (a worker, the cluster's listener or lease keeper, a sweeper)
+    /// could not be started.
+    #[error(transparent)]
+    Thread(#[from] worker::ThreadStartError),
 }
 
 pub struct Service {
@@ -158,34 +161,31 @@ impl Service {
         );
         core.server = server_params;
         if let Some(url) = &config.artifacts {
-            core.artifacts = Some(Arc::new(
-                artifacts::ArtifactStore::open(url).map_err(StartError::Component)?,
-            ));
+            core.artifacts = Some(Arc::new(artifacts::ArtifactStore::open(url)?));
         }
         core.remote_workers
             .store(pg.is_some(), std::sync::atomic::Ordering::SeqCst);
         let core = Arc::new(core);
         let cluster = match pg {
-            Some(pg) => Some(
-                worker::cluster::ClusterThreads::start(core.clone(), pg, api)
-                    .map_err(StartError::Component)?,
-            ),
+            Some(pg) => Some(worker::cluster::ClusterThreads::start(
+                core.clone(),
+                pg,
+                api,
+            )?),
             None => None,
         };
-        let pool = worker::Pool::start(core.clone()).map_err(StartError::Component)?;
+        let pool = worker::Pool::start(core.clone())?;
         let sweeper = core
             .limits
             .retain_finished
             .map(|keep| retention::Sweeper::start(core.clone(), keep))
-            .transpose()
-            .map_err(StartError::Component)?;
+            .transpose()?;
         // With shared artifact storage, cached copies of jobs deleted elsewhere are removed.
         let cache_sweeper = core
             .artifacts
             .is_some()
             .then(|| retention::CacheSweeper::start(core.clone(), retention::CACHE_SWEEP_EVERY))
-            .transpose()
-            .map_err(StartError::Component)?;
+            .transpose()?;
         Ok(Self {
             state: AppState { core },
             pool,
@@ -223,16 +223,16 @@ pub enum Database {
 }
 
 /// A `--database` URL that names no store this ashlar opens.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, thiserror::Error)]
 pub enum DatabaseError {
     #[error("--database sqlite:PATH: the path is empty")]
     EmptyPath,
     #[error("--database {url:?}: expected sqlite:PATH or postgres://USER@HOST:PORT/DBNAME")]
     Scheme { url: String },
-    /// A PostgreSQL URL or its TLS parameters do not parse (`store::postgres::parse_url`,
-    /// whose messages are still text; they name the parameter, never the credentials).
-    #[error("{0}")]
-    Postgres(String),
+    /// A PostgreSQL URL or its TLS parameters do not parse (`store::postgres::parse_url`;
+    /// the cause names the parameter, never the credentials).
+    #[error(transparent)]
+    Postgres(#[from] store::tls::PgUrlError),
 }
 
 /// `--lease` outside 1 s … a day.
@@ -245,7 +245,7 @@ pub struct LeaseError {
 /// Parse a `--database` URL.
 pub fn parse_database(url: &str) -> Result<Database, DatabaseError> {
     if url.starts_with("postgres://") || url.starts_with("postgresql://") {
-        store::postgres::parse_url(url).map_err(DatabaseError::Postgres)?;
+        store::postgres::parse_url(url)?;
         return Ok(Database::Postgres(url.to_string()));
     }
     database_path(url).map(Database::Sqlite)

@@ -4,20 +4,31 @@
 //! /v1/jobs/{id}` would. Opt-in and documented (docs/service.md "Retention"): deleting by a
 //! stated policy is not losing a job. Queued, running and waiting jobs are never touched.
 use super::store::{now_ms, DeleteOutcome};
-use super::worker::Core;
+use super::worker::{Core, ThreadStartError};
 use std::sync::mpsc;
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
+/// A `--retain-finished` value that does not read (the text given).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RetentionError {
+    #[error("{text:?}: expected a whole number and a unit, e.g. 7d, 12h, 30m, 90s")]
+    Number { text: String },
+    #[error("{text:?}: unknown unit {unit:?} (s, m, h or d, e.g. 7d)")]
+    Unit { text: String, unit: String },
+    #[error("{text:?}: the retention must be between 1 s and 10 years")]
+    Range { text: String },
+}
+
 /// Parse a retention duration: a whole number with a unit, `s`, `m`, `h` or `d` (`7d`, `12h`,
 /// `30m`, `90s`), from one second to ten years.
-pub fn parse_duration(text: &str) -> Result<Duration, String> {
+pub fn parse_duration(text: &str) -> Result<Duration, RetentionError> {
     let t = text.trim();
     let split = t.find(|c: char| !c.is_ascii_digit()).unwrap_or(t.len());
     let (n, unit) = t.split_at(split);
-    let n: u64 = n.parse().map_err(|_| {
-        format!("{text:?}: expected a whole number and a unit, e.g. 7d, 12h, 30m, 90s")
+    let n: u64 = n.parse().map_err(|_| RetentionError::Number {
+        text: text.to_string(),
     })?;
     let secs = match unit {
         "s" => Some(n),
@@ -25,16 +36,17 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
         "h" => n.checked_mul(3600),
         "d" => n.checked_mul(86_400),
         other => {
-            return Err(format!(
-                "{text:?}: unknown unit {other:?} (s, m, h or d, e.g. 7d)"
-            ))
+            return Err(RetentionError::Unit {
+                text: text.to_string(),
+                unit: other.to_string(),
+            })
         }
     };
     match secs {
         Some(s) if (1..=10 * 365 * 86_400).contains(&s) => Ok(Duration::from_secs(s)),
-        _ => Err(format!(
-            "{text:?}: the retention must be between 1 s and 10 years"
-        )),
+        _ => Err(RetentionError::Range {
+            text: text.to_string(),
+        }),
     }
 }
 
@@ -93,7 +105,7 @@ pub struct Sweeper {
 }
 
 impl Sweeper {
-    pub fn start(core: Arc<Core>, keep: Duration) -> Result<Self, String> {
+    pub fn start(core: Arc<Core>, keep: Duration) -> Result<Self, ThreadStartError> {
         let (stop, rx) = mpsc::channel::<()>();
         let every = sweep_interval(keep);
         let thread = std::thread::Builder::new()
@@ -112,7 +124,7 @@ impl Sweeper {
                     _ => return,
                 }
             })
-            .map_err(|e| format!("starting the retention sweeper: {e}"))?;
+            .map_err(ThreadStartError::of("the retention sweeper"))?;
         Ok(Self { stop, thread })
     }
 
@@ -178,7 +190,7 @@ pub struct CacheSweeper {
 }
 
 impl CacheSweeper {
-    pub fn start(core: Arc<Core>, every: Duration) -> Result<Self, String> {
+    pub fn start(core: Arc<Core>, every: Duration) -> Result<Self, ThreadStartError> {
         let (stop, rx) = mpsc::channel::<()>();
         let thread = std::thread::Builder::new()
             .name("ashlar-cache-sweep".into())
@@ -192,7 +204,7 @@ impl CacheSweeper {
                     tracing::info!(removed = n, "removed cached artifacts of deleted jobs");
                 }
             })
-            .map_err(|e| format!("starting the cache sweeper: {e}"))?;
+            .map_err(ThreadStartError::of("the cache sweeper"))?;
         Ok(Self { stop, thread })
     }
 

@@ -84,37 +84,17 @@ pub struct ServeArgs {
     /// Address to listen on (port 0 picks a free port; the chosen address is printed).
     #[arg(long, default_value = "127.0.0.1:8080")]
     pub addr: String,
-    /// Directory for the embedded job store (`jobs.sqlite`) and artifacts (`jobs/<uuid>/`).
-    #[arg(long, default_value = "./ashlar-data")]
-    pub data: PathBuf,
     /// Job store URL instead of the embedded default: `sqlite:PATH` (artifacts go to --data),
     /// or `postgres://USER@HOST:PORT/DBNAME` to share one queue with `ashlar worker` processes
     /// (TLS: libpq's `?sslmode=verify-full&sslrootcert=CA.pem`, see docs/cluster.md).
     #[arg(long)]
     pub database: Option<String>,
-    /// Shared artifact storage (`file:///DIR`, or `s3://BUCKET/PREFIX` with the `s3` feature):
-    /// workers publish finished jobs' files there and the API serves them from there.
-    #[arg(long)]
-    pub artifacts: Option<String>,
-    /// PostgreSQL store: seconds a claimed job stays leased without a heartbeat.
-    #[arg(long, default_value_t = 30.0)]
-    pub lease: f64,
-    /// Worker threads running jobs (default: the number of cores; 0 with a PostgreSQL
-    /// database: an API-only process, `ashlar worker` processes run the jobs).
-    #[arg(long)]
-    pub workers: Option<usize>,
+    /// The flags `ashlar worker` has too: directories, threads, lease, fan-out, run limits.
+    #[command(flatten)]
+    pub process: ProcessArgs,
     /// Largest request body, bytes (413 beyond).
     #[arg(long, default_value_t = Limits::default().max_body_bytes)]
     pub max_body_bytes: usize,
-    /// Most blocks in a scene (422 beyond).
-    #[arg(long, default_value_t = Limits::default().max_blocks)]
-    pub max_blocks: usize,
-    /// Most samples in a ground-motion record, both components together (422 beyond).
-    #[arg(long, default_value_t = Limits::default().max_record_samples)]
-    pub max_record_samples: usize,
-    /// Most steps of one run, duration / time_step (422 beyond).
-    #[arg(long, default_value_t = Limits::default().max_total_steps)]
-    pub max_total_steps: u64,
     /// Most jobs waiting in the queue (429 with Retry-After beyond).
     #[arg(long, default_value_t = Limits::default().max_queued_jobs)]
     pub max_queued_jobs: u64,
@@ -176,20 +156,57 @@ pub struct ServeArgs {
     /// refused.
     #[arg(long)]
     pub allow_insecure: bool,
-    /// Seconds running jobs get to finish on SIGINT/SIGTERM before they are stopped and requeued.
-    #[arg(long, default_value_t = 20.0)]
-    pub shutdown_grace: f64,
     /// Testing aid: run jobs with the service's deterministic fake runner instead of the engine.
     #[arg(long, hide = true)]
     pub fake_runner: bool,
+    #[command(flatten)]
+    pub jobs: JobRunArgs,
+}
+
+/// The flags of a process that runs jobs, shared by `ashlar serve` and `ashlar worker`
+/// (`#[command(flatten)]` in both; `--database` is not among them: optional for `serve`,
+/// required for `worker`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct ProcessArgs {
+    /// Directory for the embedded job store (`jobs.sqlite`, `ashlar serve` without a
+    /// PostgreSQL --database) and the artifacts of the jobs this process runs
+    /// (`jobs/<uuid>/`; a scratch copy with --artifacts, else give every process of a cluster
+    /// the same shared directory).
+    #[arg(long, default_value = "./ashlar-data")]
+    pub data: PathBuf,
+    /// Shared artifact storage (`file:///DIR`, or `s3://BUCKET/PREFIX` with the `s3` feature):
+    /// workers publish finished jobs' files there and the API serves them from there.
+    #[arg(long)]
+    pub artifacts: Option<String>,
+    /// Jobs run at once, one per worker thread (default: the number of cores; `ashlar serve`
+    /// with a PostgreSQL --database may take 0: an API-only process, `ashlar worker`
+    /// processes run the jobs).
+    #[arg(long)]
+    pub workers: Option<usize>,
+    /// PostgreSQL store: seconds a claimed job stays leased without a heartbeat (heartbeat: a
+    /// third of it).
+    #[arg(long, default_value_t = 30.0)]
+    pub lease: f64,
+    /// Seconds running jobs get to finish on SIGINT/SIGTERM before they are stopped and requeued.
+    #[arg(long, default_value_t = 20.0)]
+    pub shutdown_grace: f64,
     /// PGA searches fan out their runs as child jobs shared by every worker process, with N
     /// interior amplitudes per k-section round (default with a PostgreSQL --database: the
     /// number of cores; 0: each search runs on the cores of the worker that claims it, the
     /// embedded store's default).
     #[arg(long)]
     pub fanout_width: Option<usize>,
-    #[command(flatten)]
-    pub jobs: JobRunArgs,
+    /// Most blocks in a scene (the API answers 422 beyond; give workers the API's value).
+    #[arg(long, default_value_t = Limits::default().max_blocks)]
+    pub max_blocks: usize,
+    /// Most samples in a ground-motion record, both components together (the API answers 422
+    /// beyond; give workers the API's value).
+    #[arg(long, default_value_t = Limits::default().max_record_samples)]
+    pub max_record_samples: usize,
+    /// Most steps of one run, duration / time_step (the API answers 422 beyond; give workers
+    /// the API's value).
+    #[arg(long, default_value_t = Limits::default().max_total_steps)]
+    pub max_total_steps: u64,
 }
 
 /// The flags of how one job runs, shared by `ashlar serve` and `ashlar worker`
@@ -247,7 +264,7 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), ServeError> {
         // Colour codes only for a terminal: a log written to a file or a pipe stays plain text.
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .try_init();
-    let mut config = ServiceConfig::new(&args.data);
+    let mut config = ServiceConfig::new(&args.process.data);
     match args
         .database
         .as_deref()
@@ -259,14 +276,14 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), ServeError> {
         Some(Database::Postgres(url)) => config.postgres = Some(url),
         None => {}
     }
-    config.artifacts = args.artifacts.clone();
+    config.artifacts = args.process.artifacts.clone();
     config.api = true;
-    config.lease = lease_params(args.lease).map_err(ServeError::Lease)?;
+    config.lease = lease_params(args.process.lease).map_err(ServeError::Lease)?;
     config.limits = Limits {
         max_body_bytes: args.max_body_bytes,
-        max_blocks: args.max_blocks,
-        max_record_samples: args.max_record_samples,
-        max_total_steps: args.max_total_steps,
+        max_blocks: args.process.max_blocks,
+        max_record_samples: args.process.max_record_samples,
+        max_total_steps: args.process.max_total_steps,
         max_queued_jobs: args.max_queued_jobs,
         max_queued_jobs_per_token: args.max_queued_jobs_per_token,
         max_queued_searches_per_token: args.max_queued_searches_per_token,
@@ -335,17 +352,18 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), ServeError> {
         idle_timeout: secs("idle-timeout", args.idle_timeout)?,
         ..server::ServerParams::default()
     };
-    if let Some(n) = args.workers {
+    if let Some(n) = args.process.workers {
         if n == 0 && config.postgres.is_none() {
             return Err(ServeError::NoWorkers);
         }
         config.workers.workers = n;
     }
-    if !(args.shutdown_grace.is_finite() && args.shutdown_grace >= 0.0) {
-        return Err(ServeError::ShutdownGrace(args.shutdown_grace));
+    if !(args.process.shutdown_grace.is_finite() && args.process.shutdown_grace >= 0.0) {
+        return Err(ServeError::ShutdownGrace(args.process.shutdown_grace));
     }
     if !args.fake_runner {
-        config.workers.fanout_width = fanout_width(args.fanout_width, config.postgres.is_some());
+        config.workers.fanout_width =
+            fanout_width(args.process.fanout_width, config.postgres.is_some());
     }
     config.workers.isolation = isolation(&args, &config.limits)?;
     let runner = if args.fake_runner {
@@ -376,20 +394,20 @@ pub fn serve_cli(args: ServeArgs) -> Result<(), ServeError> {
     let signals = runtime.block_on(async { ShutdownSignals::register() });
     // One line on stdout that scripts (and the tests) read to find the port.
     println!("ashlar serve: listening on http://{local}");
-    tracing::info!(%local, workers = state.core.params.workers, data = %args.data.display(), "listening");
+    tracing::info!(%local, workers = state.core.params.workers, data = %args.process.data.display(), "listening");
     let served = runtime.block_on(async {
         let shutdown_state = state.clone();
         server::serve(listener, app(state), server_params, async move {
             signals.wait().await;
             tracing::info!(
                 "shutting down: no new jobs; running jobs get {} s",
-                args.shutdown_grace
+                args.process.shutdown_grace
             );
             shutdown_state.core.begin_shutdown();
         })
         .await
     });
-    let requeued = service.shutdown(Duration::from_secs_f64(args.shutdown_grace));
+    let requeued = service.shutdown(Duration::from_secs_f64(args.process.shutdown_grace));
     runtime.shutdown_timeout(Duration::from_secs(1));
     tracing::info!(requeued, "stopped");
     served.map_err(ServeError::Serve)

@@ -7,9 +7,12 @@
 //! The scenes run with the default model, as a user's would (asserted per run): the incline
 //! runs the reduced sliding model and the two-column scene the full engine; the single-block
 //! column runs the reduced rocking model unless `auto`'s first-motion check finds its pivot
-//! slipping, and then the full engine. At these brackets' ends under both records it does
-//! (measured 2026-11-25: friction demand 4.04 and 4.17 above μ = 3.73), so the column's runs
-//! here are the full engine's.
+//! slipping, and then the full engine, started from the reduced model's last valid record
+//! sample in the search's runs and in the full run alike (the default hand-over,
+//! `analysis::run_fallback`). At these brackets' ends under both records it does (measured
+//! 2026-11-25: friction demand 4.04 and 4.17 above μ = 3.73), so the column's runs here are
+//! handed over to the engine: with the hand-over in the search only, the full run at Friuli's
+//! failing bound did not topple (session 31); with one path for both it must.
 //!
 //! Exact check (no tolerance): the criterion is a threshold on the summary; both runs are
 //! deterministic.

@@ -3,7 +3,7 @@
 use ashlar::motion::GroundMotion;
 use ashlar::scene::{parse_scene, Scene};
 use ashlar::simulation::{SimParams, Simulation};
-use serde_json::{json, Value};
+use serde_json::Value;
 
 #[allow(unused_imports)] // each test binary uses a different subset
 pub use ashlar::presets::{half_sine, incline, rect, rocking_pulse, scene_json, sine, Column, G};
@@ -73,33 +73,9 @@ pub fn run_until(
     false
 }
 
-/// `columns × rows` aligned 0.4 × 0.2 m blocks in a fixed U, frictionless, under
-/// `contact_solver: "dual"` at Δt = 1 ms, with the top middle block thrown down at 1 m/s: four
-/// corners meet at every interior node (the redundant vertex–vertex contacts of Zheng et al.'s
-/// pile).
+/// The aligned stack of `ashlar::presets::aligned_stack`, parsed.
 pub fn aligned_stack(columns: usize, rows: usize) -> Scene {
-    let (w, h) = (0.4, 0.2);
-    let (width, height) = (columns as f64 * w, rows as f64 * h);
-    let mut blocks = vec![
-        json!({ "id": "floor", "material": "stone", "fixed": true, "vertices": rect(-1.0, -1.0, width + 1.0, 0.0) }),
-        json!({ "id": "left", "material": "stone", "fixed": true, "vertices": rect(-1.0, 0.0, 0.0, height + 1.0) }),
-        json!({ "id": "right", "material": "stone", "fixed": true, "vertices": rect(width, 0.0, width + 1.0, height + 1.0) }),
-    ];
-    for r in 0..rows {
-        for c in 0..columns {
-            let (x0, y0) = (c as f64 * w, r as f64 * h);
-            blocks.push(json!({ "id": format!("b{r}_{c}"), "material": "stone",
-                                "vertices": rect(x0, y0, x0 + w, y0 + h) }));
-        }
-    }
-    let mut v = scene_json(
-        json!(blocks),
-        0.0,
-        json!({ "time_step": 1e-3, "contact_solver": "dual", "duration": 1.0 }),
-    );
-    v["initial"] =
-        json!([{ "block": format!("b{}_{}", rows - 1, columns / 2), "velocity": [0.0, -1.0] }]);
-    parse(&v)
+    parse(&ashlar::presets::aligned_stack(columns, rows))
 }
 
 /// Depth of `p` inside the polygon `poly` (either orientation, convex or not), m: the distance
@@ -217,3 +193,20 @@ pub fn first_impact_angular_velocities(s: &mut Simulation, block: usize) -> (f64
     let before = before.expect("no impact within 2 s");
     (before, 2.0 * history[0] - history[1])
 }
+
+/// The fields of `ashlar motion`'s JSON report (docs/format.md §3), which `POST
+/// /v1/motions/inspect` gives too: written here once, independently of the code that builds it.
+pub const MOTION_REPORT_FIELDS: [&str; 12] = [
+    "npts",
+    "dt",
+    "duration",
+    "original_units",
+    "pga",
+    "pgv",
+    "pgd",
+    "arias_intensity",
+    "significant_duration_5_95",
+    "cav",
+    "mean_period",
+    "spectrum",
+];

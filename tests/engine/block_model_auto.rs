@@ -150,7 +150,7 @@ fn the_auto_choice_changes_a_shaken_wall_by_less_than_its_bound() {
 /// The rule bounds how far strain moves the lever arms (1e-4 of themselves); the answers of two
 /// models also differ by their numerics (a deformable block's 3 extra unknowns change the
 /// open–close path). The bound the check holds them to: 1 % of the answer's scale, the
-/// project's accuracy target (docs/accuracy-vs-speed.md). Measured (session 29): peak
+/// project's accuracy target (docs/accuracy-vs-speed.md). Measured when this test was written: peak
 /// displacement 0.81 % of the largest (4.73 mm: the wall slides on its foundation), sliding
 /// distance 0.35 % of the largest (28 mm), rotation × 0.6 m 0.014 %; the rigid run 6.5× faster.
 const BOUND: f64 = 1e-2;

@@ -13,9 +13,8 @@
 use ashlar::analysis::run::{run, RunOptions};
 use ashlar::analysis::study::{wall_record, GROUND_MOTIONS_DIR};
 use ashlar::motion::GroundMotion;
-use ashlar::presets::study_wall;
+use ashlar::presets::study_wall_json;
 use ashlar::record::Frame;
-use ashlar::scene::generate::running_bond_wall;
 use ashlar::scene::scene_from_value;
 use serde_json::{json, Value};
 use std::sync::Mutex;
@@ -25,8 +24,7 @@ const DURATION: f64 = 3.0;
 fn wall_and_record() -> (Value, GroundMotion) {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(GROUND_MOTIONS_DIR);
     let gm = wall_record(&dir).expect("the wall's record (data/ground-motions)");
-    let wall = running_bond_wall(&study_wall());
-    (serde_json::to_value(&wall).expect("wall scene"), gm)
+    (study_wall_json(), gm)
 }
 
 /// Horizontal displacement history (t, x) of the top block, every output frame.

@@ -28,6 +28,9 @@ use serde_json::{json, Value};
 
 /// Running-bond wall: `courses` courses of `per_course` blocks (bw × bh, m), half blocks at both
 /// ends of every odd course, on a fixed foundation. Returns the block list (foundation first).
+/// Not `presets::wall`: the same bond, but this foundation is 0.3 m deep (the template's 0.5 m),
+/// the stones take the scene's block model and the edges are computed, not summed, so the
+/// coordinates differ in the last bits; the bounds below were measured on this wall.
 fn wall_blocks(courses: usize, per_course: usize, bw: f64, bh: f64) -> Value {
     let length = per_course as f64 * bw;
     let rect = |x0: f64, y0: f64, x1: f64, y1: f64| json!([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]);

@@ -15,7 +15,7 @@
 //! verdict is checked where Housner's verdict holds at ±3 % of the PGA; the peak where the column
 //! survives beyond 0.02 rad and the reference is well conditioned: its peak moves by at most 3 %
 //! for ±1 % of the PGA (the rule the rocking frame's record tests assert,
-//! tests/engine/multiblock_references.rs), so a 5 % miss is the engine's and not the record's
+//! tests/engine/multiblock_references/), so a 5 % miss is the engine's and not the record's
 //! sensitivity. Each test asserts that it checked at least the points it was written for.
 //!
 //! Found when this file was written: the default missed the 5 % at Friuli 0.5 g (+36.8 %) and
@@ -94,8 +94,8 @@ fn check_point(col: &RecordColumn, record: &str, pga: f64, regression: Option<f6
         &m,
         sr::run_length(&m),
         // Deformable by name: the points and bounds below were measured with the deformable
-        // block, the default when this was written. With rigid blocks (the "auto" default
-        // since session 29) the 0.4 × 1.2 m column under Friuli at 0.5 / 0.9 g is −7.6 % off
+        // block, the default when this was written. With rigid blocks (what "auto" now
+        // chooses for it, docs/format.md) the 0.4 × 1.2 m column under Friuli at 0.5 / 0.9 g is −7.6 % off
         // Housner's peak at one of them (5 % tolerance): not yet understood.
         &json!({ "block_model": "deformable" }),
         SimParams::default(),

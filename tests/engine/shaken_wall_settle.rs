@@ -12,7 +12,6 @@
 //! before docs/contact-solve.md (`OpenCloseParams::legacy`, up to 200 iterations) at Δt = 1e-4 s
 //! fixed, over the same simulated time: the wall has no closed form.
 use ashlar::motion::{self, GroundMotion};
-use ashlar::scene::generate::{running_bond_wall, WallParams};
 use ashlar::scene::{validate, Scene};
 use ashlar::simulation::{SimParams, Simulation};
 use ashlar::solve::open_close::OpenCloseParams;
@@ -25,18 +24,11 @@ use ashlar::solve::open_close::OpenCloseParams;
 const LIGHT_BOUND: f64 = 3e-8;
 
 fn wall() -> Scene {
-    let mut spec = running_bond_wall(&WallParams {
-        courses: 10,
-        blocks_per_course: 10,
-        ..Default::default()
-    });
-    spec.control.time_step = Some(1e-3);
-    validate(&spec).expect("wall scene")
+    validate(&ashlar::presets::wall(10, 10)).expect("wall scene")
 }
 
 fn record() -> (GroundMotion, f64) {
-    let gm = crate::common::record("northridge-1994-mulholland-009.at2")
-        .scaled_to_pga(0.3 * motion::STANDARD_GRAVITY);
+    let gm = ashlar::presets::shaken_wall_record().expect("the repository's Northridge record");
     let at = motion::peak_time(&gm, 1e-3);
     (gm, (at - 0.2_f64).max(0.0))
 }

@@ -9,19 +9,12 @@
 use crate::common;
 
 use ashlar::motion::GroundMotion;
-use ashlar::scene::generate::{running_bond_wall, WallParams};
 use ashlar::scene::{validate, Scene};
 use ashlar::simulation::{SimParams, Simulation};
 use common::{displacement, sine};
 
 fn wall() -> Scene {
-    let mut spec = running_bond_wall(&WallParams {
-        courses: 5,
-        blocks_per_course: 8,
-        ..Default::default()
-    });
-    spec.control.time_step = Some(1e-3);
-    validate(&spec).expect("wall scene")
+    validate(&ashlar::presets::wall(5, 8)).expect("wall scene")
 }
 
 fn run(scene: &Scene, motion: &GroundMotion, params: SimParams, t_end: f64) -> Simulation {

@@ -342,12 +342,14 @@ fn reference_checks() {
 }
 
 fn stack_scene(st: &Stack, solver: &str, duration: f64) -> ashlar::scene::Scene {
-    let (b, y1, y2) = (st.b, 2.0 * st.h1, 2.0 * (st.h1 + st.h2));
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": rect(-2.0, -0.5, 2.0, 0.0) },
-        { "id": "lower", "material": "stone", "block_model": "rigid", "vertices": rect(-b, 0.0, b, y1) },
-        { "id": "upper", "material": "stone", "block_model": "rigid", "vertices": rect(-b, y1, b, y2) },
-    ]);
+    let blocks = ashlar::presets::Stack {
+        half_width: st.b,
+        lower_height: 2.0 * st.h1,
+        upper_height: 2.0 * st.h2,
+        base_half_width: 2.0,
+        base_depth: 0.5,
+    }
+    .blocks("stone", "rigid");
     // φ = 75°: no joint slips (the reference has no sliding).
     parse(&scene_json(
         blocks,

@@ -1,5 +1,6 @@
 //! `ashlar motion RECORD [--svg FILE]`: the JSON has exactly the docs/format.md §3 fields (plus the
 //! documented extensions) and the SVG is written.
+use crate::common::MOTION_REPORT_FIELDS;
 use ashlar::cli::motion::{report_json, MotionArgs};
 use ashlar::motion::RecordArgs;
 use std::path::PathBuf;
@@ -36,20 +37,7 @@ fn json_fields_and_svg() {
     a.svg = Some(svg.clone());
     let json: serde_json::Value =
         serde_json::from_str(&report_json(&a).expect("report")).expect("json");
-    for key in [
-        "npts",
-        "dt",
-        "duration",
-        "original_units",
-        "pga",
-        "pgv",
-        "pgd",
-        "arias_intensity",
-        "significant_duration_5_95",
-        "cav",
-        "mean_period",
-        "spectrum",
-    ] {
+    for key in MOTION_REPORT_FIELDS {
         assert!(json.get(key).is_some(), "missing {key}");
     }
     for key in ["damping", "periods", "psa"] {

@@ -9,6 +9,7 @@ mod regression_auto_controls;
 mod regression_contact_chatter;
 mod regression_dual_phantom_corner;
 mod regression_dual_trapezoidal;
+mod regression_handover_verdict;
 mod regression_pga_range;
 mod regression_phantom_penetration;
 mod regression_reported_controls;

@@ -2,7 +2,7 @@
 //!
 //! Symptom: the rocking frame (two equal free columns carrying a free cap,
 //! `presets::RockingFrame`, γ = 1) under Loma Prieta (Capitola 000) at 0.6 g peaked −28.64 %
-//! off Makris–Vassiliou's equivalent column (tests/engine/multiblock_references.rs), the
+//! off Makris–Vassiliou's equivalent column (tests/engine/multiblock_references/), the
 //! columns' rotations parted by 0.11 rad and the left column left the ground at 6.198 s.
 //!
 //! Cause as found (`frame_loma_prieta_landings` in that file prints the landings): the two

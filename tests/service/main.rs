@@ -20,3 +20,4 @@ mod service_site;
 mod service_support;
 mod service_templates;
 mod service_web;
+mod store_contract;

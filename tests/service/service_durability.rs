@@ -159,31 +159,6 @@ fn kill_and_recover(
     std::fs::remove_dir_all(data).ok();
 }
 
-/// Equal structure and strings; numbers within `rel` of each other (relative to the larger,
-/// with 1e-300 absolute so exact zeros compare). `rel = 0` demands identical numbers.
-fn close_num(a: f64, b: f64, rel: f64) -> bool {
-    a == b || (a - b).abs() <= rel * a.abs().max(b.abs()) + 1e-300
-}
-
-fn close_json(a: &Value, b: &Value, rel: f64) -> bool {
-    match (a, b) {
-        (Value::Number(x), Value::Number(y)) => close_num(
-            x.as_f64().unwrap_or(f64::NAN),
-            y.as_f64().unwrap_or(f64::NAN),
-            rel,
-        ),
-        (Value::Array(x), Value::Array(y)) => {
-            x.len() == y.len() && x.iter().zip(y).all(|(p, q)| close_json(p, q, rel))
-        }
-        (Value::Object(x), Value::Object(y)) => {
-            x.len() == y.len()
-                && x.iter()
-                    .all(|(k, v)| y.get(k).is_some_and(|w| close_json(v, w, rel)))
-        }
-        _ => a == b,
-    }
-}
-
 fn close_csv(a: &str, b: &str, rel: f64) -> bool {
     let (la, lb): (Vec<&str>, Vec<&str>) = (a.lines().collect(), b.lines().collect());
     la.len() == lb.len()

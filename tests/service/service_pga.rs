@@ -12,18 +12,6 @@ fn start(tag: &str) -> (ashlar::service::Service, axum::Router, std::path::PathB
     start_analysis(tag, ashlar::service::Limits::default())
 }
 
-fn rigid_column(duration: f64) -> Value {
-    let mut s = column_scene(duration);
-    s["control"]["block_model"] = json!("rigid");
-    // The full engine (the default `auto` would run the reduced rocking model on one column).
-    s["control"]["model"] = json!("dda");
-    s
-}
-
-fn half_sine(period: f64, name: &str) -> Value {
-    json!({"name": name, "horizontal": {"pulse": {"amplitude": 1.0, "period": period, "cycles": 0.5, "units": "m/s2"}}})
-}
-
 fn multi_body(duration: f64) -> Value {
     json!({
         "scene": rigid_column(duration),
@@ -34,29 +22,6 @@ fn multi_body(duration: f64) -> Value {
         "tolerance": 0.1,
         "scan_points": 4
     })
-}
-
-fn events_of(text: &str) -> Vec<(String, Value)> {
-    text.split("\n\n")
-        .filter(|b| b.contains("data:"))
-        .map(|block| {
-            let name = block
-                .lines()
-                .find_map(|l| l.strip_prefix("event:"))
-                .unwrap_or("")
-                .trim()
-                .to_string();
-            let data = block
-                .lines()
-                .find_map(|l| l.strip_prefix("data:"))
-                .unwrap_or("")
-                .trim();
-            (
-                name,
-                serde_json::from_str(data).expect("event data is JSON"),
-            )
-        })
-        .collect()
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -72,7 +37,7 @@ async fn multi_record_search_streams_progress_and_serves_its_fragility() {
     }
     let stream = call(&app, get(&format!("/v1/pga-searches/{id}/events"))).await;
     assert_eq!(stream.status, 200);
-    let ev = events_of(&stream.text());
+    let ev = sse_events(&stream.text());
     let (last_name, last) = ev.last().expect("events");
     assert_eq!(
         (last_name.as_str(), last["status"].as_str()),

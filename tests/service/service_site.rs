@@ -28,10 +28,6 @@ fn two_columns(duration: f64) -> Value {
     s
 }
 
-fn half_sine(period: f64, name: &str) -> Value {
-    json!({"name": name, "horizontal": {"pulse": {"amplitude": 1.0, "period": period, "cycles": 0.5, "units": "m/s2"}}})
-}
-
 fn body(duration: f64) -> Value {
     json!({
         "scene": two_columns(duration),

@@ -6,8 +6,6 @@ use axum::body::Body;
 use axum::http::{Request, Response};
 use http_body_util::BodyExt;
 use serde_json::Value;
-use std::io::{Read, Write};
-use std::net::TcpStream;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use tower::ServiceExt;
@@ -28,6 +26,46 @@ pub fn column_scene(duration: f64) -> Value {
 /// A half-sine pulse of `amplitude` m/s² and period 0.4 s.
 pub fn pulse(amplitude: f64) -> Value {
     ashlar::presets::half_sine_json(amplitude, 0.4)
+}
+
+/// [`column_scene`] with rigid blocks on the full engine (the default `auto` would run the
+/// reduced rocking model on one column): the scene of the real-engine PGA searches.
+pub fn rigid_column(duration: f64) -> Value {
+    let mut s = column_scene(duration);
+    s["control"]["block_model"] = serde_json::json!("rigid");
+    s["control"]["model"] = serde_json::json!("dda");
+    s
+}
+
+/// A named motion of one half-sine pulse of 1 m/s² and `period` s, as a search's `motions`
+/// entry.
+pub fn half_sine(period: f64, name: &str) -> Value {
+    serde_json::json!({"name": name, "horizontal": {"pulse": {"amplitude": 1.0, "period": period, "cycles": 0.5, "units": "m/s2"}}})
+}
+
+/// Equal structure and strings; numbers within `rel` of each other (relative to the larger,
+/// with 1e-300 absolute so exact zeros compare). `rel = 0` demands identical numbers.
+pub fn close_num(a: f64, b: f64, rel: f64) -> bool {
+    a == b || (a - b).abs() <= rel * a.abs().max(b.abs()) + 1e-300
+}
+
+pub fn close_json(a: &Value, b: &Value, rel: f64) -> bool {
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => close_num(
+            x.as_f64().unwrap_or(f64::NAN),
+            y.as_f64().unwrap_or(f64::NAN),
+            rel,
+        ),
+        (Value::Array(x), Value::Array(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(p, q)| close_json(p, q, rel))
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            x.len() == y.len()
+                && x.iter()
+                    .all(|(k, v)| y.get(k).is_some_and(|w| close_json(v, w, rel)))
+        }
+        _ => a == b,
+    }
 }
 
 /// A response with its body collected.
@@ -129,6 +167,30 @@ pub async fn wait_for(
     }
 }
 
+/// A server-sent event stream's events: (event name, `data` as JSON), in order.
+pub fn sse_events(text: &str) -> Vec<(String, Value)> {
+    text.split("\n\n")
+        .filter(|b| b.contains("data:"))
+        .map(|block| {
+            let name = block
+                .lines()
+                .find_map(|l| l.strip_prefix("event:"))
+                .unwrap_or("")
+                .trim()
+                .to_string();
+            let data = block
+                .lines()
+                .find_map(|l| l.strip_prefix("data:"))
+                .unwrap_or("")
+                .trim();
+            (
+                name,
+                serde_json::from_str(data).expect("event data is JSON"),
+            )
+        })
+        .collect()
+}
+
 pub fn is_terminal(j: &Value) -> bool {
     matches!(
         j["status"].as_str(),
@@ -137,56 +199,8 @@ pub fn is_terminal(j: &Value) -> bool {
 }
 
 // ---- a minimal HTTP/1.1 client over std, for tests and tools that run the real binary ----
-
-/// One request with `Connection: close`; returns (status, body).
-pub fn http(
-    addr: &str,
-    method: &str,
-    path: &str,
-    body: Option<&str>,
-) -> std::io::Result<(u16, String)> {
-    let mut s = TcpStream::connect(addr)?;
-    s.set_read_timeout(Some(Duration::from_secs(30)))?;
-    let body = body.unwrap_or("");
-    let req = format!(
-        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n{body}",
-        body.len()
-    );
-    s.write_all(req.as_bytes())?;
-    let mut raw = Vec::new();
-    s.read_to_end(&mut raw)?;
-    let text = String::from_utf8_lossy(&raw).into_owned();
-    let (head, rest) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
-    let status = head
-        .split_whitespace()
-        .nth(1)
-        .and_then(|c| c.parse().ok())
-        .unwrap_or(0);
-    let chunked = head
-        .to_ascii_lowercase()
-        .contains("transfer-encoding: chunked");
-    Ok((
-        status,
-        if chunked {
-            dechunk(rest)
-        } else {
-            rest.to_string()
-        },
-    ))
-}
-
-fn dechunk(mut s: &str) -> String {
-    let mut out = String::new();
-    while let Some((size, rest)) = s.split_once("\r\n") {
-        let n = usize::from_str_radix(size.trim(), 16).unwrap_or(0);
-        if n == 0 || rest.len() < n {
-            break;
-        }
-        out.push_str(&rest[..n]);
-        s = rest[n..].trim_start_matches("\r\n");
-    }
-    out
-}
+mod http_client;
+pub use http_client::http;
 
 /// The `ashlar serve` binary, started on a free loopback port.
 pub struct Server {

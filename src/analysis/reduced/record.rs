@@ -168,7 +168,9 @@ fn frame(scene: &Scene, m: &Reduced, now: &BlockNow, failure: &FailureParams) ->
     }
 }
 
-fn header(
+/// The record header of a reduced run (`model`: what the metadata names; `analysis::run_fallback`
+/// writes a hand-over run's outputs under it too).
+pub(crate) fn header(
     scene: &Scene,
     b: &SingleBlock,
     motion: &GroundMotion,

@@ -184,7 +184,7 @@ pub(super) fn decisions(result: &StudyResult) -> String {
             scenes.len()
         ),
         Some((cost, label)) => format!(
-            "- **A cheaper setting exists**: `{label}` keeps every benchmark within 1 % with {cost:.0} linear solves (steps × open–close iterations) against {full_cost:.0} for the default settings. It is a candidate default, not adopted by this report alone: these benchmarks have no fast impacts or large models, where Δt, penalty and g2 bound the penetration per step; adopt it only when the stability suite (tests/engine/extremes.rs, docs/stability.md) also passes with it.\n"
+            "- **A cheaper setting exists**: `{label}` keeps every benchmark within 1 % with {cost:.0} linear solves (steps × open–close iterations) against {full_cost:.0} for the default settings. It is a candidate default, not adopted by this report alone: these benchmarks have no fast impacts or large models, where Δt, penalty and g2 bound the penetration per step; adopt it only when the stability suite (tests/engine/extremes/, docs/stability.md) also passes with it.\n"
         ),
     };
     // The model: reduced against the full engine on the scenes a reduced model represents.

@@ -136,8 +136,7 @@ pub(super) fn benches(opts: &StudyOptions) -> Result<Vec<Bench>, StudyError> {
     });
     // 6. Masonry wall under a recorded ground motion (data/ground-motions).
     let gm = wall_record(&opts.ground_motions)?;
-    let wall = running_bond_wall(&presets::study_wall());
-    let scene = serde_json::to_value(&wall)?;
+    let scene = presets::study_wall_json();
     let observed = scene["blocks"].as_array().map(|b| b.len() - 1).unwrap_or(1);
     let duration = if opts.quick { 3.0 } else { 8.0 };
     let mut reference = Setting::baseline();

@@ -1,10 +1,13 @@
 //! HTTP layer: a finished run's files, `GET /v1/jobs/{id}/histories` (JSON or streamed CSV,
 //! selected blocks, every n-th frame) and `GET /v1/jobs/{id}/trajectory.mcap` (byte ranges),
 //! streamed in chunks so that memory stays one chunk per response.
+//!
+//! Length (over 600 lines): both downloads share the job lookup, the history format's
+//! negotiation and the chunked bodies; about 90 lines are the range parser's unit tests.
 use super::problem::ApiError;
 use super::state::{blocking, load, parse_id, ApiResult, AppState};
 use crate::service::auth::Access;
-use crate::service::histories::Histories;
+use crate::service::histories::{Histories, HistoriesError};
 use crate::service::store::{JobKind, JobRecord, JobStatus};
 use crate::service::worker::Core;
 use axum::body::{Body, Bytes};
@@ -307,7 +310,7 @@ impl KeptRows {
         selected: &[usize],
         every: u64,
         capacity: usize,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, HistoriesError> {
         use std::io::BufRead;
         let wanted: Vec<usize> = std::iter::once(0)
             .chain(selected.iter().flat_map(|&k| 1 + 3 * k..4 + 3 * k))
@@ -319,7 +322,10 @@ impl KeptRows {
             .lines()
             .enumerate()
         {
-            let line = line.map_err(|e| format!("histories.csv line {}: {e}", n + 2))?;
+            let line = line.map_err(|source| HistoriesError::Read {
+                line: n + 2,
+                source,
+            })?;
             if line.trim().is_empty() {
                 continue;
             }
@@ -328,8 +334,7 @@ impl KeptRows {
             if !keep {
                 continue;
             }
-            let start = u32::try_from(text.len())
-                .map_err(|_| "the kept histories exceed 4 GiB".to_string())?;
+            let start = u32::try_from(text.len()).map_err(|_| HistoriesError::TooLarge)?;
             next.push(start);
             let mut fields = line.split(',').enumerate();
             for (i, &k) in wanted.iter().enumerate() {
@@ -337,8 +342,9 @@ impl KeptRows {
                     .find(|(j, _)| *j == k)
                     .map(|(_, v)| v.trim())
                     .filter(|v| v.parse::<f64>().is_ok())
-                    .ok_or_else(|| {
-                        format!("histories.csv line {}: column {} unreadable", n + 2, k + 1)
+                    .ok_or(HistoriesError::Unreadable {
+                        line: n + 2,
+                        column: k + 1,
                     })?;
                 if i > 0 {
                     text.push(',');

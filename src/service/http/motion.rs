@@ -94,7 +94,7 @@ pub fn inspect_motion(
     // Read as a `MotionSpec` (unknown members, members of another form and nulls refused),
     // without the command-line extension `processing`.
     let problem = |e: crate::motion::MotionError| {
-        ApiError::motion(motion_pointer(&e.origin, &e.message, body), &e)
+        ApiError::motion(motion_pointer(&e.origin, &e.message, body), e)
     };
     let spec = crate::motion::MotionSpec::from_value(body).map_err(problem)?;
     for (name, c) in spec.components() {

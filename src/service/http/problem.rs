@@ -1,12 +1,14 @@
 //! Errors of the HTTP layer as RFC 9457 problem details (`application/problem+json`): the edge
-//! where the core's typed errors become a problem type per cause (`invalid-scene` from
-//! `SceneError`, `invalid-motion` from `MotionError`, `model-not-applicable` from `RunError`;
-//! docs/architecture.md). Every failure a client can cause names what was wrong: `pointer` (a
+//! where the core's typed errors become a problem type per cause (`From<RequestError>`: a
+//! request's `SceneError` is `invalid-scene`, its `MotionError` `invalid-motion`, its
+//! `RunError::ModelNotApplicable` `model-not-applicable`, a limit `limit-exceeded`, …;
+//! `ApiError::store` for `StoreError`; docs/architecture.md). Every failure a client can cause names what was wrong: `pointer` (a
 //! JSON pointer into the request body) or `parameter` (a path or query parameter). Internal
 //! failures are logged with their cause and reported to the client without it.
 use crate::analysis::run::RunError;
 use crate::motion::MotionError;
-use crate::scene::SceneError;
+pub use crate::service::request::pointer::{dotted_to_pointer, point_at_named_field};
+use crate::service::request::RequestError;
 use crate::service::store::StoreError;
 use axum::http::{header, HeaderValue, StatusCode};
 use axum::response::{IntoResponse, Response};
@@ -101,56 +103,15 @@ impl ApiError {
         .with_parameter(name)
     }
 
-    /// The scene reader refused the scene ([`SceneError`]); `pointer` names the field.
-    pub fn scene(pointer: impl Into<String>, e: &SceneError) -> Self {
-        let pointer = pointer.into();
-        Self::new(
-            StatusCode::UNPROCESSABLE_ENTITY,
-            "invalid-scene",
-            "Scene is invalid",
-            format!("{pointer}: {}", e.message),
-        )
-        .with_pointer(pointer)
-    }
-
     /// The ground-motion reader refused the motion ([`MotionError`]): `pointer` names the
-    /// member, the detail also the line of an embedded record.
-    pub fn motion(pointer: impl Into<String>, e: &MotionError) -> Self {
-        let pointer = pointer.into();
-        let line = e
-            .line
-            .map(|l| format!(" (line {l} of the record)"))
-            .unwrap_or_default();
-        let shown = if pointer.is_empty() {
-            "(body)"
-        } else {
-            pointer.as_str()
-        };
-        Self::new(
-            StatusCode::UNPROCESSABLE_ENTITY,
-            "invalid-motion",
-            "Ground motion is invalid",
-            format!("{shown}{line}: {}", e.message),
-        )
-        .with_pointer(pointer)
-    }
-
-    /// `choose_model` refused the scene: [`RunError::ModelNotApplicable`] (a forced reduced
-    /// model that cannot represent it) is `model-not-applicable`; any other cause is a bug of
-    /// the caller, reported as `internal`.
-    pub fn model(e: &RunError) -> Self {
-        if !matches!(e, RunError::ModelNotApplicable { .. }) {
-            return Self::internal(e);
+    /// member, the detail also the line of an embedded record (`POST /motion`, whose body is
+    /// the motion; as a job's motion, through [`RequestError::Motion`]).
+    pub fn motion(pointer: impl Into<String>, e: MotionError) -> Self {
+        RequestError::Motion {
+            pointer: pointer.into(),
+            source: e,
         }
-        let e = e.to_string();
-        let why = e.strip_prefix("control.model: ").unwrap_or(&e);
-        Self::new(
-            StatusCode::UNPROCESSABLE_ENTITY,
-            "model-not-applicable",
-            "The scene's model cannot represent it",
-            format!("/scene/control/model: {why}"),
-        )
-        .with_pointer("/scene/control/model")
+        .into()
     }
 
     /// A configured limit is exceeded by a field of the body (blocks, record length, steps).
@@ -345,6 +306,83 @@ impl ApiError {
     }
 }
 
+/// A refused request body as a problem, its type chosen per cause; the detail is the error's
+/// text and the pointer its member ([`RequestError::pointer`]).
+impl From<RequestError> for ApiError {
+    fn from(e: RequestError) -> Self {
+        use RequestError as E;
+        let unprocessable = StatusCode::UNPROCESSABLE_ENTITY;
+        let (status, kind, title) = match e.cause() {
+            E::EmptyBody | E::Syntax(_) => (
+                StatusCode::BAD_REQUEST,
+                "malformed-json",
+                "Request body is not valid JSON",
+            ),
+            E::Scene { .. } => (unprocessable, "invalid-scene", "Scene is invalid"),
+            E::Motion { .. } => (unprocessable, "invalid-motion", "Ground motion is invalid"),
+            E::Model(RunError::ModelNotApplicable { .. }) => (
+                unprocessable,
+                "model-not-applicable",
+                "The scene's model cannot represent it",
+            ),
+            // Any other refusal of `choose_model` is a bug of the caller, not the request's.
+            E::Model(other) => return Self::internal(other),
+            E::JsonValues { .. }
+            | E::BlocksWhileReading { .. }
+            | E::RecordsWhileReading
+            | E::Vertices { .. }
+            | E::PulseCycles { .. }
+            | E::Blocks { .. }
+            | E::RecordSamples { .. }
+            | E::Steps { .. }
+            | E::Frames { .. }
+            | E::RunWork { .. }
+            | E::RunOutput { .. }
+            | E::SearchWork { .. }
+            | E::TooManyRecords { .. }
+            | E::TooManyObservations { .. } => (
+                unprocessable,
+                "limit-exceeded",
+                "Request exceeds a server limit",
+            ),
+            E::NotAnObject { .. }
+            | E::Field { .. }
+            | E::OutOfRange { .. }
+            | E::AccelerationOutOfRange { .. }
+            | E::ExcitationField { .. }
+            | E::NoDuration
+            | E::NoCriterion { .. }
+            | E::Criterion { .. }
+            | E::CriterionType { .. }
+            | E::NotFreeBlocks { .. }
+            | E::Damage { .. }
+            | E::NoRecords
+            | E::RecordName { .. }
+            | E::RecordMissing { .. }
+            | E::DuplicateRecord { .. }
+            // `cause()` looks through a record's error: its type is its cause's.
+            | E::InRecord { .. }
+            | E::ZeroHorizontal { .. }
+            | E::MotionAndMotions
+            | E::NoMotion
+            | E::Combine(_)
+            | E::Fit(_)
+            | E::FitNeedsRecords
+            | E::Amplitude { .. }
+            | E::RangeOrder { .. }
+            | E::Tolerance
+            | E::ScanPoints { .. }
+            | E::NoObservations
+            | E::ObservationArray { .. } => {
+                (unprocessable, "invalid-field", "Request field is invalid")
+            }
+        };
+        let mut problem = Self::new(status, kind, title, e.to_string());
+        problem.pointer = e.pointer();
+        problem
+    }
+}
+
 impl std::fmt::Display for ApiError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
@@ -387,49 +425,6 @@ impl IntoResponse for ApiError {
     }
 }
 
-/// serde names missing and unknown fields in its message, not in the path: point at them.
-pub(crate) fn point_at_named_field(pointer: String, msg: &str) -> String {
-    for marker in ["missing field `", "unknown field `"] {
-        if let Some(name) = msg
-            .strip_prefix(marker)
-            .and_then(|rest| rest.split('`').next())
-        {
-            let escaped = name.replace('~', "~0").replace('/', "~1");
-            if !pointer.ends_with(&format!("/{escaped}")) {
-                return format!("{pointer}/{escaped}");
-            }
-        }
-    }
-    pointer
-}
-
-/// Turn a scene-style dotted path (`blocks[2].vertices[0]`, `materials.stone.density`) into a
-/// JSON pointer below `prefix` (`/scene/blocks/2/vertices/0`). serde_path_to_error's `.` for
-/// "the whole document" maps to `prefix` itself.
-pub fn dotted_to_pointer(prefix: &str, path: &str) -> String {
-    let mut out = String::from(prefix);
-    if path.is_empty() || path == "." || path == "(document)" {
-        return out;
-    }
-    let mut seg = String::new();
-    let flush = |seg: &mut String, out: &mut String| {
-        if !seg.is_empty() {
-            out.push('/');
-            out.push_str(&seg.replace('~', "~0").replace('/', "~1"));
-            seg.clear();
-        }
-    };
-    for ch in path.chars() {
-        match ch {
-            '.' | '[' => flush(&mut seg, &mut out),
-            ']' => {}
-            c => seg.push(c),
-        }
-    }
-    flush(&mut seg, &mut out);
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -457,21 +452,52 @@ mod tests {
         assert!(!corrupt.detail.contains("lost"), "{}", corrupt.detail);
     }
 
+    /// A refused request becomes one problem type per cause, at the pointer the cause names;
+    /// an error of record `i` of a search keeps its cause's type, re-pointed at `/motions/i`.
     #[test]
-    fn pointers_from_dotted_paths() {
+    fn request_errors_become_a_problem_per_cause() {
+        let problem = |e: RequestError| {
+            let p = ApiError::from(e);
+            (p.status.as_u16(), p.kind, p.pointer, p.detail)
+        };
+        let (status, kind, pointer, detail) = problem(RequestError::EmptyBody);
         assert_eq!(
-            dotted_to_pointer("/scene", "blocks[2].vertices[0]"),
-            "/scene/blocks/2/vertices/0"
+            (status, kind, pointer.as_deref()),
+            (400, "malformed-json", Some(""))
         );
+        assert_eq!(detail, "the request body is empty; expected a JSON object");
+        let steps = RequestError::Steps {
+            duration: 10.0,
+            time_step: 1e-3,
+            steps: 10_000.0,
+            limit: 999,
+        };
+        let (status, kind, pointer, _) = problem(steps);
         assert_eq!(
-            dotted_to_pointer("/scene", "materials.stone.density"),
-            "/scene/materials/stone/density"
+            (status, kind, pointer.as_deref()),
+            (422, "limit-exceeded", Some("/scene/control/duration"))
         );
-        assert_eq!(dotted_to_pointer("/scene", "."), "/scene");
+        let motion = RequestError::Motion {
+            pointer: "/motion/horizontal/dt".into(),
+            source: MotionError::new("motion.horizontal.dt", None, "must be > 0"),
+        };
+        let (status, kind, pointer, detail) = problem(RequestError::InRecord {
+            index: 2,
+            source: Box::new(motion),
+        });
         assert_eq!(
-            dotted_to_pointer("", "motion.horizontal.pulse"),
-            "/motion/horizontal/pulse"
+            (status, kind, pointer.as_deref()),
+            (422, "invalid-motion", Some("/motions/2/horizontal/dt"))
         );
-        assert_eq!(dotted_to_pointer("/x", "a/b"), "/x/a~1b");
+        assert_eq!(detail, "/motions/2/horizontal/dt: must be > 0");
+        let (_, kind, pointer, detail) = problem(RequestError::Tolerance);
+        assert_eq!(
+            (kind, pointer.as_deref()),
+            ("invalid-field", Some("/tolerance"))
+        );
+        assert!(detail.starts_with("/tolerance: "), "{detail}");
+        // A refusal of the model other than "not applicable" is the server's bug.
+        let (status, kind, pointer, _) = problem(RequestError::Model(RunError::NoDuration));
+        assert_eq!((status, kind, pointer), (500, "internal", None));
     }
 }

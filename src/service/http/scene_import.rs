@@ -90,7 +90,8 @@ fn check_option_ranges(options: &ImportOptions) -> Result<(), ApiError> {
         );
     }
     let as_scene = serde_json::json!({ "materials": options.materials, "joints": joints });
-    check_ranges(&as_scene).map_err(|mut e| {
+    check_ranges(&as_scene).map_err(|e| {
+        let mut e = ApiError::from(e);
         if let Some(p) = &e.pointer {
             let moved = p.replacen("/scene/joints/joint", "/options/joint", 1);
             let moved = moved.replacen("/scene/", "/options/", 1);

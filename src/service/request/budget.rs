@@ -5,7 +5,7 @@
 //! (blocks × steps, blocks × recorded frames) or of a search (runs × blocks × steps) is held to
 //! the server's limits (`ashlar serve --max-*`, reported by `GET /v1/limits`).
 use super::Limits;
-use crate::service::http::problem::ApiError;
+use super::RequestError;
 use serde::de::{DeserializeSeed, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde_json::Value;
 use std::cell::{Cell, RefCell};
@@ -25,7 +25,7 @@ struct Scan<'a> {
     at: At,
     values: &'a Cell<usize>,
     limits: &'a Limits,
-    refusal: &'a RefCell<Option<ApiError>>,
+    refusal: &'a RefCell<Option<RequestError>>,
 }
 
 impl Scan<'_> {
@@ -41,19 +41,14 @@ impl Scan<'_> {
         let n = self.values.get() + 1;
         self.values.set(n);
         if n > self.limits.max_json_values {
-            return Err(self.refuse(ApiError::limit_exceeded(
-                "",
-                format!(
-                    "the body holds more than {} JSON values (ashlar serve --max-json-values); \
-                     send a record as text (\"format\"/\"content\") rather than as a long array",
-                    self.limits.max_json_values
-                ),
-            )));
+            return Err(self.refuse(RequestError::JsonValues {
+                limit: self.limits.max_json_values,
+            }));
         }
         Ok(())
     }
-    fn refuse<E: serde::de::Error>(&self, e: ApiError) -> E {
-        let msg = e.detail.clone();
+    fn refuse<E: serde::de::Error>(&self, e: RequestError) -> E {
+        let msg = e.to_string();
         *self.refusal.borrow_mut() = Some(e);
         E::custom(msg)
     }
@@ -95,22 +90,12 @@ impl<'de> Visitor<'de> for Scan<'_> {
         while seq.next_element_seed(self.child(At::Other))?.is_some() {
             n += 1;
             if self.at == At::Blocks && n > self.limits.max_blocks {
-                return Err(self.refuse(ApiError::limit_exceeded(
-                    "/scene/blocks",
-                    format!(
-                        "/scene/blocks: more than {} blocks, the server's limit (ashlar serve --max-blocks); refused while reading",
-                        self.limits.max_blocks
-                    ),
-                )));
+                return Err(self.refuse(RequestError::BlocksWhileReading {
+                    limit: self.limits.max_blocks,
+                }));
             }
             if self.at == At::Motions && n > super::MAX_RECORDS {
-                return Err(self.refuse(ApiError::limit_exceeded(
-                    "/motions",
-                    format!(
-                        "/motions: more than {} records exceed the limit per search",
-                        super::MAX_RECORDS
-                    ),
-                )));
+                return Err(self.refuse(RequestError::RecordsWhileReading));
             }
         }
         Ok(())
@@ -134,7 +119,7 @@ impl<'de> Visitor<'de> for Scan<'_> {
 /// with more values than `--max-json-values` or more blocks than `--max-blocks` as soon as the
 /// reader gets there: memory stays proportional to the limits, not to what was sent. Syntax
 /// errors are left to the parser proper, which names line and column.
-pub fn prescan(bytes: &[u8], limits: &Limits) -> Result<(), ApiError> {
+pub fn prescan(bytes: &[u8], limits: &Limits) -> Result<(), RequestError> {
     let values = Cell::new(0);
     let refusal = RefCell::new(None);
     let mut de = serde_json::Deserializer::from_slice(bytes);
@@ -247,7 +232,7 @@ fn accel_units(v: Option<&Value>) -> Option<(f64, &'static str)> {
 }
 
 /// An acceleration `x` given in `units`, against [`GROUND_ACCELERATION`] (in m/s²).
-fn check_accel(pointer: String, v: &Value, units: Option<&Value>) -> Result<(), ApiError> {
+fn check_accel(pointer: String, v: &Value, units: Option<&Value>) -> Result<(), RequestError> {
     let (Some(x), Some((k, name))) = (v.as_f64(), accel_units(units)) else {
         return Ok(());
     };
@@ -255,21 +240,17 @@ fn check_accel(pointer: String, v: &Value, units: Option<&Value>) -> Result<(), 
     if x.is_finite() && (lo..=hi).contains(&(x * k)) {
         return Ok(());
     }
-    Err(ApiError::invalid_field(
-        pointer.clone(),
-        format!(
-            "{pointer}: {} {name} is outside the accepted range {} … {} m/s² (docs/format.md, \"Ranges\")",
-            num(x),
-            num(lo),
-            num(hi)
-        ),
-    ))
+    Err(RequestError::AccelerationOutOfRange {
+        pointer,
+        value: x,
+        units: name,
+    })
 }
 
 /// Refuse motion values outside their documented ranges, before the motion is read: a sample
 /// list's samples (the pointer names the sample's index) and `dt`, a pulse's amplitude, period
 /// and phase, a sine's amplitude and frequency. `base` is the motion's pointer (`/motion`).
-pub fn check_motion_ranges(base: &str, motion: &Value) -> Result<(), ApiError> {
+pub fn check_motion_ranges(base: &str, motion: &Value) -> Result<(), RequestError> {
     let r = |(min, max): (f64, f64), units| range(min, max, units);
     for name in ["horizontal", "vertical"] {
         let Some(c) = motion.get(name).filter(|c| c.is_object()) else {
@@ -313,23 +294,20 @@ pub fn check_motion_ranges(base: &str, motion: &Value) -> Result<(), ApiError> {
     Ok(())
 }
 
-fn check(pointer: String, v: &Value, r: Range) -> Result<(), ApiError> {
+fn check(pointer: String, v: &Value, r: Range) -> Result<(), RequestError> {
     let Some(x) = v.as_f64() else {
         return Ok(()); // not a number: the scene reader names the type error
     };
     if x.is_finite() && x >= r.min && x <= r.max {
         return Ok(());
     }
-    Err(ApiError::invalid_field(
-        pointer.clone(),
-        format!(
-            "{pointer}: {} {u} is outside the accepted range {} … {} {u} (docs/format.md, \"Ranges\")",
-            num(x),
-            num(r.min),
-            num(r.max),
-            u = r.units
-        ),
-    ))
+    Err(RequestError::OutOfRange {
+        pointer,
+        value: x,
+        min: r.min,
+        max: r.max,
+        units: r.units,
+    })
 }
 
 fn esc(key: &str) -> String {
@@ -337,7 +315,7 @@ fn esc(key: &str) -> String {
 }
 
 /// Refuse physical values outside their documented ranges, naming the first one by pointer.
-pub fn check_ranges(scene: &Value) -> Result<(), ApiError> {
+pub fn check_ranges(scene: &Value) -> Result<(), RequestError> {
     let r = |(min, max): (f64, f64), units| range(min, max, units);
     if let Some(g) = scene.get("gravity") {
         check("/scene/gravity".into(), g, r(GRAVITY, "m/s²"))?;
@@ -425,32 +403,20 @@ pub fn check_run_work(
     steps: f64,
     frames: f64,
     limits: &Limits,
-) -> Result<(), ApiError> {
-    let work = blocks as f64 * steps;
-    if work > limits.max_block_steps as f64 {
-        return Err(ApiError::limit_exceeded(
-            "/scene",
-            format!(
-                "/scene: {blocks} blocks × {steps:.0} steps = {} block-steps, {:.1} times the server's limit of {} \
-                 (ashlar serve --max-block-steps); shorten control.duration, lengthen control.time_step or use fewer blocks",
-                num(work),
-                work / limits.max_block_steps as f64,
-                limits.max_block_steps
-            ),
-        ));
+) -> Result<(), RequestError> {
+    if blocks as f64 * steps > limits.max_block_steps as f64 {
+        return Err(RequestError::RunWork {
+            blocks,
+            steps,
+            limit: limits.max_block_steps,
+        });
     }
-    let out = blocks as f64 * frames;
-    if out > limits.max_block_frames as f64 {
-        return Err(ApiError::limit_exceeded(
-            "/scene/control/output_interval",
-            format!(
-                "/scene/control/output_interval: {blocks} blocks × {frames:.0} recorded frames = {} block-frames, {:.1} times \
-                 the server's limit of {} (ashlar serve --max-block-frames); lengthen control.output_interval",
-                num(out),
-                out / limits.max_block_frames as f64,
-                limits.max_block_frames
-            ),
-        ));
+    if blocks as f64 * frames > limits.max_block_frames as f64 {
+        return Err(RequestError::RunOutput {
+            blocks,
+            frames,
+            limit: limits.max_block_frames,
+        });
     }
     Ok(())
 }
@@ -469,20 +435,14 @@ pub fn check_search_work(
     blocks: usize,
     steps: f64,
     limits: &Limits,
-) -> Result<(), ApiError> {
-    let work = runs * blocks as f64 * steps;
-    if work > limits.max_search_block_steps as f64 {
-        return Err(ApiError::limit_exceeded(
-            "/scan_points",
-            format!(
-                "/scan_points: up to {runs:.0} runs × {blocks} blocks × {steps:.0} steps = {} block-steps, {:.1} times the \
-                 server's limit of {} for a search (ashlar serve --max-search-block-steps); use fewer records or scan \
-                 points, a coarser tolerance, or a shorter run",
-                num(work),
-                work / limits.max_search_block_steps as f64,
-                limits.max_search_block_steps
-            ),
-        ));
+) -> Result<(), RequestError> {
+    if runs * blocks as f64 * steps > limits.max_search_block_steps as f64 {
+        return Err(RequestError::SearchWork {
+            runs,
+            blocks,
+            steps,
+            limit: limits.max_search_block_steps,
+        });
     }
     Ok(())
 }
@@ -503,10 +463,10 @@ mod tests {
         assert!(prescan(ok, &l).is_ok());
         let four = br#"{"scene": {"blocks": [1, 2, 3, 4]}}"#;
         let e = prescan(four, &l).expect_err("4 blocks > 3");
-        assert_eq!(e.pointer.as_deref(), Some("/scene/blocks"));
+        assert_eq!(e.pointer().as_deref(), Some("/scene/blocks"));
         let many = format!("[{}0]", "0,".repeat(100));
         let e = prescan(many.as_bytes(), &l).expect_err("101 values > 100");
-        assert_eq!(e.kind, "limit-exceeded");
+        assert!(matches!(e, RequestError::JsonValues { limit: 100 }), "{e}");
         // Syntax errors are left to the parser (which names line and column).
         assert!(prescan(b"{\"scene\": [", &l).is_ok());
     }
@@ -518,17 +478,20 @@ mod tests {
         assert!(check_ranges(&s).is_ok());
         s["materials"]["stone"]["density"] = json!(1e308);
         let e = check_ranges(&s).expect_err("density 1e308");
-        assert_eq!(e.pointer.as_deref(), Some("/scene/materials/stone/density"));
-        assert!(e.detail.len() < 200, "{}", e.detail);
+        assert_eq!(
+            e.pointer().as_deref(),
+            Some("/scene/materials/stone/density")
+        );
+        assert!(e.to_string().len() < 200, "{e}");
         s["materials"]["stone"]["density"] = json!(2500);
         s["control"]["duration"] = json!(1e308);
         let e = check_ranges(&s).expect_err("duration 1e308");
-        assert_eq!(e.pointer.as_deref(), Some("/scene/control/duration"));
-        assert!(!e.detail.contains("000000000000"), "{}", e.detail);
+        assert_eq!(e.pointer().as_deref(), Some("/scene/control/duration"));
+        assert!(!e.to_string().contains("000000000000"), "{e}");
         s["control"]["duration"] = json!(10);
         s["initial"] = json!([{"block": "b", "velocity": [0, 1e308]}]);
         let e = check_ranges(&s).expect_err("velocity");
-        assert_eq!(e.pointer.as_deref(), Some("/scene/initial/0/velocity/1"));
+        assert_eq!(e.pointer().as_deref(), Some("/scene/initial/0/velocity/1"));
     }
 
     #[test]

@@ -1,14 +1,17 @@
 //! Service: request bodies, JSON text → validated [`JobInput`], with the server's limits
 //! applied (`budget`: the pre-scan, ranges and work estimates). Beside `jobs`, below `http` and
-//! `worker`, which both import it; its errors are already the HTTP problems
-//! (`http::problem::ApiError`, the one HTTP type it uses), which the worker reads as text.
+//! `worker`, which both import it; it imports no HTTP type: its errors are [`RequestError`]s
+//! (`error.rs`, one variant per cause, each naming its JSON pointer), which `http` turns into
+//! problems and the worker shows as text.
 //! Used twice with the same rules: by the routes when a job is submitted (errors become
 //! 400/413/422 problems naming the field) and by a worker when it starts the stored job.
 //! This module holds what the three kinds share (limits, the scene and motion checks, criteria);
 //! `run`, `pga` and `site` parse each kind's body. Over 600 lines with its tests, which cover
 //! the three parsers through their shared checks.
 pub mod budget;
+pub mod error;
 mod pga;
+pub mod pointer;
 mod run;
 mod site;
 
@@ -16,8 +19,9 @@ use crate::analysis::fragility::Method;
 use crate::analysis::pga::{Criterion, PgaRequest};
 use crate::motion::{GroundMotion, Signal};
 use crate::scene::Scene;
-use crate::service::http::problem::{dotted_to_pointer, point_at_named_field, ApiError};
+pub use error::RequestError;
 pub use pga::{parse_pga, DEFAULT_SCAN_POINTS, MAX_RECORDS};
+use pointer::{dotted_to_pointer, point_at_named_field};
 pub use run::parse_run;
 use serde::Deserialize;
 use serde_json::Value;
@@ -169,38 +173,23 @@ pub struct Parsed {
 }
 
 /// Parse body bytes as JSON (syntax errors name line and column).
-pub fn json_body(bytes: &[u8]) -> Result<Value, ApiError> {
+pub fn json_body(bytes: &[u8]) -> Result<Value, RequestError> {
     if bytes.iter().all(|b| b.is_ascii_whitespace()) {
-        return Err(
-            ApiError::malformed_json("the request body is empty; expected a JSON object")
-                .with_pointer(""),
-        );
+        return Err(RequestError::EmptyBody);
     }
-    serde_json::from_slice(bytes).map_err(|e| {
-        ApiError::malformed_json(format!(
-            "invalid JSON at line {}, column {}: {e}",
-            e.line(),
-            e.column()
-        ))
-        .with_pointer("")
-    })
+    serde_json::from_slice(bytes).map_err(RequestError::Syntax)
 }
 
 /// Deserialize a typed body part, turning serde's message into a problem naming the field.
 pub(super) fn typed<T: for<'de> Deserialize<'de>>(
     prefix: &str,
     value: &Value,
-) -> Result<T, ApiError> {
+) -> Result<T, RequestError> {
     serde_path_to_error::deserialize(value).map_err(|e| {
         let path = e.path().to_string();
-        let msg = e.into_inner().to_string();
-        let pointer = point_at_named_field(dotted_to_pointer(prefix, &path), &msg);
-        let shown = if pointer.is_empty() {
-            "(body)"
-        } else {
-            pointer.as_str()
-        };
-        ApiError::invalid_field(pointer.clone(), format!("{shown}: {msg}"))
+        let source = e.into_inner();
+        let pointer = point_at_named_field(dotted_to_pointer(prefix, &path), &source.to_string());
+        RequestError::Field { pointer, source }
     })
 }
 
@@ -212,7 +201,7 @@ pub fn parse_criteria(
     spec: &Value,
     pointer: &str,
     scene: &Scene,
-) -> Result<Vec<(String, Criterion)>, ApiError> {
+) -> Result<Vec<(String, Criterion)>, RequestError> {
     let items: Vec<(String, &Value)> = match spec {
         Value::Array(v) => v
             .iter()
@@ -222,28 +211,25 @@ pub fn parse_criteria(
         other => vec![(pointer.to_string(), other)],
     };
     if items.is_empty() {
-        return Err(ApiError::invalid_field(
-            pointer,
-            format!("{pointer}: give at least one criterion"),
-        ));
+        return Err(RequestError::NoCriterion {
+            pointer: pointer.to_string(),
+        });
     }
     let mut out = Vec::new();
     for (p, item) in &items {
         let c = match item {
             Value::String(t) => Criterion::parse(t)
-                .map_err(|e| ApiError::invalid_field(p.clone(), format!("{p}: {e}")))
+                .map_err(|source| RequestError::Criterion {
+                    pointer: p.clone(),
+                    source,
+                })
                 .map(|c| (t.clone(), c))?,
             Value::Object(_) => {
                 let damage: crate::analysis::criteria::Damage = typed(p, item)?;
                 let c = Criterion::Damage { damage };
                 (c.text(), c)
             }
-            _ => {
-                return Err(ApiError::invalid_field(
-                    p.clone(),
-                    format!("{p}: a criterion is a string (\"toppled:BLOCK\") or a damage object ({{\"kind\": …}})"),
-                ))
-            }
+            _ => return Err(RequestError::CriterionType { pointer: p.clone() }),
         };
         out.push((p.clone(), c));
     }
@@ -262,25 +248,15 @@ pub fn parse_criteria(
             }
         }
     }
-    if let Some((first, _)) = missing.first() {
-        let list = missing
-            .iter()
-            .map(|(p, b)| format!("{p}: {b:?}"))
-            .collect::<Vec<_>>()
-            .join(", ");
-        return Err(ApiError::invalid_field(
-            first.clone(),
-            format!(
-                "{first}: not a free block of the scene ({} in all): {list}",
-                missing.len()
-            ),
-        ));
+    if !missing.is_empty() {
+        return Err(RequestError::NotFreeBlocks { missing });
     }
     for (p, (_, c)) in &out {
         if let Criterion::Damage { damage } = c {
-            damage
-                .check(scene)
-                .map_err(|e| ApiError::invalid_field(p.clone(), format!("{p}: {e}")))?;
+            damage.check(scene).map_err(|source| RequestError::Damage {
+                pointer: p.clone(),
+                source,
+            })?;
         }
     }
     Ok(out.into_iter().map(|(_, tc)| tc).collect())
@@ -288,27 +264,25 @@ pub fn parse_criteria(
 
 /// Shape checks before any work: a `base_acceleration` excitation takes no other field (the
 /// scene reader leaves that out), and the motion reads as a [`crate::motion::MotionSpec`].
-pub(super) fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), ApiError> {
+pub(super) fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), RequestError> {
     if let Some(ex) = scene.get("excitation").and_then(Value::as_object) {
         let allowed: &[&str] = match ex.get("type").and_then(Value::as_str) {
             Some("driven_block") => &["type", "block"],
             _ => &["type"],
         };
         if let Some(k) = ex.keys().find(|k| !allowed.contains(&k.as_str())) {
-            let p = format!("/scene/excitation/{k}");
-            return Err(ApiError::invalid_field(
-                p.clone(),
-                format!("{p}: unknown field for this excitation type"),
-            ));
+            return Err(RequestError::ExcitationField {
+                pointer: format!("/scene/excitation/{k}"),
+            });
         }
     }
     // The motion's shape is its type: members of another form, nulls and `processing` (a
     // command-line extension) are refused by reading it as a `MotionSpec`.
     if let Some(m) = motion.filter(|m| !m.is_null()) {
-        let spec = crate::motion::MotionSpec::from_value(m).map_err(|e| motion_problem(&e))?;
+        let spec = crate::motion::MotionSpec::from_value(m).map_err(motion_error)?;
         for (name, c) in spec.components() {
             if let Some(e) = c.processing_refused(&format!("motion.{name}")) {
-                return Err(motion_problem(&e));
+                return Err(motion_error(e));
             }
         }
     }
@@ -322,7 +296,7 @@ pub(super) fn check_sizes(
     scene: &Value,
     motion: Option<&Value>,
     limits: &Limits,
-) -> Result<(), ApiError> {
+) -> Result<(), RequestError> {
     let blocks = scene
         .get("blocks")
         .and_then(Value::as_array)
@@ -335,14 +309,11 @@ pub(super) fn check_sizes(
             .map(Vec::len)
             .unwrap_or(0);
         if n > limits.max_block_vertices {
-            let p = format!("/scene/blocks/{i}/vertices");
-            return Err(ApiError::limit_exceeded(
-                p.clone(),
-                format!(
-                    "{p}: {n} vertices exceed the server's limit of {} per block",
-                    limits.max_block_vertices
-                ),
-            ));
+            return Err(RequestError::Vertices {
+                block: i,
+                count: n,
+                limit: limits.max_block_vertices,
+            });
         }
     }
     for name in ["horizontal", "vertical"] {
@@ -353,33 +324,29 @@ pub(super) fn check_sizes(
             .and_then(Value::as_f64)
             .unwrap_or(0.0);
         if cycles * 20.0 > limits.max_record_samples as f64 {
-            let p = format!("/motion/{name}/pulse/cycles");
-            return Err(ApiError::limit_exceeded(
-                p.clone(),
-                format!(
-                    "{p}: {cycles} cycles is longer than the server's record limit allows ({} cycles; ashlar serve --max-record-samples)",
-                    limits.max_record_samples / 20
-                ),
-            ));
+            return Err(RequestError::PulseCycles {
+                component: name,
+                cycles,
+                limit: limits.max_record_samples / 20,
+            });
         }
     }
     Ok(())
 }
 
-/// A motion error as a problem pointing into the body (`motion.horizontal.dt` →
-/// `/motion/horizontal/dt`).
-pub(super) fn motion_problem(e: &crate::motion::MotionError) -> ApiError {
-    ApiError::motion(
-        point_at_named_field(dotted_to_pointer("", &e.origin), &e.message),
-        e,
-    )
+/// A motion error pointing into the body (`motion.horizontal.dt` → `/motion/horizontal/dt`).
+pub(super) fn motion_error(source: crate::motion::MotionError) -> RequestError {
+    RequestError::Motion {
+        pointer: point_at_named_field(dotted_to_pointer("", &source.origin), &source.message),
+        source,
+    }
 }
 
 pub(super) fn scene_and_motion(
     scene: &Value,
     motion: Option<&Value>,
     limits: &Limits,
-) -> Result<(Scene, GroundMotion), ApiError> {
+) -> Result<(Scene, GroundMotion), RequestError> {
     check_shapes(scene, motion)?;
     check_sizes(scene, motion, limits)?;
     super::budget::check_ranges(scene)?;
@@ -388,69 +355,52 @@ pub(super) fn scene_and_motion(
     }
     if let Some(n) = scene.get("blocks").and_then(Value::as_array).map(Vec::len) {
         if n > limits.max_blocks {
-            return Err(ApiError::limit_exceeded(
-                "/scene/blocks",
-                format!("/scene/blocks: {n} blocks exceed the server's limit of {} (ashlar serve --max-blocks)", limits.max_blocks),
-            ));
+            return Err(RequestError::Blocks {
+                count: n,
+                limit: limits.max_blocks,
+            });
         }
     }
-    let mut scene = crate::scene::scene_from_value(scene).map_err(|e| {
-        let p = point_at_named_field(dotted_to_pointer("/scene", &e.path), &e.message);
-        ApiError::scene(p, &e)
+    let mut scene = crate::scene::scene_from_value(scene).map_err(|source| {
+        let pointer =
+            point_at_named_field(dotted_to_pointer("/scene", &source.path), &source.message);
+        RequestError::Scene { pointer, source }
     })?;
     // A forced reduced model the scene cannot take is refused now, not failed later by a worker.
-    crate::analysis::run::choose_model(&scene, &Default::default())
-        .map_err(|e| ApiError::model(&e))?;
+    crate::analysis::run::choose_model(&scene, &Default::default()).map_err(RequestError::Model)?;
     let motion = match motion {
         None | Some(Value::Null) => GroundMotion::none(),
-        Some(v) => crate::motion::from_json(v).map_err(|e| motion_problem(&e))?,
+        Some(v) => crate::motion::from_json(v).map_err(motion_error)?,
     };
     let samples = signal_samples(&motion.horizontal) + signal_samples(&motion.vertical);
     if samples > limits.max_record_samples {
-        return Err(ApiError::limit_exceeded(
-            "/motion",
-            format!(
-                "/motion: the record has {samples} samples, over the server's limit of {} (ashlar serve --max-record-samples)",
-                limits.max_record_samples
-            ),
-        ));
+        return Err(RequestError::RecordSamples {
+            samples,
+            limit: limits.max_record_samples,
+        });
     }
-    let duration = match scene.control.duration.or_else(|| motion.duration().map(|d| d + 2.0)) {
-        Some(d) => d,
-        None => {
-            return Err(ApiError::invalid_field(
-                "/scene/control/duration",
-                "/scene/control/duration: required when the motion has no length (no record, or a steady sine)",
-            ))
-        }
-    };
+    let duration = scene
+        .control
+        .duration
+        .or_else(|| motion.duration().map(|d| d + 2.0))
+        .ok_or(RequestError::NoDuration)?;
     let steps = (duration / scene.control.time_step).ceil();
     if steps.is_nan() || steps > limits.max_total_steps as f64 {
-        return Err(ApiError::limit_exceeded(
-            "/scene/control/duration",
-            format!(
-                "/scene/control/duration: {} s at a time step of {} s is {} steps, over the server's limit of {} \
-                 (ashlar serve --max-total-steps); shorten the duration or lengthen control.time_step",
-                super::budget::num(duration),
-                super::budget::num(scene.control.time_step),
-                super::budget::num(steps),
-                limits.max_total_steps
-            ),
-        ));
+        return Err(RequestError::Steps {
+            duration,
+            time_step: scene.control.time_step,
+            steps,
+            limit: limits.max_total_steps,
+        });
     }
     let frames = (duration / scene.control.output_interval).ceil();
     if frames.is_nan() || frames > limits.max_total_steps as f64 {
-        return Err(ApiError::limit_exceeded(
-            "/scene/control/output_interval",
-            format!(
-                "/scene/control/output_interval: {} s recorded every {} s is {} frames, over the server's \
-                 limit of {} (ashlar serve --max-total-steps)",
-                super::budget::num(duration),
-                super::budget::num(scene.control.output_interval),
-                super::budget::num(frames),
-                limits.max_total_steps
-            ),
-        ));
+        return Err(RequestError::Frames {
+            duration,
+            output_interval: scene.control.output_interval,
+            frames,
+            limit: limits.max_total_steps,
+        });
     }
     super::budget::check_run_work(scene.blocks.len(), steps, frames, limits)?;
     scene.control.max_steps = scene
@@ -505,10 +455,10 @@ mod tests {
         })
     }
 
-    fn pointer_of(r: Result<Parsed, ApiError>) -> String {
+    fn pointer_of(r: Result<Parsed, RequestError>) -> String {
         match r {
             Ok(_) => panic!("expected an error"),
-            Err(e) => e.pointer.unwrap_or_else(|| "<none>".into()),
+            Err(e) => e.pointer().unwrap_or_else(|| "<none>".into()),
         }
     }
 
@@ -551,8 +501,8 @@ mod tests {
         };
         // 1 s at 1 ms = 1000 steps > 999.
         let e = parse_run(&json!({"scene": scene()}), &l).expect_err("over the step limit");
-        assert_eq!(e.kind, "limit-exceeded");
-        assert_eq!(e.pointer.as_deref(), Some("/scene/control/duration"));
+        assert!(matches!(e, RequestError::Steps { .. }), "{e}");
+        assert_eq!(e.pointer().as_deref(), Some("/scene/control/duration"));
         assert!(parse_run(
             &json!({"scene": scene()}),
             &Limits {
@@ -581,7 +531,7 @@ mod tests {
         let e = parse_run(&json!({"scene": scene(), "motion": m}), &Limits::default())
             .expect_err("a 1e12-cycle pulse");
         assert_eq!(
-            e.pointer.as_deref(),
+            e.pointer().as_deref(),
             Some("/motion/horizontal/pulse/cycles")
         );
         let l = Limits {
@@ -631,13 +581,9 @@ mod tests {
         for (field, pointer) in [("min", "/range/min"), ("max", "/range/max")] {
             let mut bad = text.clone();
             bad["range"][field] = json!("0.5");
-            let e = parse_pga(&bad, &l).expect_err("bare string");
-            assert_eq!(e.pointer.as_deref(), Some(pointer));
-            assert!(
-                e.detail.contains("0.5g") && e.detail.contains("0.5m/s2"),
-                "{}",
-                e.detail
-            );
+            let e = parse_pga(&bad, &l).expect_err("bare string").to_string();
+            assert!(e.starts_with(pointer), "{e}");
+            assert!(e.contains("0.5g") && e.contains("0.5m/s2"), "{e}");
         }
         let mut bad = text.clone();
         bad["tolerance"] = json!("0.01");
@@ -655,8 +601,8 @@ mod tests {
         let p = parse_run(&scaled(json!(2.5)), &l).expect("valid, m/s2 by default");
         assert_eq!(p.motion_summary["pga"].as_f64(), Some(2.5));
         let e = parse_run(&scaled(json!("0.5")), &l).expect_err("bare string");
-        assert!(e.detail.contains("has no units"), "{}", e.detail);
-        assert_eq!(e.pointer.as_deref(), Some("/motion/scale/target_pga"));
+        assert!(e.to_string().contains("has no units"), "{e}");
+        assert_eq!(e.pointer().as_deref(), Some("/motion/scale/target_pga"));
         let mut bad = body;
         bad["criterion"] = json!(["toppled:col", "rotation:col:x"]);
         assert_eq!(pointer_of(parse_pga(&bad, &l)), "/criterion/1");

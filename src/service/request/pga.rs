@@ -1,5 +1,6 @@
 //! Request bodies: `POST /v1/pga-searches`, a PGA search over one record or several (the
 //! records and the search range are shared with site analyses).
+use super::RequestError;
 use super::{motion_summary, parse_criteria, scene_and_motion, typed, JobInput, Limits, Parsed};
 use crate::analysis::fragility::Method;
 use crate::analysis::pga::Criterion;
@@ -7,7 +8,6 @@ use crate::analysis::pga::{Combine, PgaRequest};
 use crate::motion::GroundMotion;
 use crate::motion::{Amplitude, Units};
 use crate::scene::Scene;
-use crate::service::http::problem::ApiError;
 use serde::Deserialize;
 use serde_json::Value;
 
@@ -57,37 +57,18 @@ pub const DEFAULT_SCAN_POINTS: usize = 40;
 /// has 44), and bounds one job to 100 searches; the body-size limit bounds their samples.
 pub const MAX_RECORDS: usize = 100;
 
-/// Re-point an error of the single-motion parser at `/motions/{i}`.
-pub(super) fn at_record(e: ApiError, i: usize) -> ApiError {
-    let re = |t: &str| t.replacen("/motion", &format!("/motions/{i}"), 1);
-    ApiError {
-        detail: re(&e.detail),
-        pointer: e.pointer.as_deref().map(re),
-        ..e
-    }
-}
-
 /// The records of `"motions"`: each a GroundMotion, optionally with a `"name"` (default
 /// `motions/{i}`), parsed with the same rules as `"motion"`.
 pub(super) fn parse_records(
     scene: &Value,
     items: &[Value],
     limits: &Limits,
-) -> Result<(Scene, Vec<(String, GroundMotion)>), ApiError> {
+) -> Result<(Scene, Vec<(String, GroundMotion)>), RequestError> {
     if items.is_empty() {
-        return Err(ApiError::invalid_field(
-            "/motions",
-            "/motions: give at least one record",
-        ));
+        return Err(RequestError::NoRecords);
     }
     if items.len() > MAX_RECORDS {
-        return Err(ApiError::limit_exceeded(
-            "/motions",
-            format!(
-                "/motions: {} records exceed the limit of {MAX_RECORDS} per search",
-                items.len()
-            ),
-        ));
+        return Err(RequestError::TooManyRecords { count: items.len() });
     }
     let mut parsed_scene = None;
     let mut records = Vec::new();
@@ -96,73 +77,50 @@ pub(super) fn parse_records(
         let name = match item.as_object_mut().and_then(|o| o.remove("name")) {
             None => format!("motions/{i}"),
             Some(Value::String(n)) if !n.trim().is_empty() => n,
-            Some(_) => {
-                let p = format!("/motions/{i}/name");
-                return Err(ApiError::invalid_field(
-                    p.clone(),
-                    format!("{p}: must be a non-empty string"),
-                ));
-            }
+            Some(_) => return Err(RequestError::RecordName { index: i }),
         };
         if item.is_null() {
-            let p = format!("/motions/{i}");
-            return Err(ApiError::invalid_field(
-                p.clone(),
-                format!("{p}: a record is required"),
-            ));
+            return Err(RequestError::RecordMissing { index: i });
         }
         let (sc, motion) =
-            scene_and_motion(scene, Some(&item), limits).map_err(|e| at_record(e, i))?;
+            scene_and_motion(scene, Some(&item), limits).map_err(|e| RequestError::InRecord {
+                index: i,
+                source: Box::new(e),
+            })?;
         if motion.horizontal.peak() <= 0.0 {
-            let p = format!("/motions/{i}/horizontal");
-            return Err(ApiError::invalid_field(
-                p.clone(),
-                format!(
-                    "{p}: a PGA search scales the horizontal component, which is missing or zero"
-                ),
-            ));
+            return Err(RequestError::ZeroHorizontal {
+                pointer: format!("/motions/{i}/horizontal"),
+            });
         }
         if records.iter().any(|(n, _)| *n == name) {
-            let p = format!("/motions/{i}/name");
-            return Err(ApiError::invalid_field(
-                p.clone(),
-                format!("{p}: {name:?} names an earlier record too"),
-            ));
+            return Err(RequestError::DuplicateRecord { index: i, name });
         }
         parsed_scene.get_or_insert(sc);
         records.push((name, motion));
     }
-    let scene =
-        parsed_scene.ok_or_else(|| ApiError::invalid_field("/motions", "/motions: empty"))?;
+    let scene = parsed_scene.ok_or(RequestError::NoRecords)?;
     Ok((scene, records))
 }
 
 /// `POST /v1/pga-searches` body → search input (amplitudes converted to m/s²).
-pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
+pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, RequestError> {
     if !body.is_object() {
-        return Err(ApiError::invalid_field(
-            "",
-            "the body must be a JSON object {\"scene\", \"motion\", \"criterion\", \"range\", \"tolerance\"}",
-        ));
+        return Err(RequestError::NotAnObject {
+            members: "{\"scene\", \"motion\", \"criterion\", \"range\", \"tolerance\"}",
+        });
     }
     let b: PgaBody = typed("", body)?;
     let (scene, motion, records) = match &b.motions {
         Some(items) => {
             if !b.motion.is_null() {
-                return Err(ApiError::invalid_field(
-                    "/motions",
-                    "/motions: give either \"motion\" (one record) or \"motions\" (several), not both",
-                ));
+                return Err(RequestError::MotionAndMotions);
             }
             let (scene, records) = parse_records(&b.scene, items, limits)?;
             (scene, records[0].1.clone(), records)
         }
         None => {
             if b.motion.is_null() {
-                return Err(ApiError::invalid_field(
-                    "/motion",
-                    "/motion: a PGA search needs a ground motion to scale (or \"motions\": several records)",
-                ));
+                return Err(RequestError::NoMotion);
             }
             let (scene, motion) = scene_and_motion(&b.scene, Some(&b.motion), limits)?;
             (scene, motion, Vec::new())
@@ -170,27 +128,19 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
     };
     let combine = match &b.combine {
         None => Combine::All,
-        Some(t) => {
-            Combine::parse(t).map_err(|e| ApiError::invalid_field("/combine", format!("/{e}")))?
-        }
+        Some(t) => Combine::parse(t).map_err(RequestError::Combine)?,
     };
     let fit = match &b.fit {
         None => Method::Interval,
-        Some(t) => {
-            Method::parse(t).map_err(|e| ApiError::invalid_field("/fit", format!("/fit: {e}")))?
-        }
+        Some(t) => Method::parse(t).map_err(RequestError::Fit)?,
     };
     if b.fit.is_some() && records.is_empty() {
-        return Err(ApiError::invalid_field(
-            "/fit",
-            "/fit: a fragility fit needs several records (\"motions\")",
-        ));
+        return Err(RequestError::FitNeedsRecords);
     }
     if motion.horizontal.peak() <= 0.0 {
-        return Err(ApiError::invalid_field(
-            "/motion/horizontal",
-            "/motion/horizontal: a PGA search scales the horizontal component, which is missing or zero",
-        ));
+        return Err(RequestError::ZeroHorizontal {
+            pointer: "/motion/horizontal".into(),
+        });
     }
     let (texts, criteria): (Vec<String>, Vec<Criterion>) =
         parse_criteria(&b.criterion, "/criterion", &scene)?
@@ -259,24 +209,19 @@ pub(super) fn search_range(
     tolerance: Option<&Amplitude>,
     scan_points: Option<usize>,
     limits: &Limits,
-) -> Result<(f64, f64, f64, usize), ApiError> {
+) -> Result<(f64, f64, f64, usize), RequestError> {
     // Amplitudes in m/s² from here on.
     let units = range.units;
     let amplitude = |a: &Amplitude, p: &str| {
-        a.to_si(units)
-            .map_err(|e| ApiError::invalid_field(p, format!("{p}: {e}")))
+        a.to_si(units).map_err(|source| RequestError::Amplitude {
+            pointer: p.to_string(),
+            source,
+        })
     };
     let min = amplitude(&range.min, "/range/min")?;
     let max = amplitude(&range.max, "/range/max")?;
     if !(max.is_finite() && max > min) {
-        return Err(ApiError::invalid_field(
-            "/range/max",
-            format!(
-                "/range/max: must be finite and > range.min, got {} m/s² ≤ {} m/s²",
-                crate::quantity::sig(max),
-                crate::quantity::sig(min)
-            ),
-        ));
+        return Err(RequestError::RangeOrder { min, max });
     }
     // Default resolution: 1 % of the searched range.
     let tolerance = match tolerance {
@@ -284,20 +229,14 @@ pub(super) fn search_range(
         None => (max - min) / 100.0,
     };
     if !(tolerance.is_finite() && tolerance > 0.0) {
-        return Err(ApiError::invalid_field(
-            "/tolerance",
-            "/tolerance: must be a finite amplitude > 0",
-        ));
+        return Err(RequestError::Tolerance);
     }
     let scan_points = scan_points.unwrap_or(DEFAULT_SCAN_POINTS);
     if !(2..=limits.max_scan_points).contains(&scan_points) {
-        return Err(ApiError::invalid_field(
-            "/scan_points",
-            format!(
-                "/scan_points: must lie in 2..={}, got {scan_points}",
-                limits.max_scan_points
-            ),
-        ));
+        return Err(RequestError::ScanPoints {
+            got: scan_points,
+            limit: limits.max_scan_points,
+        });
     }
     Ok((min, max, tolerance, scan_points))
 }

@@ -1,6 +1,6 @@
 //! Request bodies: `POST /v1/jobs`, one run (scene, motion, an optional damage criterion).
+use super::RequestError;
 use super::{motion_summary, parse_criteria, scene_and_motion, typed, JobInput, Limits, Parsed};
-use crate::service::http::problem::ApiError;
 use serde::Deserialize;
 use serde_json::Value;
 
@@ -16,12 +16,11 @@ struct RunBody {
 }
 
 /// `POST /v1/jobs` body → run input.
-pub fn parse_run(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
+pub fn parse_run(body: &Value, limits: &Limits) -> Result<Parsed, RequestError> {
     if !body.is_object() {
-        return Err(ApiError::invalid_field(
-            "",
-            "the body must be a JSON object {\"scene\": …, \"motion\": …}",
-        ));
+        return Err(RequestError::NotAnObject {
+            members: "{\"scene\": …, \"motion\": …}",
+        });
     }
     let b: RunBody = typed("", body)?;
     let (scene, motion) = scene_and_motion(&b.scene, b.motion.as_ref(), limits)?;

@@ -1,9 +1,9 @@
 //! Request bodies: `POST /v1/site-analyses`, observations (each a criterion) × records.
 use super::pga::{parse_records, search_range, RangeSpec};
+use super::RequestError;
 use super::{motion_summary, parse_criteria, typed, JobInput, Limits, Parsed};
 use crate::analysis::pga::{Combine, PgaRequest};
 use crate::motion::Amplitude;
-use crate::service::http::problem::ApiError;
 use serde::Deserialize;
 use serde_json::Value;
 
@@ -36,30 +36,20 @@ struct ObservationSpec {
 pub const MAX_OBSERVATIONS: usize = 50;
 
 /// `POST /v1/site-analyses` body → site analysis input (amplitudes converted to m/s²).
-pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
+pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, RequestError> {
     if !body.is_object() {
-        return Err(ApiError::invalid_field(
-            "",
-            "the body must be a JSON object {\"scene\", \"motions\", \"observations\", \"range\"}",
-        ));
+        return Err(RequestError::NotAnObject {
+            members: "{\"scene\", \"motions\", \"observations\", \"range\"}",
+        });
     }
     let b: SiteBody = typed("", body)?;
     let (scene, records) = parse_records(&b.scene, &b.motions, limits)?;
     let items = match &b.observations {
         Value::Array(v) if !v.is_empty() => v,
-        _ => return Err(ApiError::invalid_field(
-            "/observations",
-            "/observations: give a non-empty array of {\"criterion\": …, \"observed\": true|false}",
-        )),
+        _ => return Err(RequestError::NoObservations),
     };
     if items.len() > MAX_OBSERVATIONS {
-        return Err(ApiError::limit_exceeded(
-            "/observations",
-            format!(
-                "/observations: {} observations exceed the limit of {MAX_OBSERVATIONS} per analysis",
-                items.len()
-            ),
-        ));
+        return Err(RequestError::TooManyObservations { count: items.len() });
     }
     let mut observations = Vec::new();
     for (i, item) in items.iter().enumerate() {
@@ -67,13 +57,7 @@ pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, ApiError> {
         let spec: ObservationSpec = typed(&p, item)?;
         let cp = format!("{p}/criterion");
         if spec.criterion.is_array() {
-            return Err(ApiError::invalid_field(
-                cp.clone(),
-                format!(
-                    "{cp}: an observation is one criterion; combine several with a damage object \
-                     ({{\"kind\": \"all\" | \"any\", \"of\": […]}}, docs/format.md §3)"
-                ),
-            ));
+            return Err(RequestError::ObservationArray { index: i });
         }
         let mut parsed = parse_criteria(&spec.criterion, &cp, &scene)?;
         let (_, criterion) = parsed.remove(0);

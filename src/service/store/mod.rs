@@ -13,6 +13,7 @@ pub mod tls;
 pub use super::jobs::{CancelOutcome, JobStatus};
 pub use sqlite::SqliteStore;
 
+use super::jobs::{self, Attempts, Event};
 use serde::Serialize;
 use std::time::{SystemTime, UNIX_EPOCH};
 use uuid::Uuid;
@@ -170,6 +171,21 @@ pub struct Counts {
     pub waiting: u64,
 }
 
+impl Counts {
+    /// Record that `n` jobs are in `status` (one row of a `GROUP BY status`).
+    pub(crate) fn set(&mut self, status: JobStatus, n: u64) {
+        let field = match status {
+            JobStatus::Queued => &mut self.queued,
+            JobStatus::Running => &mut self.running,
+            JobStatus::Succeeded => &mut self.succeeded,
+            JobStatus::Failed => &mut self.failed,
+            JobStatus::Cancelled => &mut self.cancelled,
+            JobStatus::Waiting => &mut self.waiting,
+        };
+        *field = n;
+    }
+}
+
 /// Which database a [`StoreError`] came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Backend {
@@ -186,10 +202,33 @@ impl std::fmt::Display for Backend {
     }
 }
 
+/// The `SET` assignments of `event` in `database`'s SQL, from the transition table
+/// ([`super::jobs::effect`]): the status it writes and its attempts arithmetic, e.g.
+/// `status = 'waiting', attempts = MAX(attempts - 1, 0)`. `to` picks the target of an event
+/// with two (a cancel: see [`super::jobs::guard_to`]). Every status-changing `UPDATE` of both
+/// stores starts its `SET` with this, so neither writes a status or attempts count by hand.
+pub(crate) fn set_sql(database: Backend, event: &Event, to: Option<JobStatus>) -> String {
+    let Some(t) = jobs::effect(event, to) else {
+        // No transition (a programming error the jobs tests rule out): write nothing new.
+        return "status = status".into();
+    };
+    let status = format!("status = '{}'", t.to.as_str());
+    match (t.attempts, database) {
+        (Attempts::Keep, _) => status,
+        (Attempts::Increment, _) => format!("{status}, attempts = attempts + 1"),
+        (Attempts::Decrement, Backend::Sqlite) => {
+            format!("{status}, attempts = MAX(attempts - 1, 0)")
+        }
+        (Attempts::Decrement, Backend::Postgres) => {
+            format!("{status}, attempts = GREATEST(attempts - 1, 0)")
+        }
+    }
+}
+
 /// A store failure, by cause, over both databases. Logged in full; the HTTP edge
 /// (`ApiError::store`) gives clients a problem per cause without internals: `Busy` is
 /// `unavailable` (503, retry), every other cause `internal` (500).
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, thiserror::Error)]
 pub enum StoreError {
     /// The database is busy or unreachable (SQLite locked past its busy timeout; PostgreSQL's
     /// connection lost or refused): a retry may succeed.
@@ -200,16 +239,25 @@ pub enum StoreError {
     Database { database: Backend, detail: String },
     /// The database URL or its TLS settings (`--database postgres://…`) are not usable.
     #[error("job store: {0}")]
-    Config(String),
+    Config(#[from] tls::PgUrlError),
     /// The store file could not be opened.
     #[error("job store: {path}: {detail}")]
     Open { path: String, detail: String },
     /// A stored value this ashlar cannot read (`what`: a column, an id, a kind, a status).
     #[error("job store: corrupt {what}: {detail}")]
     Corrupt { what: String, detail: String },
-    /// The database's schema is newer than this ashlar, or a numbered migration failed.
-    #[error("job store: {0}")]
-    Schema(String),
+    /// The database's schema (version `found`) is newer than this ashlar's (`known`).
+    #[error(
+        "job store: the database schema is version {found}, newer than this ashlar understands ({known}); upgrade ashlar"
+    )]
+    SchemaNewer { found: i32, known: i32 },
+    /// A numbered migration (`version`) failed in `database` (`detail`: the database's message).
+    #[error("job store: schema migration {version}: {database}: {detail}")]
+    Migration {
+        version: i32,
+        database: Backend,
+        detail: String,
+    },
     /// This store does not implement the operation (`what`, e.g. "delete jobs").
     #[error("job store: this job store cannot {0}")]
     Unsupported(&'static str),
@@ -358,6 +406,66 @@ pub fn rfc3339(ms: i64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn set_clauses_are_the_tables_in_both_dialects() {
+        use jobs::{End, Recovery, Settlement};
+        let both = |e: &Event, to| {
+            (
+                set_sql(Backend::Sqlite, e, to),
+                set_sql(Backend::Postgres, e, to),
+            )
+        };
+        let same = |sql: &str| (sql.to_string(), sql.to_string());
+        assert_eq!(
+            both(&Event::Claim, None),
+            same("status = 'running', attempts = attempts + 1")
+        );
+        for e in [Event::FanOut, Event::Requeue { refund: true }] {
+            let to = jobs::effect(&e, None).map(|t| t.to.as_str()).unwrap_or("?");
+            assert_eq!(
+                both(&e, None),
+                (
+                    format!("status = '{to}', attempts = MAX(attempts - 1, 0)"),
+                    format!("status = '{to}', attempts = GREATEST(attempts - 1, 0)")
+                ),
+                "{e:?}"
+            );
+        }
+        for (e, to) in [
+            (Event::Requeue { refund: false }, "queued"),
+            (Event::Finish(End::Cancelled), "cancelled"),
+            (Event::Settle(Settlement::Requeue), "queued"),
+            (Event::Settle(Settlement::Fail("x".into())), "failed"),
+            (Event::Recover(Recovery::Requeue), "queued"),
+            (Event::Recover(Recovery::Fail("x".into())), "failed"),
+        ] {
+            assert_eq!(both(&e, None), same(&format!("status = '{to}'")), "{e:?}");
+        }
+        assert_eq!(
+            both(&Event::Cancel, Some(JobStatus::Cancelled)),
+            same("status = 'cancelled'")
+        );
+    }
+
+    /// No store writes a status or an attempts count by hand: each comes from [`set_sql`].
+    #[test]
+    fn no_store_writes_a_status_or_attempts_by_hand() {
+        for (file, text) in [
+            ("sqlite.rs", include_str!("sqlite.rs")),
+            ("postgres.rs", include_str!("postgres.rs")),
+        ] {
+            for hand in [
+                "SET status",
+                " status = ?",
+                " status = $",
+                "attempts + 1",
+                "attempts - 1",
+            ] {
+                assert!(!text.contains(hand), "{file} writes `{hand}` by hand");
+            }
+        }
+    }
 
     #[test]
     fn rfc3339_matches_known_instants() {

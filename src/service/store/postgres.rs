@@ -24,10 +24,15 @@
 //! The sync `postgres` client fits the sync [`JobStore`] trait, which is called from worker
 //! threads and `spawn_blocking` (never from the async runtime's own threads).
 use super::{
-    now_ms, Backend, CancelOutcome, Counts, DeleteOutcome, Finish, JobKind, JobRecord, JobStatus,
-    JobStore, NewJob, QueueFull, StoreError,
+    now_ms, set_sql, Backend, CancelOutcome, Counts, DeleteOutcome, Finish, JobKind, JobRecord,
+    JobStatus, JobStore, NewJob, QueueFull, StoreError,
 };
 use crate::service::jobs::{self, Event};
+
+/// The `SET` of `event` in PostgreSQL's SQL ([`super::set_sql`]).
+fn set(event: &Event, to: Option<JobStatus>) -> String {
+    set_sql(Backend::Postgres, event, to)
+}
 use postgres::{Client, Row};
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -168,9 +173,9 @@ fn row_to_record(row: &Row) -> Result<JobRecord, StoreError> {
 
 /// Check a `--database` URL names PostgreSQL and parse it, TLS parameters included
 /// (credentials are never echoed).
-pub fn parse_url(url: &str) -> Result<super::tls::PgTarget, String> {
+pub fn parse_url(url: &str) -> Result<super::tls::PgTarget, super::tls::PgUrlError> {
     if !(url.starts_with("postgres://") || url.starts_with("postgresql://")) {
-        return Err("--database: expected postgres://USER@HOST:PORT/DBNAME".into());
+        return Err(super::tls::PgUrlError::Scheme);
     }
     super::tls::parse(url)
 }
@@ -178,7 +183,8 @@ pub fn parse_url(url: &str) -> Result<super::tls::PgTarget, String> {
 impl PgStore {
     /// Connect, create or upgrade the schema, and return the store.
     pub fn open(url: &str, params: LeaseParams) -> Result<Self, StoreError> {
-        let target = parse_url(url).map_err(StoreError::Config)?;
+        // StoreError is Clone and compared in the store's tests: the URL's error is kept as text.
+        let target = parse_url(url)?;
         let host = std::env::var("HOSTNAME")
             .ok()
             .or_else(|| {
@@ -210,9 +216,9 @@ impl PgStore {
 
     /// A new connection (also used for `LISTEN`).
     pub fn connect(&self) -> Result<Client, StoreError> {
-        self.target.connect().map_err(|detail| StoreError::Busy {
+        self.target.connect().map_err(|e| StoreError::Busy {
             database: Backend::Postgres,
-            detail,
+            detail: e.to_string(),
         })
     }
 
@@ -369,16 +375,21 @@ fn migrate(c: &mut Client) -> Result<(), StoreError> {
         .try_get(0)?;
     let v = v.unwrap_or(0);
     if v > SCHEMA_VERSION {
-        return Err(StoreError::Schema(format!(
-            "the database schema is version {v}, newer than this ashlar understands ({SCHEMA_VERSION}); upgrade ashlar"
-        )));
+        return Err(StoreError::SchemaNewer {
+            found: v,
+            known: SCHEMA_VERSION,
+        });
     }
     for &(version, sql) in MIGRATIONS.iter().filter(|(k, _)| *k > v) {
         tx.batch_execute(sql).map_err(|e| {
             let detail = e
                 .as_db_error()
                 .map_or_else(|| e.to_string(), |db| db.message().to_string());
-            StoreError::Schema(format!("schema migration {version}: postgres: {detail}"))
+            StoreError::Migration {
+                version,
+                database: Backend::Postgres,
+                detail,
+            }
         })?;
         tx.execute(
             "INSERT INTO ashlar_schema_version (version) VALUES ($1)",
@@ -478,9 +489,11 @@ impl JobStore for PgStore {
         let limit = i64::try_from(limit).unwrap_or(i64::MAX);
         self.with(|c| {
             c.query(
-                "SELECT id FROM jobs WHERE parent IS NULL AND finished_ms < $1
-                   AND status IN ('succeeded', 'failed', 'cancelled')
-                 ORDER BY finished_ms LIMIT $2",
+                &format!(
+                    "SELECT id FROM jobs WHERE parent IS NULL AND finished_ms < $1 AND {}
+                     ORDER BY finished_ms LIMIT $2",
+                    jobs::terminal_sql()
+                ),
                 &[&cutoff_ms, &limit],
             )?
             .iter()
@@ -517,7 +530,7 @@ impl JobStore for PgStore {
         let rec = self.with(|c| {
             let mut tx = c.transaction()?;
             let sql = format!(
-                "UPDATE jobs j SET status = 'running', attempts = j.attempts + 1, started_ms = $1,
+                "UPDATE jobs j SET {}, started_ms = $1,
                         progress = CASE WHEN j.kind = 'pga_search' THEN j.progress ELSE 0 END,
                         lease_token = $2, worker = $3,
                         lease_until = now() + make_interval(secs => $4)
@@ -525,6 +538,8 @@ impl JobStore for PgStore {
                        LIMIT 1 FOR UPDATE SKIP LOCKED) next
                  WHERE j.seq = next.seq
                  RETURNING {}",
+                // `attempts` and `status` unqualified: `next` has only `seq`.
+                set(&Event::Claim, None),
                 jobs::guard(&Event::Claim),
                 COLUMNS
                     .split(", ")
@@ -590,12 +605,13 @@ impl JobStore for PgStore {
             }
             let n = tx.execute(
                 &format!(
-                    "UPDATE jobs SET status = $2, result = $3, error = $4, progress = COALESCE($5, progress),
-                            finished_ms = $6, lease_token = NULL, lease_until = NULL
-                     WHERE id = $1 AND {} AND lease_token = $7",
+                    "UPDATE jobs SET {}, result = $2, error = $3, progress = COALESCE($4, progress),
+                            finished_ms = $5, lease_token = NULL, lease_until = NULL
+                     WHERE id = $1 AND {} AND lease_token = $6",
+                    set(&Event::Finish(end), None),
                     jobs::guard(&Event::Finish(end))
                 ),
-                &[&id, &status, &result, &error, &progress, &now_ms(), &token],
+                &[&id, &result, &error, &progress, &now_ms(), &token],
             )?;
             if let (1, Some(p)) = (n, parent) {
                 if end == jobs::End::Succeeded {
@@ -634,15 +650,16 @@ impl JobStore for PgStore {
         };
         self.with(|c| {
             let mut tx = c.transaction()?;
+            let event = Event::Requeue { refund };
             let n = tx.execute(
                 &format!(
-                    "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL,
-                            lease_token = NULL, lease_until = NULL, worker = NULL,
-                            attempts = CASE WHEN $2 THEN GREATEST(attempts - 1, 0) ELSE attempts END
-                     WHERE id = $1 AND {} AND lease_token = $3",
-                    jobs::guard(&Event::Requeue { refund })
+                    "UPDATE jobs SET {}, progress = 0, started_ms = NULL,
+                            lease_token = NULL, lease_until = NULL, worker = NULL
+                     WHERE id = $1 AND {} AND lease_token = $2",
+                    set(&event, None),
+                    jobs::guard(&event)
                 ),
-                &[&id, &refund, &token],
+                &[&id, &token],
             )?;
             if n == 1 {
                 tx.execute(
@@ -672,7 +689,10 @@ impl JobStore for PgStore {
                 // No worker holds a queued job, nor a waiting search: it ends now.
                 CancelOutcome::CancelledQueued => {
                     tx.execute(
-                        "UPDATE jobs SET status = 'cancelled', cancel_requested = TRUE, finished_ms = $2 WHERE id = $1",
+                        &format!(
+                            "UPDATE jobs SET {}, cancel_requested = TRUE, finished_ms = $2 WHERE id = $1",
+                            set(&Event::Cancel, Some(JobStatus::Cancelled))
+                        ),
                         &[&id, &now_ms()],
                     )?;
                     tx.execute("SELECT pg_notify($1, $2)", &[&CHANNEL_DONE, &id.to_string()])?;
@@ -724,28 +744,35 @@ impl JobStore for PgStore {
                     )?;
                 }
                 let attempts = u32::try_from(attempts).unwrap_or(0);
-                match jobs::recover(attempts, max_attempts, cancel, jobs::Abandoned::WorkerDied) {
+                let decision =
+                    jobs::recover(attempts, max_attempts, cancel, jobs::Abandoned::WorkerDied);
+                let set = set(&Event::Recover(decision.clone()), None);
+                match decision {
                     jobs::Recovery::Cancel => {
                         tx.execute(
-                            "UPDATE jobs SET status = 'cancelled', finished_ms = $2, lease_token = NULL, lease_until = NULL WHERE seq = $1",
+                            &format!("UPDATE jobs SET {set}, finished_ms = $2, lease_token = NULL, lease_until = NULL WHERE seq = $1"),
                             &[&seq, &now_ms()],
                         )?;
                         failed += 1;
                     }
                     jobs::Recovery::Fail(error) => {
                         tx.execute(
-                            "UPDATE jobs SET status = 'failed', finished_ms = $2, lease_token = NULL, lease_until = NULL,
-                                    error = $3
-                             WHERE seq = $1",
+                            &format!(
+                                "UPDATE jobs SET {set}, finished_ms = $2, lease_token = NULL, lease_until = NULL,
+                                        error = $3
+                                 WHERE seq = $1"
+                            ),
                             &[&seq, &now_ms(), &error],
                         )?;
                         failed += 1;
                     }
                     jobs::Recovery::Requeue => {
                         tx.execute(
-                            "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL,
-                                    lease_token = NULL, lease_until = NULL, worker = NULL
-                             WHERE seq = $1",
+                            &format!(
+                                "UPDATE jobs SET {set}, progress = 0, started_ms = NULL,
+                                        lease_token = NULL, lease_until = NULL, worker = NULL
+                                 WHERE seq = $1"
+                            ),
                             &[&seq],
                         )?;
                         requeued += 1;
@@ -794,9 +821,10 @@ impl JobStore for PgStore {
             let mut tx = c.transaction()?;
             let n = tx.execute(
                 &format!(
-                    "UPDATE jobs SET status = 'waiting', attempts = GREATEST(attempts - 1, 0), progress = GREATEST(progress, $3),
+                    "UPDATE jobs SET {}, progress = GREATEST(progress, $3),
                             lease_token = NULL, lease_until = NULL, worker = NULL
                      WHERE id = $1 AND {} AND lease_token = $2",
+                    set(&Event::FanOut, None),
                     jobs::guard(&Event::FanOut)
                 ),
                 &[&id, &token, &progress.clamp(0.0, 1.0)],
@@ -856,14 +884,7 @@ impl JobStore for PgStore {
                 let s: String = r.try_get(0)?;
                 let n: i64 = r.try_get(1)?;
                 let n = u64::try_from(n).unwrap_or(0);
-                match JobStatus::parse(&s)? {
-                    JobStatus::Queued => out.queued = n,
-                    JobStatus::Running => out.running = n,
-                    JobStatus::Succeeded => out.succeeded = n,
-                    JobStatus::Failed => out.failed = n,
-                    JobStatus::Cancelled => out.cancelled = n,
-                    JobStatus::Waiting => out.waiting = n,
-                }
+                out.set(JobStatus::parse(&s)?, n);
             }
             Ok(out)
         })
@@ -912,18 +933,20 @@ fn settle(tx: &mut postgres::Transaction<'_>, parent: Uuid) -> Result<(), StoreE
         first_bad,
         unfinished: u64::try_from(unfinished).unwrap_or(0),
     };
-    match jobs::settle(&children) {
+    let decision = jobs::settle(&children);
+    let set = set(&Event::Settle(decision.clone()), None);
+    match decision {
         jobs::Settlement::Wait => {}
         jobs::Settlement::Requeue => {
             tx.execute(
-                "UPDATE jobs SET status = 'queued', started_ms = NULL WHERE id = $1",
+                &format!("UPDATE jobs SET {set}, started_ms = NULL WHERE id = $1"),
                 &[&parent],
             )?;
             tx.execute("SELECT pg_notify($1, '')", &[&CHANNEL_WORK])?;
         }
         jobs::Settlement::Fail(error) => {
             tx.execute(
-                "UPDATE jobs SET status = 'failed', error = $2, finished_ms = $3 WHERE id = $1",
+                &format!("UPDATE jobs SET {set}, error = $2, finished_ms = $3 WHERE id = $1"),
                 &[&parent, &error, &now_ms()],
             )?;
             tx.execute(
@@ -941,7 +964,8 @@ fn settle(tx: &mut postgres::Transaction<'_>, parent: Uuid) -> Result<(), StoreE
 fn cancel_children(tx: &mut postgres::Transaction<'_>, parent: Uuid) -> Result<(), StoreError> {
     tx.execute(
         &format!(
-            "UPDATE jobs SET status = 'cancelled', cancel_requested = TRUE, finished_ms = $2 WHERE parent = $1 AND {}",
+            "UPDATE jobs SET {}, cancel_requested = TRUE, finished_ms = $2 WHERE parent = $1 AND {}",
+            set(&Event::Cancel, Some(JobStatus::Cancelled)),
             jobs::guard_to(&Event::Cancel, JobStatus::Cancelled)
         ),
         &[&parent, &now_ms()],

@@ -4,13 +4,20 @@
 //! `PRAGMA user_version`; files created before the migrations existed (version 0) are
 //! recognised by their columns.
 //!
-//! Over 600 lines because its unit tests (queue order, recovery, quotas, cancel, the schemas of
-//! older files) sit beside it; the store itself is about 670 lines, one transaction per method.
+//! Over 600 lines: the store itself is about 680 lines, one transaction per method, and the
+//! tests of what only this store has (reopening a file, the schemas of older files) sit beside
+//! it. Its behaviour as a [`JobStore`] is checked on both stores by
+//! `tests/service/store_contract.rs`.
 use super::{
-    now_ms, Backend, CancelOutcome, Counts, DeleteOutcome, Finish, JobKind, JobRecord, JobStatus,
-    JobStore, NewJob, QueueFull, StoreError,
+    now_ms, set_sql, Backend, CancelOutcome, Counts, DeleteOutcome, Finish, JobKind, JobRecord,
+    JobStatus, JobStore, NewJob, QueueFull, StoreError,
 };
 use crate::service::jobs::{self, Event};
+
+/// The `SET` of `event` in SQLite's SQL ([`super::set_sql`]).
+fn set(event: &Event, to: Option<JobStatus>) -> String {
+    set_sql(Backend::Sqlite, event, to)
+}
 use rusqlite::{params, Connection, OptionalExtension};
 use std::path::Path;
 use std::sync::Mutex;
@@ -81,13 +88,17 @@ fn migrate(c: &mut Connection) -> Result<(), StoreError> {
         v = legacy_version(&tx)?;
     }
     if v > SCHEMA_VERSION {
-        return Err(StoreError::Schema(format!(
-            "the database schema is version {v}, newer than this ashlar understands ({SCHEMA_VERSION}); upgrade ashlar"
-        )));
+        return Err(StoreError::SchemaNewer {
+            found: v,
+            known: SCHEMA_VERSION,
+        });
     }
     for &(version, sql) in MIGRATIONS.iter().filter(|(k, _)| *k > v) {
-        tx.execute_batch(sql)
-            .map_err(|e| StoreError::Schema(format!("schema migration {version}: sqlite: {e}")))?;
+        tx.execute_batch(sql).map_err(|e| StoreError::Migration {
+            version,
+            database: Backend::Sqlite,
+            detail: e.to_string(),
+        })?;
         tracing::info!(version, "applied schema migration");
     }
     tx.pragma_update(None, "user_version", SCHEMA_VERSION)?;
@@ -260,11 +271,11 @@ impl JobStore for SqliteStore {
     fn finished_before(&self, cutoff_ms: i64, limit: usize) -> Result<Vec<Uuid>, StoreError> {
         let limit = i64::try_from(limit).unwrap_or(i64::MAX);
         self.read(|c| {
-            let mut st = c.prepare(
-                "SELECT id FROM jobs WHERE parent IS NULL AND finished_ms < ?1
-                   AND status IN ('succeeded', 'failed', 'cancelled')
+            let mut st = c.prepare(&format!(
+                "SELECT id FROM jobs WHERE parent IS NULL AND finished_ms < ?1 AND {}
                  ORDER BY finished_ms LIMIT ?2",
-            )?;
+                jobs::terminal_sql()
+            ))?;
             let ids: Vec<String> = st
                 .query_map(params![cutoff_ms, limit], |r| r.get(0))?
                 .collect::<Result<_, _>>()?;
@@ -315,10 +326,11 @@ impl JobStore for SqliteStore {
         self.write(|c| {
             // One statement: atomic even with other processes writing the same file.
             let sql = format!(
-                "UPDATE jobs SET status = 'running', attempts = attempts + 1, started_ms = ?1,
+                "UPDATE jobs SET {}, started_ms = ?1,
                         progress = CASE WHEN kind = 'pga_search' THEN progress ELSE 0 END
                  WHERE seq = (SELECT seq FROM jobs WHERE {} ORDER BY seq LIMIT 1)
                  RETURNING {COLUMNS}",
+                set(&Event::Claim, None),
                 jobs::guard(&Event::Claim)
             );
             c.query_row(&sql, params![now_ms()], row_to_record)
@@ -343,16 +355,17 @@ impl JobStore for SqliteStore {
     fn finish(&self, id: Uuid, finish: &Finish) -> Result<(), StoreError> {
         let end = finish.end();
         let (result, error, progress) = finish.columns();
-        let status = end.status().as_str();
+        let event = Event::Finish(end);
         self.write(|c| {
             let tx = c.transaction()?;
             let n = tx.execute(
                 &format!(
-                    "UPDATE jobs SET status = ?2, result = ?3, error = ?4, progress = COALESCE(?5, progress), finished_ms = ?6
+                    "UPDATE jobs SET {}, result = ?2, error = ?3, progress = COALESCE(?4, progress), finished_ms = ?5
                      WHERE id = ?1 AND {}",
-                    jobs::guard(&Event::Finish(end))
+                    set(&event, None),
+                    jobs::guard(&event)
                 ),
-                params![id.to_string(), status, result, error, progress, now_ms()],
+                params![id.to_string(), result, error, progress, now_ms()],
             )?;
             if n == 1 {
                 child_ended(&tx, id, end)?;
@@ -363,15 +376,15 @@ impl JobStore for SqliteStore {
     }
 
     fn requeue(&self, id: Uuid, refund: bool) -> Result<(), StoreError> {
+        let event = Event::Requeue { refund };
         self.write(|c| {
             c.execute(
                 &format!(
-                    "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL,
-                            attempts = CASE WHEN ?2 THEN MAX(attempts - 1, 0) ELSE attempts END
-                     WHERE id = ?1 AND {}",
-                    jobs::guard(&Event::Requeue { refund })
+                    "UPDATE jobs SET {}, progress = 0, started_ms = NULL WHERE id = ?1 AND {}",
+                    set(&event, None),
+                    jobs::guard(&event)
                 ),
-                params![id.to_string(), refund],
+                params![id.to_string()],
             )?;
             Ok(())
         })
@@ -392,7 +405,10 @@ impl JobStore for SqliteStore {
                 // No worker holds a queued job, nor a waiting search: it ends now.
                 CancelOutcome::CancelledQueued => {
                     tx.execute(
-                        "UPDATE jobs SET status = 'cancelled', cancel_requested = 1, finished_ms = ?2 WHERE id = ?1",
+                        &format!(
+                            "UPDATE jobs SET {}, cancel_requested = 1, finished_ms = ?2 WHERE id = ?1",
+                            set(&Event::Cancel, Some(JobStatus::Cancelled))
+                        ),
                         params![id.to_string(), now_ms()],
                     )?;
                 }
@@ -428,24 +444,27 @@ impl JobStore for SqliteStore {
             let (mut requeued, mut ended) = (0, 0);
             for (seq, attempts, cancel) in running {
                 let attempts = u32::try_from(attempts).unwrap_or(u32::MAX);
-                match jobs::recover(attempts, max_attempts, cancel, jobs::Abandoned::ServerStopped) {
+                let decision =
+                    jobs::recover(attempts, max_attempts, cancel, jobs::Abandoned::ServerStopped);
+                let set = set(&Event::Recover(decision.clone()), None);
+                match decision {
                     jobs::Recovery::Requeue => {
                         tx.execute(
-                            "UPDATE jobs SET status = 'queued', progress = 0, started_ms = NULL WHERE seq = ?1",
+                            &format!("UPDATE jobs SET {set}, progress = 0, started_ms = NULL WHERE seq = ?1"),
                             params![seq],
                         )?;
                         requeued += 1;
                     }
                     jobs::Recovery::Fail(error) => {
                         tx.execute(
-                            "UPDATE jobs SET status = 'failed', finished_ms = ?2, error = ?3 WHERE seq = ?1",
+                            &format!("UPDATE jobs SET {set}, finished_ms = ?2, error = ?3 WHERE seq = ?1"),
                             params![seq, now_ms(), error],
                         )?;
                         ended += 1;
                     }
                     jobs::Recovery::Cancel => {
                         tx.execute(
-                            "UPDATE jobs SET status = 'cancelled', finished_ms = ?2 WHERE seq = ?1",
+                            &format!("UPDATE jobs SET {set}, finished_ms = ?2 WHERE seq = ?1"),
                             params![seq, now_ms()],
                         )?;
                         ended += 1;
@@ -480,14 +499,7 @@ impl JobStore for SqliteStore {
                 let s: String = r.get(0)?;
                 let n: i64 = r.get(1)?;
                 let n = u64::try_from(n).unwrap_or(0);
-                match JobStatus::parse(&s)? {
-                    JobStatus::Queued => out.queued = n,
-                    JobStatus::Running => out.running = n,
-                    JobStatus::Succeeded => out.succeeded = n,
-                    JobStatus::Failed => out.failed = n,
-                    JobStatus::Cancelled => out.cancelled = n,
-                    JobStatus::Waiting => out.waiting = n,
-                }
+                out.set(JobStatus::parse(&s)?, n);
             }
             Ok(out)
         })
@@ -498,8 +510,8 @@ impl JobStore for SqliteStore {
             let tx = c.transaction()?;
             let n = tx.execute(
                 &format!(
-                    "UPDATE jobs SET status = 'waiting', attempts = MAX(attempts - 1, 0), progress = MAX(progress, ?2)
-                     WHERE id = ?1 AND {}",
+                    "UPDATE jobs SET {}, progress = MAX(progress, ?2) WHERE id = ?1 AND {}",
+                    set(&Event::FanOut, None),
                     jobs::guard(&Event::FanOut)
                 ),
                 params![id.to_string(), progress.clamp(0.0, 1.0)],
@@ -631,17 +643,19 @@ fn settle(tx: &rusqlite::Transaction<'_>, parent: Uuid) -> Result<(), StoreError
             .transpose()?,
         unfinished: u64::try_from(unfinished).unwrap_or(0),
     };
-    match jobs::settle(&children) {
+    let decision = jobs::settle(&children);
+    let set = set(&Event::Settle(decision.clone()), None);
+    match decision {
         jobs::Settlement::Wait => {}
         jobs::Settlement::Requeue => {
             tx.execute(
-                "UPDATE jobs SET status = 'queued', started_ms = NULL WHERE id = ?1",
+                &format!("UPDATE jobs SET {set}, started_ms = NULL WHERE id = ?1"),
                 params![p],
             )?;
         }
         jobs::Settlement::Fail(error) => {
             tx.execute(
-                "UPDATE jobs SET status = 'failed', error = ?2, finished_ms = ?3 WHERE id = ?1",
+                &format!("UPDATE jobs SET {set}, error = ?2, finished_ms = ?3 WHERE id = ?1"),
                 params![p, error, now_ms()],
             )?;
             cancel_children(tx, parent)?;
@@ -656,7 +670,8 @@ fn cancel_children(tx: &rusqlite::Transaction<'_>, parent: Uuid) -> Result<(), S
     let p = parent.to_string();
     tx.execute(
         &format!(
-            "UPDATE jobs SET status = 'cancelled', cancel_requested = 1, finished_ms = ?2 WHERE parent = ?1 AND {}",
+            "UPDATE jobs SET {}, cancel_requested = 1, finished_ms = ?2 WHERE parent = ?1 AND {}",
+            set(&Event::Cancel, Some(JobStatus::Cancelled)),
             jobs::guard_to(&Event::Cancel, JobStatus::Cancelled)
         ),
         params![p, now_ms()],
@@ -695,25 +710,6 @@ mod tests {
     }
 
     #[test]
-    fn claims_in_submission_order_and_once() {
-        let (s, dir) = temp_store();
-        let a = job(JobKind::Run);
-        let b = job(JobKind::PgaSearch);
-        s.insert(&a).expect("insert");
-        s.insert(&b).expect("insert");
-        let first = s.claim().expect("claim").expect("a job");
-        assert_eq!(first.id, a.id);
-        assert_eq!(first.status, JobStatus::Running);
-        assert_eq!(first.attempts, 1);
-        let second = s.claim().expect("claim").expect("a job");
-        assert_eq!(second.id, b.id);
-        assert_eq!(second.kind, JobKind::PgaSearch);
-        assert!(s.claim().expect("claim").is_none());
-        assert_eq!(s.counts().expect("counts").running, 2);
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
     fn survives_reopen_and_recovers_running_jobs() {
         let (s, dir) = temp_store();
         let a = job(JobKind::Run);
@@ -730,188 +726,6 @@ mod tests {
         assert_eq!(s.claim().expect("claim").expect("job").id, a.id);
         std::fs::remove_dir_all(dir).ok();
     }
-
-    #[test]
-    fn a_job_that_keeps_killing_the_server_fails_after_max_attempts() {
-        let (s, dir) = temp_store();
-        let a = job(JobKind::Run);
-        s.insert(&a).expect("insert");
-        // max_attempts = 3: the first two crashes requeue, the third fails the job.
-        for _ in 0..2 {
-            s.claim().expect("claim").expect("job");
-            assert_eq!(s.recover(3).expect("recover"), (1, 0));
-        }
-        s.claim().expect("claim").expect("job");
-        assert_eq!(s.recover(3).expect("recover"), (0, 1));
-        let r = s.get(a.id).expect("get").expect("exists");
-        assert_eq!(r.status, JobStatus::Failed);
-        assert!(r.error.unwrap_or_default().contains("3 times"));
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn recovery_honours_a_cancel_requested_before_the_crash() {
-        let (s, dir) = temp_store();
-        let (a, b) = (job(JobKind::Run), job(JobKind::Run));
-        s.insert(&a).expect("insert");
-        s.insert(&b).expect("insert");
-        s.claim().expect("claim");
-        s.claim().expect("claim");
-        s.request_cancel(a.id).expect("cancel");
-        s.request_cancel(b.id).expect("cancel");
-        // `a` at its first start, `b` at max_attempts = 1: both end cancelled, as the
-        // cluster store's reaper does (the cancel wins over the attempts limit).
-        assert_eq!(s.recover(1).expect("recover"), (0, 2));
-        for id in [a.id, b.id] {
-            let r = s.get(id).expect("get").expect("job");
-            assert_eq!((r.status, r.error), (JobStatus::Cancelled, None));
-        }
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn bounded_insert_is_atomic_under_concurrency() {
-        let (s, dir) = temp_store();
-        let s = std::sync::Arc::new(s);
-        let accepted = std::sync::atomic::AtomicUsize::new(0);
-        std::thread::scope(|sc| {
-            for _ in 0..12 {
-                sc.spawn(|| {
-                    for _ in 0..5 {
-                        if s.insert_bounded(&job(JobKind::Run), 20)
-                            .expect("insert")
-                            .is_none()
-                        {
-                            accepted.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                        }
-                    }
-                });
-            }
-        });
-        assert_eq!(accepted.into_inner(), 20);
-        assert_eq!(s.counts().expect("counts").queued, 20);
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn owner_quota_and_listing() {
-        let (s, dir) = temp_store();
-        let mine = |kind| NewJob {
-            owner: Some("aaaa".into()),
-            ..job(kind)
-        };
-        assert_eq!(s.insert_quota(&mine(JobKind::Run), 10, 2).expect("i"), None);
-        assert_eq!(s.insert_quota(&mine(JobKind::Run), 10, 2).expect("i"), None);
-        assert_eq!(
-            s.insert_quota(&mine(JobKind::Run), 10, 2).expect("i"),
-            Some(QueueFull::Owner(2))
-        );
-        // Another kind, another owner, no owner: their own counts.
-        assert_eq!(
-            s.insert_quota(&mine(JobKind::PgaSearch), 10, 2).expect("i"),
-            None
-        );
-        let theirs = NewJob {
-            owner: Some("bbbb".into()),
-            ..job(JobKind::Run)
-        };
-        assert_eq!(s.insert_quota(&theirs, 10, 2).expect("i"), None);
-        assert_eq!(s.insert_quota(&job(JobKind::Run), 10, 0).expect("i"), None);
-        assert_eq!(
-            s.insert_quota(&theirs, 5, 2).expect("i"),
-            Some(QueueFull::Server(5))
-        );
-        assert_eq!(s.list_owned(10, None, Some("aaaa")).expect("list").len(), 3);
-        assert_eq!(s.list_owned(10, None, Some("bbbb")).expect("list").len(), 1);
-        assert_eq!(s.list_recent(10, None).expect("list").len(), 5);
-        let first = s.list_owned(10, None, Some("bbbb")).expect("list")[0].clone();
-        assert_eq!(first.owner.as_deref(), Some("bbbb"));
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn only_finished_jobs_are_deleted() {
-        let (s, dir) = temp_store();
-        let a = job(JobKind::Run);
-        s.insert(&a).expect("insert");
-        assert_eq!(
-            s.delete(a.id).expect("delete"),
-            DeleteOutcome::NotFinished(JobStatus::Queued)
-        );
-        s.request_cancel(a.id).expect("cancel");
-        assert_eq!(s.delete(a.id).expect("delete"), DeleteOutcome::Deleted);
-        assert!(s.get(a.id).expect("get").is_none());
-        assert_eq!(s.delete(a.id).expect("delete"), DeleteOutcome::NotFound);
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn cancel_paths() {
-        let (s, dir) = temp_store();
-        let q = job(JobKind::Run);
-        s.insert(&q).expect("insert");
-        assert_eq!(
-            s.request_cancel(q.id).expect("cancel"),
-            CancelOutcome::CancelledQueued
-        );
-        assert_eq!(
-            s.get(q.id).expect("get").expect("job").status,
-            JobStatus::Cancelled
-        );
-        assert!(
-            s.claim().expect("claim").is_none(),
-            "a cancelled job is never claimed"
-        );
-        let r = job(JobKind::Run);
-        s.insert(&r).expect("insert");
-        s.claim().expect("claim");
-        assert_eq!(
-            s.request_cancel(r.id).expect("cancel"),
-            CancelOutcome::Requested
-        );
-        assert!(s.get(r.id).expect("get").expect("job").cancel_requested);
-        s.finish(r.id, &Finish::Cancelled(None)).expect("finish");
-        assert_eq!(
-            s.request_cancel(r.id).expect("cancel"),
-            CancelOutcome::AlreadyFinished(JobStatus::Cancelled)
-        );
-        assert_eq!(
-            s.request_cancel(Uuid::new_v4()).expect("cancel"),
-            CancelOutcome::NotFound
-        );
-        std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn finish_and_requeue_only_touch_running_jobs() {
-        let (s, dir) = temp_store();
-        let a = job(JobKind::Run);
-        s.insert(&a).expect("insert");
-        // Not running yet: finish is a no-op.
-        s.finish(a.id, &Finish::Failed("x".into())).expect("finish");
-        assert_eq!(
-            s.get(a.id).expect("get").expect("job").status,
-            JobStatus::Queued
-        );
-        s.claim().expect("claim");
-        s.set_progress(a.id, 0.5).expect("progress");
-        assert_eq!(s.get(a.id).expect("get").expect("job").progress, 0.5);
-        s.requeue(a.id, true).expect("requeue");
-        let r = s.get(a.id).expect("get").expect("job");
-        assert_eq!(
-            (r.status, r.attempts, r.progress),
-            (JobStatus::Queued, 0, 0.0)
-        );
-        s.claim().expect("claim");
-        s.finish(a.id, &Finish::Succeeded(serde_json::json!({"ok": true})))
-            .expect("finish");
-        let r = s.get(a.id).expect("get").expect("job");
-        assert_eq!(r.status, JobStatus::Succeeded);
-        assert_eq!(r.progress, 1.0);
-        assert_eq!(r.result.as_deref(), Some(r#"{"ok":true}"#));
-        assert!(r.finished_ms.is_some());
-        std::fs::remove_dir_all(dir).ok();
-    }
 }
 
 /// Databases created before the migrations were numbered must still open.
@@ -920,26 +734,9 @@ mod legacy_schema_tests {
     use super::*;
 
     /// The schema exactly as the code before numbered migrations built it on open (its
-    /// `SCHEMA` constant, copied verbatim), without the columns added later.
-    const OLD_SCHEMA_V1: &str = "
-CREATE TABLE IF NOT EXISTS jobs (
-    seq INTEGER PRIMARY KEY AUTOINCREMENT,
-    id TEXT NOT NULL UNIQUE,
-    kind TEXT NOT NULL,
-    status TEXT NOT NULL,
-    request TEXT NOT NULL,
-    motion TEXT NOT NULL,
-    progress REAL NOT NULL DEFAULT 0,
-    result TEXT,
-    error TEXT,
-    cancel_requested INTEGER NOT NULL DEFAULT 0,
-    attempts INTEGER NOT NULL DEFAULT 0,
-    created_ms INTEGER NOT NULL,
-    started_ms INTEGER,
-    finished_ms INTEGER
-);
-CREATE INDEX IF NOT EXISTS jobs_status_seq ON jobs(status, seq);
-";
+    /// `SCHEMA` constant), without the columns added later: migration 1 is that constant
+    /// verbatim, and a released migration never changes.
+    const OLD_SCHEMA_V1: &str = MIGRATIONS[0].1;
     /// What that code's open then added (`add_column_if_missing` and the index constants).
     const OLD_PARENT: &str = "ALTER TABLE jobs ADD COLUMN parent TEXT;
 CREATE INDEX IF NOT EXISTS jobs_parent ON jobs(parent) WHERE parent IS NOT NULL;";
@@ -1084,7 +881,8 @@ CREATE INDEX IF NOT EXISTS jobs_finished ON jobs(finished_ms) WHERE parent IS NU
             Err(e) => e,
         };
         assert!(
-            matches!(&e, StoreError::Schema(m) if m.contains("version 99") && m.contains("upgrade ashlar")),
+            matches!(&e, StoreError::SchemaNewer { found: 99, .. })
+                && e.to_string().contains("upgrade ashlar"),
             "{e}"
         );
         std::fs::remove_dir_all(dir).ok();

@@ -20,8 +20,9 @@
 //! ignored, as in libpq. A parameter the URL does not set is taken, as libpq does, from the
 //! environment: `PGSSLMODE`, `PGSSLROOTCERT`, `PGSSLCERT`, `PGSSLKEY`, `PGSSLCRL` (empty means unset).
 //!
-//! Over 600 lines: the `sslmode` table, certificate and revocation-list loading, the verifier
-//! and their unit tests belong together.
+//! Over 600 lines: the `sslmode` table, certificate and revocation-list loading, the verifier,
+//! their typed errors (`PgUrlError`, `ConnectError`, one variant per parameter or cause) and
+//! their unit tests belong together.
 use postgres::config::{Host, SslMode as PgSslMode};
 use postgres::{Client, NoTls};
 use rustls::client::danger::{HandshakeSignatureValid, ServerCertVerified, ServerCertVerifier};
@@ -38,6 +39,158 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use tokio_postgres_rustls::MakeRustlsConnect;
 
+/// Why a `--database postgres://…` URL or its TLS parameters cannot be used: each cause names
+/// the parameter (never the credentials).
+#[derive(Debug, thiserror::Error)]
+pub enum PgUrlError {
+    #[error("--database: expected postgres://USER@HOST:PORT/DBNAME")]
+    Scheme,
+    /// A percent-encoded parameter name or value (`what`) is not UTF-8.
+    #[error("--database: {what} is not valid UTF-8 once decoded")]
+    NotUtf8 { what: String },
+    #[error(
+        "--database: sslmode=allow is not supported (it would try plain text \
+         first); use sslmode=prefer or sslmode=disable"
+    )]
+    SslModeAllow,
+    #[error(
+        "--database: sslmode={mode:?} is not a known sslmode (expected one of {})",
+        SslMode::NAMES
+    )]
+    SslModeUnknown { mode: String },
+    /// The client library does not parse the rest of the URL.
+    #[error("--database: not a valid PostgreSQL URL: {0}")]
+    Url(#[source] postgres::Error),
+    #[error(
+        "--database: sslrootcert=system needs sslmode=verify-full (got sslmode={}): a \
+         public CA signs certificates for anyone, so only the host name check makes it safe",
+        .mode.name()
+    )]
+    SystemRootsNeedVerifyFull { mode: SslMode },
+    #[error("--database: sslrootcert is empty (expected a PEM file path)")]
+    EmptyRootCert,
+    #[error(
+        "--database: sslmode={} needs the certificate of the CA that signed the server's \
+         certificate: add sslrootcert=PATH (PEM), or sslrootcert=system for the operating \
+         system's trusted CAs (or install it as ~/.postgresql/root.crt)",
+        .mode.name()
+    )]
+    NoRootCert { mode: SslMode },
+    #[error(
+        "--database: sslcrl needs a root certificate (sslrootcert): revocation is \
+         checked along the chain to a trusted CA, and sslmode={} without one checks no \
+         chain",
+        .mode.name()
+    )]
+    CrlWithoutRoot { mode: SslMode },
+    #[error("--database: sslcert and sslkey go together (a client certificate and its key)")]
+    CertWithoutKey,
+    /// The PEM file of `param=path` does not read (`label`: what was looked for).
+    #[error("--database: {param}={path}: cannot read PEM ({label}): {source}")]
+    Pem {
+        param: &'static str,
+        path: String,
+        label: &'static str,
+        #[source]
+        source: rustls::pki_types::pem::Error,
+    },
+    #[error("--database: {param}={path}: no PEM block -----BEGIN {label}----- in it")]
+    NoPem {
+        param: &'static str,
+        path: String,
+        label: &'static str,
+    },
+    #[error("--database: sslrootcert={path}: not a usable CA certificate: {source}")]
+    BadCa {
+        path: String,
+        #[source]
+        source: rustls::Error,
+    },
+    /// `sslrootcert=system` found no CA in the operating system's store (the first error met).
+    #[error(
+        "--database: sslrootcert=system: no trusted CA certificate found in the \
+         operating system's store{}",
+        .first.as_ref().map(|e| format!(" ({e})")).unwrap_or_default()
+    )]
+    NoSystemCa {
+        first: Option<rustls_native_certs::Error>,
+    },
+    #[error("--database: TLS set-up: {0}")]
+    TlsSetUp(#[source] rustls::Error),
+    /// The verifier over the root certificates (and CRLs) could not be built.
+    #[error("--database: sslrootcert: {0}")]
+    Verifier(#[source] rustls::client::VerifierBuilderError),
+    #[error("--database: sslkey={path}: cannot read a PEM private key: {source}")]
+    Key {
+        path: String,
+        #[source]
+        source: rustls::pki_types::pem::Error,
+    },
+    #[error("--database: sslcert/sslkey: {0}")]
+    ClientAuth(#[source] rustls::Error),
+    /// A cause above whose parameters came (partly) from libpq's environment variables.
+    #[error("{source} (taken from the environment: {})", .variables.join(", "))]
+    FromEnvironment {
+        variables: Vec<&'static str>,
+        source: Box<PgUrlError>,
+    },
+}
+
+/// Why a connection to PostgreSQL failed: the hosts and `sslmode` tried, the cause, and with
+/// `sslmode=prefer` the failure of the plain-text retry.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "connecting to PostgreSQL at {hosts} (sslmode={}): {failure}{}",
+    .mode.name(),
+    .plain_retry.as_ref().map(|r| format!("; the plain-text retry of sslmode=prefer failed too: {r}")).unwrap_or_default()
+)]
+pub struct ConnectError {
+    pub hosts: String,
+    pub mode: SslMode,
+    pub failure: Box<ConnectFailure>,
+    /// The plain-text retry's failure (`failure` then is the TLS attempt's).
+    pub plain_retry: Option<String>,
+}
+
+/// The cause of a [`ConnectError`].
+#[derive(Debug, thiserror::Error)]
+pub enum ConnectFailure {
+    /// The TLS handshake or the server's certificate failed; `why` in words.
+    #[error("the server's certificate failed verification: {tls}; {why}")]
+    Certificate {
+        tls: rustls::Error,
+        why: CertificateProblem,
+    },
+    /// Any other failure: the server's refusal or the client library's error (`detail`), and
+    /// a hint for the usual misconfigurations.
+    #[error("{detail}{hint}")]
+    Other { detail: String, hint: &'static str },
+}
+
+/// Why the server's certificate was refused, in the terms of the URL's parameters.
+#[derive(Debug, thiserror::Error)]
+pub enum CertificateProblem {
+    #[error("it is not signed by a CA trusted here (sslrootcert={roots})")]
+    UnknownIssuer { roots: String },
+    #[error(
+        "it was not issued for the host name in the URL (sslmode=verify-ca checks \
+         the CA only)"
+    )]
+    NotForName,
+    #[error("it has expired")]
+    Expired,
+    #[error("it has been revoked (sslcrl={crl})")]
+    Revoked { crl: String },
+    #[error("sslcrl={crl} has no CRL from the issuer of a certificate in its chain")]
+    UnknownRevocationStatus { crl: String },
+    #[error("the CRL in sslcrl={crl} is past its next update")]
+    ExpiredRevocationList { crl: String },
+    #[error("it was rejected")]
+    Rejected,
+    #[error("the TLS handshake failed")]
+    Handshake,
+}
+
 /// libpq's `sslmode` values (`allow` is not offered: the client library cannot fall back from
 /// plain text to TLS).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -52,25 +205,18 @@ pub enum SslMode {
 impl SslMode {
     pub const NAMES: &'static str = "disable, prefer, require, verify-ca, verify-full";
 
-    pub fn parse(s: &str) -> Result<Self, String> {
+    pub fn parse(s: &str) -> Result<Self, PgUrlError> {
         Ok(match s {
             "disable" => Self::Disable,
             "prefer" => Self::Prefer,
             "require" => Self::Require,
             "verify-ca" => Self::VerifyCa,
             "verify-full" => Self::VerifyFull,
-            "allow" => {
-                return Err(
-                    "--database: sslmode=allow is not supported (it would try plain text \
-                     first); use sslmode=prefer or sslmode=disable"
-                        .into(),
-                )
-            }
+            "allow" => return Err(PgUrlError::SslModeAllow),
             other => {
-                return Err(format!(
-                    "--database: sslmode={other:?} is not a known sslmode (expected one of {})",
-                    Self::NAMES
-                ))
+                return Err(PgUrlError::SslModeUnknown {
+                    mode: other.to_string(),
+                })
             }
         })
     }
@@ -135,7 +281,7 @@ struct TlsParams {
 }
 
 /// Split libpq's TLS parameters off a URL's query; the rest of the URL is kept verbatim.
-fn split_tls_params(url: &str) -> Result<(String, TlsParams), String> {
+fn split_tls_params(url: &str) -> Result<(String, TlsParams), PgUrlError> {
     let Some((base, query)) = url.split_once('?') else {
         return Ok((url.to_string(), TlsParams::default()));
     };
@@ -147,7 +293,9 @@ fn split_tls_params(url: &str) -> Result<(String, TlsParams), String> {
             percent_encoding::percent_decode_str(s)
                 .decode_utf8()
                 .map(|c| c.into_owned())
-                .map_err(|_| format!("--database: {what} is not valid UTF-8 once decoded"))
+                .map_err(|_| PgUrlError::NotUtf8 {
+                    what: what.to_string(),
+                })
         };
         let slot = match decode(k, "a parameter name")?.as_str() {
             "sslmode" => &mut p.sslmode,
@@ -183,37 +331,51 @@ fn provider() -> Arc<CryptoProvider> {
 
 /// Every `-----BEGIN {label}-----` object of the PEM file given as `param=path`; none is an
 /// error naming the parameter.
-fn load_pem<T: PemObject>(path: &str, param: &str, label: &str) -> Result<Vec<T>, String> {
+fn load_pem<T: PemObject>(
+    path: &str,
+    param: &'static str,
+    label: &'static str,
+) -> Result<Vec<T>, PgUrlError> {
     let items = T::pem_file_iter(path)
         .and_then(|it| it.collect::<Result<Vec<_>, _>>())
-        .map_err(|e| format!("--database: {param}={path}: cannot read PEM ({label}): {e}"))?;
+        .map_err(|source| PgUrlError::Pem {
+            param,
+            path: path.to_string(),
+            label,
+            source,
+        })?;
     if items.is_empty() {
-        return Err(format!(
-            "--database: {param}={path}: no PEM block -----BEGIN {label}----- in it"
-        ));
+        return Err(PgUrlError::NoPem {
+            param,
+            path: path.to_string(),
+            label,
+        });
     }
     Ok(items)
 }
 
-fn load_certs(path: &str, what: &str) -> Result<Vec<CertificateDer<'static>>, String> {
+fn load_certs(path: &str, what: &'static str) -> Result<Vec<CertificateDer<'static>>, PgUrlError> {
     load_pem(path, what, "CERTIFICATE")
 }
 
 /// The CRLs of `sslcrl=PATH` (PEM). As libpq with OpenSSL's CRL_CHECK_ALL, every certificate
 /// of the chain below the trust anchor must then be covered by a CRL of its issuer.
-fn load_crls(path: &std::path::Path) -> Result<Vec<CertificateRevocationListDer<'static>>, String> {
+fn load_crls(
+    path: &std::path::Path,
+) -> Result<Vec<CertificateRevocationListDer<'static>>, PgUrlError> {
     load_pem(&path.display().to_string(), "sslcrl", "X509 CRL")
 }
 
-fn root_store(roots: &RootCerts) -> Result<RootCertStore, String> {
+fn root_store(roots: &RootCerts) -> Result<RootCertStore, PgUrlError> {
     let mut store = RootCertStore::empty();
     match roots {
         RootCerts::None => {}
         RootCerts::File(p) => {
             let path = p.display().to_string();
             for c in load_certs(&path, "sslrootcert")? {
-                store.add(c).map_err(|e| {
-                    format!("--database: sslrootcert={path}: not a usable CA certificate: {e}")
+                store.add(c).map_err(|source| PgUrlError::BadCa {
+                    path: path.clone(),
+                    source,
                 })?;
             }
         }
@@ -221,15 +383,9 @@ fn root_store(roots: &RootCerts) -> Result<RootCertStore, String> {
             let found = rustls_native_certs::load_native_certs();
             let (added, _) = store.add_parsable_certificates(found.certs);
             if added == 0 {
-                return Err(format!(
-                    "--database: sslrootcert=system: no trusted CA certificate found in the \
-                     operating system's store{}",
-                    found
-                        .errors
-                        .first()
-                        .map(|e| format!(" ({e})"))
-                        .unwrap_or_default()
-                ));
+                return Err(PgUrlError::NoSystemCa {
+                    first: found.errors.into_iter().next(),
+                });
             }
         }
     }
@@ -340,11 +496,11 @@ fn client_config(
     roots: &RootCerts,
     crl: Option<&std::path::Path>,
     client_cert: Option<(&str, &str)>,
-) -> Result<ClientConfig, String> {
+) -> Result<ClientConfig, PgUrlError> {
     let provider = provider();
     let builder = ClientConfig::builder_with_provider(provider.clone())
         .with_safe_default_protocol_versions()
-        .map_err(|e| format!("--database: TLS set-up: {e}"))?;
+        .map_err(PgUrlError::TlsSetUp)?;
     let verifier: Arc<dyn ServerCertVerifier> = if *roots == RootCerts::None {
         Arc::new(EncryptOnly(provider.clone()))
     } else {
@@ -357,7 +513,7 @@ fn client_config(
             None => Vec::new(),
         })
         .build()
-        .map_err(|e| format!("--database: sslrootcert: {e}"))?;
+        .map_err(PgUrlError::Verifier)?;
         if mode == SslMode::VerifyFull {
             webpki
         } else {
@@ -372,12 +528,13 @@ fn client_config(
         None => builder.with_no_client_auth(),
         Some((cert, key)) => {
             let certs = load_certs(cert, "sslcert")?;
-            let key = PrivateKeyDer::from_pem_file(key).map_err(|e| {
-                format!("--database: sslkey={key}: cannot read a PEM private key: {e}")
+            let key = PrivateKeyDer::from_pem_file(key).map_err(|source| PgUrlError::Key {
+                path: key.to_string(),
+                source,
             })?;
             builder
                 .with_client_auth_cert(certs, key)
-                .map_err(|e| format!("--database: sslcert/sslkey: {e}"))?
+                .map_err(PgUrlError::ClientAuth)?
         }
     };
     // PostgreSQL 17's direct TLS negotiation (`sslnegotiation=direct`) requires this ALPN.
@@ -388,7 +545,7 @@ fn client_config(
 /// Parse a `--database` URL (already known to start with `postgres://` or `postgresql://`),
 /// including its TLS parameters (or libpq's environment variables for those it lacks), and
 /// load the certificates it names.
-pub fn parse(url: &str) -> Result<PgTarget, String> {
+pub fn parse(url: &str) -> Result<PgTarget, PgUrlError> {
     parse_with(url, default_root_file(), &|k| std::env::var(k).ok())
 }
 
@@ -407,7 +564,7 @@ fn parse_with(
     url: &str,
     default_root: Option<PathBuf>,
     env: &dyn Fn(&str) -> Option<String>,
-) -> Result<PgTarget, String> {
+) -> Result<PgTarget, PgUrlError> {
     let (rest, mut p) = split_tls_params(url)?;
     let mut from_env = Vec::new();
     let slots = [
@@ -429,7 +586,10 @@ fn parse_with(
         if from_env.is_empty() {
             e
         } else {
-            format!("{e} (taken from the environment: {})", from_env.join(", "))
+            PgUrlError::FromEnvironment {
+                variables: from_env,
+                source: Box::new(e),
+            }
         }
     })
 }
@@ -438,10 +598,8 @@ fn parse_params(
     rest: &str,
     p: TlsParams,
     default_root: Option<PathBuf>,
-) -> Result<PgTarget, String> {
-    let mut config = rest
-        .parse::<postgres::Config>()
-        .map_err(|e| format!("--database: not a valid PostgreSQL URL: {e}"))?;
+) -> Result<PgTarget, PgUrlError> {
+    let mut config = rest.parse::<postgres::Config>().map_err(PgUrlError::Url)?;
     let system = p.sslrootcert.as_deref() == Some("system");
     let mode = match p.sslmode.as_deref() {
         Some(m) => SslMode::parse(m)?,
@@ -450,50 +608,27 @@ fn parse_params(
         None => SslMode::Prefer,
     };
     if system && mode != SslMode::VerifyFull {
-        return Err(format!(
-            "--database: sslrootcert=system needs sslmode=verify-full (got sslmode={}): a \
-             public CA signs certificates for anyone, so only the host name check makes it safe",
-            mode.name()
-        ));
+        return Err(PgUrlError::SystemRootsNeedVerifyFull { mode });
     }
     let roots = match p.sslrootcert {
         Some(_) if system => RootCerts::System,
-        Some(path) if path.is_empty() => {
-            return Err("--database: sslrootcert is empty (expected a PEM file path)".into())
-        }
+        Some(path) if path.is_empty() => return Err(PgUrlError::EmptyRootCert),
         Some(path) => RootCerts::File(PathBuf::from(path)),
         None => default_root.map_or(RootCerts::None, RootCerts::File),
     };
     if mode.verifies() && roots == RootCerts::None {
-        return Err(format!(
-            "--database: sslmode={} needs the certificate of the CA that signed the server's \
-             certificate: add sslrootcert=PATH (PEM), or sslrootcert=system for the operating \
-             system's trusted CAs (or install it as ~/.postgresql/root.crt)",
-            mode.name()
-        ));
+        return Err(PgUrlError::NoRootCert { mode });
     }
     let crl = match p.sslcrl {
         None => None,
         Some(path) if path.is_empty() => None,
-        Some(_) if roots == RootCerts::None => {
-            return Err(format!(
-                "--database: sslcrl needs a root certificate (sslrootcert): revocation is \
-                 checked along the chain to a trusted CA, and sslmode={} without one checks no \
-                 chain",
-                mode.name()
-            ))
-        }
+        Some(_) if roots == RootCerts::None => return Err(PgUrlError::CrlWithoutRoot { mode }),
         Some(path) => Some(PathBuf::from(path)),
     };
     let client_cert = match (&p.sslcert, &p.sslkey) {
         (Some(c), Some(k)) => Some((c.as_str(), k.as_str())),
         (None, None) => None,
-        _ => {
-            return Err(
-                "--database: sslcert and sslkey go together (a client certificate and its key)"
-                    .into(),
-            )
-        }
+        _ => return Err(PgUrlError::CertWithoutKey),
     };
     let hosts = config
         .get_hosts()
@@ -556,7 +691,7 @@ impl PgTarget {
     /// certificate check with a root certificate given, or the server refusing the encrypted
     /// session, e.g. a `hostnossl` line), one more attempt is made in plain text, logged as a
     /// warning. A server answering "no TLS" is taken in plain text by the client library itself.
-    pub fn connect(&self) -> Result<Client, String> {
+    pub fn connect(&self) -> Result<Client, ConnectError> {
         let Some(tls) = &self.tls else {
             return self.config.connect(NoTls).map_err(|e| self.explain(&e));
         };
@@ -577,10 +712,10 @@ impl PgTarget {
                 );
                 Ok(c)
             }
-            Err(e) => Err(format!(
-                "{why}; the plain-text retry of sslmode=prefer failed too: {}",
-                failure(&e)
-            )),
+            Err(e) => Err(ConnectError {
+                plain_retry: Some(failure(&e)),
+                ..why
+            }),
         }
     }
 
@@ -605,57 +740,58 @@ impl PgTarget {
         }
     }
 
-    fn explain(&self, e: &postgres::Error) -> String {
-        let head = format!(
-            "connecting to PostgreSQL at {} (sslmode={})",
-            self.hosts,
-            self.mode.name()
-        );
-        if let Some(tls) = rustls_error(e) {
+    fn explain(&self, e: &postgres::Error) -> ConnectError {
+        let failure = if let Some(tls) = rustls_error(e) {
             let why = match &tls {
-                rustls::Error::InvalidCertificate(CertificateError::UnknownIssuer) => format!(
-                    "it is not signed by a CA trusted here (sslrootcert={})",
-                    self.roots_label()
-                ),
+                rustls::Error::InvalidCertificate(CertificateError::UnknownIssuer) => {
+                    CertificateProblem::UnknownIssuer {
+                        roots: self.roots_label(),
+                    }
+                }
                 rustls::Error::InvalidCertificate(
                     CertificateError::NotValidForName
                     | CertificateError::NotValidForNameContext { .. },
-                ) => "it was not issued for the host name in the URL (sslmode=verify-ca checks \
-                      the CA only)"
-                    .to_string(),
+                ) => CertificateProblem::NotForName,
                 rustls::Error::InvalidCertificate(
                     CertificateError::Expired | CertificateError::ExpiredContext { .. },
-                ) => "it has expired".to_string(),
+                ) => CertificateProblem::Expired,
                 rustls::Error::InvalidCertificate(CertificateError::Revoked) => {
-                    format!("it has been revoked (sslcrl={})", self.crl_label())
+                    CertificateProblem::Revoked {
+                        crl: self.crl_label(),
+                    }
                 }
                 rustls::Error::InvalidCertificate(CertificateError::UnknownRevocationStatus) => {
-                    format!(
-                        "sslcrl={} has no CRL from the issuer of a certificate in its chain",
-                        self.crl_label()
-                    )
+                    CertificateProblem::UnknownRevocationStatus {
+                        crl: self.crl_label(),
+                    }
                 }
                 rustls::Error::InvalidCertificate(
                     CertificateError::ExpiredRevocationList
                     | CertificateError::ExpiredRevocationListContext { .. },
-                ) => format!(
-                    "the CRL in sslcrl={} is past its next update",
-                    self.crl_label()
-                ),
-                rustls::Error::InvalidCertificate(_) => "it was rejected".to_string(),
-                _ => "the TLS handshake failed".to_string(),
+                ) => CertificateProblem::ExpiredRevocationList {
+                    crl: self.crl_label(),
+                },
+                rustls::Error::InvalidCertificate(_) => CertificateProblem::Rejected,
+                _ => CertificateProblem::Handshake,
             };
-            return format!("{head}: the server's certificate failed verification: {tls}; {why}");
-        }
-        let detail = failure(e);
-        let hint = if detail.contains("server does not support TLS") {
-            " (its postgresql.conf has ssl = off: turn it on, or use sslmode=prefer/disable)"
-        } else if detail.contains("no encryption") && self.mode == SslMode::Disable {
-            " (the server's pg_hba.conf only accepts TLS here: drop sslmode=disable)"
+            ConnectFailure::Certificate { tls, why }
         } else {
-            ""
+            let detail = failure(e);
+            let hint = if detail.contains("server does not support TLS") {
+                " (its postgresql.conf has ssl = off: turn it on, or use sslmode=prefer/disable)"
+            } else if detail.contains("no encryption") && self.mode == SslMode::Disable {
+                " (the server's pg_hba.conf only accepts TLS here: drop sslmode=disable)"
+            } else {
+                ""
+            };
+            ConnectFailure::Other { detail, hint }
         };
-        format!("{head}: {detail}{hint}")
+        ConnectError {
+            hosts: self.hosts.clone(),
+            mode: self.mode,
+            failure: Box::new(failure),
+            plain_retry: None,
+        }
     }
 }
 
@@ -693,13 +829,16 @@ mod tests {
     use super::*;
 
     /// [`parse`] with an empty environment, whatever this machine's `PGSSL*` are.
-    fn parse_no_env(url: &str) -> Result<PgTarget, String> {
+    fn parse_no_env(url: &str) -> Result<PgTarget, PgUrlError> {
         parse_with(url, default_root_file(), &|_| None)
     }
 
     /// As if `~/.postgresql/root.crt` did not exist, whatever this machine has.
     fn err(url: &str) -> String {
-        parse_with(url, None, &|_| None).map(|_| ()).expect_err(url)
+        parse_with(url, None, &|_| None)
+            .map(|_| ())
+            .expect_err(url)
+            .to_string()
     }
 
     #[test]
@@ -754,7 +893,8 @@ mod tests {
         let crl = |k: &str| (k == "PGSSLCRL").then(|| "/tmp/revoked.crl".to_string());
         let e = parse_with("postgres://h/d?sslmode=require", None, &crl)
             .map(|_| ())
-            .expect_err("PGSSLCRL without a CA");
+            .expect_err("PGSSLCRL without a CA")
+            .to_string();
         assert!(e.contains("sslcrl") && e.contains("PGSSLCRL"), "{e}");
         // Empty means unset, as in libpq.
         parse_with("postgres://h/d?sslcrl=", None, &|_| None).expect("empty sslcrl");
@@ -799,7 +939,8 @@ mod tests {
         let bad = |k: &str| (k == "PGSSLMODE").then(|| "verify-everything".to_string());
         let e = parse_with("postgres://h/d", None, &bad)
             .map(|_| ())
-            .expect_err("bad PGSSLMODE");
+            .expect_err("bad PGSSLMODE")
+            .to_string();
         assert!(
             e.contains("verify-everything") && e.contains("PGSSLMODE"),
             "{e}"
@@ -808,13 +949,15 @@ mod tests {
         let verify = |k: &str| (k == "PGSSLMODE").then(|| "verify-full".to_string());
         let e = parse_with("postgres://h/d", None, &verify)
             .map(|_| ())
-            .expect_err("verify-full without a CA");
+            .expect_err("verify-full without a CA")
+            .to_string();
         assert!(e.contains("sslrootcert") && e.contains("PGSSLMODE"), "{e}");
         // A client certificate needs its key, wherever each comes from.
         let cert = |k: &str| (k == "PGSSLCERT").then(|| "/nonexistent/client.crt".to_string());
         let e = parse_with("postgres://h/d?sslmode=disable", None, &cert)
             .map(|_| ())
-            .expect_err("sslcert without sslkey");
+            .expect_err("sslcert without sslkey")
+            .to_string();
         assert!(e.contains("sslkey") && e.contains("PGSSLCERT"), "{e}");
     }
 }

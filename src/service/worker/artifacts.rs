@@ -37,20 +37,103 @@ impl std::fmt::Debug for ArtifactStore {
     }
 }
 
+/// Why shared artifact storage could not be opened, written, listed or read. `url` is the
+/// storage's URL without its query (which may carry credentials).
+#[derive(Debug, thiserror::Error)]
+pub enum ArtifactError {
+    /// The runtime that drives the object store could not start (kept for every later call).
+    #[error("starting the artifact runtime: {0}")]
+    Runtime(#[source] Arc<std::io::Error>),
+    /// `--artifacts` is not a URL (`url` as given).
+    #[error(
+        "--artifacts {url:?}: not a URL ({source}); expected file:///DIR or s3://BUCKET/PREFIX"
+    )]
+    NotAUrl {
+        url: String,
+        #[source]
+        source: url::ParseError,
+    },
+    #[error("--artifacts {url}: a file:// URL takes no options")]
+    FileOptions { url: String },
+    /// The local root directory could not be created.
+    #[error("--artifacts {url}: {source}")]
+    Root {
+        url: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("--artifacts {url}: not a local directory")]
+    NotLocal { url: String },
+    #[error(
+        "--artifacts {url}: this ashlar was built without S3 support (cargo build --features s3)"
+    )]
+    NoS3 { url: String },
+    /// A query option of an `s3://` URL that `object_store` does not know (`option` as given).
+    #[error("--artifacts {url}: unknown S3 option {option:?} in the URL (expected object_store's names: endpoint, region, allow_http, virtual_hosted_style_request, skip_signature, …)")]
+    S3Option { url: String, option: String },
+    /// `object_store` refused the URL or its options.
+    #[error("--artifacts {url}: {source}")]
+    Open {
+        url: String,
+        #[source]
+        source: object_store::Error,
+    },
+    /// The start-up probe (one listing) failed: wrong bucket, endpoint or credentials.
+    #[error("--artifacts {url}: the storage is not reachable: {source}")]
+    Unreachable {
+        url: String,
+        #[source]
+        source: object_store::Error,
+    },
+    #[error("the artifact probe panicked")]
+    ProbePanicked,
+    /// A job's artifact file could not be read for publishing (`path`; logged).
+    #[error("the server could not read the job's artifacts")]
+    ReadLocal {
+        path: std::path::PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    /// An artifact could not be uploaded (logged).
+    #[error("the server could not publish the job's artifacts to shared storage")]
+    Publish {
+        url: String,
+        #[source]
+        source: object_store::Error,
+    },
+    /// Listing, deleting or downloading failed.
+    #[error("{url}: {source}")]
+    Storage {
+        url: String,
+        #[source]
+        source: object_store::Error,
+    },
+    /// The download task on the artifact runtime did not finish.
+    #[error("artifact fetch task: {0}")]
+    Task(#[source] tokio::task::JoinError),
+    /// A downloaded artifact could not be written to `path`.
+    #[error("{}: {source}", path.display())]
+    Write {
+        path: std::path::PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
 /// The runtime blocking callers (worker threads) drive object-store futures on. A static, so
 /// it is never dropped inside an async context.
-fn runtime() -> Result<&'static tokio::runtime::Runtime, String> {
-    static RT: OnceLock<Result<tokio::runtime::Runtime, String>> = OnceLock::new();
+fn runtime() -> Result<&'static tokio::runtime::Runtime, ArtifactError> {
+    static RT: OnceLock<Result<tokio::runtime::Runtime, Arc<std::io::Error>>> = OnceLock::new();
     RT.get_or_init(|| {
         tokio::runtime::Builder::new_multi_thread()
             .worker_threads(1)
             .thread_name("ashlar-artifacts")
             .enable_all()
             .build()
-            .map_err(|e| format!("starting the artifact runtime: {e}"))
+            .map_err(Arc::new)
     })
     .as_ref()
-    .map_err(Clone::clone)
+    .map_err(|e| ArtifactError::Runtime(e.clone()))
 }
 
 impl ArtifactStore {
@@ -63,16 +146,15 @@ impl ArtifactStore {
     /// `s3://bucket/prefix?endpoint=http://127.0.0.1:9000&allow_http=true` (any name
     /// `object_store`'s `AmazonS3ConfigKey` accepts; keep secrets in the environment). The bucket is probed once here, so a wrong endpoint, bucket or
     /// credential stops the process at start-up instead of failing every job.
-    pub fn open(url: &str) -> Result<Self, String> {
+    pub fn open(url: &str) -> Result<Self, ArtifactError> {
         let full = if url.starts_with('/') {
             format!("file://{url}")
         } else {
             url.to_string()
         };
-        let mut parsed = url::Url::parse(&full).map_err(|e| {
-            format!(
-                "--artifacts {url:?}: not a URL ({e}); expected file:///DIR or s3://BUCKET/PREFIX"
-            )
+        let mut parsed = url::Url::parse(&full).map_err(|source| ArtifactError::NotAUrl {
+            url: url.to_string(),
+            source,
         })?;
         let options: Vec<(String, String)> = parsed.query_pairs().into_owned().collect();
         parsed.set_query(None);
@@ -80,13 +162,13 @@ impl ArtifactStore {
         let shown = parsed.to_string();
         if parsed.scheme() == "file" {
             if !options.is_empty() {
-                return Err(format!(
-                    "--artifacts {shown}: a file:// URL takes no options"
-                ));
+                return Err(ArtifactError::FileOptions { url: shown });
             }
             // The local store does not create its root; workers must agree on it existing.
-            std::fs::create_dir_all(parsed.path())
-                .map_err(|e| format!("--artifacts {shown}: {e}"))?;
+            std::fs::create_dir_all(parsed.path()).map_err(|source| ArtifactError::Root {
+                url: shown.clone(),
+                source,
+            })?;
         }
         let (store, prefix) = if parsed.scheme() == "s3" {
             object_store::parse_url_opts(&parsed, s3_options(&shown, options)?)
@@ -96,18 +178,20 @@ impl ArtifactStore {
             // processes must agree exists) instead of walking up to `/`.
             let dir = parsed
                 .to_file_path()
-                .map_err(|()| format!("--artifacts {shown}: not a local directory"))?;
-            object_store::local::LocalFileSystem::new_with_prefix(dir)
-                .map(|fs| {
-                    let fs: Box<dyn ObjectStore> = Box::new(fs.with_automatic_cleanup(true));
-                    (fs, StorePath::default())
-                })
+                .map_err(|()| ArtifactError::NotLocal { url: shown.clone() })?;
+            object_store::local::LocalFileSystem::new_with_prefix(dir).map(|fs| {
+                let fs: Box<dyn ObjectStore> = Box::new(fs.with_automatic_cleanup(true));
+                (fs, StorePath::default())
+            })
         } else {
             object_store::parse_url(&parsed)
         }
-        .map_err(|e| match parsed.scheme() {
-            "s3" if !cfg!(feature = "s3") => format!("--artifacts {shown}: this ashlar was built without S3 support (cargo build --features s3)"),
-            _ => format!("--artifacts {shown}: {e}"),
+        .map_err(|source| match parsed.scheme() {
+            "s3" if !cfg!(feature = "s3") => ArtifactError::NoS3 { url: shown.clone() },
+            _ => ArtifactError::Open {
+                url: shown.clone(),
+                source,
+            },
         })?;
         let out = Self {
             store: Arc::from(store),
@@ -122,22 +206,19 @@ impl ArtifactStore {
 
     /// One listing of the prefix (empty on a fresh bucket, an error when the bucket, endpoint
     /// or credentials are wrong). On its own thread: the caller may be inside a runtime.
-    fn probe(&self) -> Result<(), String> {
+    fn probe(&self) -> Result<(), ArtifactError> {
         let store = self.store.clone();
         let prefix = self.prefix.clone();
-        let res = std::thread::spawn(move || -> Result<(), String> {
-            runtime()?
-                .block_on(store.list_with_delimiter(Some(&prefix)))
+        let rt = runtime()?;
+        let res = std::thread::spawn(move || {
+            rt.block_on(store.list_with_delimiter(Some(&prefix)))
                 .map(|_| ())
-                .map_err(|e| e.to_string())
         })
         .join()
-        .map_err(|_| "the artifact probe panicked".to_string())?;
-        res.map_err(|e| {
-            format!(
-                "--artifacts {}: the storage is not reachable: {e}",
-                self.url
-            )
+        .map_err(|_| ArtifactError::ProbePanicked)?;
+        res.map_err(|source| ArtifactError::Unreachable {
+            url: self.url.clone(),
+            source,
         })
     }
 
@@ -153,30 +234,33 @@ impl ArtifactStore {
     }
 
     /// Upload the artifacts found in a job's directory (blocking; worker threads).
-    pub fn publish_dir(&self, id: Uuid, dir: &Path) -> Result<(), String> {
+    pub fn publish_dir(&self, id: Uuid, dir: &Path) -> Result<(), ArtifactError> {
         let rt = runtime()?;
         for name in ARTIFACT_NAMES {
             let path = dir.join(name);
             let bytes = match std::fs::read(&path) {
                 Ok(b) => b,
                 Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
-                Err(e) => {
-                    tracing::error!(path = %path.display(), error = %e, "reading an artifact");
-                    return Err("the server could not read the job's artifacts".into());
+                Err(source) => {
+                    tracing::error!(path = %path.display(), error = %source, "reading an artifact");
+                    return Err(ArtifactError::ReadLocal { path, source });
                 }
             };
             let loc = self.location(id, name);
             rt.block_on(self.store.put(&loc, PutPayload::from(bytes)))
-                .map_err(|e| {
-                    tracing::error!(url = %self.url, error = %e, "publishing an artifact");
-                    "the server could not publish the job's artifacts to shared storage".to_string()
+                .map_err(|source| {
+                    tracing::error!(url = %self.url, error = %source, "publishing an artifact");
+                    ArtifactError::Publish {
+                        url: self.url.clone(),
+                        source,
+                    }
                 })?;
         }
         Ok(())
     }
 
     /// Bytes of every job's published artifacts (one listing of `<prefix>/jobs/`; blocking).
-    pub fn total_bytes(&self) -> Result<u64, String> {
+    pub fn total_bytes(&self) -> Result<u64, ArtifactError> {
         use futures_util::TryStreamExt;
         let jobs = self.under_jobs(&[]);
         runtime()?
@@ -185,18 +269,26 @@ impl ArtifactStore {
                     .list(Some(&jobs))
                     .try_fold(0u64, |n, m| async move { Ok(n.saturating_add(m.size)) }),
             )
-            .map_err(|e| format!("{}: {e}", self.url))
+            .map_err(|e| self.storage(e))
+    }
+
+    /// A listing, delete or download failure of this store.
+    fn storage(&self, source: object_store::Error) -> ArtifactError {
+        ArtifactError::Storage {
+            url: self.url.clone(),
+            source,
+        }
     }
 
     /// Remove a deleted job's published artifacts (blocking: not on an async runtime's
     /// thread). Absent files are fine: a job that failed early published nothing.
-    pub fn remove(&self, id: Uuid) -> Result<(), String> {
+    pub fn remove(&self, id: Uuid) -> Result<(), ArtifactError> {
         let rt = runtime()?;
         for name in ARTIFACT_NAMES {
             let loc = self.location(id, name);
             match rt.block_on(self.store.delete(&loc)) {
                 Ok(()) | Err(object_store::Error::NotFound { .. }) => {}
-                Err(e) => return Err(format!("{}: {e}", self.url)),
+                Err(e) => return Err(self.storage(e)),
             }
         }
         Ok(())
@@ -204,7 +296,7 @@ impl ArtifactStore {
 
     /// Download one artifact whole into memory, None when absent. For small files and tests:
     /// serving goes through [`ArtifactStore::ensure_local`], which streams to disk.
-    pub async fn fetch(&self, id: Uuid, name: &str) -> Result<Option<bytes::Bytes>, String> {
+    pub async fn fetch(&self, id: Uuid, name: &str) -> Result<Option<bytes::Bytes>, ArtifactError> {
         let loc = self.location(id, name);
         let store = self.store.clone();
         // On the artifact runtime: an S3 client's connections belong to one runtime.
@@ -216,14 +308,14 @@ impl ArtifactStore {
             }
         });
         task.await
-            .map_err(|e| format!("artifact fetch task: {e}"))?
-            .map_err(|e| format!("{}: {e}", self.url))
+            .map_err(ArtifactError::Task)?
+            .map_err(|e| self.storage(e))
     }
 
     /// Download one artifact into the file `to`, chunk by chunk as the store hands them over:
     /// memory stays one chunk whatever the artifact's size (a 300 MB trajectory asked for by
     /// eight clients at once must not cost 2.4 GB). `Ok(false)` when absent.
-    pub async fn fetch_to(&self, id: Uuid, name: &str, to: &Path) -> Result<bool, String> {
+    pub async fn fetch_to(&self, id: Uuid, name: &str, to: &Path) -> Result<bool, ArtifactError> {
         let loc = self.location(id, name);
         let store = self.store.clone();
         let to = to.to_path_buf();
@@ -234,31 +326,34 @@ impl ArtifactStore {
             let got = match store.get(&loc).await {
                 Ok(r) => r,
                 Err(object_store::Error::NotFound { .. }) => return Ok(false),
-                Err(e) => return Err(format!("{url}: {e}")),
+                Err(source) => return Err(ArtifactError::Storage { url, source }),
             };
-            let mut file = tokio::fs::File::create(&to)
-                .await
-                .map_err(|e| format!("{}: {e}", to.display()))?;
+            let write = |source| ArtifactError::Write {
+                path: to.clone(),
+                source,
+            };
+            let mut file = tokio::fs::File::create(&to).await.map_err(write)?;
             let mut chunks = got.into_stream();
             while let Some(chunk) = chunks.next().await {
-                let chunk = chunk.map_err(|e| format!("{url}: {e}"))?;
-                file.write_all(&chunk)
-                    .await
-                    .map_err(|e| format!("{}: {e}", to.display()))?;
+                let chunk = chunk.map_err(|source| ArtifactError::Storage {
+                    url: url.clone(),
+                    source,
+                })?;
+                file.write_all(&chunk).await.map_err(write)?;
             }
-            file.flush()
-                .await
-                .map_err(|e| format!("{}: {e}", to.display()))?;
+            file.flush().await.map_err(write)?;
             Ok(true)
         });
-        task.await
-            .map_err(|e| format!("artifact fetch task: {e}"))?
+        task.await.map_err(ArtifactError::Task)?
     }
 }
 
 /// S3 options: `AWS_*` environment variables, then the URL's query (validated: an unknown
 /// option is named, not ignored).
-fn s3_options(shown: &str, query: Vec<(String, String)>) -> Result<Vec<(String, String)>, String> {
+fn s3_options(
+    shown: &str,
+    query: Vec<(String, String)>,
+) -> Result<Vec<(String, String)>, ArtifactError> {
     let mut opts: Vec<(String, String)> = std::env::vars()
         .filter(|(k, _)| k.starts_with("AWS_"))
         .map(|(k, v)| (k.to_ascii_lowercase(), v))
@@ -267,9 +362,10 @@ fn s3_options(shown: &str, query: Vec<(String, String)>) -> Result<Vec<(String, 
         let key = k.to_ascii_lowercase();
         #[cfg(feature = "s3")]
         if key.parse::<object_store::aws::AmazonS3ConfigKey>().is_err() {
-            return Err(format!(
-                "--artifacts {shown}: unknown S3 option {k:?} in the URL (expected object_store's names: endpoint, region, allow_http, virtual_hosted_style_request, skip_signature, …)"
-            ));
+            return Err(ArtifactError::S3Option {
+                url: shown.to_string(),
+                option: k,
+            });
         }
         #[cfg(not(feature = "s3"))]
         let _ = shown;
@@ -408,10 +504,11 @@ mod tests {
     #[test]
     fn bad_urls_are_named() {
         let e = ArtifactStore::open("not a url").expect_err("rejected");
-        assert!(e.contains("--artifacts"), "{e}");
+        assert!(e.to_string().contains("--artifacts"), "{e}");
         if !cfg!(feature = "s3") {
             let e = ArtifactStore::open("s3://bucket/x").expect_err("rejected");
-            assert!(e.contains("without S3"), "{e}");
+            assert!(matches!(e, ArtifactError::NoS3 { .. }), "{e}");
+            assert!(e.to_string().contains("without S3"), "{e}");
         }
     }
 }

@@ -22,7 +22,11 @@ impl ClusterThreads {
     /// Start both threads for `core`, whose store is `store`; `api`: this process takes
     /// submissions (`ashlar serve`). First publishes the limits this process enforces (see
     /// [`publish`]) and, in a worker, warns about each that differs from the API's.
-    pub fn start(core: Arc<Core>, store: Arc<PgStore>, api: bool) -> Result<Self, String> {
+    pub fn start(
+        core: Arc<Core>,
+        store: Arc<PgStore>,
+        api: bool,
+    ) -> Result<Self, super::ThreadStartError> {
         let roles = publish(&core, &store, api);
         if roles.contains(&"worker") && !api {
             for line in differences_from_api(&core, &store) {
@@ -37,7 +41,7 @@ impl ClusterThreads {
                 std::thread::Builder::new()
                     .name("ashlar-listen".into())
                     .spawn(move || listen_loop(&core, &store, &stop))
-                    .map_err(|e| format!("starting the listener thread: {e}"))?,
+                    .map_err(super::ThreadStartError::of("the listener thread"))?,
             );
         }
         {
@@ -51,7 +55,7 @@ impl ClusterThreads {
                             tracing::warn!(error = %e, "withdrawing this process's limits");
                         }
                     })
-                    .map_err(|e| format!("starting the lease thread: {e}"))?,
+                    .map_err(super::ThreadStartError::of("the lease thread"))?,
             );
         }
         Ok(Self { stop, handles })

@@ -38,10 +38,9 @@ pub enum JobError {
         #[source]
         source: std::io::Error,
     },
-    /// This version's parser no longer accepts the stored request; `detail` is the problem's
-    /// text (`ApiError::detail`), naming the field.
-    #[error("the stored request is no longer accepted: {detail}")]
-    Rejected { detail: String },
+    /// This version's parser no longer accepts the stored request (the cause names the field).
+    #[error("the stored request is no longer accepted: {0}")]
+    Rejected(#[source] crate::service::request::RequestError),
     /// The store failed while a search read or wrote its child runs; the cause is logged.
     #[error("the job store failed while running the search; see the server log")]
     Store(#[source] StoreError),
@@ -77,13 +76,30 @@ pub enum JobError {
     /// The computation panicked; the panic's text is logged.
     #[error("the computation crashed (an internal error in ashlar; the cause has been logged)")]
     Panicked,
-    /// Publishing the artifacts to shared storage failed (`ArtifactStore::publish_dir`, whose
-    /// errors are still text).
-    #[error("{0}")]
-    Publish(String),
+    /// Publishing the artifacts to shared storage failed (`ArtifactStore::publish_dir`; the
+    /// cause is logged, the user reads a sentence).
+    #[error(transparent)]
+    Publish(super::artifacts::ArtifactError),
     /// The test runner's failure asked for by the scene's name `fake:fail`.
     #[error("fake failure requested by the scene name")]
     Fake,
+}
+
+/// A thread the service starts (a worker, the cluster's listener or lease keeper, a sweeper)
+/// could not be started; `thread` says which ("worker thread", "the retention sweeper", …).
+#[derive(Debug, thiserror::Error)]
+#[error("starting {thread}: {source}")]
+pub struct ThreadStartError {
+    pub thread: &'static str,
+    #[source]
+    pub source: std::io::Error,
+}
+
+impl ThreadStartError {
+    /// A `map_err` for `std::thread::Builder::spawn` naming `thread`.
+    pub(crate) fn of(thread: &'static str) -> impl FnOnce(std::io::Error) -> Self {
+        move |source| ThreadStartError { thread, source }
+    }
 }
 
 /// How stored jobs can fail to fit together (see [`JobError::Inconsistent`]).
@@ -121,8 +137,8 @@ impl JobError {
     }
 
     /// A stored request the parser now refuses.
-    pub(crate) fn rejected(e: crate::service::http::problem::ApiError) -> Self {
-        JobError::Rejected { detail: e.detail }
+    pub(crate) fn rejected(e: crate::service::request::RequestError) -> Self {
+        JobError::Rejected(e)
     }
 }
 

@@ -11,7 +11,7 @@ pub mod pool;
 pub mod run;
 pub mod runner;
 
-pub use error::{Inconsistent, JobError, ProcessEnd, ProcessError};
+pub use error::{Inconsistent, JobError, ProcessEnd, ProcessError, ThreadStartError};
 pub use fanout::{ChildRequest, ChildResult};
 pub use pool::*;
 pub use run::{analysis_runner, JobRunner, RunHooks, RunnerOutcome};

@@ -339,7 +339,7 @@ pub struct Pool {
 
 impl Pool {
     /// Start `core.params.workers` threads.
-    pub fn start(core: Arc<Core>) -> Result<Self, String> {
+    pub fn start(core: Arc<Core>) -> Result<Self, super::ThreadStartError> {
         let mut handles = Vec::new();
         for k in 0..core.params.workers {
             let c = core.clone();
@@ -348,9 +348,12 @@ impl Pool {
             let h = std::thread::Builder::new()
                 .name(format!("ashlar-worker-{k}"))
                 .spawn(move || worker_loop(&c))
-                .map_err(|e| {
+                .map_err(|source| {
                     core.workers_alive.fetch_sub(1, Ordering::SeqCst);
-                    format!("starting worker thread: {e}")
+                    super::ThreadStartError {
+                        thread: "worker thread",
+                        source,
+                    }
                 })?;
             handles.push(h);
         }

@@ -419,8 +419,19 @@ fn human_bytes(b: u64) -> String {
     }
 }
 
+/// A byte count (`--job-memory-limit`) that does not read: not a whole number with an optional
+/// K, M or G suffix, or over 2^64 (the text given).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{text:?}: expected bytes, or a number with K, M or G")]
+pub struct BytesError {
+    pub text: String,
+}
+
 /// Parse `--job-memory-limit`: bytes, or with a K/M/G suffix (powers of 1024); 0 is no limit.
-pub fn parse_bytes(s: &str) -> Result<u64, String> {
+pub fn parse_bytes(s: &str) -> Result<u64, BytesError> {
+    let bad = || BytesError {
+        text: s.to_string(),
+    };
     let t = s.trim();
     let (num, mult) = match t.char_indices().next_back() {
         Some((i, c)) if c.is_ascii_alphabetic() => {
@@ -428,7 +439,7 @@ pub fn parse_bytes(s: &str) -> Result<u64, String> {
                 'K' => 1u64 << 10,
                 'M' => 1 << 20,
                 'G' => 1 << 30,
-                _ => return Err(format!("{s:?}: expected bytes, or a number with K, M or G")),
+                _ => return Err(bad()),
             };
             (&t[..i], m)
         }
@@ -438,7 +449,7 @@ pub fn parse_bytes(s: &str) -> Result<u64, String> {
         .parse::<u64>()
         .ok()
         .and_then(|n| n.checked_mul(mult))
-        .ok_or_else(|| format!("{s:?}: expected bytes, or a number with K, M or G"))
+        .ok_or_else(bad)
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -8,7 +8,7 @@
 //! four-block example — and the step is re-solved.
 use super::gap::{GapFunction, Pair};
 use super::DualInput;
-use crate::contact::{edge_points, Contact, ContactState};
+use crate::contact::{edge_points, linearize_contact, Contact, ContactState, ShearReference};
 use crate::geometry::{displacement_matrix, inside_depth, BlockGeometry, Vec6};
 use nalgebra::Vector2;
 
@@ -102,7 +102,8 @@ pub fn vertex_vertex(
         let mut new = contacts[k].clone();
         (new.vertex_block, new.vertex, new.edge_block, new.edge) = best;
         new.state = ContactState::Locked;
-        linearize(&mut new, geoms);
+        // The step-start frame, with the shear reference at the vertex's projection.
+        linearize_contact(&mut new, geoms, ShearReference::AtVertex);
         contacts[k] = new;
     }
     count
@@ -170,32 +171,6 @@ fn admissible(g: &BlockGeometry, v: usize, n: &Vector2<f64>, sin_tol: f64) -> bo
     let e1 = g.vertices[(v + nv - 1) % nv] - p;
     let e2 = g.vertices[(v + 1) % nv] - p;
     e1.dot(n) >= -sin_tol * e1.norm() && e2.dot(n) >= -sin_tol * e2.norm()
-}
-
-/// The step-start contact frame of a switched pair (as `contact::ContactSet::linearize` does
-/// for detected ones), with the shear reference at the vertex's projection.
-fn linearize(c: &mut Contact, geoms: &[BlockGeometry]) {
-    let gi = &geoms[c.vertex_block];
-    let gj = &geoms[c.edge_block];
-    let p = gi.vertices[c.vertex];
-    let (a, b) = edge_points(gj, c.edge);
-    let ab = b - a;
-    let len = ab.norm();
-    let t = ab / len;
-    let n = Vector2::new(t.y, -t.x);
-    c.t = t;
-    c.n = n;
-    c.g0 = n.dot(&(p - a));
-    c.xi = t.dot(&(p - a)) / len;
-    c.ref_xi = c.xi;
-    c.s0 = 0.0;
-    let q = a + ab * c.xi;
-    let ti = displacement_matrix(p, gi.centroid);
-    let tq = displacement_matrix(q, gj.centroid);
-    c.e_i = ti.transpose() * n;
-    c.e_j = tq.transpose() * n;
-    c.f_i = ti.transpose() * t;
-    c.f_j = tq.transpose() * t;
 }
 
 #[cfg(test)]
