@@ -10,7 +10,8 @@
 //! `cargo run --release --example shaken_walls -- [--sizes 100,400,1600] [--steps 300]
 //!  [--motions rest,sine,record] [--diag] [--tight] [--block-model rigid|deformable] [--poisson V]
 //!  [--anderson DEPTH] [--anderson-restart] [--legacy] [--reference] [--record-start T]
-//!  [--seconds S] [--settle TOL] [--settle-after K] [--light-states on|off]`
+//!  [--seconds S] [--settle TOL] [--settle-after K] [--light-states on|off] [--light-tilt DEG]
+//!  [--light-interface on|off] [--freeze K] [--freeze-hold]`
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
 //! fixed-point loop); `--anderson-restart` restarts its history whenever a contact changes state.
@@ -183,9 +184,28 @@ fn main() {
                 params.open_close.settle_after = v.parse().expect("--settle-after");
             }
             // `--light-states on|off`: state changes of lightly loaded contacts skip the solve
-            // below the force tolerance (`OpenCloseParams::light_state_changes`, §11).
+            // below the force tolerance (`OpenCloseParams::light_state_changes`, §11; on by
+            // default since §12).
             if let Some(v) = arg("--light-states") {
                 params.open_close.light_state_changes = v == "on";
+            }
+            // `--light-tilt DEG`: largest angle of a contact normal from the horizontal at which
+            // the light rule applies (45: head joints only; 90: any orientation, session 31).
+            if let Some(v) = arg("--light-tilt") {
+                let deg: f64 = v.parse().expect("--light-tilt");
+                params.open_close.light_state_tilt = deg.to_radians();
+            }
+            // `--light-interface on|off`: the rule only where the contact's whole interface is
+            // lightly loaded (on, the default since §12; off: the contact's own load, §11).
+            if let Some(v) = arg("--light-interface") {
+                params.open_close.light_state_interface = v == "on";
+            }
+            // `--freeze K`: the flip freeze after K state changes of a contact in a step (§12).
+            if let Some(v) = arg("--freeze") {
+                params.open_close.freeze_after = v.parse().expect("--freeze");
+            }
+            if std::env::args().any(|a| a == "--freeze-hold") {
+                params.open_close.freeze_hold = true;
             }
             if let Some(v) = arg("--friction-tol") {
                 params.open_close.friction_tolerance = v.parse().expect("--friction-tol");
@@ -268,8 +288,8 @@ fn main() {
                     );
                 }
                 eprintln!(
-                    "  last iteration by force decade (1e-3.. N): {:?}; settled {}; light state changes taken {}",
-                    ch.last_force, ch.settled, ch.light
+                    "  last iteration by force decade (1e-3.. N): {:?}; settled {}; light state changes taken {}; frozen {}, freeze checks {}",
+                    ch.last_force, ch.settled, ch.light, ch.frozen, ch.freeze_checks
                 );
                 eprintln!("  changes by force decade (1e-3.. N): {:?}", ch.by_force);
             }

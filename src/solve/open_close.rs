@@ -91,16 +91,47 @@ pub struct OpenCloseParams {
     /// Let a *state* change of a lightly loaded contact (opening, closing, the onset of slip,
     /// re-sticking, a slip reversal) skip the solve as `force_tolerance` lets a friction update
     /// do: when the contact's normal force before and after is at most `light_load` × its force
-    /// scale and the force the change misjudges (as `settle_tolerance` measures it) is at most
-    /// `force_tolerance` × that scale. The change is still taken into the contact's state, for
-    /// the next iteration if one follows, else for the next step. A contact that carries its
-    /// stone (a block's base, a rocking pivot, a landing corner) is never light, so the
-    /// decisions of few-block structures always iterate. Default off (opt-in): every engine
-    /// benchmark passes at its tolerance with it, and it cuts the solves of the shaken 410-stone
-    /// wall under the 1 m/s² 1 Hz sine from 1.78 to 1.49 a step (docs/contact-solve.md §11), but
-    /// with it the bundled Doric colonnade under Friuli at 0.3 g collapses where it stands
-    /// without it (and at Δt 2e-4 and 1e-4 s), so it is not yet safe for rocking stacks.
+    /// scale, the force the change misjudges (as `settle_tolerance` measures it) is at most
+    /// `force_tolerance` × that scale, the contact is a head joint (`light_state_tilt`) and its
+    /// whole interface is lightly loaded (`light_state_interface`). The change is still taken
+    /// into the contact's state, for the next iteration if one follows, else for the next step.
+    /// A contact that carries its stone (a block's base, a rocking pivot, a landing corner) or
+    /// whose partner corner does (a rocking drum's bed joint, an arch's hinge) never qualifies,
+    /// so the decisions of few-block structures and rocking stacks always iterate. Default on:
+    /// it cuts the solves of the shaken 410-stone wall under the 1 m/s² 1 Hz sine from 1.78 to
+    /// 1.49 a step (docs/contact-solve.md §11–§12) and every engine benchmark passes with it. The
+    /// rule as first written (the contact's own load only, any orientation) made the bundled
+    /// Doric colonnade collapse under Friuli at 0.3 g; with the interface check it stands with
+    /// its peak within 0.6 % of the run without the rule (tests/engine/light_state_rocking.rs).
     pub light_state_changes: bool,
+    /// Largest angle between a contact's normal and the horizontal, rad, at which
+    /// `light_state_changes` may let its state change through. Default π/4: head (vertical)
+    /// joints only, the same split as [`ChangeCounts`] and the rule's whole gain on shaken walls
+    /// (π/2, any orientation, takes exactly the same changes there). Alone it is not a safe
+    /// guard: an arch's joints near the crown are "head" joints by orientation, and without the
+    /// interface check the bundled arch's peak under Friuli 0.3 g moved +11 %
+    /// (docs/contact-solve.md §12); with it, π/4 and π/2 gave identical runs on every scene
+    /// measured, so it is a margin.
+    pub light_state_tilt: f64,
+    /// Let `light_state_changes` through only when the contact's whole interface is lightly
+    /// loaded: every contact between the same two blocks carries at most `light_load` × the
+    /// force scale at the step start, in the solve and after it. A corner of a joint whose other
+    /// corner carries the stone (a rocking drum's bed joint, an arch's hinging joint) then never
+    /// qualifies, however little the corner itself carries (docs/contact-solve.md §12). Default
+    /// on: without it the bundled colonnade collapses under Friuli 0.3 g; with it the rule
+    /// takes the same changes on the shaken walls (head joints carry nothing at either corner).
+    pub light_state_interface: bool,
+    /// Flip freeze: a contact that has changed state this many times within the step's loop is
+    /// held at its last state (its further state changes neither apply nor ask for a solve)
+    /// until the rest of the loop converges; then each held contact is checked once against
+    /// that solution, and if it still wants to change, the change is taken and the loop goes
+    /// on with that contact free (up to `max_flips`). 0 = off. Default 0 (opt-in): measured in
+    /// docs/contact-solve.md §12.
+    pub freeze_after: u32,
+    /// After the flip freeze's end check, hold a contact that took its change at its new state
+    /// for the rest of the step (its later changes are taken into the next step) instead of
+    /// setting it free. Off (measured in docs/contact-solve.md §12).
+    pub freeze_hold: bool,
 }
 
 impl Default for OpenCloseParams {
@@ -119,7 +150,11 @@ impl Default for OpenCloseParams {
             anderson_keep: true,
             settle_tolerance: 0.0,
             settle_after: 20,
-            light_state_changes: false,
+            light_state_changes: true,
+            light_state_tilt: std::f64::consts::FRAC_PI_4,
+            light_state_interface: true,
+            freeze_after: 0,
+            freeze_hold: false,
         }
     }
 }
@@ -147,6 +182,10 @@ pub struct ChangeCounts {
     pub settled: u64,
     /// State changes of lightly loaded contacts let through (`OpenCloseParams::light_state_changes`).
     pub light: u64,
+    /// State changes held by the flip freeze (`OpenCloseParams::freeze_after`), and held
+    /// contacts that still wanted their change at the end check (each asks for one solve).
+    pub frozen: u64,
+    pub freeze_checks: u64,
 }
 
 /// Names of the kinds of [`ChangeCounts::by_kind`].
@@ -230,6 +269,40 @@ pub fn measures(c: &Contact, x: &[f64], dofs: &Dofs, prescribed: &[Prescribed]) 
 pub struct OpenCloseScratch {
     block_force: Vec<f64>,
     anderson: FrictionAnderson,
+    /// Per contact, the index of its interface (the unordered pair of its blocks).
+    interface: Vec<usize>,
+    /// Per interface, the largest normal force of its contacts at the step start, in the
+    /// current solve and after it, N.
+    interface_load: Vec<f64>,
+    /// Contacts (with their change) that qualify for the light rule on their own, pending the
+    /// check of their interface's load after the iteration's pass.
+    light: Vec<(usize, LightChange)>,
+    /// Scratch for grouping contacts by interface.
+    pairs: Vec<(usize, usize, usize)>,
+    /// Flip freeze: contacts already checked at the end this step (free again), and the
+    /// contacts whose change was held in the current iteration.
+    checked: Vec<bool>,
+    held: Vec<usize>,
+}
+
+/// A state change that `OpenCloseParams::light_state_changes` may let through, pending the
+/// interface check: what `ChangeCounts::record` needs if it does not.
+#[derive(Debug, Clone, Copy)]
+struct LightChange {
+    kind: usize,
+    head: bool,
+    force: f64,
+}
+
+/// What one contact's update asks of the loop.
+#[derive(Debug, Clone, Copy)]
+enum Update {
+    /// Nothing changed, or only what needs no other solve.
+    Quiet,
+    /// A change that asks for another solve (counted).
+    Changed,
+    /// A light state change, not yet counted: let through if its interface is light.
+    Light(LightChange),
 }
 
 /// Run the loop; `x` holds the converged solution on return.
@@ -257,6 +330,13 @@ pub fn iterate(
     block_force.resize(dofs.free_index.len(), 0.0);
     let anderson = &mut scratch.anderson;
     anderson.clear();
+    let interfaces = params.light_state_changes && params.light_state_interface;
+    if interfaces {
+        group_interfaces(contacts, &mut scratch.pairs, &mut scratch.interface);
+        let n = scratch.interface.iter().max().map_or(0, |&m| m + 1);
+        scratch.interface_load.clear();
+        scratch.interface_load.resize(n, 0.0);
+    }
     for (c, law) in contacts.iter_mut().zip(laws) {
         c.flips = 0;
         c.friction_secant = None;
@@ -273,6 +353,14 @@ pub fn iterate(
         c.release_factor = 1.0;
         note_force(block_force, c, c.start_normal_force);
     }
+    if interfaces {
+        for (c, &i) in contacts.iter().zip(&scratch.interface) {
+            let load = &mut scratch.interface_load[i];
+            *load = load.max(c.start_normal_force);
+        }
+    }
+    scratch.checked.clear();
+    scratch.checked.resize(contacts.len(), false);
     for it in 1..=params.max_iterations {
         sys.reset_to_blocks();
         add_contacts(sys, dofs, contacts, laws, springs, prescribed);
@@ -282,14 +370,45 @@ pub fn iterate(
         // history no longer applies).
         let mut structural = false;
         anderson.begin();
+        scratch.light.clear();
+        scratch.held.clear();
         for (k, (c, law)) in contacts.iter_mut().zip(laws).enumerate() {
             let scale = force_scale(block_force, c, dofs);
             let (old_state, n_in, old_release) = (c.state, c.friction_normal, c.release_factor);
-            if update_state(
+            if interfaces {
+                // The load the solve used (a closed contact's force of the last iterate).
+                let load = &mut scratch.interface_load[scratch.interface[k]];
+                if c.state.is_closed() {
+                    *load = load.max(c.normal_force);
+                }
+            }
+            // Flip freeze: keep what the contact was, to restore it if it changes state again.
+            let frozen = (params.freeze_after > 0
+                && c.flips >= params.freeze_after
+                && (!scratch.checked[k] || params.freeze_hold))
+                .then(|| (c.clone(), *counts));
+            let update = update_state(
                 c, law, springs, x, dofs, prescribed, params, it, scale, counts,
-            ) {
-                changed += 1;
-                last_changed = Some(k);
+            );
+            if let Some((held, counted)) = frozen {
+                if state_changed(held.state, c.state) {
+                    *c = held;
+                    *counts = counted;
+                    counts.frozen += 1;
+                    if !scratch.checked[k] {
+                        scratch.held.push(k);
+                    }
+                    continue;
+                }
+            }
+            match update {
+                Update::Quiet => {}
+                Update::Changed => {
+                    changed += 1;
+                    last_changed = Some(k);
+                }
+                Update::Light(change) if interfaces => scratch.light.push((k, change)),
+                Update::Light(_) => counts.light += 1,
             }
             if c.state != old_state
                 || (c.release_factor - old_release).abs() > params.release_tolerance
@@ -297,6 +416,53 @@ pub fn iterate(
                 structural = true;
             } else if law.tan_phi != 0.0 && params.anderson_depth > 0 {
                 anderson.note(k, c.state, n_in, c.normal_force.max(0.0));
+            }
+        }
+        if interfaces {
+            // The loads the solve gave, then the pending light changes against them: a light
+            // corner of a loaded interface (a pivot's partner) asks for its solve after all.
+            for (c, &i) in contacts.iter().zip(&scratch.interface) {
+                let load = &mut scratch.interface_load[i];
+                *load = load.max(c.normal_force);
+            }
+            for &(k, change) in &scratch.light {
+                let c = &contacts[k];
+                let scale = force_scale(block_force, c, dofs);
+                if scratch.interface_load[scratch.interface[k]] <= params.light_load * scale {
+                    counts.light += 1;
+                } else if params.settle_tolerance > 0.0
+                    && it >= params.settle_after
+                    && change.force <= params.settle_tolerance * scale
+                {
+                    // As in `update_state`: the settle rule still applies.
+                    counts.settled += 1;
+                } else {
+                    counts.record(
+                        change.kind,
+                        change.head,
+                        it,
+                        it == params.max_iterations,
+                        change.force,
+                    );
+                    changed += 1;
+                    last_changed = Some(k);
+                }
+            }
+        }
+        if changed == 0 && !scratch.held.is_empty() {
+            // The end check of the flip freeze: the rest has converged; a held contact that
+            // still wants its change takes it, is free from now on, and asks for a solve.
+            for &k in &scratch.held {
+                let c = &mut contacts[k];
+                let scale = force_scale(block_force, c, dofs);
+                scratch.checked[k] = true;
+                update_state(
+                    c, &laws[k], springs, x, dofs, prescribed, params, it, scale, counts,
+                );
+                counts.freeze_checks += 1;
+                changed += 1;
+                structural = true;
+                last_changed = Some(k);
             }
         }
         if changed == 0 {
@@ -319,6 +485,38 @@ pub fn iterate(
         iterations: params.max_iterations,
         contact: last_changed,
     })
+}
+
+/// Whether a contact's state changed in the sense of a flip: open ⇄ closed, stick ⇄ slip, or
+/// a slip reversal.
+fn state_changed(old: ContactState, new: ContactState) -> bool {
+    match (old, new) {
+        (ContactState::Sliding { dir: a }, ContactState::Sliding { dir: b }) => a != b,
+        _ => std::mem::discriminant(&old) != std::mem::discriminant(&new),
+    }
+}
+
+/// Number the interfaces (unordered block pairs) of `contacts`: `interface[k]` is contact k's.
+fn group_interfaces(
+    contacts: &[Contact],
+    pairs: &mut Vec<(usize, usize, usize)>,
+    interface: &mut Vec<usize>,
+) {
+    pairs.clear();
+    pairs.extend(contacts.iter().enumerate().map(|(k, c)| {
+        let (a, b) = (c.vertex_block, c.edge_block);
+        (a.min(b), a.max(b), k)
+    }));
+    pairs.sort_unstable();
+    interface.clear();
+    interface.resize(contacts.len(), 0);
+    let mut id = 0;
+    for (n, &(a, b, k)) in pairs.iter().enumerate() {
+        if n > 0 && (pairs[n - 1].0, pairs[n - 1].1) != (a, b) {
+            id += 1;
+        }
+        interface[k] = id;
+    }
 }
 
 /// Record `force` (N) as acting on both blocks of `c`.
@@ -353,7 +551,7 @@ fn update_state(
     iteration: usize,
     floor_scale: f64,
     counts: &mut ChangeCounts,
-) -> bool {
+) -> Update {
     let floor = params.force_tolerance * floor_scale;
     let friction_tol = params.friction_tolerance;
     let h = params.hysteresis;
@@ -476,7 +674,7 @@ fn update_state(
         c.friction_secant = None;
     }
     if !(changed || friction_moved || release_moved) {
-        return false;
+        return Update::Quiet;
     }
     {
         let head = c.n.y.abs() < std::f64::consts::FRAC_1_SQRT_2;
@@ -509,7 +707,7 @@ fn update_state(
         let light = c.normal_force.max(old_friction_normal) <= params.light_load * floor_scale;
         if params.force_tolerance > 0.0 && kind == 5 && light && force <= floor && !release_moved {
             // Taken, but too small to need another solve.
-            return false;
+            return Update::Quiet;
         }
         // A state change of a contact that carries almost none of its stones' load, misjudging
         // a force below the same floor: the head joints of a shaken wall, which otherwise ask
@@ -519,14 +717,14 @@ fn update_state(
             .max(old_friction_normal)
             <= params.light_load * floor_scale;
         if params.light_state_changes
+            && c.n.y.abs() <= params.light_state_tilt.sin() + 1e-12
             && params.force_tolerance > 0.0
             && kind <= 4
             && light_before_after
             && force <= floor
             && !release_moved
         {
-            counts.light += 1;
-            return false;
+            return Update::Light(LightChange { kind, head, force });
         }
         if params.settle_tolerance > 0.0
             && iteration >= params.settle_after
@@ -535,7 +733,7 @@ fn update_state(
         {
             // Settle rule: taken, and too small to hold the step back any longer.
             counts.settled += 1;
-            return false;
+            return Update::Quiet;
         }
         counts.record(
             kind,
@@ -545,7 +743,7 @@ fn update_state(
             force,
         );
     }
-    true
+    Update::Changed
 }
 
 /// A joint that can carry no shear force at any normal force (no friction, no intact

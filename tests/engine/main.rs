@@ -17,6 +17,7 @@ mod failure_modes;
 mod foundation;
 mod incline;
 mod invariants;
+mod light_state_rocking;
 mod multiblock_references;
 mod records_housner;
 mod restitution;
