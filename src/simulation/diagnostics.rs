@@ -49,7 +49,7 @@ impl Simulation {
     pub(super) fn solve_failed(&self, error: SolveError) -> SimError {
         let dof = match error {
             SolveError::NotPositiveDefinite { dof } | SolveError::NonFinite { dof } => dof,
-            SolveError::Backend(_) => 0,
+            SolveError::Backend(_) | SolveError::NoSymbolic => 0,
         };
         SimError::Solve {
             time: self.state.time,

@@ -19,8 +19,13 @@ pub enum SolveError {
     NotPositiveDefinite { dof: usize },
     #[error("non-finite value in the system at unknown {dof}")]
     NonFinite { dof: usize },
+    /// faer's own error (its error types print only with `Debug`).
     #[error("sparse factorization failed: {0}")]
     Backend(String),
+    /// A numeric factorization or solve was asked for before the symbolic one (a defect of
+    /// the call order: `factorize` makes it).
+    #[error("sparse factorization failed: symbolic factorization missing")]
+    NoSymbolic,
 }
 
 /// Tuning of the linear solver.

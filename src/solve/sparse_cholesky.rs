@@ -212,7 +212,7 @@ impl SparseCholesky {
         }
         self.factorize(sys, dofs)?;
         let (Some(symbolic), Some(mem)) = (self.symbolic.as_ref(), self.mem.as_mut()) else {
-            return Err(SolveError::Backend("symbolic factorization missing".into()));
+            return Err(SolveError::NoSymbolic);
         };
         let llt = LltRef::new(symbolic, &self.l_values);
         let rhs = faer::MatMut::from_column_major_slice_mut(x, self.n, 1);
@@ -274,7 +274,7 @@ impl SparseCholesky {
         );
         self.factorize(sys, dofs)?;
         let (Some(symbolic), Some(mem)) = (self.symbolic.as_ref(), self.mem.as_mut()) else {
-            return Err(SolveError::Backend("symbolic factorization missing".into()));
+            return Err(SolveError::NoSymbolic);
         };
         let llt = LltRef::new(symbolic, &self.l_values);
         let rhs = faer::MatMut::from_column_major_slice_mut(fresh, self.n, 1);
@@ -294,7 +294,7 @@ impl SparseCholesky {
     /// Numeric factorization of the current values into `l_values`.
     fn factorize(&mut self, sys: &BlockSystem, dofs: &Dofs) -> Result<(), SolveError> {
         let (Some(symbolic), Some(mem)) = (self.symbolic.as_ref(), self.mem.as_mut()) else {
-            return Err(SolveError::Backend("symbolic factorization missing".into()));
+            return Err(SolveError::NoSymbolic);
         };
         let n = self.n;
         let a = SparseColMatRef::new(

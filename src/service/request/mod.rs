@@ -263,8 +263,12 @@ pub fn parse_criteria(
 }
 
 /// Shape checks before any work: a `base_acceleration` excitation takes no other field (the
-/// scene reader leaves that out), and the motion reads as a [`crate::motion::MotionSpec`].
-pub(super) fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), RequestError> {
+/// scene reader leaves that out), and the motion reads as a [`crate::motion::MotionSpec`],
+/// which is returned (`None`: no motion) so that it is built without being parsed again.
+pub(super) fn check_shapes(
+    scene: &Value,
+    motion: Option<&Value>,
+) -> Result<Option<crate::motion::MotionSpec>, RequestError> {
     if let Some(ex) = scene.get("excitation").and_then(Value::as_object) {
         let allowed: &[&str] = match ex.get("type").and_then(Value::as_str) {
             Some("driven_block") => &["type", "block"],
@@ -285,8 +289,9 @@ pub(super) fn check_shapes(scene: &Value, motion: Option<&Value>) -> Result<(), 
                 return Err(motion_error(e));
             }
         }
+        return Ok(Some(spec));
     }
-    Ok(())
+    Ok(None)
 }
 
 /// Sizes checked on the raw JSON, before any work proportional to them: vertices per block,
@@ -347,7 +352,7 @@ pub(super) fn scene_and_motion(
     motion: Option<&Value>,
     limits: &Limits,
 ) -> Result<(Scene, GroundMotion), RequestError> {
-    check_shapes(scene, motion)?;
+    let spec = check_shapes(scene, motion)?;
     check_sizes(scene, motion, limits)?;
     super::budget::check_ranges(scene)?;
     if let Some(m) = motion {
@@ -368,9 +373,11 @@ pub(super) fn scene_and_motion(
     })?;
     // A forced reduced model the scene cannot take is refused now, not failed later by a worker.
     crate::analysis::run::choose_model(&scene, &Default::default()).map_err(RequestError::Model)?;
-    let motion = match motion {
-        None | Some(Value::Null) => GroundMotion::none(),
-        Some(v) => crate::motion::from_json(v).map_err(motion_error)?,
+    let motion = match spec {
+        None => GroundMotion::none(),
+        Some(spec) => spec
+            .build(&crate::motion::ProcessParams::default())
+            .map_err(motion_error)?,
     };
     let samples = signal_samples(&motion.horizontal) + signal_samples(&motion.vertical);
     if samples > limits.max_record_samples {
