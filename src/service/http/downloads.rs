@@ -125,24 +125,7 @@ pub(super) async fn get_histories(
             blocks.push(v.clone());
         }
     }
-    let j = load(&s, &access, id, JobKind::Run).await?;
-    artifact_available(&j, "histories")?;
-    ensure_local(&s.core, id, "histories.csv").await;
-    let path = s.core.job_dir(id).join("histories.csv");
-    let file = match tokio::fs::File::open(&path).await {
-        Ok(f) => f,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            return Err(ApiError::conflict(
-                "the job finished without recording histories",
-            ));
-        }
-        Err(e) => return Err(ApiError::internal(format!("{}: {e}", path.display()))),
-    };
-    let size = file
-        .metadata()
-        .await
-        .map_err(|e| ApiError::internal(format!("{}: {e}", path.display())))?
-        .len();
+    let (file, size, path) = open_artifact(&s, &access, id, Artifact::HISTORIES).await?;
     let mut reader = tokio::io::BufReader::with_capacity(CHUNK, file);
     let mut header = String::new();
     reader
@@ -505,24 +488,7 @@ pub(super) async fn get_trajectory(
     headers: HeaderMap,
 ) -> ApiResult {
     let id = parse_id(id)?;
-    let j = load(&s, &access, id, JobKind::Run).await?;
-    artifact_available(&j, "trajectory")?;
-    ensure_local(&s.core, id, "trajectory.mcap").await;
-    let path = s.core.job_dir(id).join("trajectory.mcap");
-    let file = match tokio::fs::File::open(&path).await {
-        Ok(f) => f,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            return Err(ApiError::conflict(
-                "the job finished without recording a trajectory",
-            ));
-        }
-        Err(e) => return Err(ApiError::internal(format!("{}: {e}", path.display()))),
-    };
-    let len = file
-        .metadata()
-        .await
-        .map_err(|e| ApiError::internal(format!("{}: {e}", path.display())))?
-        .len();
+    let (file, len, _) = open_artifact(&s, &access, id, Artifact::TRAJECTORY).await?;
     let range = parse_range(
         headers.get(header::RANGE).and_then(|v| v.to_str().ok()),
         len,
@@ -564,6 +530,54 @@ pub(super) async fn get_trajectory(
         HeaderValue::from_static("attachment; filename=\"trajectory.mcap\""),
     );
     Ok(resp)
+}
+
+/// A run's downloadable file: its name in the job's folder, the word `artifact_available`
+/// uses, and the 409 detail when the job finished without it.
+struct Artifact {
+    file: &'static str,
+    what: &'static str,
+    missing: &'static str,
+}
+
+impl Artifact {
+    const HISTORIES: Artifact = Artifact {
+        file: "histories.csv",
+        what: "histories",
+        missing: "the job finished without recording histories",
+    };
+    const TRAJECTORY: Artifact = Artifact {
+        file: "trajectory.mcap",
+        what: "trajectory",
+        missing: "the job finished without recording a trajectory",
+    };
+}
+
+/// The run `id`'s file `a`, open, with its length and path: checked against the caller's access and the
+/// job's status, fetched from the shared artifact store first when another process ran it.
+async fn open_artifact(
+    s: &AppState,
+    access: &Access,
+    id: Uuid,
+    a: Artifact,
+) -> Result<(tokio::fs::File, u64, std::path::PathBuf), ApiError> {
+    let j = load(s, access, id, JobKind::Run).await?;
+    artifact_available(&j, a.what)?;
+    ensure_local(&s.core, id, a.file).await;
+    let path = s.core.job_dir(id).join(a.file);
+    let file = match tokio::fs::File::open(&path).await {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(ApiError::conflict(a.missing));
+        }
+        Err(e) => return Err(ApiError::internal(format!("{}: {e}", path.display()))),
+    };
+    let len = file
+        .metadata()
+        .await
+        .map_err(|e| ApiError::internal(format!("{}: {e}", path.display())))?
+        .len();
+    Ok((file, len, path))
 }
 
 /// Make sure the job's artifact `name` is in its local directory, fetched from the shared
