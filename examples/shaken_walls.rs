@@ -11,7 +11,7 @@
 //!  [--motions rest,sine,record] [--diag] [--tight] [--block-model rigid|deformable] [--poisson V]
 //!  [--anderson DEPTH] [--anderson-restart] [--legacy] [--reference] [--record-start T]
 //!  [--seconds S] [--settle TOL] [--settle-after K] [--light-states on|off] [--light-tilt DEG]
-//!  [--light-interface on|off] [--freeze K] [--freeze-hold]`
+//!  [--light-interface on|off]`
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
 //! fixed-point loop); `--anderson-restart` restarts its history whenever a contact changes state.
@@ -200,13 +200,6 @@ fn main() {
             if let Some(v) = arg("--light-interface") {
                 params.open_close.light_state_interface = v == "on";
             }
-            // `--freeze K`: the flip freeze after K state changes of a contact in a step (§12).
-            if let Some(v) = arg("--freeze") {
-                params.open_close.freeze_after = v.parse().expect("--freeze");
-            }
-            if std::env::args().any(|a| a == "--freeze-hold") {
-                params.open_close.freeze_hold = true;
-            }
             if let Some(v) = arg("--friction-tol") {
                 params.open_close.friction_tolerance = v.parse().expect("--friction-tol");
             }
@@ -288,8 +281,8 @@ fn main() {
                     );
                 }
                 eprintln!(
-                    "  last iteration by force decade (1e-3.. N): {:?}; settled {}; light state changes taken {}; frozen {}, freeze checks {}",
-                    ch.last_force, ch.settled, ch.light, ch.frozen, ch.freeze_checks
+                    "  last iteration by force decade (1e-3.. N): {:?}; settled {}; light state changes taken {}",
+                    ch.last_force, ch.settled, ch.light
                 );
                 eprintln!("  changes by force decade (1e-3.. N): {:?}", ch.by_force);
             }

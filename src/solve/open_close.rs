@@ -121,17 +121,6 @@ pub struct OpenCloseParams {
     /// on: without it the bundled colonnade collapses under Friuli 0.3 g; with it the rule
     /// takes the same changes on the shaken walls (head joints carry nothing at either corner).
     pub light_state_interface: bool,
-    /// Flip freeze: a contact that has changed state this many times within the step's loop is
-    /// held at its last state (its further state changes neither apply nor ask for a solve)
-    /// until the rest of the loop converges; then each held contact is checked once against
-    /// that solution, and if it still wants to change, the change is taken and the loop goes
-    /// on with that contact free (up to `max_flips`). 0 = off. Default 0 (opt-in): measured in
-    /// docs/contact-solve.md §12.
-    pub freeze_after: u32,
-    /// After the flip freeze's end check, hold a contact that took its change at its new state
-    /// for the rest of the step (its later changes are taken into the next step) instead of
-    /// setting it free. Off (measured in docs/contact-solve.md §12).
-    pub freeze_hold: bool,
 }
 
 impl Default for OpenCloseParams {
@@ -153,8 +142,6 @@ impl Default for OpenCloseParams {
             light_state_changes: true,
             light_state_tilt: std::f64::consts::FRAC_PI_4,
             light_state_interface: true,
-            freeze_after: 0,
-            freeze_hold: false,
         }
     }
 }
@@ -182,10 +169,6 @@ pub struct ChangeCounts {
     pub settled: u64,
     /// State changes of lightly loaded contacts let through (`OpenCloseParams::light_state_changes`).
     pub light: u64,
-    /// State changes held by the flip freeze (`OpenCloseParams::freeze_after`), and held
-    /// contacts that still wanted their change at the end check (each asks for one solve).
-    pub frozen: u64,
-    pub freeze_checks: u64,
 }
 
 /// Names of the kinds of [`ChangeCounts::by_kind`].
@@ -279,10 +262,6 @@ pub struct OpenCloseScratch {
     light: Vec<(usize, LightChange)>,
     /// Scratch for grouping contacts by interface.
     pairs: Vec<(usize, usize, usize)>,
-    /// Flip freeze: contacts already checked at the end this step (free again), and the
-    /// contacts whose change was held in the current iteration.
-    checked: Vec<bool>,
-    held: Vec<usize>,
 }
 
 /// A state change that `OpenCloseParams::light_state_changes` may let through, pending the
@@ -359,8 +338,6 @@ pub fn iterate(
             *load = load.max(c.start_normal_force);
         }
     }
-    scratch.checked.clear();
-    scratch.checked.resize(contacts.len(), false);
     for it in 1..=params.max_iterations {
         sys.reset_to_blocks();
         add_contacts(sys, dofs, contacts, laws, springs, prescribed);
@@ -371,7 +348,6 @@ pub fn iterate(
         let mut structural = false;
         anderson.begin();
         scratch.light.clear();
-        scratch.held.clear();
         for (k, (c, law)) in contacts.iter_mut().zip(laws).enumerate() {
             let scale = force_scale(block_force, c, dofs);
             let (old_state, n_in, old_release) = (c.state, c.friction_normal, c.release_factor);
@@ -382,25 +358,9 @@ pub fn iterate(
                     *load = load.max(c.normal_force);
                 }
             }
-            // Flip freeze: keep what the contact was, to restore it if it changes state again.
-            let frozen = (params.freeze_after > 0
-                && c.flips >= params.freeze_after
-                && (!scratch.checked[k] || params.freeze_hold))
-                .then(|| (c.clone(), *counts));
             let update = update_state(
                 c, law, springs, x, dofs, prescribed, params, it, scale, counts,
             );
-            if let Some((held, counted)) = frozen {
-                if state_changed(held.state, c.state) {
-                    *c = held;
-                    *counts = counted;
-                    counts.frozen += 1;
-                    if !scratch.checked[k] {
-                        scratch.held.push(k);
-                    }
-                    continue;
-                }
-            }
             match update {
                 Update::Quiet => {}
                 Update::Changed => {
@@ -449,22 +409,6 @@ pub fn iterate(
                 }
             }
         }
-        if changed == 0 && !scratch.held.is_empty() {
-            // The end check of the flip freeze: the rest has converged; a held contact that
-            // still wants its change takes it, is free from now on, and asks for a solve.
-            for &k in &scratch.held {
-                let c = &mut contacts[k];
-                let scale = force_scale(block_force, c, dofs);
-                scratch.checked[k] = true;
-                update_state(
-                    c, &laws[k], springs, x, dofs, prescribed, params, it, scale, counts,
-                );
-                counts.freeze_checks += 1;
-                changed += 1;
-                structural = true;
-                last_changed = Some(k);
-            }
-        }
         if changed == 0 {
             return Ok(OpenClose::Converged { iterations: it });
         }
@@ -485,15 +429,6 @@ pub fn iterate(
         iterations: params.max_iterations,
         contact: last_changed,
     })
-}
-
-/// Whether a contact's state changed in the sense of a flip: open ⇄ closed, stick ⇄ slip, or
-/// a slip reversal.
-fn state_changed(old: ContactState, new: ContactState) -> bool {
-    match (old, new) {
-        (ContactState::Sliding { dir: a }, ContactState::Sliding { dir: b }) => a != b,
-        _ => std::mem::discriminant(&old) != std::mem::discriminant(&new),
-    }
 }
 
 /// Number the interfaces (unordered block pairs) of `contacts`: `interface[k]` is contact k's.
