@@ -154,17 +154,11 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, RequestError> 
         max - min,
         tolerance,
     );
-    // The longest record sets the length of every run (a scene's own duration overrides it).
-    let duration = scene.control.duration.unwrap_or_else(|| {
-        records
-            .iter()
-            .map(|(_, m)| m)
-            .chain(std::iter::once(&motion))
-            .filter_map(|m| m.duration().map(|d| d + 2.0))
-            .fold(0.0, f64::max)
-    });
-    let steps = (duration / scene.control.time_step).ceil();
-    crate::service::request::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
+    let motions = records
+        .iter()
+        .map(|(_, m)| m)
+        .chain(std::iter::once(&motion));
+    check_records_work(&scene, motions, runs, limits)?;
     let request = PgaRequest {
         criteria,
         combine,
@@ -173,17 +167,7 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, RequestError> 
         tolerance,
         scan_points,
     };
-    let mut motion_summary = motion_summary(&motion);
-    if let (false, Some(obj)) = (records.is_empty(), motion_summary.as_object_mut()) {
-        // The first record's summary, and every record's name and intensity.
-        let list: Vec<Value> = records
-            .iter()
-            .map(|(name, m)| {
-                serde_json::json!({"name": name, "pga": m.pga(), "duration": m.duration(), "provenance": m.provenance})
-            })
-            .collect();
-        obj.insert("records".into(), Value::Array(list));
-    }
+    let motion_summary = summary_with_records(&motion, &records);
     let joined = texts.join(",");
     let criterion = match combine {
         Combine::Any if texts.len() > 1 => format!("any({joined})"),
@@ -200,6 +184,40 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, RequestError> 
         },
         motion_summary,
     })
+}
+
+/// The work budget of a search over `motions` (`runs` runs): the longest record sets the length
+/// of every run (a scene's own duration overrides it, as in `analysis::run::duration`).
+pub(super) fn check_records_work<'a>(
+    scene: &Scene,
+    motions: impl Iterator<Item = &'a GroundMotion>,
+    runs: f64,
+    limits: &Limits,
+) -> Result<(), RequestError> {
+    let duration = motions
+        .filter_map(|m| crate::analysis::run::duration(scene, m).ok())
+        .fold(scene.control.duration.unwrap_or(0.0), f64::max);
+    let steps = (duration / scene.control.time_step).ceil();
+    crate::service::request::budget::check_search_work(runs, scene.blocks.len(), steps, limits)
+}
+
+/// The summary of `motion` (a search's first record) with every record's name and intensity
+/// beside it (`records`, when there are any).
+pub(super) fn summary_with_records(
+    motion: &GroundMotion,
+    records: &[(String, GroundMotion)],
+) -> Value {
+    let mut summary = motion_summary(motion);
+    if let (false, Some(obj)) = (records.is_empty(), summary.as_object_mut()) {
+        let list: Vec<Value> = records
+            .iter()
+            .map(|(name, m)| {
+                serde_json::json!({"name": name, "pga": m.pga(), "duration": m.duration(), "provenance": m.provenance})
+            })
+            .collect();
+        obj.insert("records".into(), Value::Array(list));
+    }
+    summary
 }
 
 /// The searched range of a request (`range`, `tolerance`, `scan_points`), amplitudes in m/s²:

@@ -1,7 +1,9 @@
 //! Request bodies: `POST /v1/site-analyses`, observations (each a criterion) × records.
-use super::pga::{parse_records, search_range, RangeSpec};
+use super::pga::{
+    check_records_work, parse_records, search_range, summary_with_records, RangeSpec,
+};
 use super::RequestError;
-use super::{motion_summary, parse_criteria, typed, JobInput, Limits, Parsed};
+use super::{parse_criteria, typed, JobInput, Limits, Parsed};
 use crate::analysis::pga::{Combine, PgaRequest};
 use crate::motion::Amplitude;
 use serde::Deserialize;
@@ -76,25 +78,9 @@ pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, RequestError>
             max - min,
             tolerance,
         );
-    let duration = scene.control.duration.unwrap_or_else(|| {
-        records
-            .iter()
-            .filter_map(|(_, m)| m.duration().map(|d| d + 2.0))
-            .fold(0.0, f64::max)
-    });
-    let steps = (duration / scene.control.time_step).ceil();
-    crate::service::request::budget::check_search_work(runs, scene.blocks.len(), steps, limits)?;
+    check_records_work(&scene, records.iter().map(|(_, m)| m), runs, limits)?;
     let motion = records[0].1.clone();
-    let mut motion_summary = motion_summary(&motion);
-    if let Some(obj) = motion_summary.as_object_mut() {
-        let list: Vec<Value> = records
-            .iter()
-            .map(|(name, m)| {
-                serde_json::json!({"name": name, "pga": m.pga(), "duration": m.duration(), "provenance": m.provenance})
-            })
-            .collect();
-        obj.insert("records".into(), Value::Array(list));
-    }
+    let motion_summary = summary_with_records(&motion, &records);
     Ok(Parsed {
         input: JobInput::SiteAnalysis {
             scene,
