@@ -102,11 +102,7 @@ fn fake_run(
         "fake:panic" => panic!("fake panic requested by the scene name"),
         _ => {}
     }
-    let duration = scene
-        .control
-        .duration
-        .or_else(|| motion.duration().map(|d| d + 2.0))
-        .unwrap_or(1.0);
+    let duration = crate::analysis::run::duration(scene, motion).unwrap_or(1.0);
     let dt = scene.control.output_interval;
     let frames = (duration / dt).round().max(1.0) as usize;
     let free: Vec<&str> = scene

@@ -361,11 +361,7 @@ pub async fn job_ground(
     let j = load(&s, &access, parse_id(id)?, JobKind::Run).await?;
     let body = blocking(move || {
         let (scene, motion) = stored_input(&j)?;
-        let duration = scene
-            .control
-            .duration
-            .or_else(|| motion.duration().map(|d| d + 2.0))
-            .unwrap_or(0.0);
+        let duration = crate::analysis::run::duration(&scene, &motion).unwrap_or(0.0);
         // No more points than the record has samples over the run (no invented detail).
         let native = match &motion.horizontal {
             Signal::Sampled(x) if x.dt > 0.0 => (duration / x.dt).ceil() as usize,

@@ -386,11 +386,8 @@ pub(super) fn scene_and_motion(
             limit: limits.max_record_samples,
         });
     }
-    let duration = scene
-        .control
-        .duration
-        .or_else(|| motion.duration().map(|d| d + 2.0))
-        .ok_or(RequestError::NoDuration)?;
+    let duration =
+        crate::analysis::run::duration(&scene, &motion).map_err(|_| RequestError::NoDuration)?;
     let steps = (duration / scene.control.time_step).ceil();
     if steps.is_nan() || steps > limits.max_total_steps as f64 {
         return Err(RequestError::Steps {
