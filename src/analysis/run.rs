@@ -156,6 +156,29 @@ impl Default for FailureParams {
     }
 }
 
+impl FailureParams {
+    /// What a free block is drawn as in a frame: toppled past `toppled_rotation` (rad, from
+    /// its place in the scene), else rocking above `rocking_speed` (rad/s), else sliding if its
+    /// model says so, else at rest. One rule for the engine's, the reduced model's and a
+    /// handed-over run's frames.
+    pub fn motion_state(
+        &self,
+        rotation: f64,
+        angular_velocity: f64,
+        sliding: bool,
+    ) -> BlockMotionState {
+        if rotation.abs() > self.toppled_rotation {
+            BlockMotionState::Toppled
+        } else if angular_velocity.abs() > self.rocking_speed {
+            BlockMotionState::Rocking
+        } else if sliding {
+            BlockMotionState::Sliding
+        } else {
+            BlockMotionState::AtRest
+        }
+    }
+}
+
 /// Running per-block extremes, updated after every step.
 #[derive(Debug, Clone, Default)]
 pub struct Tracker {
@@ -598,14 +621,8 @@ fn frame(sim: &Simulation, failure: &FailureParams) -> Frame {
             let v = sim.block_velocity(b);
             let state = if sim.mobility()[b] != Mobility::Free {
                 BlockMotionState::AtRest
-            } else if g.rotation.abs() > failure.toppled_rotation {
-                BlockMotionState::Toppled
-            } else if v[2].abs() > failure.rocking_speed {
-                BlockMotionState::Rocking
-            } else if sliding[b] {
-                BlockMotionState::Sliding
             } else {
-                BlockMotionState::AtRest
+                failure.motion_state(g.rotation, v[2], sliding[b])
             };
             BlockFrame {
                 x: d.x,

@@ -160,15 +160,13 @@ fn from_scene_start(
         b.x += r.displacement.x;
         b.y += r.displacement.y;
         b.rotation += r.rotation;
-        b.state = if b.rotation.abs() > failure.toppled_rotation {
-            BlockMotionState::Toppled
-        } else if b.state != BlockMotionState::Toppled {
-            b.state
-        } else if b.angular_velocity.abs() > failure.rocking_speed {
-            BlockMotionState::Rocking
-        } else {
-            BlockMotionState::AtRest
-        };
+        // The engine judged toppling from t₀'s pose; the rule is re-applied to the rotation
+        // from the scene's (sliding as the engine saw it).
+        b.state = failure.motion_state(
+            b.rotation,
+            b.angular_velocity,
+            b.state == BlockMotionState::Sliding,
+        );
     }
     let gs = motion.state(f.time);
     f.ground = GroundFrame {

@@ -115,15 +115,11 @@ fn frame(scene: &Scene, m: &Reduced, now: &BlockNow, failure: &FailureParams) ->
     let blocks = (0..scene.blocks.len())
         .map(|i| {
             if i == b.free {
-                let state = if now.rotation.abs() > failure.toppled_rotation {
-                    BlockMotionState::Toppled
-                } else if now.omega.abs() > failure.rocking_speed {
-                    BlockMotionState::Rocking
-                } else if matches!(m.phase, Phase::Sliding { .. }) {
-                    BlockMotionState::Sliding
-                } else {
-                    BlockMotionState::AtRest
-                };
+                let state = failure.motion_state(
+                    now.rotation,
+                    now.omega,
+                    matches!(m.phase, Phase::Sliding { .. }),
+                );
                 BlockFrame {
                     x: now.d.x,
                     y: now.d.y,
