@@ -15,7 +15,7 @@
 //!   has safe regions), but the runs of a bisection cluster at the threshold.
 //!
 //! Units: PGA in m/s² throughout; β is dimensionless (a standard deviation of ln PGA).
-use crate::plot;
+use crate::plot::{self, Anchor};
 use serde::{Deserialize, Serialize};
 
 /// One outcome: a run at `pga` (m/s²) met the criterion or not.
@@ -431,21 +431,25 @@ pub fn svg(f: &Fragility, capacities: &[(String, Capacity)], title: &str) -> Str
     let px = |x: f64| l + (w - l - r) * x / xmax;
     let py = |p: f64| t + (h - t - b) * (1.0 - p);
     let mut s = plot::document(w, h, 12.0, true);
-    s.push_str(&format!("<title>{}</title>\n", plot::escape(title)));
-    s.push_str(&format!(
-        "<text x=\"{}\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">{}</text>\n",
+    s.push_str(&plot::title(title));
+    s.push_str(&plot::text(
         w / 2.0,
-        plot::escape(title)
+        22.0,
+        Anchor::Middle,
+        &plot::attr("font-size", 14),
+        title,
     ));
     // Axes and grid.
     let mut k = 0.0;
     while k <= xmax + 1e-9 * xmax {
         let x = px(k);
         s.push_str(&plot::grid_line(x, py(0.0), x, py(1.0)));
-        s.push_str(&format!(
-            "<text x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{}</text>\n",
-            py(0.0) + 16.0,
-            trim(k)
+        s.push_str(&plot::text(
+            plot::tenth(x),
+            plot::tenth(py(0.0) + 16.0),
+            Anchor::Middle,
+            "",
+            &trim(k),
         ));
         k += step;
     }
@@ -453,22 +457,27 @@ pub fn svg(f: &Fragility, capacities: &[(String, Capacity)], title: &str) -> Str
         let p = i as f64 / 5.0;
         let y = py(p);
         s.push_str(&plot::grid_line(l, y, w - r, y));
-        s.push_str(&format!(
-            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>\n",
-            l - 6.0,
-            y + 4.0,
-            trim(p)
+        s.push_str(&plot::text(
+            plot::tenth(l - 6.0),
+            plot::tenth(y + 4.0),
+            Anchor::End,
+            "",
+            &trim(p),
         ));
     }
     s.push_str(&plot::frame(l, t, w - l - r, h - t - b));
-    s.push_str(&format!(
-        "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">Peak ground acceleration, PGA (m/s²)</text>\n",
-        l + (w - l - r) / 2.0,
-        h - 18.0
+    s.push_str(&plot::text(
+        plot::tenth(l + (w - l - r) / 2.0),
+        plot::tenth(h - 18.0),
+        Anchor::Middle,
+        "",
+        "Peak ground acceleration, PGA (m/s²)",
     ));
-    s.push_str(&format!(
-        "<text transform=\"translate(18 {:.1}) rotate(-90)\" text-anchor=\"middle\">Probability of failure (–)</text>\n",
-        t + (h - t - b) / 2.0
+    s.push_str(&plot::axis_title(
+        18.0,
+        plot::tenth(t + (h - t - b) / 2.0),
+        -90.0,
+        "Probability of failure (–)",
     ));
     // Curve.
     let pts: Vec<(f64, f64)> = (0..=200)
@@ -485,12 +494,14 @@ pub fn svg(f: &Fragility, capacities: &[(String, Capacity)], title: &str) -> Str
         } else {
             (0.0, "#27ae60")
         };
-        s.push_str(&format!(
-            "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"3\" fill=\"{colour}\" fill-opacity=\"0.5\"><title>{} m/s²: {}</title></circle>\n",
-            px(pt.pga),
-            py(y),
-            trim(pt.pga),
-            if pt.failed { "failed" } else { "stood" }
+        let outcome = if pt.failed { "failed" } else { "stood" };
+        s.push_str(&plot::circle(
+            plot::tenth(px(pt.pga)),
+            plot::tenth(py(y)),
+            3.0,
+            colour,
+            &plot::attr("fill-opacity", 0.5),
+            Some(&format!("{} m/s²: {outcome}", trim(pt.pga))),
         ));
     }
     // Record capacities at their empirical probabilities.
@@ -505,26 +516,36 @@ pub fn svg(f: &Fragility, capacities: &[(String, Capacity)], title: &str) -> Str
     mids.sort_by(|a, b| a.0.total_cmp(&b.0));
     let n = capacities.len() as f64;
     for (i, (x, name)) in mids.iter().enumerate() {
-        s.push_str(&format!(
-            "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"7\" height=\"7\" fill=\"black\"><title>{}: capacity {} m/s²</title></rect>\n",
-            px(*x) - 3.5,
-            py((i + 1) as f64 / (n + 1.0)) - 3.5,
-            plot::escape(name),
-            trim(*x)
+        s.push_str(&plot::rect(
+            plot::tenth(px(*x) - 3.5),
+            plot::tenth(py((i + 1) as f64 / (n + 1.0)) - 3.5),
+            7.0,
+            7.0,
+            "black",
+            "",
+            Some(&format!("{name}: capacity {} m/s²", trim(*x))),
         ));
     }
     // Legend.
     let lx = l + 12.0;
-    s.push_str(&format!(
-        "<text x=\"{lx}\" y=\"{:.1}\">median θ = {} m/s², β = {} ({})</text>\n",
-        t + 18.0,
-        trim(f.median),
-        trim(f.beta),
-        plot::escape(&f.method)
+    s.push_str(&plot::text(
+        lx,
+        plot::tenth(t + 18.0),
+        Anchor::Start,
+        "",
+        &format!(
+            "median θ = {} m/s², β = {} ({})",
+            trim(f.median),
+            trim(f.beta),
+            f.method
+        ),
     ));
-    s.push_str(&format!(
-        "<text x=\"{lx}\" y=\"{:.1}\" fill=\"#555\">line: fitted lognormal; squares: record capacities at i/(n+1); dots: runs (red failed, green stood)</text>\n",
-        t + 34.0
+    s.push_str(&plot::text(
+        lx,
+        plot::tenth(t + 34.0),
+        Anchor::Start,
+        &plot::attr("fill", "#555"),
+        "line: fitted lognormal; squares: record capacities at i/(n+1); dots: runs (red failed, green stood)",
     ));
     s.push_str(plot::END);
     s

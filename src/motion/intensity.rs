@@ -6,7 +6,7 @@
 //! Length (over 600 lines): about a third is unit tests (closed forms, the SVG's text boxes);
 //! the drawing's pieces are `crate::plot`'s.
 use super::{GroundMotion, Signal, Units, STANDARD_GRAVITY};
-use crate::plot;
+use crate::plot::{self, Anchor};
 use serde::{Deserialize, Serialize};
 
 /// Knobs of `report_with`. The defaults reproduce the docs/format.md §3 output.
@@ -525,11 +525,7 @@ pub fn spectrum_svg(im: &IntensityMeasures) -> String {
     let y = |a: f64| t + ph * (1.0 - a / ymax);
     let mut s = plot::document(w, h, 12.0, true);
     for ((line, size), y_line) in title.iter().zip(&baselines) {
-        s += &format!(
-            "<text class=\"title\" x=\"{}\" y=\"{y_line:.1}\" text-anchor=\"middle\" font-size=\"{size}\">{}</text>\n",
-            w / 2.0,
-            plot::escape(line)
-        );
+        s += &plot::title_line(w / 2.0, plot::tenth(*y_line), *size, line);
     }
     // Decade grid on the period axis.
     let mut dec = 10f64.powf(lo.log10().floor());
@@ -537,10 +533,12 @@ pub fn spectrum_svg(im: &IntensityMeasures) -> String {
         if dec >= lo * 0.9999 {
             let xd = x(dec);
             s += &plot::grid_line(xd, t, xd, t + ph);
-            s += &format!(
-                "<text x=\"{xd:.1}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n",
+            s += &plot::text(
+                plot::tenth(xd),
                 t + ph + 16.0,
-                fmt(dec)
+                Anchor::Middle,
+                "",
+                &fmt(dec),
             );
         }
         dec *= 10.0;
@@ -549,17 +547,14 @@ pub fn spectrum_svg(im: &IntensityMeasures) -> String {
         let a = ymax * i as f64 / 5.0;
         let yy = y(a);
         s += &plot::grid_line(l, yy, l + pw, yy);
-        s += &format!(
-            "<text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>\n",
-            l - 6.0,
-            yy + 4.0,
-            fmt(a)
-        );
-        s += &format!(
-            "<text x=\"{}\" y=\"{:.1}\">{}</text>\n",
+        let label_y = plot::tenth(yy + 4.0);
+        s += &plot::text(l - 6.0, label_y, Anchor::End, "", &fmt(a));
+        s += &plot::text(
             l + pw + 6.0,
-            yy + 4.0,
-            fmt(a / STANDARD_GRAVITY)
+            label_y,
+            Anchor::Start,
+            "",
+            &fmt(a / STANDARD_GRAVITY),
         );
     }
     s += &plot::frame(l, t, pw, ph);
@@ -570,20 +565,9 @@ pub fn spectrum_svg(im: &IntensityMeasures) -> String {
         .map(|(p, a)| (x(*p), y(*a)))
         .collect();
     s += &plot::polyline(&pts, "#c0392b", 2.0, "");
-    s += &format!(
-        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">period (s)</text>\n",
-        l + pw / 2.0,
-        h - 10.0
-    );
-    s += &format!(
-        "<text transform=\"translate(18,{}) rotate(-90)\" text-anchor=\"middle\">PSA (m/s²)</text>\n",
-        t + ph / 2.0
-    );
-    s += &format!(
-        "<text transform=\"translate({},{}) rotate(90)\" text-anchor=\"middle\">PSA (g)</text>\n",
-        w - 14.0,
-        t + ph / 2.0
-    );
+    s += &plot::text(l + pw / 2.0, h - 10.0, Anchor::Middle, "", "period (s)");
+    s += &plot::axis_title(18.0, t + ph / 2.0, -90.0, "PSA (m/s²)");
+    s += &plot::axis_title(w - 14.0, t + ph / 2.0, 90.0, "PSA (g)");
     s += plot::END;
     s
 }
@@ -645,79 +629,8 @@ mod tests {
         let im = report(&gm);
         let svg = spectrum_svg(&im);
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
-        assert_eq!(svg.matches("<polyline").count(), 1);
+        assert_eq!(plot::read::count(&svg, "polyline"), 1);
         assert!(svg.matches(',').count() >= im.spectrum.periods.len());
-    }
-
-    /// A text and its box: (text, x0, y0, x1, y1) in the SVG's user units.
-    type TextBox = (String, f64, f64, f64, f64);
-
-    /// Boxes of every `<text>` of an SVG written by `spectrum_svg`, estimated independently of
-    /// the writer's own layout: 0.7 em a character (DejaVu Sans averages 0.68 em over capitals,
-    /// less over anything else, so the estimate is conservative), a font size above the baseline
-    /// and 0.3 of it below (descenders); `rotate(±90)` about a `translate` swaps the extents.
-    /// Returns (text, x0, y0, x1, y1) and the viewBox.
-    fn svg_text_boxes(svg: &str) -> (Vec<TextBox>, [f64; 4]) {
-        let attr = |tag: &str, name: &str| -> Option<String> {
-            let key = format!(" {name}=\"");
-            let i = tag.find(&key)? + key.len();
-            Some(tag[i..i + tag[i..].find('"')?].to_string())
-        };
-        let root = &svg[..svg.find('>').expect("svg tag")];
-        let vb: Vec<f64> = attr(root, "viewBox")
-            .expect("viewBox")
-            .split_whitespace()
-            .map(|v| v.parse().expect("viewBox number"))
-            .collect();
-        let base_size: f64 = attr(root, "font-size").map_or(16.0, |v| v.parse().expect("size"));
-        let mut boxes = Vec::new();
-        for chunk in svg.split("<text").skip(1) {
-            let close = chunk.find('>').expect("text tag");
-            let tag = &chunk[..close];
-            let content = &chunk[close + 1..chunk.find("</text>").expect("</text>")];
-            let text = content
-                .replace("&lt;", "<")
-                .replace("&gt;", ">")
-                .replace("&quot;", "\"")
-                .replace("&amp;", "&");
-            let size: f64 = attr(tag, "font-size").map_or(base_size, |v| v.parse().expect("size"));
-            let width = 0.7 * size * text.chars().count() as f64;
-            let (along0, along1) = match attr(tag, "text-anchor").as_deref() {
-                Some("middle") => (-width / 2.0, width / 2.0),
-                Some("end") => (-width, 0.0),
-                _ => (0.0, width),
-            };
-            let (across0, across1) = (-size, 0.3 * size);
-            let num = |v: &str| v.trim().parse::<f64>().expect("coordinate");
-            let (x0, y0, x1, y1) = match attr(tag, "transform") {
-                None => {
-                    let (x, y) = (
-                        num(&attr(tag, "x").expect("x")),
-                        num(&attr(tag, "y").expect("y")),
-                    );
-                    (x + along0, y + across0, x + along1, y + across1)
-                }
-                Some(tr) => {
-                    let inner = |f: &str| {
-                        tr[tr.find(f).expect(f) + f.len()..]
-                            .split(')')
-                            .next()
-                            .expect("a closing parenthesis")
-                            .to_string()
-                    };
-                    let xy: Vec<f64> = inner("translate(").split(',').map(num).collect();
-                    let (x, y) = (xy[0], xy[1]);
-                    match num(&inner("rotate(")) as i64 {
-                        // rotate(-90): text runs upwards, its top faces left.
-                        -90 => (x + across0, y - along1, x + across1, y - along0),
-                        90 => (x - across1, y + along0, x - across0, y + along1),
-                        other => panic!("rotation {other} not handled"),
-                    }
-                }
-            };
-            boxes.push((text, x0, y0, x1, y1));
-        }
-        (boxes, [vb[0], vb[1], vb[0] + vb[2], vb[1] + vb[3]])
     }
 
     /// The title of `ashlar motion --svg` was one line of 14 px text centred on a 720 px wide
@@ -739,7 +652,7 @@ mod tests {
             let mut im = report(&gm);
             im.provenance = provenance.to_string();
             let svg = spectrum_svg(&im);
-            let (boxes, [vx0, vy0, vx1, vy1]) = svg_text_boxes(&svg);
+            let (boxes, [vx0, vy0, vx1, vy1]) = plot::read::text_boxes(&svg);
             let titles = svg.matches("class=\"title\"").count();
             assert!(titles >= 2, "{provenance}: {titles} title lines");
             for (text, x0, y0, x1, y1) in &boxes {

@@ -1,6 +1,6 @@
 //! The study's log–log plots, drawn with [`crate::plot`]'s pieces.
 use super::{convergence_order, dt_series, Point};
-use crate::plot::{self, escape as esc};
+use crate::plot::{self, attr, tenth, Anchor};
 
 const W: f64 = 640.0;
 const H: f64 = 420.0;
@@ -45,38 +45,52 @@ impl Axes {
     }
     fn draw(&self, title: &str, xl: &str, yl: &str) -> String {
         let mut s = plot::document(W, H, 11.0, false);
-        s += &format!(
-            "<text x=\"{}\" y=\"20\" text-anchor=\"middle\" font-size=\"14\">{title}</text>\n",
-            (W - R + L) / 2.0
+        s += &plot::text(
+            (W - R + L) / 2.0,
+            20.0,
+            Anchor::Middle,
+            &attr("font-size", 14),
+            title,
         );
         s += &plot::frame(L, T, W - L - R, H - T - B);
         for d in (self.x.0 as i32)..=(self.x.1 as i32) {
             let x = self.px(10f64.powi(d));
             s += &plot::grid_line(x, T, x, H - B);
-            s += &format!(
-                "<text x=\"{x:.1}\" y=\"{}\" text-anchor=\"middle\">1e{d}</text>\n",
-                H - B + 15.0
+            s += &plot::text(
+                tenth(x),
+                H - B + 15.0,
+                Anchor::Middle,
+                "",
+                &format!("1e{d}"),
             );
         }
         for d in (self.y.0 as i32)..=(self.y.1 as i32) {
             let y = self.py(10f64.powi(d));
             s += &plot::grid_line(L, y, W - R, y);
-            s += &format!(
-                "<text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">1e{d}</text>\n",
-                L - 5.0,
-                y + 4.0
-            );
+            s += &plot::text(L - 5.0, tenth(y + 4.0), Anchor::End, "", &format!("1e{d}"));
         }
-        s += &format!(
-            "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{xl}</text>\n",
-            (W - R + L) / 2.0,
-            H - 12.0
-        );
-        s += &format!("<text x=\"15\" y=\"{}\" text-anchor=\"middle\" transform=\"rotate(-90 15 {})\">{yl}</text>\n", (H - B + T) / 2.0, (H - B + T) / 2.0);
+        s += &plot::text((W - R + L) / 2.0, H - 12.0, Anchor::Middle, "", xl);
+        s += &plot::axis_title(15.0, (H - B + T) / 2.0, -90.0, yl);
         // The 1 % line.
         if self.y.0 <= -2.0 && self.y.1 >= -2.0 {
             let y = self.py(0.01);
-            s += &format!("<line x1=\"{L}\" y1=\"{y:.1}\" x2=\"{}\" y2=\"{y:.1}\" stroke=\"#c00\" stroke-dasharray=\"4 3\"/><text x=\"{}\" y=\"{:.1}\" fill=\"#c00\">1 %</text>\n", W - R, W - R - 25.0, y - 3.0);
+            s += &plot::beside(
+                &plot::line(
+                    L,
+                    tenth(y),
+                    W - R,
+                    tenth(y),
+                    "#c00",
+                    &attr("stroke-dasharray", "4 3"),
+                ),
+                &plot::text(
+                    W - R - 25.0,
+                    tenth(y - 3.0),
+                    Anchor::Start,
+                    &attr("fill", "#c00"),
+                    "1 %",
+                ),
+            );
         }
         s
     }
@@ -101,6 +115,14 @@ fn color(sweep: &str) -> &'static str {
         .unwrap_or("#7f7f7f")
 }
 
+/// One row of a legend right of the plot, its baseline 4 px below `y`: `marker`, then `label`.
+fn legend_row(marker: &str, y: f64, label: &str) -> String {
+    plot::beside(
+        marker,
+        &plot::text(W - R + 25.0, y + 4.0, Anchor::Start, "", label),
+    )
+}
+
 pub fn pareto(scene: &str, pts: &[&Point]) -> String {
     let ok: Vec<&Point> = pts
         .iter()
@@ -123,16 +145,24 @@ pub fn pareto(scene: &str, pts: &[&Point]) -> String {
             ax.px(p.wall_time_s.max(1e-6)),
             ax.py(p.error.unwrap_or(1.0).max(1e-12)),
         );
-        let shape = if p.setting.integrator == "trapezoidal" && p.sweep == "time_step" {
-            "rect"
+        let (fill, faded, tooltip) = (
+            color(&p.sweep),
+            attr("opacity", 0.8),
+            Some(p.label.as_str()),
+        );
+        s += &if p.setting.integrator == "trapezoidal" && p.sweep == "time_step" {
+            plot::rect(
+                tenth(x - 3.5),
+                tenth(y - 3.5),
+                7.0,
+                7.0,
+                fill,
+                &faded,
+                tooltip,
+            )
         } else {
-            "circle"
+            plot::circle(tenth(x), tenth(y), 4.0, fill, &faded, tooltip)
         };
-        if shape == "rect" {
-            s += &format!("<rect x=\"{:.1}\" y=\"{:.1}\" width=\"7\" height=\"7\" fill=\"{}\" opacity=\"0.8\"><title>{}</title></rect>\n", x - 3.5, y - 3.5, color(&p.sweep), esc(&p.label));
-        } else {
-            s += &format!("<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"4\" fill=\"{}\" opacity=\"0.8\"><title>{}</title></circle>\n", color(&p.sweep), esc(&p.label));
-        }
     }
     let front = super::pareto(&ok);
     let line: Vec<(f64, f64)> = front
@@ -147,12 +177,14 @@ pub fn pareto(scene: &str, pts: &[&Point]) -> String {
     s += &plot::polyline(&line, "black", 1.2, "");
     let mut y = T + 10.0;
     for (name, c) in COLORS.iter().take(7) {
-        s += &format!("<circle cx=\"{}\" cy=\"{y}\" r=\"4\" fill=\"{c}\"/><text x=\"{}\" y=\"{}\">{name}</text>\n", W - R + 15.0, W - R + 25.0, y + 4.0);
+        s += &legend_row(&plot::circle(W - R + 15.0, y, 4.0, c, "", None), y, name);
         y += 16.0;
     }
-    s += &format!("<rect x=\"{}\" y=\"{}\" width=\"7\" height=\"7\" fill=\"#1f77b4\"/><text x=\"{}\" y=\"{}\">trapezoidal</text>\n", W - R + 11.5, y - 3.5, W - R + 25.0, y + 4.0);
+    let square = plot::rect(W - R + 11.5, y - 3.5, 7.0, 7.0, "#1f77b4", "", None);
+    s += &legend_row(&square, y, "trapezoidal");
     y += 16.0;
-    s += &format!("<line x1=\"{}\" y1=\"{y}\" x2=\"{}\" y2=\"{y}\" stroke=\"black\"/><text x=\"{}\" y=\"{}\">Pareto front</text>\n", W - R + 8.0, W - R + 20.0, W - R + 25.0, y + 4.0);
+    let front = plot::line(W - R + 8.0, y, W - R + 20.0, y, "black", "");
+    s += &legend_row(&front, y, "Pareto front");
     s + plot::END
 }
 
@@ -172,16 +204,13 @@ pub fn convergence(scene: &str, pts: &[&Point]) -> String {
         let line: Vec<(f64, f64)> = d.iter().map(|p| (ax.px(p.0), ax.py(p.1))).collect();
         s += &plot::polyline(&line, c, 1.5, "");
         for p in d {
-            s += &format!(
-                "<circle cx=\"{:.1}\" cy=\"{:.1}\" r=\"3.5\" fill=\"{c}\"/>\n",
-                ax.px(p.0),
-                ax.py(p.1)
-            );
+            s += &plot::circle(tenth(ax.px(p.0)), tenth(ax.py(p.1)), 3.5, c, "", None);
         }
         let order = convergence_order(d, 1e-9)
             .map(|o| format!("order {o:.2}"))
             .unwrap_or_else(|| "order n/a".into());
-        s += &format!("<line x1=\"{}\" y1=\"{y}\" x2=\"{}\" y2=\"{y}\" stroke=\"{c}\" stroke-width=\"2\"/><text x=\"{}\" y=\"{}\">{name}: {order}</text>\n", W - R + 8.0, W - R + 20.0, W - R + 25.0, y + 4.0);
+        let marker = plot::line(W - R + 8.0, y, W - R + 20.0, y, c, &attr("stroke-width", 2));
+        s += &legend_row(&marker, y, &format!("{name}: {order}"));
         y += 16.0;
     }
     s + plot::END
