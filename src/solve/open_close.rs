@@ -211,6 +211,14 @@ impl OpenCloseParams {
             ..Self::default()
         }
     }
+
+    /// The settle rule (`settle_tolerance`, `settle_after`): at `iteration`, a change that
+    /// misjudges `force` (N) against the force scale `scale` (N) is taken without another solve.
+    fn settles(&self, iteration: usize, force: f64, scale: f64) -> bool {
+        self.settle_tolerance > 0.0
+            && iteration >= self.settle_after
+            && force <= self.settle_tolerance * scale
+    }
 }
 
 /// Result of one open–close loop.
@@ -390,10 +398,7 @@ pub fn iterate(
                 let scale = force_scale(block_force, c, dofs);
                 if scratch.interface_load[scratch.interface[k]] <= params.light_load * scale {
                     counts.light += 1;
-                } else if params.settle_tolerance > 0.0
-                    && it >= params.settle_after
-                    && change.force <= params.settle_tolerance * scale
-                {
+                } else if params.settles(it, change.force, scale) {
                     // As in `update_state`: the settle rule still applies.
                     counts.settled += 1;
                 } else {
@@ -661,11 +666,7 @@ fn update_state(
         {
             return Update::Light(LightChange { kind, head, force });
         }
-        if params.settle_tolerance > 0.0
-            && iteration >= params.settle_after
-            && force <= params.settle_tolerance * floor_scale
-            && !release_moved
-        {
+        if params.settles(iteration, force, floor_scale) && !release_moved {
             // Settle rule: taken, and too small to hold the step back any longer.
             counts.settled += 1;
             return Update::Quiet;
