@@ -172,6 +172,26 @@ pub fn listed_names(list: &Value) -> Vec<&str> {
         .collect()
 }
 
+/// A column of half-width `b` and half-height `h` (m) on a fixed base 4 m wide and 0.5 m deep,
+/// turned clockwise by `theta0` (rad) about its bottom-right corner (θ0 = 0: upright), as released
+/// from a tilt; `block_model` "rigid" or "deformable", the scene's `control` as given. φ = 75°:
+/// its pivot never slips (tan 75° = 3.7 ≫ the friction demand of rocking). Blocks `base`, then
+/// `column` (block 1). The rocking-impact tests: restitution, rocking impacts, the trapezoidal
+/// rule's impact regression.
+pub fn tilted_column(b: f64, h: f64, theta0: f64, block_model: &str, control: Value) -> Value {
+    let (co, si) = (theta0.cos(), theta0.sin());
+    let rot = |x: f64, y: f64| {
+        let dx = x - b;
+        [b + co * dx + si * y, -si * dx + co * y]
+    };
+    let v = [rot(-b, 0.0), rot(b, 0.0), rot(b, 2.0 * h), rot(-b, 2.0 * h)];
+    let blocks = serde_json::json!([
+        { "id": "base", "material": "stone", "fixed": true, "vertices": rect(-2.0, -0.5, 2.0, 0.0) },
+        { "id": "column", "material": "stone", "block_model": block_model, "vertices": v },
+    ]);
+    scene_json(blocks, 75.0, control)
+}
+
 /// Block `block`'s angular velocity just before and just after the first impact within 2 s
 /// (rad/s). Before: at the start of the step whose impact law fired (the velocity the impulse
 /// acts on). After: at the end of that step, less the change over the next step (the gravity

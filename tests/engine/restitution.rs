@@ -64,17 +64,7 @@ fn two_block_velocities(restitution: Value, dt: f64, solver: &str) -> (f64, f64,
 /// slip, tan 75° = 3.7 ≫ the friction demand of a rocking impact), tilted by θ0 about its
 /// bottom-right corner, released from rest.
 fn column(b: f64, h: f64, theta0: f64, control: Value) -> Scene {
-    let (co, si) = (theta0.cos(), theta0.sin());
-    let rot = |x: f64, y: f64| {
-        let dx = x - b;
-        [b + co * dx + si * y, -si * dx + co * y]
-    };
-    let v = [rot(-b, 0.0), rot(b, 0.0), rot(b, 2.0 * h), rot(-b, 2.0 * h)];
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": rect(-2.0, -0.5, 2.0, 0.0) },
-        { "id": "column", "material": "stone", "block_model": "rigid", "vertices": v },
-    ]);
-    parse(&scene_json(blocks, 75.0, control))
+    parse(&tilted_column(b, h, theta0, "rigid", control))
 }
 
 /// The column's angular velocity just before and just after its first impact (rad/s). Before:

@@ -175,23 +175,7 @@ fn column_scene_of(
     control: serde_json::Value,
     block_model: &str,
 ) -> serde_json::Value {
-    let (co, si) = (theta0.cos(), theta0.sin());
-    let rot = |x: f64, y: f64| {
-        let (dx, dy) = (x - c.b, y);
-        [c.b + co * dx + si * dy, -si * dx + co * dy]
-    };
-    let v = [
-        rot(-c.b, 0.0),
-        rot(c.b, 0.0),
-        rot(c.b, 2.0 * c.h),
-        rot(-c.b, 2.0 * c.h),
-    ];
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": rect(-2.0, -0.5, 2.0, 0.0) },
-        { "id": "column", "material": "stone", "block_model": block_model, "vertices": v },
-    ]);
-    // φ = 75°: the column's pivot never slips (tan 75° = 3.7 ≫ the friction demand of rocking).
-    scene_json(blocks, 75.0, control)
+    tilted_column(c.b, c.h, theta0, block_model, control)
 }
 
 /// The engine's controls: `"model": "dda"`, the contact solver, every other numerical control at

@@ -20,26 +20,18 @@ use crate::common;
 
 use ashlar::motion::GroundMotion;
 use ashlar::simulation::{SimParams, Simulation};
-use common::{parse, rect, scene_json};
+use common::{parse, tilted_column};
 use serde_json::json;
 
 /// ω just before the first impact and just after it (extrapolated back over the next step), rad/s.
 fn rocking_ratio(params: SimParams) -> f64 {
     let (b, h) = (0.2f64, 0.6f64);
     let theta0 = 0.5 * (b / h).atan();
-    let (co, si) = (theta0.cos(), theta0.sin());
-    let rot = |x: f64, y: f64| {
-        let dx = x - b;
-        [b + co * dx + si * y, -si * dx + co * y]
-    };
-    let v = [rot(-b, 0.0), rot(b, 0.0), rot(b, 2.0 * h), rot(-b, 2.0 * h)];
-    let blocks = json!([
-        { "id": "base", "material": "stone", "fixed": true, "vertices": rect(-2.0, -0.5, 2.0, 0.0) },
-        { "id": "column", "material": "stone", "block_model": "rigid", "vertices": v },
-    ]);
-    let scene = parse(&scene_json(
-        blocks,
-        75.0,
+    let scene = parse(&tilted_column(
+        b,
+        h,
+        theta0,
+        "rigid",
         json!({ "model": "dda", "duration": 2.0, "integrator": "trapezoidal" }),
     ));
     let mut s = Simulation::new(&scene, &GroundMotion::none(), params);
