@@ -2,22 +2,30 @@
 //! failures and panics, PGA searches, shutdown and restart (see `mod.rs`).
 use super::*;
 
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn cancelling_a_running_job_stops_it_within_one_frame() {
-    // 100 ms wall per simulated second, frames every 0.01 s: a frame takes 1 ms of wall time.
-    let (svc, app, dir) = start(
-        "routes-cancel",
-        1,
-        Duration::from_millis(100),
-        Limits::default(),
-    );
-    let id = submit(&app, &column_job(60.0)).await;
-    let uri = format!("/v1/jobs/{id}");
-    let running = wait_for(&app, &uri, Duration::from_secs(20), |j| {
-        j["status"] == "running"
-    })
+/// Where the cancel tests start: one worker at 100 ms of wall time per simulated second (frames
+/// every 0.01 s: a frame takes 1 ms), and a column job of `duration` s submitted and seen
+/// running. Returns the service, its router and directory, and the job's id.
+async fn one_running_job(
+    tag: &str,
+    duration: f64,
+) -> (Service, axum::Router, std::path::PathBuf, String) {
+    let (svc, app, dir) = start(tag, 1, Duration::from_millis(100), Limits::default());
+    let id = submit(&app, &column_job(duration)).await;
+    let running = wait_for(
+        &app,
+        &format!("/v1/jobs/{id}"),
+        Duration::from_secs(20),
+        |j| j["status"] == "running",
+    )
     .await;
     assert_eq!(running["status"], "running");
+    (svc, app, dir, id)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn cancelling_a_running_job_stops_it_within_one_frame() {
+    let (svc, app, dir, id) = one_running_job("routes-cancel", 60.0).await;
+    let uri = format!("/v1/jobs/{id}");
     // Progress reaches the store while it runs (written at most every 250 ms).
     let j = wait_for(&app, &uri, Duration::from_secs(5), |j| {
         j["progress"].as_f64().unwrap_or(0.0) > 0.0
@@ -25,11 +33,7 @@ async fn cancelling_a_running_job_stops_it_within_one_frame() {
     .await;
     assert!(j["progress"].as_f64().unwrap_or(1.0) < 1.0);
     let t0 = Instant::now();
-    let r = call(
-        &app,
-        post_raw(&format!("{uri}/cancel"), "application/json", ""),
-    )
-    .await;
+    let r = cancel(&app, &id).await;
     assert_eq!(r.status, 202, "{}", r.text());
     assert_eq!(r.json()["cancel_requested"], true);
     let j = wait_for(&app, &uri, Duration::from_secs(5), is_terminal).await;
@@ -49,33 +53,13 @@ async fn cancelling_a_running_job_stops_it_within_one_frame() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn cancelling_a_queued_job_is_immediate_and_it_never_runs() {
-    let (svc, app, dir) = start(
-        "routes-cancel-queued",
-        1,
-        Duration::from_millis(100),
-        Limits::default(),
-    );
-    let first = submit(&app, &column_job(10.0)).await;
+    // The one worker is busy with `first`: `second` waits in the queue.
+    let (svc, app, dir, first) = one_running_job("routes-cancel-queued", 10.0).await;
     let second = submit(&app, &column_job(1.0)).await;
-    wait_for(
-        &app,
-        &format!("/v1/jobs/{first}"),
-        Duration::from_secs(20),
-        |j| j["status"] == "running",
-    )
-    .await;
-    let r = call(
-        &app,
-        post_raw(&format!("/v1/jobs/{second}/cancel"), "application/json", ""),
-    )
-    .await;
+    let r = cancel(&app, &second).await;
     assert_eq!(r.status, 200, "{}", r.text());
     assert_eq!(r.json()["status"], "cancelled");
-    call(
-        &app,
-        post_raw(&format!("/v1/jobs/{first}/cancel"), "application/json", ""),
-    )
-    .await;
+    cancel(&app, &first).await;
     wait_for(
         &app,
         &format!("/v1/jobs/{first}"),

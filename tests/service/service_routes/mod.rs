@@ -57,6 +57,15 @@ async fn submit(app: &axum::Router, body: &Value) -> String {
     id
 }
 
+/// `POST /v1/jobs/{id}/cancel`, empty body.
+async fn cancel(app: &axum::Router, id: &str) -> Reply {
+    call(
+        app,
+        post_raw(&format!("/v1/jobs/{id}/cancel"), "application/json", ""),
+    )
+    .await
+}
+
 /// A run of the column scene (`duration` s) under a 1 m/s² pulse, the job most tests submit.
 fn column_job(duration: f64) -> Value {
     json!({"scene": column_scene(duration), "motion": pulse(1.0)})

@@ -151,12 +151,7 @@ async fn a_job_runs_and_its_outputs_are_served() {
     );
 
     // A finished job cannot be cancelled.
-    let p = call(
-        &app,
-        post_raw(&format!("{uri}/cancel"), "application/json", ""),
-    )
-    .await
-    .problem(409);
+    let p = cancel(&app, &id).await.problem(409);
     assert!(p["detail"]
         .as_str()
         .unwrap_or_default()

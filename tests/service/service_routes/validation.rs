@@ -220,16 +220,7 @@ async fn bad_requests_get_problems_naming_the_field() {
     call(&app, get(&format!("/v1/jobs/{unknown}/events")))
         .await
         .problem(404);
-    call(
-        &app,
-        post_raw(
-            &format!("/v1/jobs/{unknown}/cancel"),
-            "application/json",
-            "",
-        ),
-    )
-    .await
-    .problem(404);
+    cancel(&app, &unknown.to_string()).await.problem(404);
     call(&app, get(&format!("/v1/pga-searches/{unknown}")))
         .await
         .problem(404);
