@@ -193,13 +193,8 @@ pub fn circle(
     extra: &str,
     tooltip: Option<&str>,
 ) -> String {
-    let open = format!(
-        "<circle cx=\"{}\" cy=\"{}\" r=\"{r}\" fill=\"{}\"{extra}",
-        cx.into(),
-        cy.into(),
-        escape(fill)
-    );
-    close(open, "circle", tooltip)
+    let at = format!("cx=\"{}\" cy=\"{}\" r=\"{r}\"", cx.into(), cy.into());
+    shape("circle", &at, fill, extra, tooltip)
 }
 
 /// A `w` × `h` rectangle with its top left corner at (`x`, `y`) filled with `fill` (`"none"` for
@@ -214,17 +209,18 @@ pub fn rect(
     extra: &str,
     tooltip: Option<&str>,
 ) -> String {
-    let open = format!(
-        "<rect x=\"{}\" y=\"{}\" width=\"{w}\" height=\"{h}\" fill=\"{}\"{extra}",
+    let at = format!(
+        "x=\"{}\" y=\"{}\" width=\"{w}\" height=\"{h}\"",
         x.into(),
-        y.into(),
-        escape(fill)
+        y.into()
     );
-    close(open, "rect", tooltip)
+    shape("rect", &at, fill, extra, tooltip)
 }
 
-/// A shape's opening tag `open` closed: with a tooltip as its `<title>` child, else empty.
-fn close(open: String, name: &str, tooltip: Option<&str>) -> String {
+/// A filled shape `name` placed by the attributes `at`, then its fill, `extra` attributes, and
+/// its tooltip as a `<title>` child (or none: an empty element).
+fn shape(name: &str, at: &str, fill: &str, extra: &str, tooltip: Option<&str>) -> String {
+    let open = format!("<{name} {at} fill=\"{}\"{extra}", escape(fill));
     match tooltip {
         Some(t) => format!("{open}><title>{}</title></{name}>\n", escape(t)),
         None => format!("{open}/>\n"),
