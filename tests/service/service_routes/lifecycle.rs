@@ -139,51 +139,27 @@ async fn failures_and_panics_fail_the_job_not_the_worker() {
     s["name"] = json!("fake:panic");
     let panicking = submit(&app, &json!({"scene": s})).await;
     let fine = submit(&app, &json!({"scene": column_scene(1.0)})).await;
-    let j = wait_for(
-        &app,
-        &format!("/v1/jobs/{failing}"),
-        Duration::from_secs(20),
-        is_terminal,
-    )
-    .await;
+    // Job `id` once it has ended, and its error message.
+    let ended = |id: String| {
+        let app = app.clone();
+        async move {
+            let uri = format!("/v1/jobs/{id}");
+            wait_for(&app, &uri, Duration::from_secs(20), is_terminal).await
+        }
+    };
+    let error = |j: &Value| j["error"].as_str().unwrap_or_default().to_string();
+    let j = ended(failing.clone()).await;
     assert_eq!(j["status"], "failed");
-    assert!(
-        j["error"]
-            .as_str()
-            .unwrap_or_default()
-            .contains("fake failure"),
-        "{j}"
-    );
-    let j = wait_for(
-        &app,
-        &format!("/v1/jobs/{panicking}"),
-        Duration::from_secs(20),
-        is_terminal,
-    )
-    .await;
+    assert!(error(&j).contains("fake failure"), "{j}");
+    let j = ended(panicking).await;
     assert_eq!(j["status"], "failed");
+    assert!(error(&j).contains("internal error"), "{j}");
     assert!(
-        j["error"]
-            .as_str()
-            .unwrap_or_default()
-            .contains("internal error"),
-        "{j}"
-    );
-    assert!(
-        !j["error"]
-            .as_str()
-            .unwrap_or_default()
-            .contains("fake panic"),
+        !error(&j).contains("fake panic"),
         "panic text stays in the log"
     );
     // The single worker survived both.
-    let j = wait_for(
-        &app,
-        &format!("/v1/jobs/{fine}"),
-        Duration::from_secs(20),
-        is_terminal,
-    )
-    .await;
+    let j = ended(fine).await;
     assert_eq!(j["status"], "succeeded");
     call(&app, get(&format!("/v1/jobs/{failing}/histories")))
         .await
