@@ -131,7 +131,11 @@ fn main() {
     let mut sim = Simulation::new(&fine, &gm, SimParams::default());
     let mut he = Vec::new();
     let free = block.free;
-    let engine_end = if env("ENGINE") == Some(0.0) { 0.0 } else { t_end };
+    let engine_end = if env("ENGINE") == Some(0.0) {
+        0.0
+    } else {
+        t_end
+    };
     while sim.time() < engine_end - 1e-12 {
         // As `analysis::run` steps (to each output frame) unless FRAMES=0.
         let limit = if env("FRAMES") == Some(0.0) {

@@ -213,7 +213,9 @@ fn main() {
     }
     println!("\npoints {}; peaks within 5 %:", rows.len());
     println!("- (a) `auto` against (c) the engine at 1e-4 s, where (c) stands above 0.02 rad: {ac}/{n_c}");
-    println!("- against (h) Housner, where it stands above 0.02 rad: (a) {ah}/{n_h}, (c) {ch}/{n_h}");
+    println!(
+        "- against (h) Housner, where it stands above 0.02 rad: (a) {ah}/{n_h}, (c) {ch}/{n_h}"
+    );
     println!("- the same where the point is also robust (verdict at ±3 %) and well conditioned (peak ±3 % at ±1 %): (a) {aw}/{n_w}, (c) {cw}/{n_w}; (a) against (c) {acw}/{n_w}");
     println!("verdict = Housner's where robust: (a) {verdict_ah}/{n_robust}, (c) {verdict_ch}/{n_robust}");
 }

@@ -10,11 +10,11 @@
 //! Nishi-Akashi (`data/ground-motions/`) scaled to 0.3, 0.5 and 0.7 g, over the record's length.
 //! Checks, per case:
 //! - the same verdict (overturned or not);
-//! - where it stands and rocks past 0.01 rad: peak |θ| within 5 % of the reference, the
-//!   agreement that docs/accuracy-vs-speed.md ("Records") asks of the full engine against the same reference. Set when
-//!   the reference put each impact at the end of its step (ω·1e-5 s in θ per impact), which a
-//!   rocking history through ~90 impacts amplified; the located reference agrees far closer
-//!   (printed; the next test holds the hand-over study's worst points to 0.5 %).
+//! - where it stands and rocks past 0.01 rad: peak |θ| within 0.5 % of the reference. Both
+//!   solve the same equation; measured 0.033 % at most (Kobe 0.7 g, 99 impacts). It was 5 %
+//!   while the reference put each impact at the end of its step (ω·1e-5 s in θ per impact),
+//!   which a rocking history through ~90 impacts amplified (Friuli 0.5 g: 4.4 % off); the
+//!   reference now locates impacts (session 33), and 0.5 % is the bound of the next test.
 use crate::common;
 use ashlar::analysis::reference::{housner_rocking, HousnerColumn};
 use ashlar::analysis::run::{run, RunOptions};
@@ -75,8 +75,8 @@ fn peak_rotation_on_records_matches_housner_rk4() {
             assert_eq!(s.model, "rocking");
             let peak = s.blocks[0].max_rotation;
             let fell = s.blocks[0].final_rotation.abs() > alpha;
-            // The fine reference is the one held to; the 1e-4 s one is printed (it misplaces
-            // each impact by up to a step, which on Friuli at 0.5 g puts its peak 44 % low).
+            // The fine reference is the one held to; the 1e-4 s one is printed (with impacts
+            // at the step's end it put Friuli 0.5 g's peak 44 % low; located, it agrees).
             let coarse = peak_ref;
             let peak_ref = peak_fine;
             let diff = (peak - peak_ref) / peak_ref.max(1e-12);
@@ -93,7 +93,7 @@ fn peak_rotation_on_records_matches_housner_rk4() {
                 compared += 1;
                 worst = worst.max(diff.abs());
                 assert!(
-                    diff.abs() < 0.05,
+                    diff.abs() < 5e-3,
                     "{name} at {g_units} g: peak {peak} rad against {peak_ref} rad"
                 );
             }
