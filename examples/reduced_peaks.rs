@@ -13,7 +13,7 @@
 //! (robust: the same verdict, the rule). Prints one row per point where (c) or (h)
 //! stands above 0.02 rad and the counts of peaks within 5 %.
 //!
-//! Run: `cargo run --release --example reduced_peaks` (about 3 min at 2 threads).
+//! Run: `cargo run --release --example reduced_peaks` (7 min at 2 threads on the loaded machine).
 use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};
 use ashlar::analysis::reduced::{self, ReducedParams};
 use ashlar::analysis::reference::{housner_rocking, HousnerColumn};
