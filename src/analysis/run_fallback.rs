@@ -119,8 +119,14 @@ fn open_stitched<'a>(
     hdr.metadata.insert(
         "hand_over".into(),
         format!(
-            "frames before t = {} s from the reduced model, from there the full DDA engine",
-            r.time
+            "frames before t = {} s from the reduced model, from there the full DDA engine{}",
+            r.time,
+            if opts.hand_back.unwrap_or_default().enabled {
+                // Written before the run knows whether it will hand back.
+                " (and the reduced model again from each hand-back summary.json's model_reason names)"
+            } else {
+                ""
+            }
         ),
     );
     let out = Mutex::new(Stitched {
