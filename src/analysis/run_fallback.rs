@@ -443,7 +443,7 @@ pub(crate) fn from_rest(
             return false;
         }
         let target = *w.target.get_or_insert_with(|| gm.next_kink(te));
-        if !(target < engine_dur - 1e-9) || te < target - 1e-12 {
+        if target >= engine_dur - 1e-9 || te < target - 1e-12 {
             return false;
         }
         let g = &sim.geoms()[b.free];
