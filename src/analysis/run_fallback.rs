@@ -16,6 +16,15 @@
 //! before the case the reduced model does not represent (the pivot slipping). The engine's
 //! own start-up differs from a run from t = 0: its penalty contacts start unloaded at t₀ (the
 //! block sinks by ~g·Δt²/2, a few µm, in the first step).
+//!
+//! The hand-back ([`HandBackParams`]): once the engine's block is at rest on its base again,
+//! the run goes back to `analysis::run::run` on the scene from the next record sample (the
+//! block moved along its base by its slip), and that part is reported offset by the block's
+//! displacement and rotation then, its frames into the same outputs.
+//!
+//! Length (over 600 lines): the hand-over and the hand-back are one chain of offsets (times,
+//! the block's pose, the tracker's maxima, the stitched frames, the summary) read together; the
+//! engine loop is `run.rs`'s, the reduced model's `reduced/record.rs`.
 use super::reduced::{
     self,
     record::{ReducedError, Resume},
