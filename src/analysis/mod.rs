@@ -8,7 +8,7 @@ pub mod reduced;
 pub mod reference;
 pub mod run;
 pub mod run_end;
-mod run_fallback;
+pub mod run_fallback;
 pub mod run_summary;
 pub mod study;
 pub mod study_records;

@@ -59,6 +59,13 @@ pub struct RunOptions<'a> {
     /// docs/speed.md). Runs and PGA searches take the same default (the search's runs use
     /// it), so a run at a bracket end reproduces the search's verdict.
     pub fallback_from_zero: bool,
+    /// After such a hand-over, once the engine's block is at rest on its base again, the
+    /// reduced model takes the run back from there (`analysis::run_fallback::HandBackParams`;
+    /// `None`: the defaults, on).
+    pub hand_back: Option<super::run_fallback::HandBackParams>,
+    /// Called after every step of a full-engine run; returning true ends the run there with
+    /// `stopped_reason` "handed back" (set by `analysis::run_fallback` only).
+    pub engine_at_rest: Option<&'a (dyn Fn(&Simulation) -> bool + Sync)>,
 }
 
 /// How a run can fail, by cause; each message names where (docs/architecture.md, "Errors").
@@ -451,6 +458,9 @@ pub fn run(
     }
 }
 
+/// `stopped_reason` of an engine run ended by `RunOptions::engine_at_rest`.
+pub(crate) const HANDED_BACK: &str = "handed back";
+
 /// Run the full DDA engine.
 pub(crate) fn run_dda(
     scene: &Scene,
@@ -515,6 +525,10 @@ pub(crate) fn run_dda(
         }
         if opts.stop_when.is_some_and(|f| f(&tracker)) {
             stopped_reason = Some("decided".to_string());
+            break;
+        }
+        if opts.engine_at_rest.is_some_and(|f| f(&sim)) {
+            stopped_reason = Some(HANDED_BACK.to_string());
             break;
         }
     }

@@ -5,6 +5,7 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+mod hand_back;
 mod pga_cli;
 mod pga_fragility;
 mod pga_frequency_sweep;
