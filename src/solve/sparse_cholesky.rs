@@ -10,7 +10,7 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
-    SymbolicCholeskyRaw, SymmetricOrdering,
+    SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
@@ -42,9 +42,6 @@ pub struct SparseCholesky {
     /// change of an entry and the largest entry.
     change: Vec<[f64; 2]>,
     mem: Option<MemBuffer>,
-    /// The supernodal factor's layout for [`FactorLayout::solve`] (empty: simplicial, solved
-    /// by faer).
-    layout: FactorLayout,
     /// Conjugate-gradient scratch: right-hand side, residual, preconditioned residual,
     /// search direction and its image.
     b: Vec<f64>,
@@ -161,7 +158,6 @@ impl SparseCholesky {
             .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
             .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
         self.mem = Some(MemBuffer::new(req));
-        self.layout = FactorLayout::of(&symbolic);
         self.symbolic = Some(symbolic);
         self.pattern.clone_from(&sys.pairs);
         self.n = n;
@@ -169,23 +165,36 @@ impl SparseCholesky {
         Ok(())
     }
 
-    fn fill_values(&mut self, sys: &BlockSystem, dofs: &Dofs) {
-        self.values.clear();
+    /// Copy the system's blocks into the compressed upper triangle `values` (column by
+    /// column, as `rebuild_pattern` laid it out). With `track_changes` (a factor of the same
+    /// pattern exists) it also notes, per off-diagonal slot, the largest change of an entry
+    /// since the factored values and the largest entry, for [`SparseCholesky::major_changes`]:
+    /// one pass over the values instead of two.
+    fn fill_values(&mut self, sys: &BlockSystem, dofs: &Dofs, track_changes: bool) {
+        self.values.resize(self.row_idx.len(), 0.0);
+        if track_changes {
+            self.change.clear();
+            self.change.resize(sys.pairs.len(), [0.0; 2]);
+        }
+        let mut at = 0;
         for b in 0..dofs.ndof.len() {
             for c in 0..dofs.ndof[b] {
                 for &(a, slot) in &self.col_blocks[b] {
-                    match slot {
-                        None => {
-                            for r in 0..=c {
-                                self.values.push(sys.diag[b][(r, c)]);
-                            }
-                        }
-                        Some(k) => {
-                            for r in 0..dofs.ndof[a] {
-                                self.values.push(sys.off[k][(r, c)]);
-                            }
+                    // Column c of a 6×6 block (nalgebra stores columns contiguously).
+                    let (src, rows) = match slot {
+                        None => (&sys.diag[b].as_slice()[6 * c..], c + 1),
+                        Some(k) => (&sys.off[k].as_slice()[6 * c..], dofs.ndof[a]),
+                    };
+                    let new = &src[..rows];
+                    self.values[at..at + rows].copy_from_slice(new);
+                    if let (true, Some(k)) = (track_changes, slot) {
+                        let [delta, size] = &mut self.change[k];
+                        for (new, old) in new.iter().zip(&self.factored_values[at..at + rows]) {
+                            *delta = delta.max((new - old).abs());
+                            *size = size.max(new.abs()).max(old.abs());
                         }
                     }
+                    at += rows;
                 }
             }
         }
@@ -201,11 +210,9 @@ impl SparseCholesky {
         if self.symbolic.is_none() || self.pattern != sys.pairs || self.n != dofs.n {
             self.rebuild_pattern(sys, dofs, params.supernodal)?;
         }
-        self.fill_values(sys, dofs);
-        if self.factored
-            && params.max_reuse_iterations > 0
-            && self.major_changes(sys, dofs) < params.max_reuse_iterations
-        {
+        let try_reuse = self.factored && params.max_reuse_iterations > 0;
+        self.fill_values(sys, dofs, try_reuse);
+        if try_reuse && self.major_changes() < params.max_reuse_iterations {
             let rhs = params.check_reuse.then(|| x.to_vec());
             if self.reuse_solve(x, params) {
                 if let Some(mut fresh) = rhs {
@@ -218,21 +225,19 @@ impl SparseCholesky {
         self.factor_solve_in_place(x)
     }
 
-    /// `x ← (L Lᵀ)⁻¹ x` with the current factor: [`FactorLayout::solve`] for a supernodal
-    /// factor, faer's own solve for a simplicial one.
+    /// `x ← (L Lᵀ)⁻¹ x` with the current factor.
     fn factor_solve_in_place(&mut self, x: &mut [f64]) -> Result<(), SolveError> {
         let (Some(symbolic), Some(mem)) = (self.symbolic.as_ref(), self.mem.as_mut()) else {
             return Err(SolveError::NoSymbolic);
         };
-        if !self.layout.solve(&self.l_values, x) {
-            let llt = LltRef::new(symbolic, &self.l_values);
-            let rhs = faer::MatMut::from_column_major_slice_mut(x, self.n, 1);
-            llt.solve_in_place_with_conj(faer::Conj::No, rhs, Par::Seq, MemStack::new(mem));
-        }
+        let llt = LltRef::new(symbolic, &self.l_values);
+        let rhs = faer::MatMut::from_column_major_slice_mut(x, self.n, 1);
+        llt.solve_in_place_with_conj(faer::Conj::No, rhs, Par::Seq, MemStack::new(mem));
         Ok(())
     }
 
-    /// About the rank of the change of the matrix since its last factorization, which is
+    /// About the rank of the change of the matrix since its last factorization (from the
+    /// changes `fill_values` noted), which is
     /// about the number of conjugate-gradient iterations the reused factor needs: the number
     /// of off-diagonal blocks that changed by more than [`MAJOR_CHANGE`] of their size (each is
     /// at least one spring opened, closed or switched between stick and slip). Small changes
@@ -241,28 +246,7 @@ impl SparseCholesky {
     /// [`SparseParams::max_reuse_iterations`] the iteration cannot converge in time, and
     /// trying costs more than a factorization (the pile of examples/pile.rs spent 55 % of its
     /// solve time in such failed attempts: docs/pile.md).
-    fn major_changes(&mut self, sys: &BlockSystem, dofs: &Dofs) -> usize {
-        self.change.clear();
-        self.change.resize(sys.pairs.len(), [0.0; 2]);
-        let mut at = 0;
-        for b in 0..dofs.ndof.len() {
-            for c in 0..dofs.ndof[b] {
-                for &(a, slot) in &self.col_blocks[b] {
-                    let rows = if slot.is_none() { c + 1 } else { dofs.ndof[a] };
-                    if let Some(k) = slot {
-                        let [delta, size] = &mut self.change[k];
-                        for (new, old) in self.values[at..at + rows]
-                            .iter()
-                            .zip(&self.factored_values[at..at + rows])
-                        {
-                            *delta = delta.max((new - old).abs());
-                            *size = size.max(new.abs()).max(old.abs());
-                        }
-                    }
-                    at += rows;
-                }
-            }
-        }
+    fn major_changes(&self) -> usize {
         self.change
             .iter()
             .filter(|[delta, size]| *delta > MAJOR_CHANGE * size)
@@ -338,12 +322,9 @@ impl SparseCholesky {
             return false;
         };
         let llt = LltRef::new(symbolic, &self.l_values);
-        let (layout, l_values) = (&mut self.layout, &self.l_values);
         let mut precondition = |v: &mut [f64]| {
-            if !layout.solve(l_values, v) {
-                let m = faer::MatMut::from_column_major_slice_mut(v, n, 1);
-                llt.solve_in_place_with_conj(faer::Conj::No, m, Par::Seq, MemStack::new(mem));
-            }
+            let m = faer::MatMut::from_column_major_slice_mut(v, n, 1);
+            llt.solve_in_place_with_conj(faer::Conj::No, m, Par::Seq, MemStack::new(mem));
         };
         self.b.clear();
         self.b.extend_from_slice(x);
@@ -445,118 +426,6 @@ fn first_bad_pivot(sys: &BlockSystem, dofs: &Dofs) -> usize {
     0
 }
 
-/// The supernodal factor L of faer (`SymbolicSupernodalCholesky`) as plain index arrays, and
-/// its triangular solves as plain loops. faer's own `solve_in_place_with_conj` dispatches a
-/// dense triangular solve and a matrix product per supernode, which at the 3–30-column
-/// supernodes of a masonry wall costs ~10× the arithmetic (callgrind, 410 stones: 783 k
-/// instructions a solve for ~60 k multiply-adds, 34 % of a shaken step; docs/contact-solve.md
-/// §14). Same factor, same permutation; the sums are taken in another order, so the result
-/// differs from faer's by round-off only.
-#[derive(Debug, Default)]
-struct FactorLayout {
-    /// `w[i] = x[perm_fwd[i]]` (the fill-reducing ordering), and back `x[i] = w[perm_inv[i]]`.
-    perm_fwd: Vec<usize>,
-    perm_inv: Vec<usize>,
-    /// Per supernode s: its first column `begin[s]` (and `begin[s + 1]` its end), the range
-    /// `row_ptr[s]..row_ptr[s + 1]` of `rows` holding the row indices below its diagonal block,
-    /// and the offset `val_ptr[s]` of its column-major values (diagonal block on top).
-    begin: Vec<usize>,
-    row_ptr: Vec<usize>,
-    rows: Vec<usize>,
-    val_ptr: Vec<usize>,
-    /// The permuted right-hand side.
-    work: Vec<f64>,
-}
-
-impl FactorLayout {
-    /// The layout of `symbolic` if it is supernodal, else an empty layout (faer then solves).
-    fn of(symbolic: &SymbolicCholesky<usize>) -> Self {
-        let SymbolicCholeskyRaw::Supernodal(sn) = symbolic.raw() else {
-            return Self::default();
-        };
-        let n = sn.nrows();
-        let (perm_fwd, perm_inv) = match symbolic.perm() {
-            Some(p) => (p.arrays().0.to_vec(), p.arrays().1.to_vec()),
-            None => ((0..n).collect(), (0..n).collect()),
-        };
-        let ns = sn.n_supernodes();
-        let mut layout = Self {
-            perm_fwd,
-            perm_inv,
-            begin: Vec::with_capacity(ns + 1),
-            row_ptr: Vec::with_capacity(ns + 1),
-            rows: Vec::new(),
-            val_ptr: sn.col_ptr_for_val().to_vec(),
-            work: vec![0.0; n],
-        };
-        layout.row_ptr.push(0);
-        for s in 0..ns {
-            let node = sn.supernode(s);
-            layout.begin.push(node.start());
-            layout.rows.extend_from_slice(node.pattern());
-            layout.row_ptr.push(layout.rows.len());
-        }
-        layout.begin.push(n);
-        layout
-    }
-
-    /// `x ← (L Lᵀ)⁻¹ x` with the factor values `l` (faer's supernodal layout). Returns false,
-    /// leaving `x` untouched, when there is no supernodal layout.
-    fn solve(&mut self, l: &[f64], x: &mut [f64]) -> bool {
-        let n = x.len();
-        if self.perm_fwd.len() != n || self.begin.is_empty() {
-            return false;
-        }
-        let w = &mut self.work;
-        for (wi, &p) in w.iter_mut().zip(&self.perm_fwd) {
-            *wi = x[p];
-        }
-        let ns = self.begin.len() - 1;
-        // L y = b, column by column.
-        for s in 0..ns {
-            let (b, e) = (self.begin[s], self.begin[s + 1]);
-            let size = e - b;
-            let rows = &self.rows[self.row_ptr[s]..self.row_ptr[s + 1]];
-            let nr = size + rows.len();
-            let ls = &l[self.val_ptr[s]..self.val_ptr[s + 1]];
-            for j in 0..size {
-                let col = &ls[j * nr..(j + 1) * nr];
-                let xj = w[b + j] / col[j];
-                w[b + j] = xj;
-                for (wi, &v) in w[b + j + 1..e].iter_mut().zip(&col[j + 1..size]) {
-                    *wi -= v * xj;
-                }
-                for (&r, &v) in rows.iter().zip(&col[size..]) {
-                    w[r] -= v * xj;
-                }
-            }
-        }
-        // Lᵀ z = y, backwards.
-        for s in (0..ns).rev() {
-            let (b, e) = (self.begin[s], self.begin[s + 1]);
-            let size = e - b;
-            let rows = &self.rows[self.row_ptr[s]..self.row_ptr[s + 1]];
-            let nr = size + rows.len();
-            let ls = &l[self.val_ptr[s]..self.val_ptr[s + 1]];
-            for j in (0..size).rev() {
-                let col = &ls[j * nr..(j + 1) * nr];
-                let mut acc = w[b + j];
-                for (wi, &v) in w[b + j + 1..e].iter().zip(&col[j + 1..size]) {
-                    acc -= v * wi;
-                }
-                for (&r, &v) in rows.iter().zip(&col[size..]) {
-                    acc -= v * w[r];
-                }
-                w[b + j] = acc / col[j];
-            }
-        }
-        for (xi, &p) in x.iter_mut().zip(&self.perm_inv) {
-            *xi = w[p];
-        }
-        true
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -629,47 +498,70 @@ mod tests {
         b
     }
 
-    /// The plain-loop triangular solves on faer's supernodal factor give faer's own solve within
-    /// round-off (1e-13 of the solution: both are backward stable on a matrix of condition ~2),
-    /// and the solution satisfies the system (residual 1e-12 of the right-hand side).
+    fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+        a.iter()
+            .zip(b)
+            .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()))
+    }
+
+    /// The supernodal factorization solves the system (residual 1e-12 of the right-hand side,
+    /// by the matrix-vector product of the conjugate gradients, whose operand layout this also
+    /// checks); after a small change of every block (geometry drift: no major change) the next
+    /// solve reuses the factor and gives the fresh factorization's answer within the reuse
+    /// tolerance's order (1e-11 of the solution, as tests/engine/solver_reuse.rs).
     #[test]
-    fn supernodal_layout_solve_matches_faer() {
-        let (sys, dofs) = grid_system(150, 10);
+    fn supernodal_solve_and_reuse_after_a_small_change() {
+        let (mut sys, dofs) = grid_system(150, 10);
         let mut chol = SparseCholesky::default();
         let params = SparseParams::default();
         let b = rhs_of(&sys, &dofs);
         let mut x = b.clone();
         chol.factor_solve(&sys, &dofs, &mut x, &params)
             .expect("positive definite");
-        assert!(!chol.layout.begin.is_empty(), "the factor is supernodal");
-        let mut faer_x = b.clone();
-        let symbolic = chol.symbolic.as_ref().expect("symbolic");
-        let llt = LltRef::new(symbolic, &chol.l_values);
-        let mem = chol.mem.as_mut().expect("scratch");
-        llt.solve_in_place_with_conj(
-            faer::Conj::No,
-            faer::MatMut::from_column_major_slice_mut(&mut faer_x, dofs.n, 1),
-            Par::Seq,
-            MemStack::new(mem),
-        );
-        let scale = max_abs(&faer_x);
-        let diff = x
-            .iter()
-            .zip(&faer_x)
-            .fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
-        assert!(diff <= 1e-13 * scale, "differs by {diff:e} of {scale:e}");
         let mut ax = Vec::new();
         symmetric_upper_matvec(&chol.col_ptr, &chol.row_idx, &chol.values, &x, &mut ax);
-        let res = ax
-            .iter()
-            .zip(&b)
-            .fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
-        assert!(res <= 1e-12 * max_abs(&b), "residual {res:e}");
+        assert!(max_diff(&ax, &b) <= 1e-12 * max_abs(&b), "residual");
+        for m in sys.diag.iter_mut().chain(sys.off.iter_mut()) {
+            *m *= 1.0 + 1e-4;
+        }
+        let mut reused = b.clone();
+        chol.factor_solve(&sys, &dofs, &mut reused, &params)
+            .expect("positive definite");
+        assert_eq!(chol.numeric_count, 1, "the second solve reuses the factor");
+        assert!(chol.reuse_iterations >= 1);
+        let mut fresh_chol = SparseCholesky::default();
+        let mut fresh = b.clone();
+        fresh_chol
+            .factor_solve(&sys, &dofs, &mut fresh, &params)
+            .expect("positive definite");
+        let d = max_diff(&reused, &fresh);
+        assert!(d <= 1e-11 * max_abs(&fresh), "reuse differs by {d:e}");
     }
 
-    /// The simplicial path (no supernodal layout) still solves, through faer.
+    /// A change of many coupling blocks by more than `MAJOR_CHANGE` (springs opening) is
+    /// counted as such and refactors without trying the old factor.
     #[test]
-    fn simplicial_factor_falls_back_to_faer() {
+    fn major_changes_refactor() {
+        let (mut sys, dofs) = grid_system(150, 10);
+        let mut chol = SparseCholesky::default();
+        let params = SparseParams::default();
+        let mut x = rhs_of(&sys, &dofs);
+        chol.factor_solve(&sys, &dofs, &mut x, &params)
+            .expect("positive definite");
+        for m in sys.off.iter_mut().take(params.max_reuse_iterations) {
+            *m *= 0.5;
+        }
+        let mut x = rhs_of(&sys, &dofs);
+        chol.factor_solve(&sys, &dofs, &mut x, &params)
+            .expect("positive definite");
+        assert_eq!(chol.major_changes(), params.max_reuse_iterations);
+        assert_eq!(chol.numeric_count, 2, "refactored");
+        assert_eq!(chol.reuse_iterations, 0, "without trying the old factor");
+    }
+
+    /// The simplicial path (faer's automatic choice) solves the same way.
+    #[test]
+    fn simplicial_factor_solves() {
         let (sys, dofs) = grid_system(60, 6);
         let mut chol = SparseCholesky::default();
         let params = SparseParams {
@@ -680,12 +572,6 @@ mod tests {
         let mut x = b.clone();
         chol.factor_solve(&sys, &dofs, &mut x, &params)
             .expect("positive definite");
-        let simplicial = matches!(
-            chol.symbolic.as_ref().map(|s| s.raw()),
-            Some(SymbolicCholeskyRaw::Simplicial(_))
-        );
-        assert!(simplicial, "faer's automatic choice is simplicial here");
-        assert!(chol.layout.begin.is_empty(), "no supernodal layout");
         let mut ax = Vec::new();
         symmetric_upper_matvec(&chol.col_ptr, &chol.row_idx, &chol.values, &x, &mut ax);
         let res = ax
