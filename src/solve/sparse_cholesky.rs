@@ -165,23 +165,36 @@ impl SparseCholesky {
         Ok(())
     }
 
-    fn fill_values(&mut self, sys: &BlockSystem, dofs: &Dofs) {
-        self.values.clear();
+    /// Copy the system's blocks into the compressed upper triangle `values` (column by
+    /// column, as `rebuild_pattern` laid it out). With `track_changes` (a factor of the same
+    /// pattern exists) it also notes, per off-diagonal slot, the largest change of an entry
+    /// since the factored values and the largest entry, for [`SparseCholesky::major_changes`]:
+    /// one pass over the values instead of two.
+    fn fill_values(&mut self, sys: &BlockSystem, dofs: &Dofs, track_changes: bool) {
+        self.values.resize(self.row_idx.len(), 0.0);
+        if track_changes {
+            self.change.clear();
+            self.change.resize(sys.pairs.len(), [0.0; 2]);
+        }
+        let mut at = 0;
         for b in 0..dofs.ndof.len() {
             for c in 0..dofs.ndof[b] {
                 for &(a, slot) in &self.col_blocks[b] {
-                    match slot {
-                        None => {
-                            for r in 0..=c {
-                                self.values.push(sys.diag[b][(r, c)]);
-                            }
-                        }
-                        Some(k) => {
-                            for r in 0..dofs.ndof[a] {
-                                self.values.push(sys.off[k][(r, c)]);
-                            }
+                    // Column c of a 6×6 block (nalgebra stores columns contiguously).
+                    let (src, rows) = match slot {
+                        None => (&sys.diag[b].as_slice()[6 * c..], c + 1),
+                        Some(k) => (&sys.off[k].as_slice()[6 * c..], dofs.ndof[a]),
+                    };
+                    let new = &src[..rows];
+                    self.values[at..at + rows].copy_from_slice(new);
+                    if let (true, Some(k)) = (track_changes, slot) {
+                        let [delta, size] = &mut self.change[k];
+                        for (new, old) in new.iter().zip(&self.factored_values[at..at + rows]) {
+                            *delta = delta.max((new - old).abs());
+                            *size = size.max(new.abs()).max(old.abs());
                         }
                     }
+                    at += rows;
                 }
             }
         }
@@ -197,11 +210,9 @@ impl SparseCholesky {
         if self.symbolic.is_none() || self.pattern != sys.pairs || self.n != dofs.n {
             self.rebuild_pattern(sys, dofs, params.supernodal)?;
         }
-        self.fill_values(sys, dofs);
-        if self.factored
-            && params.max_reuse_iterations > 0
-            && self.major_changes(sys, dofs) < params.max_reuse_iterations
-        {
+        let try_reuse = self.factored && params.max_reuse_iterations > 0;
+        self.fill_values(sys, dofs, try_reuse);
+        if try_reuse && self.major_changes() < params.max_reuse_iterations {
             let rhs = params.check_reuse.then(|| x.to_vec());
             if self.reuse_solve(x, params) {
                 if let Some(mut fresh) = rhs {
@@ -211,6 +222,11 @@ impl SparseCholesky {
             }
         }
         self.factorize(sys, dofs)?;
+        self.factor_solve_in_place(x)
+    }
+
+    /// `x ← (L Lᵀ)⁻¹ x` with the current factor.
+    fn factor_solve_in_place(&mut self, x: &mut [f64]) -> Result<(), SolveError> {
         let (Some(symbolic), Some(mem)) = (self.symbolic.as_ref(), self.mem.as_mut()) else {
             return Err(SolveError::NoSymbolic);
         };
@@ -220,7 +236,8 @@ impl SparseCholesky {
         Ok(())
     }
 
-    /// About the rank of the change of the matrix since its last factorization, which is
+    /// About the rank of the change of the matrix since its last factorization (from the
+    /// changes `fill_values` noted), which is
     /// about the number of conjugate-gradient iterations the reused factor needs: the number
     /// of off-diagonal blocks that changed by more than [`MAJOR_CHANGE`] of their size (each is
     /// at least one spring opened, closed or switched between stick and slip). Small changes
@@ -229,28 +246,7 @@ impl SparseCholesky {
     /// [`SparseParams::max_reuse_iterations`] the iteration cannot converge in time, and
     /// trying costs more than a factorization (the pile of examples/pile.rs spent 55 % of its
     /// solve time in such failed attempts: docs/pile.md).
-    fn major_changes(&mut self, sys: &BlockSystem, dofs: &Dofs) -> usize {
-        self.change.clear();
-        self.change.resize(sys.pairs.len(), [0.0; 2]);
-        let mut at = 0;
-        for b in 0..dofs.ndof.len() {
-            for c in 0..dofs.ndof[b] {
-                for &(a, slot) in &self.col_blocks[b] {
-                    let rows = if slot.is_none() { c + 1 } else { dofs.ndof[a] };
-                    if let Some(k) = slot {
-                        let [delta, size] = &mut self.change[k];
-                        for (new, old) in self.values[at..at + rows]
-                            .iter()
-                            .zip(&self.factored_values[at..at + rows])
-                        {
-                            *delta = delta.max((new - old).abs());
-                            *size = size.max(new.abs()).max(old.abs());
-                        }
-                    }
-                    at += rows;
-                }
-            }
-        }
+    fn major_changes(&self) -> usize {
         self.change
             .iter()
             .filter(|[delta, size]| *delta > MAJOR_CHANGE * size)
@@ -273,12 +269,7 @@ impl SparseCholesky {
             self.numeric_count,
         );
         self.factorize(sys, dofs)?;
-        let (Some(symbolic), Some(mem)) = (self.symbolic.as_ref(), self.mem.as_mut()) else {
-            return Err(SolveError::NoSymbolic);
-        };
-        let llt = LltRef::new(symbolic, &self.l_values);
-        let rhs = faer::MatMut::from_column_major_slice_mut(fresh, self.n, 1);
-        llt.solve_in_place_with_conj(faer::Conj::No, rhs, Par::Seq, MemStack::new(mem));
+        self.factor_solve_in_place(fresh)?;
         let scale = max_abs(fresh);
         let diff = x
             .iter()
@@ -386,7 +377,10 @@ impl SparseCholesky {
     }
 }
 
-/// y = A·x for a symmetric matrix stored as its upper triangle in compressed columns.
+/// y = A·x for a symmetric matrix stored as its upper triangle in compressed columns, each
+/// column's diagonal entry last (as `rebuild_pattern` lays them out: row blocks in increasing
+/// order, the diagonal block last with rows 0..=c). Same operations in the same order as a
+/// loop that tests `i != j` on every entry, without the test.
 fn symmetric_upper_matvec(
     col_ptr: &[usize],
     row_idx: &[usize],
@@ -396,16 +390,17 @@ fn symmetric_upper_matvec(
 ) {
     y.clear();
     y.resize(x.len(), 0.0);
-    for j in 0..x.len() {
-        let xj = x[j];
+    for (j, (&xj, ends)) in x.iter().zip(col_ptr.windows(2)).enumerate() {
+        let (rows, vals) = (&row_idx[ends[0]..ends[1]], &values[ends[0]..ends[1]]);
+        let Some((&diag, below)) = vals.split_last() else {
+            continue;
+        };
         let mut acc = 0.0;
-        for k in col_ptr[j]..col_ptr[j + 1] {
-            let (i, v) = (row_idx[k], values[k]);
+        for (&i, &v) in rows.iter().zip(below) {
             y[i] += v * xj;
-            if i != j {
-                acc += v * x[i];
-            }
+            acc += v * x[i];
         }
+        y[j] += diag * xj;
         y[j] += acc;
     }
 }
@@ -429,4 +424,160 @@ fn first_bad_pivot(sys: &BlockSystem, dofs: &Dofs) -> usize {
         }
     }
     0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Mat6, Vec6};
+
+    /// A block system of `nb` rigid blocks on a grid `cols` wide, each coupled to its right and
+    /// upper neighbours (the pattern of a wall): diagonally dominant, so positive definite.
+    fn grid_system(nb: usize, cols: usize) -> (BlockSystem, Dofs) {
+        let mut dofs = Dofs::default();
+        for b in 0..nb {
+            dofs.free_index.push(Some(b));
+            dofs.block_of.push(b);
+            dofs.ndof.push(3);
+            dofs.offset.push(3 * b);
+        }
+        dofs.n = 3 * nb;
+        // Deterministic pseudo-random entries in [-1, 1).
+        let mut seed = 12345_u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let mut sys = BlockSystem::default();
+        for b in 0..nb {
+            for n in [b + 1, b + cols] {
+                if n < nb && (n != b + 1 || n % cols != 0) {
+                    sys.pairs.push((b, n));
+                }
+            }
+        }
+        sys.pairs.sort_unstable();
+        for _ in &sys.pairs {
+            let mut m = Mat6::zeros();
+            for c in 0..3 {
+                for r in 0..3 {
+                    m[(r, c)] = next();
+                }
+            }
+            sys.off.push(m);
+        }
+        for _ in 0..nb {
+            let mut m = Mat6::zeros();
+            for c in 0..3 {
+                for r in 0..c {
+                    let v = 0.5 * next();
+                    m[(r, c)] = v;
+                    m[(c, r)] = v;
+                }
+                m[(c, c)] = 20.0 + next();
+            }
+            sys.diag.push(m);
+            let mut r = Vec6::zeros();
+            for k in 0..3 {
+                r[k] = next();
+            }
+            sys.rhs.push(r);
+        }
+        (sys, dofs)
+    }
+
+    fn rhs_of(sys: &BlockSystem, dofs: &Dofs) -> Vec<f64> {
+        let mut b = vec![0.0; dofs.n];
+        for (f, r) in sys.rhs.iter().enumerate() {
+            for k in 0..3 {
+                b[dofs.offset[f] + k] = r[k];
+            }
+        }
+        b
+    }
+
+    fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+        a.iter()
+            .zip(b)
+            .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()))
+    }
+
+    /// The supernodal factorization solves the system (residual 1e-12 of the right-hand side,
+    /// by the matrix-vector product of the conjugate gradients, whose operand layout this also
+    /// checks); after a small change of every block (geometry drift: no major change) the next
+    /// solve reuses the factor and gives the fresh factorization's answer within the reuse
+    /// tolerance's order (1e-11 of the solution, as tests/engine/solver_reuse.rs).
+    #[test]
+    fn supernodal_solve_and_reuse_after_a_small_change() {
+        let (mut sys, dofs) = grid_system(150, 10);
+        let mut chol = SparseCholesky::default();
+        let params = SparseParams::default();
+        let b = rhs_of(&sys, &dofs);
+        let mut x = b.clone();
+        chol.factor_solve(&sys, &dofs, &mut x, &params)
+            .expect("positive definite");
+        let mut ax = Vec::new();
+        symmetric_upper_matvec(&chol.col_ptr, &chol.row_idx, &chol.values, &x, &mut ax);
+        assert!(max_diff(&ax, &b) <= 1e-12 * max_abs(&b), "residual");
+        for m in sys.diag.iter_mut().chain(sys.off.iter_mut()) {
+            *m *= 1.0 + 1e-4;
+        }
+        let mut reused = b.clone();
+        chol.factor_solve(&sys, &dofs, &mut reused, &params)
+            .expect("positive definite");
+        assert_eq!(chol.numeric_count, 1, "the second solve reuses the factor");
+        assert!(chol.reuse_iterations >= 1);
+        let mut fresh_chol = SparseCholesky::default();
+        let mut fresh = b.clone();
+        fresh_chol
+            .factor_solve(&sys, &dofs, &mut fresh, &params)
+            .expect("positive definite");
+        let d = max_diff(&reused, &fresh);
+        assert!(d <= 1e-11 * max_abs(&fresh), "reuse differs by {d:e}");
+    }
+
+    /// A change of many coupling blocks by more than `MAJOR_CHANGE` (springs opening) is
+    /// counted as such and refactors without trying the old factor.
+    #[test]
+    fn major_changes_refactor() {
+        let (mut sys, dofs) = grid_system(150, 10);
+        let mut chol = SparseCholesky::default();
+        let params = SparseParams::default();
+        let mut x = rhs_of(&sys, &dofs);
+        chol.factor_solve(&sys, &dofs, &mut x, &params)
+            .expect("positive definite");
+        for m in sys.off.iter_mut().take(params.max_reuse_iterations) {
+            *m *= 0.5;
+        }
+        let mut x = rhs_of(&sys, &dofs);
+        chol.factor_solve(&sys, &dofs, &mut x, &params)
+            .expect("positive definite");
+        assert_eq!(chol.major_changes(), params.max_reuse_iterations);
+        assert_eq!(chol.numeric_count, 2, "refactored");
+        assert_eq!(chol.reuse_iterations, 0, "without trying the old factor");
+    }
+
+    /// The simplicial path (faer's automatic choice) solves the same way.
+    #[test]
+    fn simplicial_factor_solves() {
+        let (sys, dofs) = grid_system(60, 6);
+        let mut chol = SparseCholesky::default();
+        let params = SparseParams {
+            supernodal: false,
+            ..Default::default()
+        };
+        let b = rhs_of(&sys, &dofs);
+        let mut x = b.clone();
+        chol.factor_solve(&sys, &dofs, &mut x, &params)
+            .expect("positive definite");
+        let mut ax = Vec::new();
+        symmetric_upper_matvec(&chol.col_ptr, &chol.row_idx, &chol.values, &x, &mut ax);
+        let res = ax
+            .iter()
+            .zip(&b)
+            .fold(0.0_f64, |m, (a, b)| m.max((a - b).abs()));
+        assert!(res <= 1e-12 * max_abs(&b), "residual {res:e}");
+    }
 }
