@@ -80,6 +80,14 @@ pub struct ImpactParams {
     /// off Makris–Vassiliou's (docs/impacts-and-multiblock.md). `false` restores the old law
     /// (for diagnosis).
     pub group_landings: bool,
+    /// An impact predicted within the next step splits the time to it into two equal steps
+    /// ([`located_step`]); `false` runs the step whole and locates the impact from within its
+    /// own step only (the law before the split, for diagnosis).
+    pub split_before: bool,
+    /// An impacting contact still open by g0 that does not bounce clear of it leaves at
+    /// −2 g0/Δt and lands at the step's end (the hover closed, see `apply_impacts`); `false`
+    /// gives it −e ġ⁻ (for diagnosis).
+    pub close_hover: bool,
 }
 
 impl Default for ImpactParams {
@@ -91,6 +99,8 @@ impl Default for ImpactParams {
             window: 0.01,
             margin: 1e-4,
             group_landings: true,
+            split_before: true,
+            close_hover: true,
         }
     }
 }
@@ -245,7 +255,7 @@ pub fn located_step(
     let dt = input.dt;
     match next_impact(input, contacts, states, params, landing) {
         Some(t) if t <= dt => t - params.margin * dt,
-        Some(t) if t <= 2.0 * dt => 0.5 * (t - params.margin * dt),
+        Some(t) if t <= 2.0 * dt && params.split_before => 0.5 * (t - params.margin * dt),
         _ => dt,
     }
 }
@@ -335,7 +345,7 @@ pub fn apply_impacts(
             // = 2, 1 ms; +0.6 % with a 2e-3 Δt margin).
             let bounce = -input.restitution * rate;
             let g0 = c.g0.max(0.0);
-            if bounce * input.dt > g0 {
+            if bounce * input.dt > g0 || !params.close_hover {
                 bounce
             } else {
                 -2.0 * g0 / input.dt
