@@ -127,6 +127,9 @@ fn time_run(solver: &str, cli: &Cli) -> Result<(f64, Simulation), String> {
     params.impact.group_landings &= !cli.no_group_landings;
     params.impact.split_before &= !cli.no_split;
     params.impact.close_hover &= !cli.no_hover_landing;
+    if let Some(r) = cli.locate_speed_ratio {
+        params.impact.locate_speed_ratio = r;
+    }
     let mut sim = Simulation::new(&scene, &GroundMotion::none(), params);
     let t = Instant::now();
     if trace {
@@ -218,6 +221,9 @@ struct Cli {
     /// Diagnosis: an impacting contact's hover is not closed (`ImpactParams::close_hover`).
     #[arg(long)]
     no_hover_landing: bool,
+    /// Diagnosis: locate only impacts faster than R × the settling threshold (`ImpactParams::locate_speed_ratio`).
+    #[arg(long, value_name = "R", value_parser = positive)]
+    locate_speed_ratio: Option<f64>,
     /// Write each block's final centroid (x, y, m) and rotation (rad), one line a block, to
     /// compare the final states of two runs.
     #[arg(long, value_name = "PATH")]
