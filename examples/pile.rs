@@ -87,6 +87,9 @@ pub fn pile_scene(solver: &str, block_model: &str) -> Value {
 /// `control.dual_stall_acceptance` (so the scene written by `--write` runs as this does).
 fn scene_json(solver: &str, cli: &Cli) -> Value {
     let mut v = pile_scene(solver, &cli.block_model);
+    if let Some(r) = &cli.restitution {
+        v["control"]["restitution"] = r.as_str().into();
+    }
     if solver == "dual" {
         if let Some(t) = cli.dual_tolerance {
             v["control"]["dual_tolerance"] = t.into();
@@ -120,6 +123,12 @@ fn time_run(solver: &str, cli: &Cli) -> Result<(f64, Simulation), String> {
     }
     if let Some(g) = cli.proportioning {
         params.dual.proportioning = g;
+    }
+    params.impact.group_landings &= !cli.no_group_landings;
+    params.impact.split_before &= !cli.no_split;
+    params.impact.close_hover &= !cli.no_hover_landing;
+    if let Some(r) = cli.locate_speed_ratio {
+        params.impact.locate_speed_ratio = r;
     }
     let mut sim = Simulation::new(&scene, &GroundMotion::none(), params);
     let t = Instant::now();
@@ -200,6 +209,25 @@ struct Cli {
     /// Accept a stalled dual solve whose violation is within A × its tolerance (default 1: none).
     #[arg(long, value_name = "A", value_parser = at_least_one)]
     stall_acceptance: Option<f64>,
+    /// The scene's `control.restitution` instead of its default (`contact`: no impact law).
+    #[arg(long, value_parser = ["housner", "contact"])]
+    restitution: Option<String>,
+    /// Diagnosis: landings later within an impact's step do not join it (`ImpactParams::group_landings`).
+    #[arg(long)]
+    no_group_landings: bool,
+    /// Diagnosis: no split step before an impact in the next step (`ImpactParams::split_before`).
+    #[arg(long)]
+    no_split: bool,
+    /// Diagnosis: an impacting contact's hover is not closed (`ImpactParams::close_hover`).
+    #[arg(long)]
+    no_hover_landing: bool,
+    /// Diagnosis: locate only impacts faster than R × the settling threshold (`ImpactParams::locate_speed_ratio`).
+    #[arg(long, value_name = "R", value_parser = positive)]
+    locate_speed_ratio: Option<f64>,
+    /// Write each block's final centroid (x, y, m) and rotation (rad), one line a block, to
+    /// compare the final states of two runs.
+    #[arg(long, value_name = "PATH")]
+    write_state: Option<std::path::PathBuf>,
 }
 
 fn positive(s: &str) -> Result<f64, String> {
@@ -265,7 +293,28 @@ fn main() -> std::process::ExitCode {
             sim.stats().dual_loose_solves,
             sim.stats().dual_loose_residual,
         );
-        println!("         profile: {:?}", sim.profile());
+        println!(
+            "         profile: {:?}; impacting contacts {}",
+            sim.profile(),
+            sim.stats().impacts
+        );
+        if let Some(path) = &cli.write_state {
+            let text: String = scene(solver, &cli)
+                .blocks
+                .iter()
+                .zip(sim.geoms())
+                .map(|(b, g)| {
+                    format!(
+                        "{} {:.9} {:.9} {:.9}\n",
+                        b.id, g.centroid.x, g.centroid.y, g.rotation
+                    )
+                })
+                .collect();
+            if let Err(e) = std::fs::write(path, text) {
+                eprintln!("pile: cannot write {}: {e}", path.display());
+                code = std::process::ExitCode::FAILURE;
+            }
+        }
     }
     code
 }

@@ -80,6 +80,19 @@ pub struct ImpactParams {
     /// off Makris–Vassiliou's (docs/impacts-and-multiblock.md). `false` restores the old law
     /// (for diagnosis).
     pub group_landings: bool,
+    /// An impact predicted within the next step splits the time to it into two equal steps
+    /// ([`located_step`]); `false` runs the step whole and locates the impact from within its
+    /// own step only (the law before the split, for diagnosis).
+    pub split_before: bool,
+    /// An impacting contact still open by g0 that does not bounce clear of it leaves at
+    /// −2 g0/Δt and lands at the step's end (the hover closed, see `apply_impacts`); `false`
+    /// gives it −e ġ⁻ (for diagnosis).
+    pub close_hover: bool,
+    /// Location (the split step, the closed hover, grouped landings) only for impacts
+    /// approaching faster than this × the settling threshold (`slow_factor` g Δt); slower ones
+    /// take the impulse at the step start unlocated. 1: every impact is located (today's
+    /// law); measured on the pile (docs/pile.md, session 33) for diagnosis.
+    pub locate_speed_ratio: f64,
 }
 
 impl Default for ImpactParams {
@@ -91,6 +104,9 @@ impl Default for ImpactParams {
             window: 0.01,
             margin: 1e-4,
             group_landings: true,
+            split_before: true,
+            close_hover: true,
+            locate_speed_ratio: 1.0,
         }
     }
 }
@@ -165,6 +181,20 @@ fn motion_of(input: &ImpactInput, b: usize, states: &[BlockState]) -> (Vec6, Vec
     }
 }
 
+/// Whether contact `c` approaches fast enough to be located (`ImpactParams::locate_speed_ratio`).
+fn locatable(
+    input: &ImpactInput,
+    c: &Contact,
+    states: &[BlockState],
+    params: &ImpactParams,
+) -> bool {
+    let (vi, _) = motion_of(input, c.vertex_block, states);
+    let (vj, _) = motion_of(input, c.edge_block, states);
+    let rate = c.e_i.dot(&vi) - c.e_j.dot(&vj);
+    let v_min = params.slow_factor * input.gravity.abs() * input.dt.max(input.nominal_dt);
+    -rate > params.locate_speed_ratio * v_min
+}
+
 /// When contact `c` impacts, s from the step start: 0 for a contact closed within the last step
 /// still approaching faster than `v_min`, the first root within two steps of g0 + ġ·t + ½·g̈·t² for an open one
 /// approaching that fast, `None` otherwise (not approaching, settling, or not closing within
@@ -218,6 +248,7 @@ pub fn next_impact(
         .iter()
         .enumerate()
         .filter(|(k, _)| !landing.get(*k).copied().unwrap_or(false))
+        .filter(|(_, c)| params.locate_speed_ratio <= 1.0 || locatable(input, c, states, params))
         .filter_map(|(_, c)| impact_time(input, c, states, params))
         .filter(|&t| t > window)
         .min_by(f64::total_cmp)
@@ -245,7 +276,7 @@ pub fn located_step(
     let dt = input.dt;
     match next_impact(input, contacts, states, params, landing) {
         Some(t) if t <= dt => t - params.margin * dt,
-        Some(t) if t <= 2.0 * dt => 0.5 * (t - params.margin * dt),
+        Some(t) if t <= 2.0 * dt && params.split_before => 0.5 * (t - params.margin * dt),
         _ => dt,
     }
 }
@@ -291,7 +322,8 @@ pub fn apply_impacts(
         // A later landing within this step joins the impact (`ImpactParams::group_landings`).
         let later = any_now
             && params.group_landings
-            && times[k].is_some_and(|t| t > window && t <= input.dt);
+            && times[k].is_some_and(|t| t > window && t <= input.dt)
+            && (params.locate_speed_ratio <= 1.0 || locatable(input, c, states, params));
         if now || later {
             impacting[k] = true;
             landing[k] = later;
@@ -335,7 +367,14 @@ pub fn apply_impacts(
             // = 2, 1 ms; +0.6 % with a 2e-3 Δt margin).
             let bounce = -input.restitution * rate;
             let g0 = c.g0.max(0.0);
-            if bounce * input.dt > g0 {
+            let hover = params.close_hover
+                && (params.locate_speed_ratio <= 1.0
+                    || -rate
+                        > params.locate_speed_ratio
+                            * params.slow_factor
+                            * input.gravity.abs()
+                            * input.dt.max(input.nominal_dt));
+            if bounce * input.dt > g0 || !hover {
                 bounce
             } else {
                 -2.0 * g0 / input.dt
