@@ -209,6 +209,10 @@ fn main() {
             if std::env::args().any(|a| a == "--line-search") {
                 params.open_close.line_search = true;
             }
+            // `--restick-jump`: a re-sticking misjudges the jump to the locked force (§13).
+            if std::env::args().any(|a| a == "--restick-jump") {
+                params.open_close.restick_jump = true;
+            }
             if let Some(v) = arg("--local-after") {
                 params.open_close.local_after = v.parse().expect("--local-after");
             }

@@ -144,6 +144,14 @@ pub struct OpenCloseParams {
     /// convergence test is unchanged (a global solve whose states hold, taken undamped).
     /// Measured in docs/contact-solve.md §13.
     pub line_search: bool,
+    /// Measure the force a re-sticking misjudges as the jump from the friction force the solve
+    /// used (−dir·limit) to the force the locked spring carries at the same solution (−k_s·s),
+    /// instead of bounding it by twice the Coulomb limit. A sliding contact's shear reference
+    /// trails it by the elastic displacement at the limit, so a head joint whose slip just
+    /// reverses re-sticks with a jump of k_s × the reversal, far below 2·limit; the light rule
+    /// (`light_state_changes`) then compares that jump with its floor. Measured in
+    /// docs/contact-solve.md §13.
+    pub restick_jump: bool,
 }
 
 impl Default for OpenCloseParams {
@@ -169,6 +177,7 @@ impl Default for OpenCloseParams {
             local_rounds: 4,
             local_after: 1,
             line_search: false,
+            restick_jump: false,
         }
     }
 }
@@ -791,6 +800,12 @@ fn update_state(
     let h = params.hysteresis;
     let (g, s) = measures(c, x, dofs, prescribed);
     let old_friction_normal = c.friction_normal;
+    // The shear force the solve applied (a sliding contact's friction; N, on the vertex block).
+    let old_shear = if let ContactState::Sliding { dir } = c.state {
+        -dir * shear_limit(c, law, c.friction_normal)
+    } else {
+        c.shear_force
+    };
     // The normal force the solve just used (the previous iterate's, or the last step's).
     let old_normal = if c.state.is_closed() {
         c.normal_force.max(0.0)
@@ -921,6 +936,9 @@ fn update_state(
                 (c.shear_force.abs() - shear_limit(c, law, c.normal_force)).max(0.0),
             ),
             // The friction force was the limit; the true one lies within ±limit.
+            (ContactState::Sliding { .. }, ContactState::Locked) if params.restick_jump => {
+                (3, (-springs.shear * s - old_shear).abs())
+            }
             (ContactState::Sliding { .. }, ContactState::Locked) => {
                 (3, 2.0 * shear_limit(c, law, c.normal_force))
             }
@@ -968,12 +986,6 @@ fn update_state(
             // Settle rule: taken, and too small to hold the step back any longer.
             counts.settled += 1;
             return Update::Quiet;
-        }
-        if iteration >= 16 && std::env::var_os("ASHLAR_CYCLE_DEBUG").is_some() {
-            eprintln!(
-                "CYC it {iteration} blocks {}-{} kind {kind} head {head} force {force:.3e} scale {floor_scale:.3e} n_old {old_normal:.3e} n_new {:.3e} fn_old {old_friction_normal:.3e} g {g:.3e} s {:.3e} {:?}->{:?} light {light_before_after} flips {}",
-                c.vertex_block, c.edge_block, c.normal_force, c.slip, old, new, c.flips
-            );
         }
         counts.record(
             kind,
