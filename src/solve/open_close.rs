@@ -586,7 +586,7 @@ fn line_search_step(
     for (k, &(a, b)) in sys.pairs.iter().enumerate() {
         dad += 2.0 * dir[a].dot(&(sys.off[k] * dir[b]));
     }
-    if !(dad > 0.0) {
+    if dad.is_nan() || dad <= 0.0 {
         return 1.0;
     }
     let k = springs.normal;
