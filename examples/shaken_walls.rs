@@ -200,6 +200,25 @@ fn main() {
             if let Some(v) = arg("--light-interface") {
                 params.open_close.light_state_interface = v == "on";
             }
+            // `--local-sweeps S [--local-rounds R]`: local rounds of block Gauss–Seidel between
+            // global solves (`OpenCloseParams::local_sweeps`, docs/contact-solve.md §13).
+            if let Some(v) = arg("--local-sweeps") {
+                params.open_close.local_sweeps = v.parse().expect("--local-sweeps");
+            }
+            // `--line-search`: the damped (semismooth Newton) open–close loop (§13).
+            if std::env::args().any(|a| a == "--line-search") {
+                params.open_close.line_search = true;
+            }
+            // `--restick-jump`: a re-sticking misjudges the jump to the locked force (§13).
+            if std::env::args().any(|a| a == "--restick-jump") {
+                params.open_close.restick_jump = true;
+            }
+            if let Some(v) = arg("--local-after") {
+                params.open_close.local_after = v.parse().expect("--local-after");
+            }
+            if let Some(v) = arg("--local-rounds") {
+                params.open_close.local_rounds = v.parse().expect("--local-rounds");
+            }
             if let Some(v) = arg("--friction-tol") {
                 params.open_close.friction_tolerance = v.parse().expect("--friction-tol");
             }
@@ -274,6 +293,26 @@ fn main() {
                     );
                 }
                 eprintln!("  changes by iteration: {:?}", ch.by_iteration);
+                for (k, name) in CHANGE_KINDS.iter().enumerate() {
+                    for (o, side) in ["bed", "head"].iter().enumerate() {
+                        if ch.by_kind[k][o] > 0 {
+                            eprintln!(
+                                "  by iteration {name:>22} {side:>4}: {:?}",
+                                ch.by_kind_iteration[k][o]
+                            );
+                        }
+                    }
+                }
+                eprintln!(
+                    "  local rounds {}, state changes in them {}",
+                    ch.local_rounds, ch.local_changes
+                );
+                eprintln!(
+                    "  line searches {}, damped {} (mean t {:.3})",
+                    ch.searches,
+                    ch.damped,
+                    ch.damped_t_sum / ch.damped.max(1) as f64
+                );
                 for (k, name) in CHANGE_KINDS.iter().enumerate() {
                     eprintln!(
                         "  last iteration {name:>22}: bed {:>7} head {:>7}",
