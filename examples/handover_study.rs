@@ -18,7 +18,7 @@
 //! 5 % of (c)'s where (c) stands with more than 0.02 rad.
 //!
 //! Run: `cargo run --release --example handover_study` (about 10 min at 2 threads, loaded).
-use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};
+use ashlar::analysis::pga::{search, Criterion, PgaRequest};
 use ashlar::analysis::run::{run, RunOptions, Summary, Tracker};
 use ashlar::analysis::run_fallback::HandBackParams;
 use ashlar::motion::GroundMotion;
@@ -112,14 +112,7 @@ fn main() {
         ("squat 0.6 x 0.8 m", squat),
     ];
     let criteria = vec![Criterion::parse("toppled:column").expect("criterion")];
-    let req = PgaRequest {
-        criteria,
-        combine: Combine::All,
-        min: 0.05 * G,
-        max: 2.0 * G,
-        tolerance: 0.01,
-        scan_points: 40,
-    };
+    let req = PgaRequest::cli_default(criteria);
     let mut jobs = Vec::new();
     for (label, scene) in &scenes {
         for name in &names {

@@ -12,35 +12,13 @@
 //! the restart), `avg` (`average_ground_load`), `rigid` (block model), `rock:C`, `err:R`, `nm:G` (Newmark γ = G,
 //! β = (G + ½)²/4), `slow:F` (`impact.slow_factor`), `dt:S` (the coarse run's step), `fine:S` (the reference run's
 //! step, 1e-4 s unless given); the reference run takes the same modifiers except `rock`, `err`, `dt`).
-use ashlar::analysis::reference::{housner_rocking, HousnerColumn};
+use ashlar::analysis::reference::{half_cycles, housner_rocking, HousnerColumn};
 use ashlar::analysis::study_records::{self as sr, COLUMNS};
 use ashlar::assembly::Newmark;
 use ashlar::scene::scene_from_value;
 use ashlar::simulation::{SimParams, Simulation};
 use serde_json::json;
 use std::path::Path;
-
-/// Half-cycles of a history (t, θ, θ̇): (start time, |θ̇| at start, peak |θ|).
-fn half_cycles(h: &[(f64, f64, f64)]) -> Vec<(f64, f64, f64)> {
-    let still = 1e-5;
-    let mut out: Vec<(f64, f64, f64)> = Vec::new();
-    let mut sign = 0.0f64;
-    for &(t, th, w) in h {
-        let s = if th.abs() > still { th.signum() } else { 0.0 };
-        if s != 0.0 && s != sign {
-            out.push((t, w.abs(), th.abs()));
-        }
-        if s != 0.0 {
-            sign = s;
-        }
-        if let Some(last) = out.last_mut() {
-            if s == sign && s != 0.0 {
-                last.2 = last.2.max(th.abs());
-            }
-        }
-    }
-    out
-}
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();

@@ -11,34 +11,12 @@
 //! `column` (examples/column.json), `slender` (0.24 × 1.6 m, φ = 75°), `slender9` (the same over
 //! the record's first 9 s); PGA in m/s² (handover.md's column); T_END cuts every run (s).
 use ashlar::analysis::reduced::{self, Modes, Phase, Reduced, ReducedParams};
-use ashlar::analysis::reference::{housner_rocking, HousnerColumn};
+use ashlar::analysis::reference::{half_cycles, housner_rocking, HousnerColumn};
 use ashlar::analysis::run::duration;
 use ashlar::presets::{self, Column};
 use ashlar::scene::{parse_scene, ModelChoice, Scene};
 use ashlar::simulation::{SimParams, Simulation};
 use serde_json::json;
-
-/// Half-cycles of a history (t, θ, θ̇): (start time, |θ̇| at start, peak |θ|).
-fn half_cycles(h: &[(f64, f64, f64)]) -> Vec<(f64, f64, f64)> {
-    let still = 1e-5;
-    let mut out: Vec<(f64, f64, f64)> = Vec::new();
-    let mut sign = 0.0f64;
-    for &(t, th, w) in h {
-        let s = if th.abs() > still { th.signum() } else { 0.0 };
-        if s != 0.0 && s != sign {
-            out.push((t, w.abs(), th.abs()));
-        }
-        if s != 0.0 {
-            sign = s;
-        }
-        if let Some(last) = out.last_mut() {
-            if s == sign && s != 0.0 {
-                last.2 = last.2.max(th.abs());
-            }
-        }
-    }
-    out
-}
 
 /// Past this |θ| (rad) a run stops: the column has fallen (handover_study stops at 60°).
 const FALLEN: f64 = 1.0;

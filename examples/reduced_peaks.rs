@@ -14,7 +14,7 @@
 //! stands above 0.02 rad and the counts of peaks within 5 %.
 //!
 //! Run: `cargo run --release --example reduced_peaks` (7 min at 2 threads on the loaded machine).
-use ashlar::analysis::pga::{search, Combine, Criterion, PgaRequest};
+use ashlar::analysis::pga::{search, Criterion, PgaRequest};
 use ashlar::analysis::reduced::{self, ReducedParams};
 use ashlar::analysis::reference::{housner_rocking, HousnerColumn};
 use ashlar::analysis::run::{run, RunOptions, Tracker};
@@ -24,7 +24,6 @@ use ashlar::scene::{parse_scene, ModelChoice, Scene};
 use rayon::prelude::*;
 use serde_json::json;
 
-const G: f64 = 9.80665;
 /// The points of handover_study: fractions of the threshold F.
 const FACTORS: [f64; 7] = [0.90, 0.95, 0.98, 1.00, 1.02, 1.05, 1.10];
 /// Past this |θ| (rad) Housner's column has fallen (the records study's rule).
@@ -96,14 +95,7 @@ fn main() {
         .filter(|n| n.ends_with(".at2") || n.ends_with(".csv"))
         .collect();
     names.sort();
-    let req = PgaRequest {
-        criteria: vec![Criterion::parse("toppled:column").expect("criterion")],
-        combine: Combine::All,
-        min: 0.05 * G,
-        max: 2.0 * G,
-        tolerance: 0.01,
-        scan_points: 40,
-    };
+    let req = PgaRequest::cli_default(vec![Criterion::parse("toppled:column").expect("criterion")]);
     let mut jobs = Vec::new();
     for (label, scene) in &scenes {
         for name in &names {

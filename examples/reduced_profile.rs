@@ -7,12 +7,10 @@
 //! fell back to the full engine, with the reason), the steps and the thread's CPU time.
 //!
 //! Run: `cargo run --release --example reduced_profile [-- RECORD-NAME-PART]`.
-use ashlar::analysis::pga::{evaluate_with_summary, search, Combine, Criterion, PgaRequest};
+use ashlar::analysis::pga::{evaluate_with_summary, search, Criterion, PgaRequest};
 use ashlar::analysis::run::RunOptions;
 use ashlar::motion::load_path;
 use ashlar::scene::parse_scene;
-
-const G: f64 = 9.80665;
 
 #[path = "support/thread_cpu.rs"]
 mod thread_cpu;
@@ -31,14 +29,7 @@ fn main() {
         })
         .collect();
     records.sort();
-    let req = PgaRequest {
-        criteria: vec![Criterion::parse("toppled:column").expect("criterion")],
-        combine: Combine::All,
-        min: 0.05 * G,
-        max: 2.0 * G,
-        tolerance: 0.01,
-        scan_points: 40,
-    };
+    let req = PgaRequest::cli_default(vec![Criterion::parse("toppled:column").expect("criterion")]);
     for path in &records {
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("?");
         let gm = load_path(path).expect("record");

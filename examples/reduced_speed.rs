@@ -15,9 +15,7 @@
 //! reduced runs and of the fallbacks (sums of tick-counted CPU time over the search's runs).
 //!
 //! Run: `cargo run --release --example reduced_speed [-- REPS]` (REPS defaults to 5).
-use ashlar::analysis::pga::{
-    evaluate_with_summary, search, Combine, Criterion, PgaRequest, PgaResult,
-};
+use ashlar::analysis::pga::{evaluate_with_summary, search, Criterion, PgaRequest, PgaResult};
 use ashlar::analysis::run::{run, RunOptions, Summary};
 use ashlar::motion::{load_path, GroundMotion};
 use ashlar::scene::{parse_scene, ModelChoice, Scene};
@@ -79,14 +77,7 @@ fn main() {
         .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("at2" | "csv")))
         .collect();
     records.sort();
-    let req = PgaRequest {
-        criteria: vec![Criterion::parse("toppled:column").expect("criterion")],
-        combine: Combine::All,
-        min: 0.05 * G,
-        max: 2.0 * G,
-        tolerance: 0.01,
-        scan_points: 40,
-    };
+    let req = PgaRequest::cli_default(vec![Criterion::parse("toppled:column").expect("criterion")]);
     println!("Full runs on one thread, wall time, min of {reps}:\n");
     println!("| record | PGA | `auto` runs | rocking steps | rocking (ms) | dda steps | dda (ms) | dda / rocking | peak θ rocking / dda (rad) |");
     println!("|---|---|---|---|---|---|---|---|---|");

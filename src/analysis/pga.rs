@@ -289,6 +289,23 @@ pub struct PgaRequest {
     pub scan_points: usize,
 }
 
+impl PgaRequest {
+    /// The search `ashlar pga` runs by default (`cli::load`'s range flags and `--scan-points`):
+    /// 0.05–2 g (standard g), 40 scan points, to 0.01 m/s², every criterion. The examples and
+    /// tests that reproduce a user's default search start from it.
+    pub fn cli_default(criteria: Vec<Criterion>) -> Self {
+        let g = crate::motion::STANDARD_GRAVITY;
+        Self {
+            criteria,
+            combine: Combine::All,
+            min: 0.05 * g,
+            max: 2.0 * g,
+            tolerance: 0.01,
+            scan_points: 40,
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PgaRun {
     pub pga: f64,

@@ -183,6 +183,30 @@ pub fn housner_rocking(
     }
     s
 }
+/// Half-cycles of a rocking history of (t s, θ rad, θ̇ rad/s) samples: (start time s, |θ̇| at
+/// the start rad/s, peak |θ| rad) of each run of one sign of θ. A sample with |θ| ≤ 1e-5 rad
+/// counts as at rest (neither sign), so rest between two half-cycles of the same sign does not
+/// split them. Used to compare histories half-cycle by half-cycle (docs/accuracy-vs-speed.md).
+pub fn half_cycles(h: &[(f64, f64, f64)]) -> Vec<(f64, f64, f64)> {
+    let still = 1e-5;
+    let mut out: Vec<(f64, f64, f64)> = Vec::new();
+    let mut sign = 0.0f64;
+    for &(t, th, w) in h {
+        let s = if th.abs() > still { th.signum() } else { 0.0 };
+        if s != 0.0 && s != sign {
+            out.push((t, w.abs(), th.abs()));
+        }
+        if s != 0.0 {
+            sign = s;
+        }
+        if let Some(last) = out.last_mut() {
+            if s == sign && s != 0.0 {
+                last.2 = last.2.max(th.abs());
+            }
+        }
+    }
+    out
+}
 
 /// The ground motion of Yagoda-Biran & Hatzor 2015, §3.3: ü_g = A sin 2πt for 0 ≤ t ≤ 0.5 s (one half-sine of a 1 s
 /// period), then 0; A in m/s².
@@ -330,6 +354,23 @@ mod tests {
     use super::*;
 
     const G: f64 = 9.81;
+
+    /// A rest inside a run of one sign does not split it; a change of sign does: two
+    /// half-cycles, each with its start speed and peak (exact: the peaks are samples).
+    #[test]
+    fn half_cycles_split_on_sign_and_bridge_rest() {
+        let h = [
+            (0.0, 0.0, 0.0),
+            (0.1, 0.02, 0.5),
+            (0.2, 0.05, 0.1),
+            (0.3, 0.0, -0.4),
+            (0.4, 0.03, 0.2),
+            (0.5, -0.01, -0.6),
+            (0.6, -0.04, -0.1),
+        ];
+        let c = half_cycles(&h);
+        assert_eq!(c, vec![(0.1, 0.5, 0.05), (0.5, 0.6, 0.04)]);
+    }
 
     /// Under gravity alone the incline has the closed form d = ½g(sin α − cos α tan φ)t²
     /// (Yagoda-Biran & Hatzor 2015, Eq. 14); the semi-implicit steps with the trapezoidal position update

@@ -101,13 +101,7 @@ fn a_block_at_rest_again_is_handed_back_and_ends_as_the_engine_run_through() {
     let mut fine = scene.clone();
     fine.control.time_step = 2.5e-4;
     let reference = go_frames(&fine, pga, false, None, Some(&kr));
-    let t1: f64 = a
-        .model_reason
-        .split("; at t = ")
-        .nth(1)
-        .and_then(|r| r.split(' ').next())
-        .and_then(|t| t.parse().ok())
-        .expect("hand-back time");
+    let t1: f64 = reason_time(&a.model_reason, "; at t = ").expect("hand-back time");
     let after = |v: Mutex<Vec<(f64, f64)>>| {
         v.into_inner()
             .expect("frames")
@@ -176,13 +170,7 @@ fn the_hand_back_keeps_the_slip_and_stitches_the_outputs() {
         (a.final_rotation, a.max_rotation, a.final_displacement),
         (b.final_rotation, b.max_rotation, b.final_displacement)
     );
-    let t1: f64 = with
-        .model_reason
-        .split("; at t = ")
-        .nth(1)
-        .and_then(|r| r.split(' ').next())
-        .and_then(|t| t.parse().ok())
-        .expect("hand-back time");
+    let t1: f64 = reason_time(&with.model_reason, "; at t = ").expect("hand-back time");
     let csv = std::fs::read_to_string(dir.join("histories.csv")).expect("histories");
     let mut lines = csv.lines();
     let head: Vec<&str> = lines.next().expect("header").split(',').collect();

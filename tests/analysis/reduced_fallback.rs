@@ -73,12 +73,7 @@ fn fallback_from_the_last_rest_matches_the_engine_from_zero() {
                 println!("{name} {g} g: {} (no fallback)", s.model);
                 continue;
             }
-            let t0: f64 = s
-                .model_reason
-                .split("ran from t = ")
-                .nth(1)
-                .and_then(|r| r.split(' ').next())
-                .and_then(|t| t.parse().ok())
+            let t0: f64 = reason_time(&s.model_reason, "ran from t = ")
                 .unwrap_or_else(|| panic!("{name} {g} g: no warm start in {:?}", s.model_reason));
             let (f0, end0, steps0) = from_zero(&dda, name, g);
             let (ff, endf, _) = from_zero(&fine, name, g);
@@ -160,13 +155,7 @@ fn a_run_that_writes_outputs_hands_over_like_a_search_run() {
         (with.steps, with.simulated_time, &with.failure_mode),
         (without.steps, without.simulated_time, &without.failure_mode)
     );
-    let t0: f64 = with
-        .model_reason
-        .split("ran from t = ")
-        .nth(1)
-        .and_then(|r| r.split(' ').next())
-        .and_then(|t| t.parse().ok())
-        .expect("handed over");
+    let t0: f64 = reason_time(&with.model_reason, "ran from t = ").expect("handed over");
     let csv = std::fs::read_to_string(dir.join("histories.csv")).expect("histories");
     let mut lines = csv.lines();
     let head: Vec<&str> = lines.next().expect("header").split(',').collect();

@@ -134,15 +134,10 @@ pub fn example_column() -> Scene {
 /// The PGA-range tests' search: `toppled:column` from `min_g` to 2 g (g = 9.80665 m/s²) with
 /// 40 scan points (the CLI's defaults but the start of the range), to 0.01 m/s².
 pub fn toppled_column_search(min_g: f64) -> ashlar::analysis::pga::PgaRequest {
-    use ashlar::analysis::pga::{Combine, Criterion, PgaRequest};
-    const G_STANDARD: f64 = 9.80665;
+    use ashlar::analysis::pga::{Criterion, PgaRequest};
     PgaRequest {
-        criteria: vec![Criterion::parse("toppled:column").expect("criterion")],
-        combine: Combine::All,
-        min: min_g * G_STANDARD,
-        max: 2.0 * G_STANDARD,
-        tolerance: 0.01,
-        scan_points: 40,
+        min: min_g * ashlar::motion::STANDARD_GRAVITY,
+        ..PgaRequest::cli_default(vec![Criterion::parse("toppled:column").expect("criterion")])
     }
 }
 
@@ -230,3 +225,13 @@ pub const MOTION_REPORT_FIELDS: [&str; 12] = [
     "mean_period",
     "spectrum",
 ];
+
+/// The time, s, written after `marker` in a run's `model_reason` (e.g. "ran from t = " for
+/// the hand-over, "; at t = " for the hand-back); `None` when the reason has no such time.
+pub fn reason_time(reason: &str, marker: &str) -> Option<f64> {
+    reason
+        .split(marker)
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|t| t.parse().ok())
+}
