@@ -77,12 +77,7 @@ fn point(scene: &Scene, gm: &GroundMotion, how: Fallback) -> Point {
 
 fn main() {
     let column = parse_scene(presets::EXAMPLE_COLUMN).expect("column");
-    let slender = Column {
-        half_width: 0.12,
-        half_height: 0.8,
-        ..Column::SEED
-    }
-    .json(json!({}));
+    let slender = Column::SLENDER.json(json!({}));
     let slender = parse_scene(&slender.to_string()).expect("slender");
     let mut names: Vec<String> = std::fs::read_dir(presets::records_dir())
         .expect("data/ground-motions")

@@ -22,15 +22,7 @@ use serde_json::json;
 const FALLEN: f64 = 1.0;
 
 fn scene_of(name: &str) -> Scene {
-    let slender = || {
-        Column {
-            half_width: 0.12,
-            half_height: 0.8,
-            ..Column::SEED
-        }
-        .json(json!({}))
-        .to_string()
-    };
+    let slender = || Column::SLENDER.json(json!({})).to_string();
     match name {
         "column" => parse_scene(presets::EXAMPLE_COLUMN).expect("column"),
         "slender" => parse_scene(&slender()).expect("slender"),

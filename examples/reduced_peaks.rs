@@ -75,12 +75,7 @@ fn within(x: f64, reference: f64) -> bool {
 
 fn main() {
     let column = parse_scene(presets::EXAMPLE_COLUMN).expect("column");
-    let slender = Column {
-        half_width: 0.12,
-        half_height: 0.8,
-        ..Column::SEED
-    }
-    .json(json!({}));
+    let slender = Column::SLENDER.json(json!({}));
     let slender = parse_scene(&slender.to_string()).expect("slender");
     let mut windowed = slender.clone();
     windowed.control.duration = Some(9.0);

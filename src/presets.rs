@@ -64,6 +64,15 @@ impl Column {
         block_model: Some(BlockModel::Rigid),
     };
 
+    /// The slender column of the PGA-search honesty tests and the hand-over studies: 0.24 ×
+    /// 1.6 m (slenderness 0.15 rad, 8.5°), otherwise [`Column::SEED`]; near its threshold its
+    /// verdict turns on the impacts, which is what those checks need.
+    pub const SLENDER: Column = Column {
+        half_width: 0.12,
+        half_height: 0.8,
+        ..Column::SEED
+    };
+
     /// The same column with another friction angle, degrees.
     pub const fn friction(self, friction_angle: f64) -> Self {
         Column {

@@ -33,11 +33,7 @@ fn record(name: &str) -> GroundMotion {
 
 /// A slender column (half-sizes 0.12 × 0.8 m) on a plinth.
 fn column() -> ashlar::scene::Scene {
-    let slender = Column {
-        half_width: 0.12,
-        half_height: 0.8,
-        ..Column::SEED
-    };
+    let slender = Column::SLENDER;
     parse(&slender.json(json!({ "duration": WINDOW })))
 }
 

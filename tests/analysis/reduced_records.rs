@@ -123,16 +123,7 @@ fn peak_rotation_on_records_matches_housner_rk4() {
 /// below the 5 % target and tells "the same solution" from "another".
 #[test]
 fn worst_hand_over_points_match_converged_housner() {
-    let slender = || {
-        parse(
-            &Column {
-                half_width: 0.12,
-                half_height: 0.8,
-                ..Column::SEED
-            }
-            .json(json!({})),
-        )
-    };
+    let slender = || parse(&Column::SLENDER.json(json!({})));
     let column = ashlar::scene::parse_scene(ashlar::presets::EXAMPLE_COLUMN).expect("column");
     let mut windowed = slender();
     windowed.control.duration = Some(9.0);

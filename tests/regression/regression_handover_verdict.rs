@@ -16,14 +16,7 @@ use serde_json::json;
 
 #[test]
 fn a_full_run_gives_the_search_verdict_where_auto_hands_over() {
-    let scene = parse(
-        &Column {
-            half_width: 0.12,
-            half_height: 0.8,
-            ..Column::SEED
-        }
-        .json(json!({ "duration": 9.0 })),
-    );
+    let scene = parse(&Column::SLENDER.json(json!({ "duration": 9.0 })));
     let gm = record("friuli-1976-tolmezzo-000.at2");
     let criteria = [Criterion::parse("toppled:column").expect("criterion")];
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("regression_handover");
