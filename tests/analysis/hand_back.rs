@@ -171,37 +171,26 @@ fn the_hand_back_keeps_the_slip_and_stitches_the_outputs() {
         (b.final_rotation, b.max_rotation, b.final_displacement)
     );
     let t1: f64 = reason_time(&with.model_reason, "; at t = ").expect("hand-back time");
-    let csv = std::fs::read_to_string(dir.join("histories.csv")).expect("histories");
-    let mut lines = csv.lines();
-    let head: Vec<&str> = lines.next().expect("header").split(',').collect();
-    let find = |name: &str| {
-        head.iter()
-            .position(|h| *h == name)
-            .unwrap_or_else(|| panic!("{name} in {head:?}"))
-    };
-    let (cr, cx) = (find("column.rotation_rad"), find("column.x_m"));
-    let rows: Vec<(f64, f64, f64)> = lines
-        .map(|l| {
-            let v: Vec<f64> = l.split(',').map(|x| x.parse().expect("number")).collect();
-            (v[0], v[cr], v[cx])
-        })
-        .collect();
-    assert_eq!(rows[0].0, 0.0);
-    assert!(rows.windows(2).all(|w| w[1].0 > w[0].0), "times increase");
-    let last = rows.last().expect("rows");
-    assert!((last.0 - with.simulated_time).abs() < 1e-9, "{last:?}");
-    assert_eq!(last.1, a.final_rotation);
+    let rows = history_columns(
+        &dir.join("histories.csv"),
+        &["column.rotation_rad", "column.x_m"],
+    );
+    assert_whole_history(&rows, with.simulated_time, a.final_rotation);
     // Across the hand-back the block is at rest: its displacement continues (the slip kept),
     // the engine's last frame before and the reduced model's first after within 1e-9 m.
-    let before = rows.iter().rev().find(|r| r.0 < t1 - 1e-9).expect("before");
-    let after = rows.iter().find(|r| r.0 >= t1 - 1e-9).expect("after");
+    let before = rows
+        .iter()
+        .rev()
+        .find(|r| r[0] < t1 - 1e-9)
+        .expect("before");
+    let after = rows.iter().find(|r| r[0] >= t1 - 1e-9).expect("after");
     println!("hand-back at {t1} s: before {before:?}, after {after:?}");
     assert!(
-        before.2.abs() > 1e-5,
+        before[2].abs() > 1e-5,
         "the block slipped before the hand-back"
     );
     assert!(
-        (after.2 - before.2).abs() < 1e-9 + 1e-3 * (after.0 - before.0),
+        (after[2] - before[2]).abs() < 1e-9 + 1e-3 * (after[0] - before[0]),
         "slip lost: {before:?} → {after:?}"
     );
     std::fs::remove_dir_all(&dir).ok();

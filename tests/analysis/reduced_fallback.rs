@@ -156,32 +156,20 @@ fn a_run_that_writes_outputs_hands_over_like_a_search_run() {
         (without.steps, without.simulated_time, &without.failure_mode)
     );
     let t0: f64 = reason_time(&with.model_reason, "ran from t = ").expect("handed over");
-    let csv = std::fs::read_to_string(dir.join("histories.csv")).expect("histories");
-    let mut lines = csv.lines();
-    let head: Vec<&str> = lines.next().expect("header").split(',').collect();
-    let col = head
-        .iter()
-        .position(|h| *h == "column.rotation_rad")
-        .expect("rotation column");
-    let rows: Vec<(f64, f64)> = lines
-        .map(|l| {
-            let v: Vec<f64> = l.split(',').map(|x| x.parse().expect("number")).collect();
-            (v[0], v[col])
-        })
-        .collect();
-    assert_eq!(rows[0].0, 0.0);
-    assert!(rows.windows(2).all(|w| w[1].0 > w[0].0), "times increase");
-    let last = rows.last().expect("rows");
-    assert!((last.0 - with.simulated_time).abs() < 1e-9, "{last:?}");
-    assert_eq!(last.1, a.final_rotation);
-    let peak = rows.iter().map(|r| r.1.abs()).fold(0.0, f64::max);
+    let rows = history_columns(&dir.join("histories.csv"), &["column.rotation_rad"]);
+    assert_whole_history(&rows, with.simulated_time, a.final_rotation);
+    let peak = rows.iter().map(|r| r[1].abs()).fold(0.0, f64::max);
     assert!(peak <= a.max_rotation, "{peak} > {}", a.max_rotation);
-    let before: Vec<_> = rows.iter().filter(|r| r.0 < t0 - 1e-9).collect();
+    let before: Vec<_> = rows.iter().filter(|r| r[0] < t0 - 1e-9).collect();
     for (k, r) in before.iter().enumerate() {
-        assert!((r.0 - k as f64 * 0.01).abs() < 1e-9, "frame {k} at {}", r.0);
+        assert!(
+            (r[0] - k as f64 * 0.01).abs() < 1e-9,
+            "frame {k} at {}",
+            r[0]
+        );
     }
     assert!(
-        rows.iter().any(|r| (r.0 - t0).abs() < 1e-9),
+        rows.iter().any(|r| (r[0] - t0).abs() < 1e-9),
         "a frame at t0 = {t0}"
     );
     // The independent reference over [0, t0 + 50 ms].
@@ -222,8 +210,8 @@ fn a_run_that_writes_outputs_hands_over_like_a_search_run() {
     };
     let window: Vec<(f64, f64, f64)> = rows
         .iter()
-        .filter(|r| r.0 <= end)
-        .filter_map(|r| at(r.0).map(|x| (r.0, r.1, x)))
+        .filter(|r| r[0] <= end)
+        .filter_map(|r| at(r[0]).map(|x| (r[0], r[1], x)))
         .collect();
     assert!(window.len() > 10, "{} common frames", window.len());
     let scale = window

@@ -235,3 +235,37 @@ pub fn reason_time(reason: &str, marker: &str) -> Option<f64> {
         .and_then(|r| r.split(' ').next())
         .and_then(|t| t.parse().ok())
 }
+
+/// Rows of `histories.csv` as [time, the named columns in order…] (each name as in the
+/// header, e.g. "column.rotation_rad"); panics naming a column the header lacks.
+pub fn history_columns(path: &std::path::Path, names: &[&str]) -> Vec<Vec<f64>> {
+    let csv = std::fs::read_to_string(path).expect("histories");
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let cols: Vec<usize> = names
+        .iter()
+        .map(|name| {
+            head.iter()
+                .position(|h| h == name)
+                .unwrap_or_else(|| panic!("{name} in {head:?}"))
+        })
+        .collect();
+    lines
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').map(|x| x.parse().expect("number")).collect();
+            std::iter::once(v[0])
+                .chain(cols.iter().map(|&c| v[c]))
+                .collect()
+        })
+        .collect()
+}
+
+/// A stitched history is whole: it starts at t = 0, its times increase, it ends at the run's
+/// simulated time (within 1e-9 s) and its last rotation (row[1]) is the summary's, exactly.
+pub fn assert_whole_history(rows: &[Vec<f64>], simulated_time: f64, final_rotation: f64) {
+    assert_eq!(rows[0][0], 0.0);
+    assert!(rows.windows(2).all(|w| w[1][0] > w[0][0]), "times increase");
+    let last = rows.last().expect("rows");
+    assert!((last[0] - simulated_time).abs() < 1e-9, "{last:?}");
+    assert_eq!(last[1], final_rotation);
+}
