@@ -327,13 +327,7 @@ fn hand_back_at(
     else {
         return None;
     };
-    let ag = gm.acceleration(0.0);
-    let a = b.to_local(Vector2::new(-ag[0], -b.gravity - ag[1]));
-    let quiet = !reduced::rocking::tips(&b, 0, a)
-        && !reduced::rocking::tips(&b, 1, a)
-        && reduced::sliding::slips(&b, a).is_none()
-        && reduced::sliding::pressure(a) > 0.0;
-    quiet.then_some((
+    reduced::stays_at_rest(&b, &gm, 0.0).then_some((
         s,
         gm,
         Shift {

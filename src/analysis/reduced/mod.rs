@@ -263,6 +263,40 @@ pub struct Reduced {
 /// What would start at an instant: rocking on a pivot, sliding in a direction, loss of contact.
 type Onset = (Option<usize>, Option<f64>, bool);
 
+/// Which motion would start for a block at rest on its base under the load `a` (per unit mass,
+/// local coordinates, m/s²): (rocking pivot, sliding direction, loss of contact), each only
+/// for the motions `modes` admits.
+fn onset_under(block: &SingleBlock, modes: Modes, a: Vector2<f64>) -> Onset {
+    let lift = sliding::pressure(a) <= 0.0;
+    let rock = if modes == Modes::Sliding {
+        None
+    } else {
+        (0..2).find(|&k| rocking::tips(block, k, a))
+    };
+    let slide = if modes == Modes::Rocking {
+        None
+    } else {
+        sliding::slips(block, a)
+    };
+    (rock, slide, lift)
+}
+
+/// Is nothing starting under the onset `o`? (Loss of contact only stops `Auto` runs; the
+/// forced models keep the block on its base through it.)
+fn quiet(modes: Modes, o: &Onset) -> bool {
+    o.0.is_none() && o.1.is_none() && (!o.2 || modes != Modes::Auto)
+}
+
+/// Does a block at rest on its base stay at rest at `t` under `motion` (the `Auto` model: no
+/// rocking, no sliding, no loss of contact starts)? The rule the reduced model applies at
+/// rest, for a caller that wants to start it there (the hand-back).
+pub(crate) fn stays_at_rest(block: &SingleBlock, motion: &GroundMotion, t: f64) -> bool {
+    quiet(
+        Modes::Auto,
+        &onset_under(block, Modes::Auto, load_at(block, motion, t)),
+    )
+}
+
 /// Bisection depth of event location: 2⁻⁶⁰ of a step is below round-off of the time.
 const BISECTIONS: usize = 60;
 
@@ -528,25 +562,12 @@ impl Reduced {
 
     /// Which motion would start at t: (rocking pivot, sliding direction), each if any.
     fn onset(&self, t: f64) -> Onset {
-        let a = self.load(t);
-        let lift = sliding::pressure(a) <= 0.0;
-        let rock = if self.modes == Modes::Sliding {
-            None
-        } else {
-            (0..2).find(|&k| rocking::tips(&self.block, k, a))
-        };
-        let slide = if self.modes == Modes::Rocking {
-            None
-        } else {
-            sliding::slips(&self.block, a)
-        };
-        (rock, slide, lift)
+        onset_under(&self.block, self.modes, self.load(t))
     }
 
-    /// Is nothing starting under the onset `o`? (Loss of contact only stops `Auto` runs; the
-    /// forced models keep the block on its base through it.)
+    /// Is nothing starting under the onset `o`?
     fn quiet(&self, o: &Onset) -> bool {
-        o.0.is_none() && o.1.is_none() && (!o.2 || self.modes != Modes::Auto)
+        quiet(self.modes, o)
     }
 
     /// At rest: scan for the first instant a motion starts, locate it by bisection.
