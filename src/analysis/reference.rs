@@ -121,18 +121,7 @@ pub fn housner_rocking(
             } else if ground(t + dt).abs() > threshold {
                 // The onset within the step, located like an impact (at the step's start it
                 // would err by up to a step: a second-order error in θ).
-                let (mut lo, mut hi) = (t, t + dt);
-                while hi - lo > IMPACT_TIME {
-                    let mid = 0.5 * (lo + hi);
-                    if mid <= lo || mid >= hi {
-                        break;
-                    }
-                    if ground(mid).abs() > threshold {
-                        hi = mid;
-                    } else {
-                        lo = mid;
-                    }
-                }
+                let hi = first_true(t, t + dt, |x| ground(x).abs() > threshold);
                 sgn = ground(hi).signum();
                 tt = hi;
                 left = t + dt - hi;
@@ -150,18 +139,7 @@ pub fn housner_rocking(
                 break;
             }
             // θ crosses zero within the sub-step: the shortest sub-step after which it has.
-            let (mut lo, mut hi) = (0.0, left);
-            while hi - lo > IMPACT_TIME {
-                let mid = 0.5 * (lo + hi);
-                if mid <= lo || mid >= hi {
-                    break;
-                }
-                if rk4(tt, th, w, mid, sgn).0 * sgn < 0.0 {
-                    hi = mid;
-                } else {
-                    lo = mid;
-                }
-            }
+            let hi = first_true(0.0, left, |h| rk4(tt, th, w, h, sgn).0 * sgn < 0.0);
             let w_before = rk4(tt, th, w, hi, sgn).1;
             tt += hi;
             left -= hi;
@@ -183,6 +161,24 @@ pub fn housner_rocking(
     }
     s
 }
+
+/// The smallest x in (lo, hi] at which `holds` does, by bisection to [`IMPACT_TIME`] (it does
+/// not at `lo`, it does at `hi`): where the reference locates an onset or an impact.
+fn first_true(mut lo: f64, mut hi: f64, holds: impl Fn(f64) -> bool) -> f64 {
+    while hi - lo > IMPACT_TIME {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        if holds(mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    hi
+}
+
 /// Half-cycles of a rocking history of (t s, θ rad, θ̇ rad/s) samples: (start time s, |θ̇| at
 /// the start rad/s, peak |θ| rad) of each run of one sign of θ. A sample with |θ| ≤ 1e-5 rad
 /// counts as at rest (neither sign), so rest between two half-cycles of the same sign does not
