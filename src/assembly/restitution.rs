@@ -181,6 +181,19 @@ fn motion_of(input: &ImpactInput, b: usize, states: &[BlockState]) -> (Vec6, Vec
     }
 }
 
+/// The approach speed (m/s) below which a contact is settling, not impacting:
+/// `slow_factor` × g × Δt (the nominal Δt when the step is cut).
+fn settling_speed(input: &ImpactInput, params: &ImpactParams) -> f64 {
+    params.slow_factor * input.gravity.abs() * input.dt.max(input.nominal_dt)
+}
+
+/// Whether an impact approaching at the normal gap rate `rate` (m/s, negative closing) is
+/// located (`ImpactParams::locate_speed_ratio`; at 1 or less every impact is).
+fn fast_enough(rate: f64, input: &ImpactInput, params: &ImpactParams) -> bool {
+    params.locate_speed_ratio <= 1.0
+        || -rate > params.locate_speed_ratio * settling_speed(input, params)
+}
+
 /// Whether contact `c` approaches fast enough to be located (`ImpactParams::locate_speed_ratio`).
 fn locatable(
     input: &ImpactInput,
@@ -188,11 +201,12 @@ fn locatable(
     states: &[BlockState],
     params: &ImpactParams,
 ) -> bool {
+    if params.locate_speed_ratio <= 1.0 {
+        return true;
+    }
     let (vi, _) = motion_of(input, c.vertex_block, states);
     let (vj, _) = motion_of(input, c.edge_block, states);
-    let rate = c.e_i.dot(&vi) - c.e_j.dot(&vj);
-    let v_min = params.slow_factor * input.gravity.abs() * input.dt.max(input.nominal_dt);
-    -rate > params.locate_speed_ratio * v_min
+    fast_enough(c.e_i.dot(&vi) - c.e_j.dot(&vj), input, params)
 }
 
 /// When contact `c` impacts, s from the step start: 0 for a contact closed within the last step
@@ -211,7 +225,7 @@ fn impact_time(
     let (vi, ai) = motion_of(input, c.vertex_block, states);
     let (vj, aj) = motion_of(input, c.edge_block, states);
     let rate = c.e_i.dot(&vi) - c.e_j.dot(&vj);
-    let v_min = params.slow_factor * input.gravity.abs() * input.dt.max(input.nominal_dt);
+    let v_min = settling_speed(input, params);
     if rate >= -v_min {
         return None;
     }
@@ -248,7 +262,7 @@ pub fn next_impact(
         .iter()
         .enumerate()
         .filter(|(k, _)| !landing.get(*k).copied().unwrap_or(false))
-        .filter(|(_, c)| params.locate_speed_ratio <= 1.0 || locatable(input, c, states, params))
+        .filter(|(_, c)| locatable(input, c, states, params))
         .filter_map(|(_, c)| impact_time(input, c, states, params))
         .filter(|&t| t > window)
         .min_by(f64::total_cmp)
@@ -323,7 +337,7 @@ pub fn apply_impacts(
         let later = any_now
             && params.group_landings
             && times[k].is_some_and(|t| t > window && t <= input.dt)
-            && (params.locate_speed_ratio <= 1.0 || locatable(input, c, states, params));
+            && locatable(input, c, states, params);
         if now || later {
             impacting[k] = true;
             landing[k] = later;
@@ -367,13 +381,7 @@ pub fn apply_impacts(
             // = 2, 1 ms; +0.6 % with a 2e-3 Δt margin).
             let bounce = -input.restitution * rate;
             let g0 = c.g0.max(0.0);
-            let hover = params.close_hover
-                && (params.locate_speed_ratio <= 1.0
-                    || -rate
-                        > params.locate_speed_ratio
-                            * params.slow_factor
-                            * input.gravity.abs()
-                            * input.dt.max(input.nominal_dt));
+            let hover = params.close_hover && fast_enough(rate, input, params);
             if bounce * input.dt > g0 || !hover {
                 bounce
             } else {
