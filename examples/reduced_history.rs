@@ -10,6 +10,9 @@
 //! Run: `cargo run --release --example reduced_history -- SCENE RECORD PGA [T_END]`, SCENE one of
 //! `column` (examples/column.json), `slender` (0.24 × 1.6 m, φ = 75°), `slender9` (the same over
 //! the record's first 9 s); PGA in m/s² (handover.md's column); T_END cuts every run (s).
+//! Diagnosis switches of the engine run (SLOW, HOVER, GROUP, SPLIT, AVG, DUAL, KPEN, EDT), the
+//! per-landing ratio r (LAND0, LAND1) and a sample dump (DUMP0, DUMP1): docs/accuracy-vs-speed.md,
+//! "Micro-rocking: what parts the engine from Housner (session 34)".
 use ashlar::analysis::reduced::{self, Modes, Phase, Reduced, ReducedParams};
 use ashlar::analysis::reference::{half_cycles, housner_rocking, HousnerColumn};
 use ashlar::analysis::run::duration;
@@ -97,8 +100,30 @@ fn main() {
     // (e) the engine at 1e-4 s.
     let mut fine = scene.clone();
     fine.control.model = ModelChoice::Dda;
-    fine.control.time_step = 1e-4;
-    let mut sim = Simulation::new(&fine, &gm, SimParams::default());
+    fine.control.time_step = env("EDT").unwrap_or(1e-4);
+    // Diagnosis of the engine's contact handling in micro-rocking (docs/accuracy-vs-speed.md,
+    // "Micro-rocking"): SLOW = ImpactParams::slow_factor, HOVER/GROUP/SPLIT = 0 turn off
+    // close_hover/group_landings/split_before, KPEN = penalty stiffness (N/m) in place of 10 E,
+    // DUAL = 1 the dual (penalty-free) contact solver, AVG = 1 SimParams::average_ground_load,
+    // EDT = the engine's Δt (s).
+    let mut sp = SimParams::default();
+    if let Some(f) = env("SLOW") {
+        sp.impact.slow_factor = f;
+    }
+    let off = |k: &str| env(k) == Some(0.0);
+    sp.impact.close_hover &= !off("HOVER");
+    sp.impact.group_landings &= !off("GROUP");
+    sp.impact.split_before &= !off("SPLIT");
+    if env("AVG") == Some(1.0) {
+        sp.average_ground_load = true;
+    }
+    if env("DUAL") == Some(1.0) {
+        fine.control.contact_solver = ashlar::scene::ContactSolver::Dual;
+    }
+    if let Some(k) = env("KPEN") {
+        fine.control.penalty_stiffness = ashlar::scene::Penalty::Value(k);
+    }
+    let mut sim = Simulation::new(&fine, &gm, sp);
     let mut he = Vec::new();
     let free = block.free;
     let engine_end = if env("ENGINE") == Some(0.0) {
@@ -157,6 +182,52 @@ fn main() {
             println!("{f} × PGA: reduced (forced rocking) peak {pr:.5}, Housner {ph:.5}");
         }
     }
+    if let (Some(t0), Some(t1)) = (env("DUMP0"), env("DUMP1")) {
+        // The three histories sample by sample over [DUMP0, DUMP1] s (engine samples; Housner's
+        // nearest sample), for the landings of micro-rocking.
+        for &(t, th, w) in he.iter().filter(|x| x.0 >= t0 && x.0 <= t1) {
+            // Housner's samples are in time order: the nearest one by bisection.
+            let k = hh
+                .partition_point(|x| x.0 < t)
+                .min(hh.len().saturating_sub(1));
+            let j = if k > 0 && (hh[k - 1].0 - t).abs() < (hh[k].0 - t).abs() {
+                k - 1
+            } else {
+                k
+            };
+            let (th_h, w_h) = hh.get(j).map_or((0.0, 0.0), |x| (x.1, x.2));
+            println!(
+                "dump t {t:.5} engine θ {th:+.3e} θ̇ {w:+.3e} | Housner θ {th_h:+.3e} θ̇ {w_h:+.3e} | ü_g {:+.4}",
+                gm.acceleration(t)[0]
+            );
+        }
+    }
+    if let (Some(t0), Some(t1)) = (env("LAND0"), env("LAND1")) {
+        // Per-landing angular-velocity ratio over [LAND0, LAND1] s, for the engine and Housner.
+        // Landings split at the settling threshold of the default engine run (Δt = 1e-4 s),
+        // whatever EDT, so that the classes are the same landings across Δt.
+        let slow = 2.0 * scene.gravity.abs() * 1e-4 / (2.0 * b);
+        for (name, v) in [("engine", &he), ("Housner", &hh)] {
+            let rs = landing_ratios(v, t0, t1);
+            let mean = |f: &dyn Fn(f64) -> bool| {
+                let x: Vec<f64> = rs.iter().filter(|l| f(l.1)).map(|l| l.2 / l.1).collect();
+                let m = x.iter().sum::<f64>() / x.len() as f64;
+                (
+                    x.len(),
+                    if x.is_empty() {
+                        "-".into()
+                    } else {
+                        format!("{m:.4}")
+                    },
+                )
+            };
+            let (ns, rs_slow) = mean(&|w| w < slow);
+            let (nf, rs_fast) = mean(&|w| w >= slow);
+            println!(
+                "landings {name}: {ns} with |θ̇⁻| < 2g(1e-4 s)/2b = {slow:.5} rad/s, mean r {rs_slow}; {nf} faster, mean r {rs_fast}"
+            );
+        }
+    }
     let (r, hs, e) = (half_cycles(&hr), half_cycles(&hh), half_cycles(&he));
     let peak = |v: &[(f64, f64, f64)]| v.iter().fold(0.0f64, |a, x| a.max(x.1.abs()));
     println!(
@@ -192,4 +263,55 @@ fn main() {
             s(f(&e, 2), 5),
         );
     }
+}
+
+/// The landings (sign changes of θ) of a history of (t s, θ rad, θ̇ rad/s) samples within
+/// [t0, t1] s, each as (time s, |θ̇| before, |θ̇| after, rad/s): θ̇ fitted by least squares on
+/// [t − 2 ms, t − 0.3 ms] and [t + 1.5 ms, t + 3 ms] and extrapolated to the landing, so that
+/// the change of θ̇ under gravity and the ground within the windows and the contact's ringing
+/// just after the landing drop out (measured on Housner's own history: r within ±0.015 of
+/// 1 − 1.5 sin²α; landings closer than the windows to the next one are skipped).
+fn landing_ratios(v: &[(f64, f64, f64)], t0: f64, t1: f64) -> Vec<(f64, f64, f64)> {
+    let (before, after) = ((3e-4, 2e-3), (1.5e-3, 3e-3));
+    let crossings: Vec<f64> = v
+        .windows(2)
+        .filter(|w| {
+            w[0].0 >= t0 && w[1].0 <= t1 && w[0].1 != 0.0 && (w[0].1 > 0.0) != (w[1].1 > 0.0)
+        })
+        .map(|w| w[0].0 + (w[1].0 - w[0].0) * w[0].1 / (w[0].1 - w[1].1))
+        .collect();
+    let fit = |a: f64, b: f64, at: f64| {
+        let p: Vec<(f64, f64)> = v
+            .iter()
+            .filter(|x| x.0 >= a && x.0 <= b)
+            .map(|x| (x.0, x.2))
+            .collect();
+        let n = p.len() as f64;
+        let (mx, my) = (
+            p.iter().map(|x| x.0).sum::<f64>() / n,
+            p.iter().map(|x| x.1).sum::<f64>() / n,
+        );
+        let sxx: f64 = p.iter().map(|x| (x.0 - mx).powi(2)).sum();
+        let sxy: f64 = p.iter().map(|x| (x.0 - mx) * (x.1 - my)).sum();
+        (p.len() >= 3 && sxx > 0.0).then(|| my + sxy / sxx * (at - mx))
+    };
+    let mut out = Vec::new();
+    for (k, &t) in crossings.iter().enumerate() {
+        let prev = if k > 0 {
+            crossings[k - 1]
+        } else {
+            f64::NEG_INFINITY
+        };
+        let next = crossings.get(k + 1).copied().unwrap_or(f64::INFINITY);
+        if t - prev < before.1 + 1e-4 || next - t < after.1 + 1e-4 {
+            continue;
+        }
+        if let (Some(wb), Some(wa)) = (
+            fit(t - before.1, t - before.0, t),
+            fit(t + after.0, t + after.1, t),
+        ) {
+            out.push((t, wb.abs(), wa.abs()));
+        }
+    }
+    out
 }
