@@ -234,11 +234,13 @@ pub struct ReducedStats {
     pub first_sliding: Option<f64>,
 }
 
-/// The running state of a reduced model.
+/// The running state of a reduced model. It borrows the motion: a search runs one model per
+/// amplitude, and a copy of a record (its samples and their integrals) cost each run as much as
+/// a few hundred of its steps.
 #[derive(Debug, Clone)]
-pub struct Reduced {
+pub struct Reduced<'a> {
     pub block: SingleBlock,
-    pub motion: GroundMotion,
+    pub motion: &'a GroundMotion,
     pub params: ReducedParams,
     pub modes: Modes,
     pub time: f64,
@@ -250,6 +252,10 @@ pub struct Reduced {
     h: f64,
     /// f at the end of the last ODE step, for the next one (FSAL).
     first_stage: Option<FirstStage>,
+    /// s, the time at which the at-rest scan last found nothing starting (NaN: none yet): the
+    /// next scan step starts there and need not check it again (the onset is a function of
+    /// the time alone, so the check would give the same answer).
+    quiet_at: f64,
     pub stats: ReducedStats,
     /// Violations met so far (only the first stops an `Auto` run; the forced models keep
     /// going and report them).
@@ -339,6 +345,17 @@ impl<'a> StepLoad<'a> {
             StepLoad::Linear { end, at_end, slope }
         } else {
             StepLoad::Exact { block, motion }
+        }
+    }
+
+    /// The load at `t` when `t` is the step's end and the load there is already known (under
+    /// a record: the value [`StepLoad::new`] evaluated there, bit for bit what [`load_at`]
+    /// gives), so the checks at the end of a step cut short by a sample need not evaluate the
+    /// record again.
+    fn at_end(&self, t: f64) -> Option<Vector2<f64>> {
+        match self {
+            StepLoad::Linear { end, at_end, .. } if t == *end => Some(*at_end),
+            _ => None,
         }
     }
 
@@ -471,10 +488,10 @@ fn locate(
     (hi, yh)
 }
 
-impl Reduced {
+impl<'a> Reduced<'a> {
     pub fn new(
         block: SingleBlock,
-        motion: &GroundMotion,
+        motion: &'a GroundMotion,
         params: ReducedParams,
         modes: Modes,
     ) -> Self {
@@ -490,8 +507,9 @@ impl Reduced {
         Self {
             h: params.max_step.min(1e-4),
             first_stage: None,
+            quiet_at: f64::NAN,
             block,
-            motion: motion.clone(),
+            motion,
             params,
             modes,
             time: 0.0,
@@ -515,7 +533,7 @@ impl Reduced {
     /// Effective load per unit mass at t in local coordinates (m/s²): gravity and the inertial
     /// load −a_g of the moving base.
     pub fn load(&self, t: f64) -> Vector2<f64> {
-        load_at(&self.block, &self.motion, t)
+        load_at(&self.block, self.motion, t)
     }
 
     /// Keep the state now as the hand-over point (called at record samples where the state is
@@ -573,9 +591,11 @@ impl Reduced {
     /// At rest: scan for the first instant a motion starts, locate it by bisection.
     fn rest(&mut self, target: f64) -> bool {
         let t0 = self.time;
-        let first = self.onset(t0);
-        if !self.quiet(&first) {
-            return self.start(t0, first);
+        if t0 != self.quiet_at {
+            let first = self.onset(t0);
+            if !self.quiet(&first) {
+                return self.start(t0, first);
+            }
         }
         // Records: to the next sample (exact, see `ReducedParams::rest_scan`); curved motions:
         // one scan step.
@@ -589,6 +609,7 @@ impl Reduced {
         self.stats.steps += 1;
         if self.quiet(&end) {
             self.time = t1;
+            self.quiet_at = t1;
             if t1 == kink {
                 self.keep_hand_over();
             }
@@ -689,7 +710,7 @@ impl Reduced {
         else {
             return false;
         };
-        let (b, motion, params, t0) = (&self.block, &self.motion, self.params, self.time);
+        let (b, motion, params, t0) = (&self.block, self.motion, self.params, self.time);
         let motion_kink = motion.next_kink(t0);
         let end = target.min(motion_kink);
         let load = StepLoad::new(b, motion, t0, end);
@@ -759,7 +780,9 @@ impl Reduced {
         };
         let b = &self.block;
         if self.modes != Modes::Sliding {
-            let a = self.load(self.time);
+            let a = load
+                .at_end(self.time)
+                .unwrap_or_else(|| self.load(self.time));
             let r = rocking::reaction(b, k, y1[0], y1[1], a);
             let t = self.time;
             if r.y < 0.0 {
@@ -786,7 +809,7 @@ impl Reduced {
         let Phase::Sliding { rate, dir } = self.phase else {
             return false;
         };
-        let (b, motion, params, t0) = (&self.block, &self.motion, self.params, self.time);
+        let (b, motion, params, t0) = (&self.block, self.motion, self.params, self.time);
         let motion_kink = motion.next_kink(t0);
         let end = target.min(motion_kink);
         let load = StepLoad::new(b, motion, t0, end);
