@@ -11,6 +11,8 @@
 //!  [--motions rest,sine,record] [--diag] [--tight] [--block-model rigid|deformable] [--poisson V]
 //!  [--anderson DEPTH] [--anderson-restart] [--legacy] [--reference] [--record-start T]
 //!  [--seconds S] [--settle TOL] [--settle-after K] [--light-states on|off] [--light-tilt DEG]
+//!  [--stone-settle TOL] [--stone-settle-state TOL] [--stone-settle-after K]
+//!  [--stone-settle-interfaces N] [--stone-settle-neighbours] [--weight-scale on|off]
 //!  [--light-interface on|off]`
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
@@ -219,6 +221,33 @@ fn main() {
             if let Some(v) = arg("--local-rounds") {
                 params.open_close.local_rounds = v.parse().expect("--local-rounds");
             }
+            // `--stone-settle TOL [--stone-settle-state TOL] [--stone-settle-after K]
+            // [--stone-settle-interfaces N]`: the settle rule for loaded friction updates (and
+            // light head-joint state changes) between stones held by many contacts
+            // (`OpenCloseParams::stone_settle_friction`, docs/contact-solve.md §17).
+            if let Some(v) = arg("--stone-settle") {
+                params.open_close.stone_settle_friction = v.parse().expect("--stone-settle");
+            }
+            if let Some(v) = arg("--stone-settle-state") {
+                params.open_close.stone_settle_state = v.parse().expect("--stone-settle-state");
+            }
+            if let Some(v) = arg("--stone-settle-after") {
+                params.open_close.stone_settle_after = v.parse().expect("--stone-settle-after");
+            }
+            if let Some(v) = arg("--stone-settle-interfaces") {
+                params.open_close.stone_settle_interfaces =
+                    v.parse().expect("--stone-settle-interfaces");
+            }
+            // `--stone-settle-neighbours`: a stone loaded against one with enough interfaces
+            // qualifies too (`OpenCloseParams::stone_settle_neighbours`, §17).
+            if std::env::args().any(|a| a == "--stone-settle-neighbours") {
+                params.open_close.stone_settle_neighbours = true;
+            }
+            // `--weight-scale on|off`: a stone with no contact force uses its weight as force
+            // scale (`OpenCloseParams::weight_scale`, §17).
+            if let Some(v) = arg("--weight-scale") {
+                params.open_close.weight_scale = v == "on";
+            }
             if let Some(v) = arg("--friction-tol") {
                 params.open_close.friction_tolerance = v.parse().expect("--friction-tol");
             }
@@ -324,6 +353,10 @@ fn main() {
                     ch.last_force, ch.settled, ch.light
                 );
                 eprintln!("  changes by force decade (1e-3.. N): {:?}", ch.by_force);
+                eprintln!(
+                    "  stone settle rule: friction updates taken {}, state changes taken {}",
+                    ch.stone_settled_friction, ch.stone_settled_state
+                );
             }
         }
     }

@@ -153,6 +153,9 @@ pub struct BlockSystem {
     base_rhs: Vec<Vec6>,
     /// Mass matrices of this step (for energy and velocity updates).
     pub mass: Vec<Mat6>,
+    /// Per free block, its weight m·g, N (≥ 0; the open–close loop's force scale of a stone
+    /// with no contact force yet, `OpenCloseParams::weight_scale`).
+    pub weight: Vec<f64>,
     /// Per contact (in `ContactSet` order): where its coupling block goes, found once per step
     /// by [`BlockSystem::bind_contacts`] rather than once per spring and iteration.
     /// `None` for a contact with a fixed or driven block (no coupling block).
@@ -184,6 +187,7 @@ impl BlockSystem {
         self.base_diag.resize(nf, Mat6::zeros());
         self.base_rhs.resize(nf, Vec6::zeros());
         self.mass.resize(nf, Mat6::zeros());
+        self.weight.resize(nf, 0.0);
         let a_coef = 1.0 / (newmark.beta * dt * dt);
         for f in 0..nf {
             let b = dofs.block_of[f];
@@ -208,6 +212,7 @@ impl BlockSystem {
                 }
             }
             self.mass[f] = mass;
+            self.weight[f] = (m * loads.gravity).abs();
             self.base_diag[f] = k;
             self.base_rhs[f] = rhs;
         }

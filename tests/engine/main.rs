@@ -28,4 +28,5 @@ mod single_contact;
 mod sliding_newmark;
 mod solver_reuse;
 mod stacked_column;
+mod stone_settle;
 mod templates;
