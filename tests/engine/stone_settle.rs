@@ -1,5 +1,5 @@
 //! The settle rule for loaded friction updates (`OpenCloseParams::stone_settle_friction`,
-//! opt-in, docs/contact-solve.md §17): where it may not apply, it does not. §8's settle rule,
+//! on by default since session 34, docs/contact-solve.md §17): where it may not apply, it does not. §8's settle rule,
 //! applied at the iteration limit as a default, moved two benchmarks of few-block structures
 //! (a block sliding on an incline, the rocking frame under Kobe 0.7 g) because there one
 //! contact's friction is a block's whole shear balance. The new rule applies only between
@@ -26,6 +26,15 @@ fn aggressive() -> OpenCloseParams {
         stone_settle_state: 0.1,
         stone_settle_after: 1,
         stone_settle_neighbours: true,
+        ..Default::default()
+    }
+}
+
+/// The rule off (its default is on: friction 1e-3 from the first iteration, neighbours on).
+fn off() -> OpenCloseParams {
+    OpenCloseParams {
+        stone_settle_friction: 0.0,
+        stone_settle_state: 0.0,
         ..Default::default()
     }
 }
@@ -78,7 +87,7 @@ fn the_stone_rule_leaves_a_block_on_an_incline_alone() {
     let scene = parse(&v);
     let none = GroundMotion::none();
     let on = run(&scene, &none, aggressive(), 1000);
-    let off = run(&scene, &none, OpenCloseParams::default(), 1000);
+    let off = run(&scene, &none, off(), 1000);
     assert_untouched("incline", &on, &off);
 }
 
@@ -90,7 +99,7 @@ fn the_stone_rule_leaves_a_rocking_frame_alone() {
     let scene = parse(&RockingFrame::SEED.json(json!({ "time_step": 1e-3, "duration": 2.0 })));
     let pulse = presets::half_sine(6.0, 0.5);
     let on = run(&scene, &pulse, aggressive(), 1500);
-    let off = run(&scene, &pulse, OpenCloseParams::default(), 1500);
+    let off = run(&scene, &pulse, off(), 1500);
     let rocked = on.geoms()[1].rotation.abs();
     eprintln!("frame: left column rotation at the end {rocked:.3e} rad");
     assert_untouched("frame", &on, &off);
