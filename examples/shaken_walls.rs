@@ -13,7 +13,10 @@
 //!  [--seconds S] [--settle TOL] [--settle-after K] [--light-states on|off] [--light-tilt DEG]
 //!  [--stone-settle TOL] [--stone-settle-state TOL] [--stone-settle-after K]
 //!  [--stone-settle-interfaces N] [--stone-settle-neighbours] [--weight-scale on|off]
-//!  [--light-interface on|off]`
+//!  [--light-interface on|off] [--simplicial] [--digest]`
+//!
+//! `--simplicial` turns off faer's supernodal factorization (`SparseParams::supernodal`);
+//! `--digest` prints a hash of every vertex and velocity at the end (bit-identity checks).
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
 //! fixed-point loop); `--anderson-restart` restarts its history whenever a contact changes state.
@@ -90,6 +93,28 @@ fn compare_with_reference(
         reference.stats().max_penetration,
         sim.stats().max_penetration
     );
+}
+
+/// FNV-1a of the bits of every vertex and velocity (`--digest`): equal digests mean a change
+/// left the run bit-identical.
+fn state_digest(sim: &Simulation) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |x: f64| {
+        for byte in x.to_bits().to_le_bytes() {
+            h = (h ^ u64::from(byte)).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    for g in sim.geoms() {
+        for v in &g.vertices {
+            eat(v.x);
+            eat(v.y);
+        }
+    }
+    for st in sim.states() {
+        st.vel.iter().chain(st.acc.iter()).for_each(|&x| eat(x));
+    }
+    eat(sim.time());
+    h
 }
 
 fn main() {
@@ -255,6 +280,9 @@ fn main() {
                 params.open_close = ashlar::solve::open_close::OpenCloseParams::legacy();
                 params.open_close.max_iterations = 200;
             }
+            if std::env::args().any(|a| a == "--simplicial") {
+                params.solver.sparse.supernodal = false;
+            }
             let mut sim = Simulation::new(&scene, &gm, params);
             sim.set_time(start);
             let t = Instant::now();
@@ -274,6 +302,14 @@ fn main() {
                 done += 1;
             }
             let wall = t.elapsed().as_secs_f64();
+            if std::env::args().any(|a| a == "--digest") {
+                eprintln!(
+                    "  {} stones, {m}: state digest {:016x}, impacts {}",
+                    scene.blocks.len() - 1,
+                    state_digest(&sim),
+                    sim.stats().impacts
+                );
+            }
             if std::env::args().any(|a| a == "--reference") {
                 compare_with_reference(&sim, &scene, &gm, start);
             }

@@ -135,6 +135,25 @@ pub struct ImpactInput<'a> {
     pub gravity: f64,
 }
 
+/// The impact law's per-contact results of one step, kept across steps so that its vectors
+/// are reused. Filled by [`apply_impacts`], read by [`located_step`].
+#[derive(Debug, Default, Clone)]
+pub struct ImpactScratch {
+    /// Per contact: its impact time ([`impact_time`]) at the velocities after this step's
+    /// impulses, s from the step start. Why kept: [`located_step`] needs every contact's impact
+    /// time at those velocities, and the impulses change only the involved blocks'
+    /// velocities, so only their contacts are evaluated again (the second pass over every
+    /// contact was 5 % of a shaken step and 10 % of one at rest, docs/contact-solve.md §16).
+    times: Vec<Option<f64>>,
+    /// Per contact: whether it joined the impact from later in the step
+    /// ([`ImpactParams::group_landings`]).
+    landing: Vec<bool>,
+    /// Per contact: whether it takes part in the impulse set.
+    impacting: Vec<bool>,
+    /// Per free block: whether an impacting contact touches it (its velocity may change).
+    involved: Vec<bool>,
+}
+
 /// One contact in the impact solve: its rows on the two blocks' rigid-body unknowns.
 struct Row {
     /// Free-block indices (None: fixed or driven).
@@ -219,6 +238,11 @@ fn impact_time(
     states: &[BlockState],
     params: &ImpactParams,
 ) -> Option<f64> {
+    // Closed for longer than the last step: the contact's own (a block on its springs), never
+    // an impact whatever its rate (tested first: most contacts of a wall are such).
+    if c.state.is_closed() && !c.closed_within_last_step {
+        return None;
+    }
     if !takes_part(input, c) {
         return None;
     }
@@ -230,8 +254,8 @@ fn impact_time(
         return None;
     }
     if c.state.is_closed() {
-        // Closed for longer than the last step: the contact's own (a block on its springs).
-        return c.closed_within_last_step.then_some(0.0);
+        // Closed within the last step (the others returned above).
+        return Some(0.0);
     }
     if c.g0 <= 0.0 {
         return Some(0.0);
@@ -248,22 +272,24 @@ fn impact_time(
 }
 
 /// The first impact after the window at the step start ([`ImpactParams::window`]), s from the
-/// step start, if one falls within the next two steps. Contacts flagged in `landing` (they
-/// joined this step's impact, [`apply_impacts`]) are skipped: they land at the step's end.
-pub fn next_impact(
+/// step start, if one falls within the next two steps, from the impact times `scratch` holds
+/// (filled by [`apply_impacts`] for these contacts and states). Contacts flagged landing (they
+/// joined this step's impact) are skipped: they land at the step's end.
+fn next_impact(
     input: &ImpactInput,
     contacts: &[Contact],
     states: &[BlockState],
     params: &ImpactParams,
-    landing: &[bool],
+    scratch: &ImpactScratch,
 ) -> Option<f64> {
     let window = params.window * input.dt;
     contacts
         .iter()
-        .enumerate()
-        .filter(|(k, _)| !landing.get(*k).copied().unwrap_or(false))
-        .filter(|(_, c)| locatable(input, c, states, params))
-        .filter_map(|(_, c)| impact_time(input, c, states, params))
+        .zip(&scratch.times)
+        .zip(&scratch.landing)
+        .filter(|(_, &landing)| !landing)
+        .filter(|((c, _), _)| locatable(input, c, states, params))
+        .filter_map(|((_, &t), _)| t)
         .filter(|&t| t > window)
         .min_by(f64::total_cmp)
 }
@@ -280,15 +306,19 @@ pub fn next_impact(
 /// −0.12 % of the ratio), and the dual solver's own step then reached the landing contact and
 /// took part of the impact (−0.125 %). Split, the step before the impact is ≥ ½ Δt and as long
 /// as the one before it.
+///
+/// `scratch` is the one [`apply_impacts`] filled for the same input, contacts and (updated)
+/// states.
 pub fn located_step(
     input: &ImpactInput,
     contacts: &[Contact],
     states: &[BlockState],
     params: &ImpactParams,
-    landing: &[bool],
+    scratch: &ImpactScratch,
 ) -> f64 {
+    debug_assert_eq!(scratch.times.len(), contacts.len());
     let dt = input.dt;
-    match next_impact(input, contacts, states, params, landing) {
+    match next_impact(input, contacts, states, params, scratch) {
         Some(t) if t <= dt => t - params.margin * dt,
         Some(t) if t <= 2.0 * dt && params.split_before => 0.5 * (t - params.margin * dt),
         _ => dt,
@@ -296,17 +326,24 @@ pub fn located_step(
 }
 
 /// Apply the impacts of the step about to be taken to `states` (velocities at the step start).
-/// Returns the number of impacting contacts (0: nothing changed). `landing` is set, per
-/// contact, to whether it joined the impact from later in the step
-/// ([`ImpactParams::group_landings`]); pass it to [`located_step`].
+/// Returns the number of impacting contacts (0: nothing changed). `scratch` is filled with,
+/// per contact, whether it joined the impact from later in the step
+/// ([`ImpactParams::group_landings`]) and its impact time at the velocities after the
+/// impulses; pass it to [`located_step`].
 pub fn apply_impacts(
     input: &ImpactInput,
     contacts: &[Contact],
     states: &mut [BlockState],
     params: &ImpactParams,
-    landing: &mut Vec<bool>,
+    scratch: &mut ImpactScratch,
 ) -> usize {
     let dofs = input.dofs;
+    let ImpactScratch {
+        times,
+        landing,
+        impacting,
+        involved,
+    } = scratch;
     landing.clear();
     landing.resize(contacts.len(), false);
     let velocity = |b: usize, states: &[BlockState]| -> Vec6 {
@@ -324,12 +361,16 @@ pub fn apply_impacts(
     let takes_part = |c: &Contact| takes_part(input, c);
     let window = params.window * input.dt;
     // Impacting contacts and the free blocks they touch.
-    let mut impacting = vec![false; contacts.len()];
-    let mut involved = vec![false; dofs.block_of.len()];
-    let times: Vec<Option<f64>> = contacts
-        .iter()
-        .map(|c| impact_time(input, c, states, params))
-        .collect();
+    impacting.clear();
+    impacting.resize(contacts.len(), false);
+    involved.clear();
+    involved.resize(dofs.block_of.len(), false);
+    times.clear();
+    times.extend(
+        contacts
+            .iter()
+            .map(|c| impact_time(input, c, states, params)),
+    );
     let any_now = times.iter().any(|t| t.is_some_and(|t| t <= window));
     for (k, c) in contacts.iter().enumerate() {
         let now = times[k].is_some_and(|t| t <= window);
@@ -350,8 +391,10 @@ pub fn apply_impacts(
     }
     let count = impacting.iter().filter(|&&i| i).count();
     if count == 0 {
+        // No velocity changed: `times` already holds the impact times `located_step` needs.
         return 0;
     }
+    let involved: &[bool] = involved;
     // Inverse rigid-body mass per involved free block (diagonal about the centroid).
     let inv_mass: Vec<Matrix3<f64>> = (0..dofs.block_of.len())
         .map(|f| {
@@ -500,6 +543,14 @@ pub fn apply_impacts(
             st.vel[0] = v[f][0];
             st.vel[1] = v[f][1];
             st.vel[2] = v[f][2];
+        }
+    }
+    // Only the involved blocks' velocities changed: the impact times of the contacts that touch
+    // one are evaluated again, the others' are the same numbers.
+    let touches_involved = |b: usize| dofs.free_index[b].is_some_and(|f| involved[f]);
+    for (t, c) in times.iter_mut().zip(contacts) {
+        if touches_involved(c.vertex_block) || touches_involved(c.edge_block) {
+            *t = impact_time(input, c, states, params);
         }
     }
     count

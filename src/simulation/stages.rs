@@ -78,32 +78,38 @@ impl Simulation {
     /// take: `dt`, or shorter so that it ends just before the next impact (event location,
     /// `ImpactParams::window`; not a cut: the next step is `dt` again).
     pub(super) fn impacts(&mut self, e: f64, dt: f64) -> f64 {
-        let immobile: Vec<[f64; 3]> = (0..self.state.scene.blocks.len())
-            .map(|b| match self.state.dofs.free_index[b] {
+        // The per-block and per-contact inputs are refilled in the stepper's vectors (kept
+        // across steps, no allocation a step).
+        let state = &self.state;
+        let immobile = &mut self.stepper.impact_immobile;
+        immobile.clear();
+        immobile.extend(
+            (0..state.scene.blocks.len()).map(|b| match state.dofs.free_index[b] {
                 Some(_) => [0.0; 3],
-                None => self.block_velocity(b),
-            })
-            .collect();
-        let friction: Vec<f64> = self.state.laws.iter().map(|l| l.tan_phi).collect();
+                None => state.block_velocity(b),
+            }),
+        );
+        let friction = &mut self.stepper.impact_friction;
+        friction.clear();
+        friction.extend(state.laws.iter().map(|l| l.tan_phi));
         let input = ImpactInput {
             dofs: &self.state.dofs,
             geoms: &self.state.geoms,
             densities: &self.state.densities,
-            immobile_velocity: &immobile,
-            friction: &friction,
+            immobile_velocity: &self.stepper.impact_immobile,
+            friction: &self.stepper.impact_friction,
             retired: &self.state.retired,
             restitution: e,
             dt,
             nominal_dt: self.state.scene.control.time_step,
             gravity: self.state.scene.gravity,
         };
-        let mut landing = Vec::new();
         let n = apply_impacts(
             &input,
             &self.state.contacts.contacts,
             &mut self.state.states,
             &self.params.impact,
-            &mut landing,
+            &mut self.stepper.impact_scratch,
         );
         self.stepper.stats.impacts += n as u64;
         located_step(
@@ -111,7 +117,7 @@ impl Simulation {
             &self.state.contacts.contacts,
             &self.state.states,
             &self.params.impact,
-            &landing,
+            &self.stepper.impact_scratch,
         )
     }
 

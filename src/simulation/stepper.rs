@@ -6,6 +6,7 @@ use super::diagnostics::{Stats, StepProfile};
 use super::params::{resolve_penalty, SimParams};
 use super::state::SimState;
 use crate::assembly::contact_springs::SpringParams;
+use crate::assembly::restitution::ImpactScratch;
 use crate::assembly::{BlockSystem, Newmark};
 use crate::solve::dual::{DualOutcome, DualSolver};
 use crate::solve::open_close;
@@ -41,6 +42,13 @@ pub(super) struct Stepper {
     /// Per free block: gravity's angular acceleration about its last pivot, rad/s², while it
     /// rocks (0: not rocking; see `Simulation::update_rocking`).
     pub(super) rocking_accel: Vec<f64>,
+    /// The impact law's per-contact results (impact times, landings), kept across steps.
+    pub(super) impact_scratch: ImpactScratch,
+    /// Per block: velocity (vx, vy, ω; m/s, rad/s) of blocks without unknowns, the impact
+    /// law's input, refilled each step.
+    pub(super) impact_immobile: Vec<[f64; 3]>,
+    /// Per contact: tan φ of its joint, the impact law's input, refilled each step.
+    pub(super) impact_friction: Vec<f64>,
 }
 
 impl Stepper {
@@ -79,6 +87,9 @@ impl Stepper {
             refusals: [0; 4],
             omega_scale: vec![0.0; state.dofs.block_of.len()],
             rocking_accel: vec![0.0; state.dofs.block_of.len()],
+            impact_scratch: ImpactScratch::default(),
+            impact_immobile: Vec::new(),
+            impact_friction: Vec::new(),
         }
     }
 }

@@ -64,7 +64,9 @@ pub struct SparseParams {
     /// Force faer's supernodal factorization. Block systems of 2D masonry have dense 3×3 or
     /// 6×6 blocks and nested-dissection fill, where supernodes (dense kernels) beat faer's
     /// automatic choice here, the simplicial (scalar) one, by 1.6× at 400 blocks (callgrind,
-    /// `examples/engine_scaling.rs` wall).
+    /// `examples/engine_scaling.rs` wall); on whole shaken steps simplicial costs 12–31 % more
+    /// at 410 blocks and 76–182 % more at 1620 (docs/contact-solve.md §16). `false` leaves the
+    /// choice to faer, which picks simplicial at 410 blocks but supernodal at 1620.
     pub supernodal: bool,
     /// Conjugate-gradient iterations preconditioned by the previous factor before refactoring;
     /// 0 always refactors. A step that changes no contact state converges in 1–2, one that
