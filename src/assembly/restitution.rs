@@ -94,7 +94,8 @@ pub struct ImpactParams {
     /// although 1.5 or 2 cuts the pile's open–close iterations by 13.5 % (its 24 landings at
     /// 1.0–1.2× the threshold): at 2 the rocking frame under Loma Prieta 0.6 g (dual) splits
     /// again (+48 % peak), at 1.5 the rocking colonnade's light-state test fails (peaks with and
-    /// without the rule 14 % apart, bound 10 %; docs/pile.md, sessions 33–34). For diagnosis.
+    /// without the rule 14 % apart, bound 10 %) and the column example's golden digest moves
+    /// (docs/pile.md, sessions 33–34). For diagnosis.
     pub locate_speed_ratio: f64,
 }
 
