@@ -232,8 +232,8 @@ impl Default for SparseParams {
 /// reuse, the rule before).
 const FACTOR_WORK_WEIGHT: f64 = 0.55;
 /// See [`SparseParams::cost_rule_min_work`]: between the 105-stone wall (7.4e4 with the
-/// weight above) and the 410-stone wall (7.1e5); every wall of the engine and regression tests
-/// (≤ 100 blocks) is below it.
+/// weight above) and the 410-stone wall (7.1e5); the engine and regression tests' walls of
+/// ≤ 100 blocks are below it (the 1000-block extremes are above).
 const COST_RULE_MIN_WORK: f64 = 2e5;
 
 impl std::fmt::Debug for SparseCholesky {
