@@ -177,6 +177,15 @@ fn main() {
                 other => panic!("--motions: unknown {other:?} (rest, sine, record)"),
             };
             let mut params = SimParams::default();
+            if let Some(v) = arg("--reuse-rule") {
+                // "off": the fixed cap alone decides (the rule before session 34).
+                if v == "off" {
+                    params.solver.sparse.cost_rule_min_work = f64::INFINITY;
+                }
+            }
+            if let Some(v) = arg("--factor-weight") {
+                params.solver.sparse.factor_work_weight = v.parse().expect("--factor-weight");
+            }
             if std::env::args().any(|a| a == "--legacy") {
                 params.open_close = ashlar::solve::open_close::OpenCloseParams::legacy();
             }
@@ -336,6 +345,22 @@ fn main() {
                     c.reuse_iterations,
                     sim.contacts().detections
                 );
+                let fc = c.factor_cost;
+                eprintln!(
+                    "  factor cost (solve multiply-adds): factorization {:.3e}, pair {:.3e}, matvec {:.3e}, n {}, break-even {:.2} iterations",
+                    fc.factor,
+                    fc.pair,
+                    fc.matvec,
+                    fc.n,
+                    fc.break_even()
+                );
+                for (p, [tries, its, failed, skipped]) in c.reuse_table.iter().enumerate() {
+                    if tries + skipped > 0 {
+                        eprintln!(
+                            "  predicted {p:>2}: attempts {tries}, CG iterations {its}, failed {failed}, refactored by the cost rule {skipped}"
+                        );
+                    }
+                }
                 let p = sim.profile();
                 eprintln!(
                     "  time: detect {:.3} s, assemble {:.3} s, solve {:.3} s, integrate {:.3} s",

@@ -8,7 +8,7 @@ pub mod dual;
 pub mod open_close;
 mod sparse_cholesky;
 
-pub use sparse_cholesky::SparseParams;
+pub use sparse_cholesky::{FactorCost, ReuseTable, SparseParams, REUSE_TABLE_LEN};
 
 use crate::assembly::{BlockSystem, Dofs};
 
@@ -67,6 +67,10 @@ pub struct SparseCounts {
     pub reuse_iterations: u64,
     /// See [`SparseParams::check_reuse`]; 0 when unchecked.
     pub reuse_max_error: f64,
+    /// Reused-factor attempts per predicted iteration count (see [`ReuseTable`]).
+    pub reuse_table: ReuseTable,
+    /// Cost model of the current factor (zero before the first sparse solve).
+    pub factor_cost: FactorCost,
 }
 
 impl LinearSolver {
@@ -83,6 +87,8 @@ impl LinearSolver {
             numeric: self.sparse.numeric_count,
             reuse_iterations: self.sparse.reuse_iterations,
             reuse_max_error: self.sparse.reuse_max_error,
+            reuse_table: self.sparse.reuse_table,
+            factor_cost: self.sparse.cost(),
         }
     }
 

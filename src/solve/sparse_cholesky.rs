@@ -3,14 +3,17 @@
 //! numeric factor preconditions a conjugate-gradient solve of the next system (the matrix
 //! changes little from one step or open–close iteration to the next), so most solves cost a
 //! few triangular solves instead of a factorization. A solve that does not converge in
-//! [`SparseParams::max_reuse_iterations`] falls back to a fresh factorization.
+//! [`SparseParams::max_reuse_iterations`] falls back to a fresh factorization. On a large
+//! factor, whether to try the old factor at all is decided by the factor's own cost model
+//! (a factorization against the expected conjugate-gradient iterations, learned from the last
+//! attempts): [`SparseCholesky::reuse_pays`].
 use super::SolveError;
 use crate::assembly::{BlockSystem, Dofs};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
-    SymmetricOrdering,
+    SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
@@ -22,6 +25,97 @@ use faer::{Par, Side};
 /// geometry drift changes it by the blocks' relative motion within one step, usually far less
 /// (a misjudged count only costs time: the iteration still checks its own convergence).
 const MAJOR_CHANGE: f64 = 0.2;
+
+/// Length of the per-prediction tables (`expected`, [`ReuseTable`]): predicted counts from 0
+/// to this − 1 have their own entry, larger ones share the last.
+pub const REUSE_TABLE_LEN: usize = 16;
+
+/// Per predicted iteration count (`major_changes`, the last entry for all larger), the
+/// reused-factor attempts: `[attempts, CG iterations, failed attempts, skipped by the cost
+/// rule]` (diagnostics for benchmarks).
+pub type ReuseTable = [[u64; 4]; REUSE_TABLE_LEN];
+
+/// Cost model of one factor, in units of one multiply–add of a triangular solve (the
+/// instructions of the CG iteration's parts scale with these counts: docs/contact-solve.md §15).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FactorCost {
+    /// A numeric factorization: Σ over the columns of L of c(c−1)/2 + c multiply–adds (c the
+    /// column's count of entries, diagonal included), times
+    /// [`SparseParams::factor_work_weight`].
+    pub factor: f64,
+    /// A triangular-solve pair (L, then Lᵀ): 2·nnz(L).
+    pub pair: f64,
+    /// A matrix–vector product on the stored upper triangle: [`FactorCost::MATVEC_PER_ENTRY`]
+    /// per stored entry.
+    pub matvec: f64,
+    /// Unknowns (the vector operations of an iteration cost a few per unknown).
+    pub n: f64,
+}
+
+impl FactorCost {
+    /// Vector operations of one CG iteration per unknown: two updates, the direction, two dot
+    /// products, the copy of the residual and the two largest-entry scans.
+    /// Measured on the shaken walls (§14's instructions over the counted work, in units of a
+    /// triangular-solve multiply–add): 9 at 410 stones.
+    pub const VECTOR_OPS: f64 = 8.0;
+    /// Work of the symmetric product per stored upper-triangle entry (two multiply–adds, with
+    /// indexed loads and stores the triangular solves' dense supernodes avoid): measured 2.4
+    /// at 410 stones and 3.2 at 1620 (§15).
+    pub const MATVEC_PER_ENTRY: f64 = 3.0;
+
+    /// Work of the factor `symbolic` of a matrix with `stored` upper-triangle entries.
+    fn of(symbolic: &SymbolicCholesky<usize>, stored: usize, weight: f64) -> Self {
+        let mut factor = 0.0;
+        let mut nnz = 0.0;
+        let mut column = |c: f64| {
+            factor += c * (c - 1.0) / 2.0 + c;
+            nnz += c;
+        };
+        match symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                for (k, (&begin, &end)) in s
+                    .supernode_begin()
+                    .iter()
+                    .zip(s.supernode_end())
+                    .enumerate()
+                {
+                    let below = s.supernode(k).pattern().len();
+                    for j in 0..end - begin {
+                        column((end - begin - j + below) as f64);
+                    }
+                }
+            }
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                for w in s.col_ptr().windows(2) {
+                    column((w[1] - w[0]) as f64);
+                }
+            }
+        }
+        Self {
+            factor: weight * factor,
+            pair: 2.0 * nnz,
+            matvec: Self::MATVEC_PER_ENTRY * stored as f64,
+            n: symbolic.nrows() as f64,
+        }
+    }
+
+    /// One CG iteration: a preconditioning (triangular-solve pair), a product, vector updates.
+    pub fn iteration(&self) -> f64 {
+        self.pair + self.matvec + Self::VECTOR_OPS * self.n
+    }
+
+    /// The start of a reused-factor attempt: two preconditionings (the first guess and the first
+    /// residual) and a product.
+    pub fn start(&self) -> f64 {
+        2.0 * self.pair + self.matvec + Self::VECTOR_OPS * self.n
+    }
+
+    /// CG iterations at which a reused-factor attempt costs as much as a fresh factorization
+    /// and its triangular-solve pair: start + b·iteration = factorization + pair.
+    pub fn break_even(&self) -> f64 {
+        (self.factor + self.pair - self.start()) / self.iteration()
+    }
+}
 
 #[derive(Default)]
 pub struct SparseCholesky {
@@ -49,9 +143,19 @@ pub struct SparseCholesky {
     z: Vec<f64>,
     p: Vec<f64>,
     ap: Vec<f64>,
+    /// Cost model of the current symbolic factor (`rebuild_pattern`).
+    cost: FactorCost,
+    /// Per predicted count (`major_changes`, the last entry for all larger): the expected cost
+    /// of a reused-factor attempt in CG iterations beyond its start (a failed attempt counts
+    /// its iterations plus the factorization it falls back to), a running average of the last
+    /// attempts. Empty until the first decision; kept across pattern changes (it measures how
+    /// the matrix changes, not its size).
+    expected: Vec<f64>,
     pub symbolic_count: u64,
     pub numeric_count: u64,
     pub reuse_iterations: u64,
+    /// Attempts, iterations, failures and rule skips per predicted count (diagnostics).
+    pub reuse_table: ReuseTable,
     /// With [`SparseParams::check_reuse`]: the largest difference between a reused-factor
     /// solution and the refactored solution of the same system, relative to the largest
     /// unknown of the latter.
@@ -84,6 +188,27 @@ pub struct SparseParams {
     /// factorization a solve, the work the reuse saves; for tests of the shortcut only (the
     /// reused factor itself is kept, so the run takes the same path as without the check).
     pub check_reuse: bool,
+    /// Instructions of one multiply–add of faer's supernodal numeric factorization relative to
+    /// one of its triangular solves (the factorization runs dense SIMD kernels on whole
+    /// supernodes, the solves mostly vector–matrix products). Calibrated on the shaken walls
+    /// (docs/contact-solve.md §15): the measured factorization/solve-pair instruction ratio
+    /// over the counted multiply–add ratio, at 410 and 1620 stones.
+    pub factor_work_weight: f64,
+    /// The cost rule ([`SparseCholesky::reuse_pays`]) decides only when a factorization costs
+    /// at least this many solve multiply–adds; below, every change smaller than
+    /// `max_reuse_iterations` tries the old factor (the rule before session 34). A
+    /// factorization that cheap costs little either way, and small scenes (the tests' walls and
+    /// the golden-digest column) keep their path bit for bit.
+    pub cost_rule_min_work: f64,
+    /// Weight of the newest attempt in the running average of a prediction's cost
+    /// (`SparseCholesky::expected`): 0.25 averages over about the last four attempts, so the
+    /// rule follows a change of regime (shaking → rest) within a few steps.
+    pub reuse_learning_rate: f64,
+    /// While the rule refactors without trying, a prediction's expected cost moves by this
+    /// fraction back toward its prior (the predicted count itself) per skipped solve, so a
+    /// prediction judged too costly is tried again after about 1/rate solves (the matrix
+    /// changes may have become smaller). 0.1: a retry costs at most one failed attempt in ten.
+    pub reuse_forget_rate: f64,
 }
 
 impl Default for SparseParams {
@@ -93,9 +218,25 @@ impl Default for SparseParams {
             max_reuse_iterations: 8,
             reuse_tolerance: 1e-12,
             check_reuse: false,
+            factor_work_weight: FACTOR_WORK_WEIGHT,
+            cost_rule_min_work: COST_RULE_MIN_WORK,
+            reuse_learning_rate: 0.25,
+            reuse_forget_rate: 0.1,
         }
     }
 }
+
+/// See [`SparseParams::factor_work_weight`].
+/// The measured fit is 0.57 at 410 stones (5.65 M instructions a factorization over 1.295e6
+/// multiply–adds, 0.78 M a solve pair over 1.011e5) and 0.44 at 1620 (35.3 M over 1.386e7,
+/// 3.43 M over 5.966e5: the solves' wider supernodes run faster there); 0.55 fits the 410-stone
+/// wall, where the rule changes decisions, and at 1620 overestimates the break-even (more
+/// reuse, the rule before).
+const FACTOR_WORK_WEIGHT: f64 = 0.55;
+/// See [`SparseParams::cost_rule_min_work`]: between the 105-stone wall (7.4e4 with the
+/// weight above) and the 410-stone wall (7.1e5); the engine and regression tests' walls of
+/// ≤ 100 blocks are below it (the 1000-block extremes are above).
+const COST_RULE_MIN_WORK: f64 = 2e5;
 
 impl std::fmt::Debug for SparseCholesky {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -111,8 +252,9 @@ impl SparseCholesky {
         &mut self,
         sys: &BlockSystem,
         dofs: &Dofs,
-        supernodal: bool,
+        params: &SparseParams,
     ) -> Result<(), SolveError> {
+        let supernodal = params.supernodal;
         let nf = dofs.ndof.len();
         self.col_blocks = vec![Vec::new(); nf];
         for b in 0..nf {
@@ -155,6 +297,7 @@ impl SparseCholesky {
         )
         .map_err(|e| SolveError::Backend(format!("{e:?}")))?;
         self.l_values = vec![0.0; symbolic.len_val()];
+        self.cost = FactorCost::of(&symbolic, self.row_idx.len(), params.factor_work_weight);
         self.factored = false;
         let req = symbolic
             .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
@@ -171,7 +314,9 @@ impl SparseCholesky {
     /// column, as `rebuild_pattern` laid it out). With `track_changes` (a factor of the same
     /// pattern exists) it also notes, per off-diagonal slot, the largest change of an entry
     /// since the factored values and the largest entry, for [`SparseCholesky::major_changes`]:
-    /// one pass over the values instead of two.
+    /// one pass over the values instead of two. Not inlined: inlined into `factor_solve` it
+    /// compiled to 1 % more instructions (callgrind, docs/contact-solve.md §15).
+    #[inline(never)]
     fn fill_values(&mut self, sys: &BlockSystem, dofs: &Dofs, track_changes: bool) {
         self.values.resize(self.row_idx.len(), 0.0);
         if track_changes {
@@ -210,21 +355,34 @@ impl SparseCholesky {
         params: &SparseParams,
     ) -> Result<(), SolveError> {
         if self.symbolic.is_none() || self.pattern != sys.pairs || self.n != dofs.n {
-            self.rebuild_pattern(sys, dofs, params.supernodal)?;
+            self.rebuild_pattern(sys, dofs, params)?;
         }
         let try_reuse = self.factored && params.max_reuse_iterations > 0;
         self.fill_values(sys, dofs, try_reuse);
-        if try_reuse && self.major_changes() < params.max_reuse_iterations {
-            let rhs = params.check_reuse.then(|| x.to_vec());
-            if self.reuse_solve(x, params) {
-                if let Some(mut fresh) = rhs {
-                    self.check_against_fresh(sys, dofs, x, &mut fresh)?;
+        let predicted = if try_reuse { self.major_changes() } else { 0 };
+        if try_reuse && predicted < params.max_reuse_iterations {
+            if !self.reuse_pays(predicted, params) {
+                self.reuse_table[predicted.min(REUSE_TABLE_LEN - 1)][3] += 1;
+            } else {
+                let rhs = params.check_reuse.then(|| x.to_vec());
+                let before = self.reuse_iterations;
+                let converged = self.reuse_solve(x, params);
+                self.learn(predicted, self.reuse_iterations - before, converged, params);
+                if converged {
+                    if let Some(mut fresh) = rhs {
+                        self.check_against_fresh(sys, dofs, x, &mut fresh)?;
+                    }
+                    return Ok(());
                 }
-                return Ok(());
             }
         }
         self.factorize(sys, dofs)?;
         self.factor_solve_in_place(x)
+    }
+
+    /// Cost model of the current factor.
+    pub fn cost(&self) -> FactorCost {
+        self.cost
     }
 
     /// `x ← (L Lᵀ)⁻¹ x` with the current factor.
@@ -253,6 +411,50 @@ impl SparseCholesky {
             .iter()
             .filter(|[delta, size]| *delta > MAJOR_CHANGE * size)
             .count()
+    }
+
+    /// Whether to try the last factor on a change of `predicted` major blocks (below the
+    /// hard cap [`SparseParams::max_reuse_iterations`]): when the factorization costs less
+    /// than [`SparseParams::cost_rule_min_work`], always (the rule before session 34);
+    /// otherwise when the expected cost of the attempt, in CG iterations beyond its start,
+    /// is below the break-even of this factor's size ([`FactorCost::break_even`]). The
+    /// expectation starts at the predicted count (each changed block about one iteration) and
+    /// learns from the attempts (`learn`); while the rule refactors, it drifts back to that
+    /// prior at [`SparseParams::reuse_forget_rate`], so a prediction is retried now and then.
+    fn reuse_pays(&mut self, predicted: usize, params: &SparseParams) -> bool {
+        if self.cost.factor < params.cost_rule_min_work {
+            return true;
+        }
+        let k = predicted.min(REUSE_TABLE_LEN - 1);
+        if self.expected.is_empty() {
+            self.expected = (0..REUSE_TABLE_LEN).map(|p| p as f64).collect();
+        }
+        if self.expected[k] < self.cost.break_even() {
+            return true;
+        }
+        self.expected[k] += params.reuse_forget_rate * (k as f64 - self.expected[k]);
+        false
+    }
+
+    /// Note an attempt on a change of `predicted` major blocks that took `iterations` CG
+    /// iterations and converged or not: its cost in iterations beyond the start (a failure
+    /// adds the factorization and solve pair it falls back to, and the start it wasted) joins
+    /// the running average of that prediction.
+    fn learn(&mut self, predicted: usize, iterations: u64, converged: bool, params: &SparseParams) {
+        let k = predicted.min(REUSE_TABLE_LEN - 1);
+        let row = &mut self.reuse_table[k];
+        row[0] += 1;
+        row[1] += iterations;
+        row[2] += u64::from(!converged);
+        if self.expected.is_empty() {
+            return;
+        }
+        let c = self.cost;
+        let mut spent = iterations as f64;
+        if !converged {
+            spent += (c.factor + c.pair) / c.iteration();
+        }
+        self.expected[k] += params.reuse_learning_rate * (spent - self.expected[k]);
     }
 
     /// Solve the system with the right-hand side `fresh` by a fresh factorization, compare
@@ -559,6 +761,140 @@ mod tests {
         assert_eq!(chol.major_changes(), params.max_reuse_iterations);
         assert_eq!(chol.numeric_count, 2, "refactored");
         assert_eq!(chol.reuse_iterations, 0, "without trying the old factor");
+    }
+
+    /// The size-aware rule (on for any size: `cost_rule_min_work` 0). The break-even is the
+    /// factor's own (start + b·iteration = factorization + pair, from its counted sizes); a
+    /// change predicted to need at least b iterations refactors without trying the old factor,
+    /// one predicted below it tries it, and an unchanged matrix (rest) reuses it with no
+    /// iteration. The grid's break-even is checked to lie where both cases exist (1 < b < cap).
+    #[test]
+    fn cost_rule_refactors_above_the_break_even_and_reuses_at_rest() {
+        let (mut sys, dofs) = grid_system(400, 20);
+        let params = SparseParams {
+            cost_rule_min_work: 0.0,
+            ..Default::default()
+        };
+        let mut chol = SparseCholesky::default();
+        let mut x = rhs_of(&sys, &dofs);
+        chol.factor_solve(&sys, &dofs, &mut x, &params)
+            .expect("positive definite");
+        let c = chol.cost();
+        let b = c.break_even();
+        let by_hand = (c.factor + c.pair - c.start()) / c.iteration();
+        assert_eq!(b, by_hand);
+        assert!(
+            b > 1.0 && b < (params.max_reuse_iterations - 1) as f64,
+            "break-even {b} outside the test's range"
+        );
+
+        // Rest: the same matrix again reuses the factor with no iteration.
+        let mut x = rhs_of(&sys, &dofs);
+        chol.factor_solve(&sys, &dofs, &mut x, &params)
+            .expect("positive definite");
+        assert_eq!(chol.numeric_count, 1, "at rest the factor is reused");
+        assert_eq!(chol.reuse_iterations, 0);
+        assert_eq!(chol.reuse_table[0][0], 1, "one attempt at prediction 0");
+
+        // A change of ⌈b⌉ coupling blocks: the prior expects ⌈b⌉ ≥ b iterations: refactor.
+        let above = b.ceil() as usize;
+        for m in sys.off.iter_mut().take(above) {
+            *m *= 0.5;
+        }
+        let mut x = rhs_of(&sys, &dofs);
+        chol.factor_solve(&sys, &dofs, &mut x, &params)
+            .expect("positive definite");
+        assert_eq!(chol.major_changes(), above);
+        assert_eq!(chol.numeric_count, 2, "refactored above the break-even");
+        assert_eq!(chol.reuse_table[above][3], 1, "by the cost rule");
+        assert_eq!(chol.reuse_iterations, 0, "without trying the old factor");
+
+        // A change of ⌈b⌉ − 1 < b blocks (since the last factorization) tries the old factor.
+        let below = above - 1;
+        for m in sys.off.iter_mut().skip(above).take(below) {
+            *m *= 0.5;
+        }
+        let mut x = rhs_of(&sys, &dofs);
+        chol.factor_solve(&sys, &dofs, &mut x, &params)
+            .expect("positive definite");
+        assert_eq!(chol.major_changes(), below);
+        assert_eq!(chol.reuse_table[below][0], 1, "tried below the break-even");
+
+        // The same change of ⌈b⌉ blocks with the rule off (the default's small-factor
+        // path) tries the old factor: the rule, not the cap, refactored above.
+        let mut old = SparseCholesky::default();
+        let off = SparseParams {
+            cost_rule_min_work: f64::INFINITY,
+            ..Default::default()
+        };
+        let (mut sys, dofs) = grid_system(400, 20);
+        let mut x = rhs_of(&sys, &dofs);
+        old.factor_solve(&sys, &dofs, &mut x, &off)
+            .expect("positive definite");
+        for m in sys.off.iter_mut().take(above) {
+            *m *= 0.5;
+        }
+        let mut x = rhs_of(&sys, &dofs);
+        old.factor_solve(&sys, &dofs, &mut x, &off)
+            .expect("positive definite");
+        assert_eq!(old.reuse_table[above][0], 1, "the old rule tries");
+    }
+
+    /// Attempts that fail (the cap reached: the change is too large for the old factor) teach
+    /// the rule to refactor that prediction: each failure costs its iterations plus the
+    /// factorization and pair it falls back to (f = cap + (factorization + pair)/iteration),
+    /// so from the prior 0 the running average after k failures is f·(1 − (1 − rate)^k), and
+    /// the rule refactors without trying from the first k at which that reaches the
+    /// break-even: exactly k failed attempts, then a skip.
+    #[test]
+    fn failed_attempts_teach_the_rule_to_refactor() {
+        let (mut sys, dofs) = grid_system(400, 20);
+        let params = SparseParams {
+            cost_rule_min_work: 0.0,
+            max_reuse_iterations: 2,
+            ..Default::default()
+        };
+        let mut chol = SparseCholesky::default();
+        let mut x = rhs_of(&sys, &dofs);
+        chol.factor_solve(&sys, &dofs, &mut x, &params)
+            .expect("positive definite");
+        let c = chol.cost();
+        let failure = params.max_reuse_iterations as f64 + (c.factor + c.pair) / c.iteration();
+        let mut expected_failures = 0;
+        let mut e = 0.0;
+        while e < c.break_even() {
+            e += params.reuse_learning_rate * (failure - e);
+            expected_failures += 1;
+        }
+        assert!(
+            expected_failures > 1,
+            "the running average needs several failures"
+        );
+        // Every block changes by 10 %: no major change (prediction 0), but too much for
+        // two iterations.
+        let change = |sys: &mut BlockSystem| {
+            for m in sys.diag.iter_mut() {
+                *m *= 1.1;
+            }
+            for (k, m) in sys.off.iter_mut().enumerate() {
+                *m *= if k % 2 == 0 { 1.1 } else { 1.0 / 1.1 };
+            }
+        };
+        for _ in 0..expected_failures + 1 {
+            change(&mut sys);
+            let mut x = rhs_of(&sys, &dofs);
+            chol.factor_solve(&sys, &dofs, &mut x, &params)
+                .expect("positive definite");
+            assert_eq!(chol.major_changes(), 0);
+        }
+        let [tries, _, failed, skipped] = chol.reuse_table[0];
+        assert_eq!(
+            tries, expected_failures,
+            "attempts before the rule refactors"
+        );
+        assert_eq!(failed, tries, "every attempt failed");
+        assert_eq!(skipped, 1, "then the rule refactors without trying");
+        assert_eq!(chol.numeric_count, 1 + tries + skipped);
     }
 
     /// The simplicial path (faer's automatic choice) solves the same way.
