@@ -165,8 +165,7 @@ fn the_settle_rule_takes_the_shaken_walls_cycling_steps_and_keeps_the_answer() {
 /// docs/contact-solve.md §17) where it applies: between the wall's stones, each held by
 /// three or more loaded interfaces. From the second iteration on (at the iteration limit this
 /// wall never gets there), friction updates misjudging at most 1e-3 of the force scale skip
-/// the solve; the other tests of this file run the default (from the first iteration, with the
-/// neighbours). Its few-block counterparts (where it must not apply): stone_settle.rs.
+/// the solve. Its few-block counterparts (where it must not apply): stone_settle.rs.
 #[test]
 fn the_stone_rule_takes_the_walls_loaded_friction_updates_and_keeps_the_answer() {
     let scene = wall();
@@ -174,7 +173,7 @@ fn the_stone_rule_takes_the_walls_loaded_friction_updates_and_keeps_the_answer()
     let rule = OpenCloseParams {
         stone_settle_friction: 1e-3,
         stone_settle_after: 2,
-        // As measured (the default, since, is from the first iteration with the neighbours).
+        // As measured (not `stone_settle_neighbours`, whatever its default).
         stone_settle_neighbours: false,
         ..Default::default()
     };
