@@ -168,15 +168,15 @@ pub struct OpenCloseParams {
     /// still taken, for the next iteration or step. Unlike `force_tolerance` it also takes
     /// loaded contacts (the bed joints of a wall), which carry the stone, but only on a stone
     /// whose balance several loaded interfaces share, so that a misjudged friction of one of them
-    /// is a small part of it. 0 = off. Default 0 (off). From the first iteration with
-    /// `stone_settle_neighbours` at 1e-3 it cuts the shaken 410-stone wall's solves a step
-    /// (record's strong part 5.43 → 4.32, sine 1.66 → 1.25, whole 20 s record 2.84 → 1.71, user
-    /// CPU −30 %) within the tight reference's bounds, and every engine suite, the regressions
-    /// and the golden digests pass with it; but it moves the bundled Doric colonnade under
-    /// Friuli 0.3 g from a peak of 5.375 cm to 6.875 cm (+28 %, against the 10 % the light
-    /// rule's colonnade check allows): a capital carrying two architraves on its drum has three
-    /// loaded interfaces, so a rocking stack is not kept out by the interface count
-    /// (docs/contact-solve.md §17). 1e-3 is the value to opt in with for walls.
+    /// is a small part of it. 0 = off. Default 1e-3 (the fraction of `force_tolerance`), from
+    /// the first iteration, with `stone_settle_neighbours` and `stone_settle_supports`: on the
+    /// shaken 410-stone wall it cuts the solves a step (sine 1.66 → 1.25, the record's strong
+    /// part 5.43 → 4.36, the whole 20 s record 2.82 → 1.71 and −32 % user CPU) within the tight
+    /// reference's bounds (sine 9.4e-12 m, record 2.73e-8 m = 1.6 %), and every engine suite,
+    /// the regressions and the golden digests pass with it; the bundled colonnade's peak moves
+    /// 2.1 % (its check allows 10 %) and the arch's not at all (docs/contact-solve.md §17). It
+    /// does not remove the cuts (whole record 3 → 5, all at Δt ≥ 3e-4 s): those follow the
+    /// head joints' state changes.
     pub stone_settle_friction: f64,
     /// Force bound, as the same fraction, of a *state* change (opening, closing, stick ⇄ slip,
     /// a slip reversal) of a lightly loaded head joint (the `light_state_changes` load and
@@ -189,8 +189,8 @@ pub struct OpenCloseParams {
     /// but moves the wall 3.8× further from the tight reference (7.0 % against 1.8 %,
     /// docs/contact-solve.md §17): undecided head joints at 1e-2 of the scale change the answer.
     pub stone_settle_state: f64,
-    /// First iteration (1-based) of `stone_settle_friction` and `stone_settle_state`. Default 1
-    /// (the rule is off by its bounds): from the first iteration the rule acts as
+    /// First iteration (1-based) of `stone_settle_friction` and `stone_settle_state`. Default 1:
+    /// from the first iteration the rule acts as
     /// `force_tolerance` does on light contacts and pays in solves; at the iteration limit (20)
     /// it only takes steps that would otherwise be cut, and measured there it takes 551 updates
     /// on the strong part yet leaves all 7 cuts and raises the solves (5.43 → 5.63,
@@ -212,6 +212,14 @@ pub struct OpenCloseParams {
     /// qualifies either way. Default on: the sine's gain is the top course (1.66 solves a step
     /// without it, 1.25 with it; docs/contact-solve.md §17).
     pub stone_settle_neighbours: bool,
+    /// Loaded supports a stone must rest on (bed joints below it, whose normal from the
+    /// support into the stone is more than `light_state_tilt` above horizontal; a fixed block
+    /// counts as all of them) for `stone_settle_interfaces` to let it qualify. 2: a stone of a
+    /// running-bond wall rests on two stones or on the foundation, while the capital of a
+    /// column carrying two architraves rests on one drum, so it is kept out although it has
+    /// three loaded interfaces (it moved the bundled colonnade's peak by 28 %,
+    /// docs/contact-solve.md §17), and with it the architraves loaded against it.
+    pub stone_settle_supports: usize,
     /// When a stone carried no contact force at the step start (the first step of a scene
     /// dropped onto its springs), use its weight (mass × gravity, N) as its force scale instead
     /// of 0, against which no change is small. Default off: on the shaken 410-stone wall's
@@ -246,11 +254,12 @@ impl Default for OpenCloseParams {
             local_after: 1,
             line_search: false,
             restick_jump: false,
-            stone_settle_friction: 0.0,
+            stone_settle_friction: 1e-3,
             stone_settle_state: 0.0,
             stone_settle_after: 1,
             stone_settle_interfaces: 3,
             stone_settle_neighbours: true,
+            stone_settle_supports: 2,
             weight_scale: false,
         }
     }
@@ -407,6 +416,9 @@ pub struct OpenCloseScratch {
     /// Per block, its interfaces loaded at the step start (`OpenCloseParams::
     /// stone_settle_interfaces`).
     loaded_interfaces: Vec<usize>,
+    /// Per block, its loaded supports below at the step start (`OpenCloseParams::
+    /// stone_settle_supports`).
+    supports: Vec<usize>,
     /// Per block, whether the stone settle rule may apply to its contacts.
     many_stone: Vec<bool>,
     local: LocalScratch,
@@ -516,20 +528,40 @@ pub fn iterate(
         let counts = &mut scratch.loaded_interfaces;
         counts.clear();
         counts.resize(block_force.len(), 0);
+        let supports = &mut scratch.supports;
+        supports.clear();
+        supports.resize(block_force.len(), 0);
+        let free = |x: usize| dofs.free_index[x].is_some();
         for (n, &(a, b, k)) in scratch.pairs.iter().enumerate() {
             if n > 0 && (scratch.pairs[n - 1].0, scratch.pairs[n - 1].1) == (a, b) {
                 continue;
             }
             let load = scratch.interface_load[scratch.interface[k]];
-            for blk in [a, b] {
+            let c = &contacts[k];
+            for (blk, other) in [(a, b), (b, a)] {
                 if load > 0.0 && load >= params.light_load * block_force[blk] {
                     counts[blk] += 1;
+                    // `n` points out of the edge block into the vertex block: the normal
+                    // from `other` into `blk`, upward for a bed joint that `blk` rests on.
+                    let up = if blk == c.vertex_block { c.n.y } else { -c.n.y };
+                    if up > params.light_state_tilt.sin() {
+                        // A fixed support carries the stone alone.
+                        supports[blk] += if free(other) {
+                            1
+                        } else {
+                            params.stone_settle_supports
+                        };
+                    }
                 }
             }
         }
+        let core = |x: usize| {
+            counts[x] >= params.stone_settle_interfaces
+                && supports[x] >= params.stone_settle_supports
+        };
         let many_stone = &mut scratch.many_stone;
         many_stone.clear();
-        many_stone.extend(counts.iter().map(|&n| n >= params.stone_settle_interfaces));
+        many_stone.extend((0..counts.len()).map(core));
         if params.stone_settle_neighbours {
             // A stone loaded against a stone of the web belongs to it.
             for (n, &(a, b, k)) in scratch.pairs.iter().enumerate() {
@@ -537,10 +569,9 @@ pub fn iterate(
                     continue;
                 }
                 let load = scratch.interface_load[scratch.interface[k]];
-                let free = |x: usize| dofs.free_index[x].is_some();
                 for (x, y) in [(a, b), (b, a)] {
                     if free(y)
-                        && counts[y] >= params.stone_settle_interfaces
+                        && core(y)
                         && load > 0.0
                         && load >= params.light_load * block_force[x]
                     {

@@ -28,9 +28,9 @@ const DURATION: f64 = 12.0;
 /// per cent (two head-joint changes of the architraves moved it 0.5 %); 10 % is far inside the
 /// answer's own sensitivity to Δt (5.4 cm at 1 ms, 8.8 cm at 0.2 ms: docs/templates.md) and a
 /// thousand times below the first rule's failure.
-const PEAK_BOUND: f64 = 0.10;
+pub(crate) const PEAK_BOUND: f64 = 0.10;
 
-fn colonnade(oc: OpenCloseParams) -> Summary {
+pub(crate) fn colonnade(oc: OpenCloseParams) -> Summary {
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/examples/doric-colonnade.json"
@@ -52,7 +52,7 @@ fn colonnade(oc: OpenCloseParams) -> Summary {
 }
 
 /// The largest `max_displacement` of any block, m, and that block's id.
-fn peak(s: &Summary) -> (f64, String) {
+pub(crate) fn peak(s: &Summary) -> (f64, String) {
     s.blocks
         .iter()
         .map(|b| (b.max_displacement, b.id.clone()))
