@@ -1177,8 +1177,11 @@ fn update_state(
             .max(c.normal_force.max(0.0))
             .max(old_friction_normal)
             <= params.light_load * floor_scale;
+        // A head joint by the light rule's tilt (`light_state_tilt`); the stone rule's state
+        // bound below asks the same.
+        let head_by_tilt = c.n.y.abs() <= params.light_state_tilt.sin() + 1e-12;
         if params.light_state_changes
-            && c.n.y.abs() <= params.light_state_tilt.sin() + 1e-12
+            && head_by_tilt
             && params.force_tolerance > 0.0
             && kind <= 4
             && light_before_after
@@ -1200,7 +1203,7 @@ fn update_state(
             if kind <= 4
                 && params.stone_settle_state > 0.0
                 && light_before_after
-                && c.n.y.abs() <= params.light_state_tilt.sin() + 1e-12
+                && head_by_tilt
                 && force <= params.stone_settle_state * floor_scale
             {
                 counts.stone_settled_state += 1;
