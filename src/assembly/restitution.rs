@@ -97,18 +97,20 @@ pub struct ImpactParams {
     /// without the rule 14 % apart, bound 10 %) and the column example's golden digest moves
     /// (docs/pile.md, sessions 33–34). For diagnosis.
     pub locate_speed_ratio: f64,
-    /// At an impact on a free block whose other contacts are all with fixed or driven blocks
-    /// (a column landing on its base), the block's pose is moved by a rigid displacement of
-    /// order (its weight)/k, 1e-8 m, so that the landing contacts start the step at the
-    /// penetration the released ones had (the old pivot's spring force handed to the new
-    /// corner) and the released ones at zero gap ([`hand_over_weight`]). Why: the penalty pivot
-    /// stores (mg)²/2k; left to the springs, that energy moves from one corner to the other
-    /// through a ringing of period 2π/√(2k/m), three steps of 1e-4 s, that the step damps:
-    /// slow landings of micro-rocking lost 1.6 % more of θ̇ than Housner's law
-    /// (docs/accuracy-vs-speed.md, sessions 34–35). The move swaps the stored energy between
-    /// the springs (equal penetrations) and changes gravity's to second order in the rotation
-    /// (≈ 4e-7 rad). `false` (default): the contacts keep their gaps. Opt-in, measured in
-    /// docs/accuracy-vs-speed.md, "Micro-rocking: the landing corner takes the weight".
+    /// At an impact on a free block whose contacts are all with fixed or driven blocks (a
+    /// column landing on its base), the block's pose is moved by a rigid displacement of order
+    /// (its weight)/k, 5e-8 m for a slender column, so that the landing contacts start the step
+    /// at the penetration the released ones had (the old pivot's spring force handed to the
+    /// new corner) and the released ones at zero gap ([`hand_over_weight`]). Why: the penalty
+    /// pivot stores (mg)²/2k; left to the springs, that energy moves from one corner to the
+    /// other through a ringing of period 2π/√(2k/m), three steps of 1e-4 s, that the step
+    /// damps: slow landings of micro-rocking lost 1.6 % more of θ̇ than Housner's law. The
+    /// move swaps the stored energy between the springs (equal penetrations) and changes
+    /// gravity's to second order in the rotation (≈ 4e-7 rad). It acts at impacts only: for
+    /// landings slower than the settling threshold set `slow_factor` to 0 as well (then the
+    /// slow landings' r is Housner's within 0.2 % at 1e-4 s). `false` (default): not a gain
+    /// on the records study at the default Δt (docs/accuracy-vs-speed.md, "Micro-rocking: the
+    /// landing corner takes the weight (session 35)").
     pub hand_over_weight: bool,
 }
 

@@ -137,8 +137,8 @@ impl Simulation {
 
     /// Move free block `f` by the rigid increment `d` (u0 m, v0 m, r0 rad) between detection
     /// and the solve (`ImpactParams::hand_over_weight`): its geometry, and the step-start gaps
-    /// and shear displacements of its contacts to first order in `d` (|d| ≈ 1e-8 m: the
-    /// neglected terms are 1e-16 m).
+    /// and shear displacements of its contacts to first order in `d` (|d| ≈ 5e-8 m, r0 ≈ 4e-7 rad:
+    /// the neglected terms are ≈ 1e-13 m).
     fn move_rigidly(&mut self, f: usize, d: nalgebra::Vector3<f64>) {
         let b = self.state.dofs.block_of[f];
         let d6 = crate::geometry::Vec6::new(d[0], d[1], d[2], 0.0, 0.0, 0.0);

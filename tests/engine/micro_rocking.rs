@@ -1,7 +1,7 @@
 //! Micro-rocking against Housner's impact law (issue #20; docs/accuracy-vs-speed.md,
 //! "Micro-rocking: the landing corner takes the weight (session 35)"): a slender rigid column
 //! released from a tilt of 15 µrad rocks freely on a fixed base, every landing slower than the
-//! engine's settling threshold 2gΔt (corner at ≤ 1.7 mm/s against 1.96 mm/s at Δt = 1e-4 s).
+//! engine's settling threshold 2gΔt (corner at ≤ 1.5 mm/s against 1.96 mm/s at Δt = 1e-4 s).
 //! The per-landing ratio r = |θ̇⁺|/|θ̇⁻| of the engine with `ImpactParams::hand_over_weight`
 //! (and every landing an impact, `slow_factor` 0) is held to Housner's angular-momentum law for
 //! a rectangle, r = 1 − 1.5 sin²α, a closed form that shares nothing with the engine.
