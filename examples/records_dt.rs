@@ -29,7 +29,8 @@ fn main() {
     // control, `SimParams::rocking_velocity_change` off), `new` (the defaults), `rock:C` (the
     // rocking control at C), `trap` (the trapezoidal integrator, rocking control off), `imp:R` (impact_approach_ratio R), `rot:R`
     // (max_rotation_step R rad, no impact location), `dt:S` (time_step S, no impact location), `hand`
-    // (ImpactParams::hand_over_weight with slow_factor 0), `handover` (hand_over_weight alone).
+    // (ImpactParams::hand_over_weight with slow_factor 0), `handover` (hand_over_weight alone),
+    // `hand4` (`hand` at the converged run's Δt 1e-4 s and params).
     let spec = std::env::var("ASHLAR_VARIANTS").unwrap_or_else(|_| "old,new".into());
     let no_impact = SimParams {
         impact_approach_ratio: None,
@@ -103,6 +104,16 @@ fn main() {
                 p.impact.hand_over_weight = true;
                 p.impact.slow_factor = 0.0;
                 (json!({}), p)
+            } else if v == "hand4" {
+                // `hand` at the converged run's Δt = 1e-4 s and its params (no rocking
+                // step control beyond the defaults').
+                let mut p = SimParams {
+                    impact_approach_ratio: None,
+                    ..SimParams::default()
+                };
+                p.impact.hand_over_weight = true;
+                p.impact.slow_factor = 0.0;
+                (json!({ "time_step": 1e-4 }), p)
             } else if v == "handover" {
                 // ImpactParams::hand_over_weight alone (slow landings left to the springs).
                 let mut p = SimParams::default();
