@@ -18,6 +18,7 @@
 //!  [--seconds S] [--settle TOL] [--settle-after K] [--light-states on|off] [--light-tilt DEG]
 //!  [--stone-settle TOL] [--stone-settle-state TOL] [--stone-settle-after K]
 //!  [--stone-settle-interfaces N] [--stone-settle-neighbours] [--weight-scale on|off]
+//!  [--cycle-flips N] [--cycle-after K] [--cycle-extra E] [--time-step DT]
 //!  [--light-interface on|off] [--simplicial] [--digest] [--no-settle] [--settle-max S]
 //!  [--lead-in S] [--motions …,sine3]`
 //!
@@ -298,7 +299,13 @@ fn main() {
                     m.poisson_ratio = v.parse().expect("--poisson");
                 }
             }
-            let scene = validate(&spec).expect("wall");
+            let mut scene = validate(&spec).expect("wall");
+            // `--time-step DT`: a fixed Δt, s, as the tight reference's (separates the Δt
+            // error from a loop variant's, docs/contact-solve.md §18).
+            if let Some(v) = arg("--time-step") {
+                scene.control.time_step = v.parse().expect("--time-step");
+                scene.control.adaptive_time_step = false;
+            }
             let (gm, start) = match m {
                 "rest" => (GroundMotion::none(), 0.0),
                 "sine" => (
@@ -423,6 +430,18 @@ fn main() {
             // scale (`OpenCloseParams::weight_scale`, §17).
             if let Some(v) = arg("--weight-scale") {
                 params.open_close.weight_scale = v == "on";
+            }
+            // `--cycle-flips N [--cycle-after K] [--cycle-extra E]`: a contact that has
+            // flipped N times in the step closes sliding, from iteration K on, with E
+            // iterations beyond the limit (`OpenCloseParams::cycle_flips`, §18).
+            if let Some(v) = arg("--cycle-flips") {
+                params.open_close.cycle_flips = v.parse().expect("--cycle-flips");
+            }
+            if let Some(v) = arg("--cycle-after") {
+                params.open_close.cycle_after = v.parse().expect("--cycle-after");
+            }
+            if let Some(v) = arg("--cycle-extra") {
+                params.open_close.cycle_extra = v.parse().expect("--cycle-extra");
             }
             if let Some(v) = arg("--friction-tol") {
                 params.open_close.friction_tolerance = v.parse().expect("--friction-tol");
