@@ -19,10 +19,13 @@
 //!  [--stone-settle TOL] [--stone-settle-state TOL] [--stone-settle-after K]
 //!  [--stone-settle-interfaces N] [--stone-settle-neighbours] [--weight-scale on|off]
 //!  [--cycle-flips N] [--cycle-after K] [--cycle-extra E] [--time-step DT]
-//!  [--light-interface on|off] [--simplicial] [--digest] [--no-settle] [--settle-max S]
+//!  [--light-interface on|off] [--simplicial] [--ordering scalar|block-amd|dissection|coordinates]
+//!  [--relax faer|none|wide] [--dissection-leaf N] [--digest] [--no-settle] [--settle-max S]
 //!  [--lead-in S] [--motions …,sine3]`
 //!
 //! `--simplicial` turns off faer's supernodal factorization (`SparseParams::supernodal`);
+//! `--ordering`, `--relax` and `--dissection-leaf` choose its ordering and supernode
+//! amalgamation (`SparseParams::ordering`, `relax`, `dissection_leaf`);
 //! `--digest` prints a hash of every vertex and velocity at the end (bit-identity checks).
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
@@ -37,6 +40,7 @@ use ashlar::scene::generate::WallParams;
 use ashlar::scene::{validate, BlockModel};
 use ashlar::simulation::{SimParams, Simulation};
 use ashlar::solve::open_close::CHANGE_KINDS;
+use ashlar::solve::{SparseOrdering, SupernodeRelax};
 use std::time::Instant;
 
 fn arg(name: &str) -> Option<String> {
@@ -453,6 +457,28 @@ fn main() {
             if std::env::args().any(|a| a == "--simplicial") {
                 params.solver.sparse.supernodal = false;
             }
+            // `--ordering block-amd|dissection`, `--relax none|wide`, `--dissection-leaf N`
+            // (`SparseParams`, docs/contact-solve.md §20).
+            match arg("--ordering").as_deref() {
+                Some("block-amd") => params.solver.sparse.ordering = SparseOrdering::BlockAmd,
+                Some("dissection") => {
+                    params.solver.sparse.ordering = SparseOrdering::BlockDissection
+                }
+                Some("coordinates") => {
+                    params.solver.sparse.ordering = SparseOrdering::BlockCoordinates
+                }
+                Some("scalar") | None => {}
+                Some(o) => panic!("--ordering {o}: scalar, block-amd, dissection or coordinates"),
+            }
+            match arg("--relax").as_deref() {
+                Some("none") => params.solver.sparse.relax = SupernodeRelax::None,
+                Some("wide") => params.solver.sparse.relax = SupernodeRelax::Wide,
+                Some("faer") | None => {}
+                Some(r) => panic!("--relax {r}: faer, none or wide"),
+            }
+            if let Some(l) = arg("--dissection-leaf") {
+                params.solver.sparse.dissection_leaf = l.parse().expect("--dissection-leaf");
+            }
             // `--no-settle`: drop the wall onto its springs as the motion starts (before
             // session 35); `--settle-max S`: the longest settling, s (0.5 s: walls of 105 to
             // 1620 stones are quiet from their second step, §21). `--lead-in S`: a record is
@@ -548,8 +574,9 @@ fn main() {
                 );
                 let fc = c.factor_cost;
                 eprintln!(
-                    "  factor cost (solve multiply-adds): factorization {:.3e}, pair {:.3e}, matvec {:.3e}, n {}, break-even {:.2} iterations",
+                    "  factor cost (solve multiply-adds): factorization {:.3e} (unweighted {:.4e}), pair {:.3e}, matvec {:.3e}, n {}, break-even {:.2} iterations",
                     fc.factor,
+                    fc.factor / SimParams::default().solver.sparse.factor_work_weight,
                     fc.pair,
                     fc.matvec,
                     fc.n,
