@@ -6,6 +6,10 @@
 //! and against the converged run, steps, cuts, wall time.
 //! Run: `cargo run --release --example records_dt -- [records…]` (default: Friuli only);
 //! `ASHLAR_LEVELS="0.3 0.5"` picks the PGA levels (g), `ASHLAR_BLOCK=rigid` the block model, `ASHLAR_COLUMNS="0"` the column, `ASHLAR_ROBUST=1` Housner's verdict at ±3 % of the PGA.
+//! `ASHLAR_CONDITION=1` replaces the comparison by the conditioning of each point (docs/accuracy-vs-speed.md,
+//! "The last misses, conditioned"): Housner's peak on a grid of PGA × (0.94 … 1.06) and the
+//! engine's (default controls) at PGA × (1 ± 0.01), (1 ± 0.03), with the PGA shift that takes
+//! Housner's curve onto each engine point.
 use ashlar::analysis::study_records::{self as sr, COLUMNS};
 use ashlar::simulation::SimParams;
 use serde_json::json;
@@ -142,9 +146,14 @@ fn main() {
         .split_whitespace()
         .filter_map(|s| s.parse().ok())
         .collect();
+    let condition = std::env::var("ASHLAR_CONDITION").as_deref() == Ok("1");
     for col in columns.iter().map(|&i| &COLUMNS[i]) {
         for rec in &records {
             for &pga in &levels {
+                if condition {
+                    conditioning(col, dir, rec, pga, &block);
+                    continue;
+                }
                 let m = sr::load_record(dir, rec, pga).expect("record");
                 let t_end = sr::run_length(&m);
                 let h = sr::housner(col, &m, t_end, sr::HOUSNER_DT);
@@ -210,4 +219,167 @@ fn main() {
             }
         }
     }
+}
+
+/// Housner's grid for the PGA shift: PGA × (1 + k·0.5 %), k = −12 … 12 (so an engine point at
+/// ±3 % can be matched up to a further ±3 %).
+const SHIFT_STEP: f64 = 0.005;
+const SHIFT_HALF: i32 = 12;
+/// The engine's factors: the ±1 % and ±3 % of the verdict rule, and the point itself.
+const ENGINE_FACTORS: [f64; 5] = [0.97, 0.99, 1.0, 1.01, 1.03];
+
+/// A response as a number on one axis: the peak, or +∞ once fallen (a fall is beyond every
+/// standing peak).
+fn level(r: &sr::Response) -> f64 {
+    if r.fallen {
+        f64::INFINITY
+    } else {
+        r.peak
+    }
+}
+
+/// The PGA factor nearest to `f0` at which Housner's curve `h` (factor, level; ascending in
+/// factor) takes the value `y`: linear between two standing neighbours, the midpoint between a
+/// standing and a fallen one (a fall is reached somewhere in that interval), the grid point for
+/// equal falls. `None` if the curve does not take `y` on the grid.
+fn pga_match(h: &[(f64, f64)], y: f64, f0: f64) -> Option<f64> {
+    let mut best: Option<f64> = None;
+    let mut take = |f: f64| {
+        if best.is_none_or(|b| (f - f0).abs() < (b - f0).abs()) {
+            best = Some(f);
+        }
+    };
+    for &(f, v) in h {
+        if v == y {
+            take(f);
+        }
+    }
+    for w in h.windows(2) {
+        let ((fa, a), (fb, b)) = (w[0], w[1]);
+        if (a - y) * (b - y) >= 0.0 && !(a.is_infinite() || b.is_infinite()) {
+            continue;
+        }
+        if a.is_finite() && b.is_finite() {
+            take(fa + (y - a) / (b - a) * (fb - fa));
+        } else if a.is_finite() != b.is_finite() && y > a.min(b) {
+            take(0.5 * (fa + fb));
+        }
+    }
+    best
+}
+
+fn show(r: &sr::Response) -> String {
+    if r.fallen {
+        "falls".into()
+    } else {
+        format!("{:.5}", r.peak)
+    }
+}
+
+/// ASHLAR_CONDITION=1: how well posed the point is (see the module doc).
+fn conditioning(col: &sr::RecordColumn, dir: &Path, rec: &str, pga: f64, block: &str) {
+    let housner_at = |f: f64| {
+        let m = sr::load_record(dir, rec, pga * f).expect("record");
+        sr::housner(col, &m, sr::run_length(&m), sr::HOUSNER_DT)
+    };
+    let grid: Vec<(f64, sr::Response)> = (-SHIFT_HALF..=SHIFT_HALF)
+        .map(|k| {
+            let f = 1.0 + f64::from(k) * SHIFT_STEP;
+            (f, housner_at(f))
+        })
+        .collect();
+    let curve: Vec<(f64, f64)> = grid.iter().map(|(f, r)| (*f, level(r))).collect();
+    let at = |f: f64| {
+        &grid
+            .iter()
+            .find(|(g, _)| (g - f).abs() < 1e-9)
+            .expect("grid point")
+            .1
+    };
+    let mid = at(1.0);
+    // Housner's own spread: the largest relative change of its peak within ±1 % and ±3 %.
+    let spread = |w: f64| {
+        grid.iter()
+            .filter(|(f, _)| (f - 1.0).abs() <= w + 1e-9)
+            .map(|(_, r)| {
+                if r.fallen != mid.fallen {
+                    f64::INFINITY
+                } else if r.fallen {
+                    0.0
+                } else {
+                    (r.peak / mid.peak - 1.0).abs()
+                }
+            })
+            .fold(0.0, f64::max)
+    };
+    let pct = |x: f64| {
+        if x.is_finite() {
+            format!("{:.1} %", 100.0 * x)
+        } else {
+            "verdict flips".into()
+        }
+    };
+    println!(
+        "CONDITION {} | {rec} | {pga:.2} g | Housner {} | spread ±1 %: {} | ±3 %: {}",
+        col.name,
+        show(mid),
+        pct(spread(0.01)),
+        pct(spread(0.03))
+    );
+    let housner_row: Vec<String> = grid
+        .iter()
+        .filter(|(f, _)| (f - 1.0).abs() <= 0.03 + 1e-9)
+        .map(|(f, r)| format!("{f:.3}:{}", show(r)))
+        .collect();
+    println!("  Housner {}", housner_row.join(" "));
+    // Housner's band over ±3 %: the lowest and highest level (a fall is +∞).
+    let band = grid
+        .iter()
+        .filter(|(f, _)| (f - 1.0).abs() <= 0.03 + 1e-9)
+        .map(|(_, r)| level(r))
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    let mut worst: f64 = 0.0;
+    for f in ENGINE_FACTORS {
+        let m = sr::load_record(dir, rec, pga * f).expect("record");
+        let ctl = json!({ "block_model": block });
+        let e =
+            sr::engine(col, &m, sr::run_length(&m), &ctl, SimParams::default()).expect("engine");
+        let h = at(f);
+        let err = if e.response.fallen || h.fallen {
+            if e.response.fallen == h.fallen {
+                "same verdict".to_string()
+            } else {
+                "verdict differs".to_string()
+            }
+        } else {
+            format!("{:+.1} %", 100.0 * (e.response.peak / h.peak - 1.0))
+        };
+        let shift = pga_match(&curve, level(&e.response), f).map(|g| g / f - 1.0);
+        worst = worst.max(shift.map_or(f64::INFINITY, f64::abs));
+        // The engine's level against Housner's band over ±3 % of the PGA: 0 inside it, else
+        // the relative distance to its nearer edge.
+        let y = level(&e.response);
+        let outside = if y < band.0 {
+            format!("{:+.1} % below", 100.0 * (y / band.0 - 1.0))
+        } else if y > band.1 {
+            format!("{:+.1} % above", 100.0 * (y / band.1 - 1.0))
+        } else {
+            "inside".into()
+        };
+        println!(
+            "  engine × {f:.2}: {} ({err} vs Housner × {f:.2}); Housner's curve reaches it at a PGA shift of {}; Housner's ±3 % band: {outside}",
+            show(&e.response),
+            shift.map_or("none on Housner's grid (PGA × 0.94–1.06)".into(), |s| format!("{:+.2} %", 100.0 * s))
+        );
+    }
+    println!(
+        "  largest PGA shift over the five engine points: {}",
+        if worst.is_finite() {
+            format!("{:.2} %", 100.0 * worst)
+        } else {
+            "beyond the grid".into()
+        }
+    );
 }
