@@ -53,10 +53,13 @@ impl std::fmt::Debug for Simulation {
 }
 
 /// The engine knobs a scene may set (`control.dual_tolerance`, `control.dual_stall_acceptance`)
-/// override the caller's; unset ones keep them.
+/// override the caller's; unset ones keep them. A scene's own dual tolerance is taken as given,
+/// without the small-Δt cap (`DualParams::settling_fraction`): it is the user's trade of
+/// accuracy for speed (the pile's 1e-4, docs/dual.md).
 fn with_scene_knobs(mut params: SimParams, control: &Control) -> SimParams {
     if let Some(t) = control.dual_tolerance {
         params.dual.tolerance = t;
+        params.dual.settling_fraction = 0.0;
     }
     if let Some(a) = control.dual_stall_acceptance {
         params.dual.stall_acceptance = a;

@@ -246,6 +246,8 @@ impl Simulation {
             length_scale: self.stepper.smallest_free_block,
             search: self.search_distance(),
             contact: &self.params.contact,
+            nominal_dt: self.state.scene.control.time_step,
+            gravity: self.state.scene.gravity,
         };
         let r = self.stepper.dual.solve(
             &self.stepper.system,

@@ -95,6 +95,22 @@ pub struct DualParams {
     /// contacts with zero force and zero gap is not cured by a shorter step (the pile of
     /// `examples/pile.rs`, `--stall-acceptance`; docs/dual.md).
     pub stall_acceptance: f64,
+    /// Cap on the stopping tolerance (a length) at the scene's time scale: at most this
+    /// fraction × g × Δt², m, with Δt the scene's nominal step. The tolerance above is
+    /// absolute, and a displacement error ε of a step is a velocity error 2ε/Δt (DDA's
+    /// v₁ = 2d/Δt − v₀), which at a small Δt grows past the impact law's settling speed 2gΔt
+    /// (`ImpactParams::slow_factor`): resting corners then read as impacts and the block lifts
+    /// (the slender column at Δt = 3e-6 s,
+    /// `tests/regression/regression_dual_tolerance_small_dt.rs`). With the cap the velocity
+    /// error of a full step is at most this fraction of 2gΔt. 0.01: the tolerance that stopped
+    /// the early lift at 3e-6 s (1e-11 of the half size, 1.2e-12 m) is 0.014 gΔt²; at the
+    /// default Δt = 1 ms the cap is 9.8e-8 m, above 1e-9 of any half size below 98 m, so the
+    /// default runs are unchanged. The nominal Δt, not the cut one: a cap that shrinks with
+    /// each cut made a stalled solve unreachable (the rocking column's overturning bisection
+    /// under the dual solver, cut to 3e-9 s, tolerance 3e-13 m). No cap without gravity (no
+    /// settling speed to protect) or at 0, which a scene's own `control.dual_tolerance` sets
+    /// (`Simulation::new`: an explicit tolerance is taken as given).
+    pub settling_fraction: f64,
 }
 
 impl Default for DualParams {
@@ -115,6 +131,7 @@ impl Default for DualParams {
             max_switch_rounds: 4,
             parallel_from: 2000,
             stall_acceptance: 1.0,
+            settling_fraction: 0.01,
         }
     }
 }
@@ -150,6 +167,22 @@ pub struct DualInput<'a> {
     /// Search distance and contact parameters (for finding the alternative vertex–vertex pair).
     pub search: f64,
     pub contact: &'a ContactParams,
+    /// The scene's nominal Δt, s, and |g|, m/s²: the scale of the tolerance's cap
+    /// (`DualParams::settling_fraction`).
+    pub nominal_dt: f64,
+    pub gravity: f64,
+}
+
+/// The solve's stopping tolerance, m: `DualParams::tolerance` × the length scale, capped at
+/// `settling_fraction` × g × Δt² (nominal Δt) where gravity acts.
+fn stopping_tolerance(prm: &DualParams, input: &DualInput) -> f64 {
+    let tol = prm.tolerance * input.length_scale;
+    let cap = prm.settling_fraction * input.gravity.abs() * input.nominal_dt.powi(2);
+    if cap > 0.0 {
+        tol.min(cap)
+    } else {
+        tol
+    }
 }
 
 type Key = (u32, u32, u32, u32);
@@ -195,7 +228,7 @@ impl DualSolver {
         x: &mut Vec<f64>,
     ) -> Result<DualOutcome, SolveError> {
         let prm = self.params;
-        let tol = prm.tolerance * input.length_scale;
+        let tol = stopping_tolerance(&prm, input);
         self.gap.parallel_from = prm.parallel_from;
         flexibility::flexibilities(sys, input.dofs, prm.parallel_from, &mut self.flex)?;
         let mut outcome = DualOutcome {
