@@ -636,30 +636,17 @@ pub fn iterate(
                 .all(|b| many_stone[b])
     }));
     let block_force: &[f64] = block_force;
+    // One contact's update at an iterate: the pass after the solve, the pass again at the
+    // undamped solution, and the local rounds' passes.
+    let rule = Rule {
+        springs,
+        dofs,
+        prescribed,
+        params,
+        block_force,
+    };
     let limit = params.iteration_limit();
     for it in 1..=limit {
-        // One contact's update at the iterate `x` (the pass after the solve, and the pass again
-        // at the undamped solution below).
-        let decide = |c: &mut Contact,
-                      law: &JointLaw,
-                      x: &[f64],
-                      many_stones: bool,
-                      counts: &mut ChangeCounts| {
-            let scale = force_scale(block_force, c, dofs);
-            update_state(
-                c,
-                law,
-                springs,
-                x,
-                dofs,
-                prescribed,
-                params,
-                it,
-                scale,
-                many_stones,
-                counts,
-            )
-        };
         sys.reset_to_blocks();
         add_contacts(sys, dofs, contacts, laws, springs, prescribed);
         if params.line_search {
@@ -705,7 +692,7 @@ pub fn iterate(
                     *load = load.max(c.normal_force);
                 }
             }
-            match decide(c, law, x, scratch.many_stones[k], counts) {
+            match rule.update(c, law, x, it, scratch.many_stones[k], counts) {
                 Update::Quiet => {}
                 Update::Changed => {
                     changed += 1;
@@ -749,7 +736,7 @@ pub fn iterate(
             // so a converged step is always an undamped solve whose states hold.
             x.clone_from(&scratch.x_new);
             for (k, (c, law)) in contacts.iter_mut().zip(laws).enumerate() {
-                match decide(c, law, x, scratch.many_stones[k], counts) {
+                match rule.update(c, law, x, it, scratch.many_stones[k], counts) {
                     Update::Quiet => {}
                     // The interface check is skipped here: such a change asks for a solve.
                     Update::Changed | Update::Light(_) => {
@@ -777,15 +764,11 @@ pub fn iterate(
         if params.local_sweeps > 0 && it >= params.local_after && it < limit {
             local_rounds(
                 sys,
-                dofs,
+                &rule,
                 contacts,
                 laws,
-                springs,
-                prescribed,
                 x,
-                params,
                 it,
-                block_force,
                 counts,
                 &mut scratch.local,
             );
@@ -889,18 +872,16 @@ fn state_changed(old: ContactState, new: ContactState) -> bool {
 #[allow(clippy::too_many_arguments)]
 fn local_rounds(
     sys: &mut BlockSystem,
-    dofs: &Dofs,
+    rule: &Rule,
     contacts: &mut [Contact],
     laws: &[JointLaw],
-    springs: &SpringParams,
-    prescribed: &[Prescribed],
     x: &mut [f64],
-    params: &OpenCloseParams,
     iteration: usize,
-    block_force: &[f64],
     counts: &mut ChangeCounts,
     local: &mut LocalScratch,
 ) {
+    let (dofs, springs, prescribed, params) =
+        (rule.dofs, rule.springs, rule.prescribed, rule.params);
     let nf = dofs.ndof.len();
     local.nbr.iter_mut().for_each(Vec::clear);
     local.nbr.resize_with(nf, Vec::new);
@@ -956,21 +937,8 @@ fn local_rounds(
         }
         let mut changed = 0;
         for (c, law) in contacts.iter_mut().zip(laws) {
-            let scale = force_scale(block_force, c, dofs);
             let (old, flips) = (c.state, c.flips);
-            update_state(
-                c,
-                law,
-                springs,
-                x,
-                dofs,
-                prescribed,
-                params,
-                iteration,
-                scale,
-                false,
-                &mut ignored,
-            );
+            rule.update(c, law, x, iteration, false, &mut ignored);
             c.flips = flips;
             changed += state_changed(old, c.state) as u64;
         }
@@ -1025,6 +993,44 @@ fn force_scale(block_force: &[f64], c: &Contact, dofs: &Dofs) -> f64 {
         .map(|b| block_force[b])
         .fold(f64::INFINITY, f64::min)
         .min(block_force[c.vertex_block].max(block_force[c.edge_block]))
+}
+
+/// What a contact's update reads besides the contact and the iterate: the step's constants.
+struct Rule<'a> {
+    springs: &'a SpringParams,
+    dofs: &'a Dofs,
+    prescribed: &'a [Prescribed],
+    params: &'a OpenCloseParams,
+    /// Per block, its largest contact force at the step start (`force_scale`), N.
+    block_force: &'a [f64],
+}
+
+impl Rule<'_> {
+    /// Contact `c`'s new state at the iterate `x`, at its force scale (`update_state`).
+    fn update(
+        &self,
+        c: &mut Contact,
+        law: &JointLaw,
+        x: &[f64],
+        iteration: usize,
+        many_stones: bool,
+        counts: &mut ChangeCounts,
+    ) -> Update {
+        let scale = force_scale(self.block_force, c, self.dofs);
+        update_state(
+            c,
+            law,
+            self.springs,
+            x,
+            self.dofs,
+            self.prescribed,
+            self.params,
+            iteration,
+            scale,
+            many_stones,
+            counts,
+        )
+    }
 }
 
 /// New state of one contact given the trial solution; returns whether it changed.
