@@ -135,15 +135,9 @@ fn light_state_changes_skip_solves_and_keep_the_shaken_walls_answer() {
         light_state_changes: false,
         ..Default::default()
     };
-    let Outcome {
-        on,
-        cuts_on,
-        off,
-        start,
-        diff,
-        moved,
-    } = against_reference(on_params, Some(off_params));
-    let (off, cuts_off) = off.expect("the run without the rule");
+    let o = against_reference(on_params, Some(off_params));
+    let (on, cuts_on, start, diff, moved) = (o.on, o.cuts_on, o.start, o.diff, o.moved);
+    let (off, cuts_off) = o.off.expect("the run without the rule");
     let solves = |s: &Simulation| s.stats().open_close_iterations as f64 / s.stats().steps as f64;
     eprintln!(
         "light: solves/step {:.3} (off {:.3}), cuts {cuts_on} (off {cuts_off}), taken {}; simulated {:.4} s; vertex difference {diff:.3e} m of {moved:.3e} m",
@@ -174,15 +168,9 @@ fn the_settle_rule_takes_the_shaken_walls_cycling_steps_and_keeps_the_answer() {
         settle_after: 20,
         ..Default::default()
     };
-    let Outcome {
-        on: sim,
-        cuts_on: cuts,
-        off,
-        start,
-        diff,
-        moved,
-    } = against_reference(settle, Some(OpenCloseParams::default()));
-    let (_, cuts_off) = off.expect("the run without the rule");
+    let o = against_reference(settle, Some(OpenCloseParams::default()));
+    let (sim, cuts, start, diff, moved) = (o.on, o.cuts_on, o.start, o.diff, o.moved);
+    let (_, cuts_off) = o.off.expect("the run without the rule");
     eprintln!(
         "settle: cuts {cuts} (off: {cuts_off}); simulated {:.4} s; vertex difference {diff:.3e} m of {moved:.3e} m",
         sim.time() - start
@@ -214,14 +202,8 @@ fn the_stone_rule_takes_the_walls_loaded_friction_updates_and_keeps_the_answer()
         stone_settle_neighbours: false,
         ..Default::default()
     };
-    let Outcome {
-        on: sim,
-        cuts_on: cuts,
-        start,
-        diff,
-        moved,
-        ..
-    } = against_reference(rule, None);
+    let o = against_reference(rule, None);
+    let (sim, cuts, start, diff, moved) = (o.on, o.cuts_on, o.start, o.diff, o.moved);
     let solves = sim.stats().open_close_iterations as f64 / sim.stats().steps as f64;
     eprintln!(
         "stone rule: solves/step {solves:.3}, cuts {cuts}, taken {}; simulated {:.4} s; vertex difference {diff:.3e} m of {moved:.3e} m",
@@ -257,15 +239,9 @@ fn the_cycle_rule_finishes_the_walls_cut_steps_and_keeps_the_answer() {
         cycle_extra: 10,
         ..Default::default()
     };
-    let Outcome {
-        on: sim,
-        off,
-        start,
-        diff,
-        moved,
-        ..
-    } = against_reference(rule, Some(OpenCloseParams::default()));
-    let (off, _) = off.expect("the run without the rule");
+    let o = against_reference(rule, Some(OpenCloseParams::default()));
+    let (sim, start, diff, moved) = (o.on, o.start, o.diff, o.moved);
+    let (off, _) = o.off.expect("the run without the rule");
     let (cuts, cuts_off) = (sim.stats().time_step_cuts, off.stats().time_step_cuts);
     eprintln!(
         "cycle rule: cuts {cuts} (off: {cuts_off}); simulated {:.4} s; vertex difference {diff:.3e} m of {moved:.3e} m",
