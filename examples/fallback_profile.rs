@@ -12,7 +12,7 @@
 //! the defaults), and the table adds that replay's verdict, end time, steps and CPU.
 //!
 //! Run: `cargo run --release --example fallback_profile [-- RECORD-NAME-PART [GROWTH CUT]]`.
-use ashlar::analysis::pga::{evaluate_with_summary, search, Criterion, PgaRequest};
+use ashlar::analysis::pga::search;
 use ashlar::analysis::run::{self as engine_run, RunOptions, Tracker};
 use ashlar::motion::load_path;
 use ashlar::scene::parse_scene;
@@ -21,6 +21,9 @@ use ashlar::simulation::SimParams;
 #[path = "support/thread_cpu.rs"]
 mod thread_cpu;
 use thread_cpu::cpu;
+#[path = "support/column_search.rs"]
+mod column_search;
+use column_search::{records, replay, request};
 
 /// The number after `key` in `text` (e.g. "from t = 6.4850 s": key "from t = ").
 fn after(text: &str, key: &str) -> f64 {
@@ -91,11 +94,7 @@ fn engine_refusals(record: &std::path::Path, pga: f64) {
 fn main() {
     if let Ok(p) = std::env::var("FALLBACK_ENGINE") {
         let part = std::env::args().nth(1).expect("record part");
-        let path = std::fs::read_dir(ashlar::presets::records_dir())
-            .expect("records")
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .find(|x| x.to_string_lossy().contains(&part))
-            .expect("record");
+        let path = records(Some(&part)).into_iter().next().expect("record");
         engine_refusals(&path, p.parse().expect("PGA"));
         return;
     }
@@ -111,30 +110,16 @@ fn main() {
     };
     let (mut all_cpu, mut all_cpu_if, mut all_steps, mut all_steps_if) = (0.0, 0.0, 0u64, 0u64);
     let scene = parse_scene(ashlar::presets::EXAMPLE_COLUMN).expect("scene");
-    let mut records: Vec<_> = std::fs::read_dir(ashlar::presets::records_dir())
-        .expect("records")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("at2" | "csv")))
-        .filter(|p| {
-            only.as_deref()
-                .is_none_or(|o| p.to_string_lossy().contains(o))
-        })
-        .collect();
-    records.sort();
-    let req = PgaRequest::cli_default(vec![Criterion::parse("toppled:column").expect("criterion")]);
+    let req = request();
     println!("| record | PGA (m/s²) | failed | t₀ (s) | θ₀ (rad) | ω₀ (rad/s) | engine span (s) | end θ (rad) | steps | cuts | min Δt (s) | CPU (ms) | what-if: failed, end (s), steps, CPU (ms) |");
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
-    for path in &records {
+    for path in &records(only.as_deref()) {
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("?");
         let gm = load_path(path).expect("record");
         let r = search(&scene, &gm, &req, &RunOptions::default()).expect("search");
         let (mut n, mut span, mut steps, mut cpu_all) = (0, 0.0, 0u64, 0.0);
         for run in &r.runs {
-            let c0 = cpu();
-            let (failed, s) =
-                evaluate_with_summary(&scene, &gm, &req.criteria, req.combine, run.pga, None)
-                    .expect("run");
-            let c = cpu() - c0;
+            let (failed, s, c) = replay(&scene, &gm, &req, run.pga);
             if s.model != "dda" {
                 continue;
             }

@@ -14,7 +14,7 @@
 //! per-landing ratio r (LAND0, LAND1) and a sample dump (DUMP0, DUMP1): docs/accuracy-vs-speed.md,
 //! "Micro-rocking: what parts the engine from Housner (session 34)".
 use ashlar::analysis::reduced::{self, Modes, Phase, Reduced, ReducedParams};
-use ashlar::analysis::reference::{half_cycles, housner_rocking, HousnerColumn};
+use ashlar::analysis::reference::{half_cycles, housner_rocking, landings, HousnerColumn, Landing};
 use ashlar::analysis::run::duration;
 use ashlar::presets::{self, Column};
 use ashlar::scene::{parse_scene, ModelChoice, Scene};
@@ -217,9 +217,13 @@ fn main() {
         // whatever EDT, so that the classes are the same landings across Δt.
         let slow = 2.0 * scene.gravity.abs() * 1e-4 / (2.0 * b);
         for (name, v) in [("engine", &he), ("Housner", &hh)] {
-            let rs = landing_ratios(v, t0, t1);
+            let rs = landings(v, t0, t1);
             let mean = |f: &dyn Fn(f64) -> bool| {
-                let x: Vec<f64> = rs.iter().filter(|l| f(l.1)).map(|l| l.2 / l.1).collect();
+                let x: Vec<f64> = rs
+                    .iter()
+                    .filter(|l| f(l.before))
+                    .map(Landing::ratio)
+                    .collect();
                 let m = x.iter().sum::<f64>() / x.len() as f64;
                 (
                     x.len(),
@@ -272,55 +276,4 @@ fn main() {
             s(f(&e, 2), 5),
         );
     }
-}
-
-/// The landings (sign changes of θ) of a history of (t s, θ rad, θ̇ rad/s) samples within
-/// [t0, t1] s, each as (time s, |θ̇| before, |θ̇| after, rad/s): θ̇ fitted by least squares on
-/// [t − 2 ms, t − 0.3 ms] and [t + 1.5 ms, t + 3 ms] and extrapolated to the landing, so that
-/// the change of θ̇ under gravity and the ground within the windows and the contact's ringing
-/// just after the landing drop out (measured on Housner's own history: r within ±0.015 of
-/// 1 − 1.5 sin²α; landings closer than the windows to the next one are skipped).
-fn landing_ratios(v: &[(f64, f64, f64)], t0: f64, t1: f64) -> Vec<(f64, f64, f64)> {
-    let (before, after) = ((3e-4, 2e-3), (1.5e-3, 3e-3));
-    let crossings: Vec<f64> = v
-        .windows(2)
-        .filter(|w| {
-            w[0].0 >= t0 && w[1].0 <= t1 && w[0].1 != 0.0 && (w[0].1 > 0.0) != (w[1].1 > 0.0)
-        })
-        .map(|w| w[0].0 + (w[1].0 - w[0].0) * w[0].1 / (w[0].1 - w[1].1))
-        .collect();
-    let fit = |a: f64, b: f64, at: f64| {
-        let p: Vec<(f64, f64)> = v
-            .iter()
-            .filter(|x| x.0 >= a && x.0 <= b)
-            .map(|x| (x.0, x.2))
-            .collect();
-        let n = p.len() as f64;
-        let (mx, my) = (
-            p.iter().map(|x| x.0).sum::<f64>() / n,
-            p.iter().map(|x| x.1).sum::<f64>() / n,
-        );
-        let sxx: f64 = p.iter().map(|x| (x.0 - mx).powi(2)).sum();
-        let sxy: f64 = p.iter().map(|x| (x.0 - mx) * (x.1 - my)).sum();
-        (p.len() >= 3 && sxx > 0.0).then(|| my + sxy / sxx * (at - mx))
-    };
-    let mut out = Vec::new();
-    for (k, &t) in crossings.iter().enumerate() {
-        let prev = if k > 0 {
-            crossings[k - 1]
-        } else {
-            f64::NEG_INFINITY
-        };
-        let next = crossings.get(k + 1).copied().unwrap_or(f64::INFINITY);
-        if t - prev < before.1 + 1e-4 || next - t < after.1 + 1e-4 {
-            continue;
-        }
-        if let (Some(wb), Some(wa)) = (
-            fit(t - before.1, t - before.0, t),
-            fit(t + after.0, t + after.1, t),
-        ) {
-            out.push((t, wb.abs(), wa.abs()));
-        }
-    }
-    out
 }

@@ -7,30 +7,22 @@
 //! fell back to the full engine, with the reason), the steps and the thread's CPU time.
 //!
 //! Run: `cargo run --release --example reduced_profile [-- RECORD-NAME-PART]`.
-use ashlar::analysis::pga::{evaluate_with_summary, search, Criterion, PgaRequest};
+use ashlar::analysis::pga::search;
 use ashlar::analysis::run::RunOptions;
 use ashlar::motion::load_path;
 use ashlar::scene::parse_scene;
 
+#[path = "support/column_search.rs"]
+mod column_search;
 #[path = "support/thread_cpu.rs"]
 mod thread_cpu;
-use thread_cpu::cpu;
+use column_search::{records, replay, request};
 
 fn main() {
     let only = std::env::args().nth(1);
     let scene = parse_scene(ashlar::presets::EXAMPLE_COLUMN).expect("scene");
-    let mut records: Vec<_> = std::fs::read_dir(ashlar::presets::records_dir())
-        .expect("records")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| matches!(p.extension().and_then(|e| e.to_str()), Some("at2" | "csv")))
-        .filter(|p| {
-            only.as_deref()
-                .is_none_or(|o| p.to_string_lossy().contains(o))
-        })
-        .collect();
-    records.sort();
-    let req = PgaRequest::cli_default(vec![Criterion::parse("toppled:column").expect("criterion")]);
-    for path in &records {
+    let req = request();
+    for path in &records(only.as_deref()) {
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("?");
         let gm = load_path(path).expect("record");
         let r = search(&scene, &gm, &req, &RunOptions::default()).expect("search");
@@ -44,11 +36,7 @@ fn main() {
         let (mut total, mut total_dda, mut n_dda, mut steps_red, mut n_red) =
             (0.0, 0.0, 0, 0u64, 0);
         for run in &r.runs {
-            let c0 = cpu();
-            let (failed, s) =
-                evaluate_with_summary(&scene, &gm, &req.criteria, req.combine, run.pga, None)
-                    .expect("run");
-            let c = cpu() - c0;
+            let (failed, s, c) = replay(&scene, &gm, &req, run.pga);
             total += c;
             let why = if s.model == "dda" {
                 total_dda += c;

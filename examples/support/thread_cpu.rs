@@ -1,5 +1,5 @@
-//! Shared by the profiling examples (`reduced_speed`, `reduced_profile`): the CPU time of the
-//! calling thread.
+//! Shared by the profiling examples (`reduced_speed`, `reduced_profile`, `fallback_profile`):
+//! the CPU time of the calling thread.
 
 /// CPU seconds of this thread (`/proc/thread-self/schedstat`); 0 where not available. Some
 /// kernels move it in 4 ms ticks, so a single short run reads 0 or 4 ms and only sums over many

@@ -172,6 +172,30 @@ pub struct ImpactScratch {
     impacting: Vec<bool>,
     /// Per free block: whether an impacting contact touches it (its velocity may change).
     involved: Vec<bool>,
+    /// [`hand_over_weight`]'s buffers and its moves.
+    hand_over: HandOver,
+}
+
+impl ImpactScratch {
+    /// The rigid moves (free block index, (u0 m, v0 m, r0 rad)) the last [`hand_over_weight`]
+    /// found.
+    pub fn moves(&self) -> &[(usize, Vector3<f64>)] {
+        &self.hand_over.moves
+    }
+}
+
+/// Buffers of [`hand_over_weight`], kept across impacts.
+#[derive(Debug, Default, Clone)]
+struct HandOver {
+    /// One block's gap and shear rows on its rigid-body unknowns, each with its Δg (m).
+    rows: Vec<(Vector3<f64>, f64)>,
+    /// Which of `rows` are the landing contacts' normal rows.
+    landing: Vec<usize>,
+    /// The Gram matrix of `rows` (column-major) and the solve's right-hand side.
+    gram: Vec<f64>,
+    dg: Vec<f64>,
+    /// Per block moved: (free block index, (u0 m, v0 m, r0 rad)).
+    moves: Vec<(usize, Vector3<f64>)>,
 }
 
 /// One contact in the impact solve: its rows on the two blocks' rigid-body unknowns.
@@ -179,7 +203,8 @@ struct Row {
     /// Free-block indices (None: fixed or driven).
     fi: Option<usize>,
     fj: Option<usize>,
-    /// Normal and tangential gradients on block i (vertex) and j (edge), first 3 components.
+    /// Normal and tangential rows on block i (vertex) and j (edge), rigid-body part
+    /// ([`Contact::rows`], signed: ġ = n_fixed + ni·vᵢ + nj·vⱼ).
     ni: Vector3<f64>,
     nj: Vector3<f64>,
     ti: Vector3<f64>,
@@ -363,6 +388,7 @@ pub fn apply_impacts(
         landing,
         impacting,
         involved,
+        ..
     } = scratch;
     landing.clear();
     landing.resize(contacts.len(), false);
@@ -465,15 +491,16 @@ pub fn apply_impacts(
                     .dot(&velocity(c.vertex_block, states).rows(3, 3));
             }
             if fj.is_none() {
-                r -= grad_j.dot(&velocity(c.edge_block, states));
+                r += grad_j.dot(&velocity(c.edge_block, states));
             } else {
-                r -= grad_j
+                r += grad_j
                     .rows(3, 3)
                     .dot(&velocity(c.edge_block, states).rows(3, 3));
             }
             r
         };
-        let (ni, nj, ti, tj) = (rigid(&c.e_i), rigid(&c.e_j), rigid(&c.f_i), rigid(&c.f_j));
+        let [on_i, on_j] = c.rows();
+        let ((ni, ti), (nj, tj)) = (on_i.rigid(), on_j.rigid());
         let w = |gi: &Vector3<f64>, gj: &Vector3<f64>| {
             let mut w = 0.0;
             if let Some(f) = fi {
@@ -487,8 +514,8 @@ pub fn apply_impacts(
         rows.push(Row {
             fi,
             fj,
-            n_fixed: fixed_part(&c.e_i, &c.e_j),
-            t_fixed: fixed_part(&c.f_i, &c.f_j),
+            n_fixed: fixed_part(&on_i.normal, &on_j.normal),
+            t_fixed: fixed_part(&on_i.shear, &on_j.shear),
             wn: w(&ni, &nj),
             wt: w(&ti, &tj),
             ni,
@@ -514,7 +541,7 @@ pub fn apply_impacts(
             rate += gi.dot(&v[f]);
         }
         if let Some(f) = r.fj {
-            rate -= gj.dot(&v[f]);
+            rate += gj.dot(&v[f]);
         }
         rate
     };
@@ -528,7 +555,7 @@ pub fn apply_impacts(
             v[f] += inv_mass[f] * gi * dp;
         }
         if let Some(f) = r.fj {
-            v[f] -= inv_mass[f] * gj * dp;
+            v[f] += inv_mass[f] * gj * dp;
         }
     };
     for _ in 0..params.max_sweeps {
@@ -576,57 +603,67 @@ pub fn apply_impacts(
     count
 }
 
-/// The rigid moves (free block index, (u0 m, v0 m, r0 rad)) that hand the weight over at this
-/// step's impacts ([`ImpactParams::hand_over_weight`]), from the `scratch` and velocities
-/// [`apply_impacts`] left. Per involved free block whose contacts all have a fixed or driven
-/// block on the other side: the *released* contacts (closed, penetrating at the step start,
-/// not impacting, separating at the velocities after the impulses) are brought to zero gap,
-/// the impacting ones take their summed penetration in equal shares, every other closed or
-/// impacting contact of the block keeps its gap; the move is the one of least kinetic
-/// metric (D = M⁻¹Gᵀ(GM⁻¹Gᵀ)⁻¹Δg on the rigid-body unknowns). A block with no released
-/// contact, or whose gap rows are dependent (more than three independent contacts), is
-/// left where it is.
+/// The rigid moves that hand the weight over at this step's impacts
+/// ([`ImpactParams::hand_over_weight`]), from the `scratch` and velocities [`apply_impacts`]
+/// left; read them with [`ImpactScratch::moves`]. Per involved free block whose contacts all
+/// have a fixed or driven block on the other side: the *released* contacts (closed,
+/// penetrating at the step start, not impacting, separating at the velocities after the
+/// impulses) are brought to zero gap, the impacting ones take their summed penetration in
+/// equal shares, every other closed or impacting contact of the block keeps its gap; the move
+/// is the one of least kinetic metric (D = M⁻¹Gᵀ(GM⁻¹Gᵀ)⁻¹Δg on the rigid-body unknowns). A
+/// block with no released contact, or whose gap rows are dependent (more than three
+/// independent contacts), is left where it is.
 pub fn hand_over_weight(
     input: &ImpactInput,
     contacts: &[Contact],
     states: &[BlockState],
-    scratch: &ImpactScratch,
-) -> Vec<(usize, Vector3<f64>)> {
+    scratch: &mut ImpactScratch,
+) {
     let dofs = input.dofs;
-    let mut moves = Vec::new();
-    for (f, _) in scratch.involved.iter().enumerate().filter(|(_, &i)| i) {
+    let ImpactScratch {
+        impacting,
+        involved,
+        hand_over,
+        ..
+    } = scratch;
+    let HandOver {
+        rows,
+        landing,
+        gram,
+        dg,
+        moves,
+    } = hand_over;
+    moves.clear();
+    for (f, _) in involved.iter().enumerate().filter(|(_, &i)| i) {
         let b = dofs.block_of[f];
-        // Per contact of the block: its gradient on the block's rigid unknowns, and Δg.
-        let mut rows: Vec<(Vector3<f64>, f64)> = Vec::new();
-        let mut landing = Vec::new();
+        // Per contact of the block: its row on the block's rigid unknowns, and Δg.
+        rows.clear();
+        landing.clear();
         let mut released = 0.0;
         let mut coupled = false;
         for (k, c) in contacts.iter().enumerate() {
-            let (grad, other) = if c.vertex_block == b {
-                (rigid(&c.e_i), c.edge_block)
-            } else if c.edge_block == b {
-                (-rigid(&c.e_j), c.vertex_block)
-            } else {
+            let Some(on_b) = c.rows_on(b) else {
                 continue;
             };
-            if !(c.state.is_closed() || scratch.impacting[k]) || !takes_part(input, c) {
+            let other = if c.vertex_block == b {
+                c.edge_block
+            } else {
+                c.vertex_block
+            };
+            if !(c.state.is_closed() || impacting[k]) || !takes_part(input, c) {
                 continue;
             }
             if dofs.free_index[other].is_some() {
                 coupled = true;
                 break;
             }
-            if scratch.impacting[k] {
+            let (normal, shear) = on_b.rigid();
+            if impacting[k] {
                 landing.push(rows.len());
-                rows.push((grad, 0.0));
+                rows.push((normal, 0.0));
                 // The landing corner does not slide in the move: a shear increment of h·r0
                 // (3e-7 m for the slender column) would load its shear spring with k·h·r0, six
                 // times the block's weight.
-                let shear = if c.vertex_block == b {
-                    rigid(&c.f_i)
-                } else {
-                    -rigid(&c.f_j)
-                };
                 rows.push((shear, 0.0));
                 continue;
             }
@@ -635,33 +672,37 @@ pub fn hand_over_weight(
             let rate = c.e_i.dot(&vi) - c.e_j.dot(&vj);
             if c.g0 < 0.0 && rate > 0.0 {
                 released += -c.g0;
-                rows.push((grad, -c.g0));
+                rows.push((normal, -c.g0));
             } else {
-                rows.push((grad, 0.0));
+                rows.push((normal, 0.0));
             }
         }
         if coupled || landing.is_empty() || released == 0.0 || rows.len() > 3 {
             continue;
         }
         let share = released / landing.len() as f64;
-        for &r in &landing {
+        for &r in landing.iter() {
             rows[r].1 = -share;
         }
         let m = input.geoms[b].mass_matrix(input.densities[f]);
         let Some(inv) = m.fixed_view::<3, 3>(0, 0).clone_owned().try_inverse() else {
             continue;
         };
+        // G M⁻¹ Gᵀ column by column (nalgebra's order) in the kept buffer.
         let n = rows.len();
-        let gram = nalgebra::DMatrix::from_fn(n, n, |i, j| rows[i].0.dot(&(inv * rows[j].0)));
-        let dg = nalgebra::DVector::from_fn(n, |i, _| rows[i].1);
-        let Some(lambda) = gram.cholesky().map(|ch| ch.solve(&dg)) else {
+        gram.clear();
+        gram.extend((0..n * n).map(|e| rows[e % n].0.dot(&(inv * rows[e / n].0))));
+        let Some(ch) = nalgebra::DMatrix::from_vec(n, n, std::mem::take(gram)).cholesky() else {
             continue;
         };
+        dg.clear();
+        dg.extend(rows.iter().map(|r| r.1));
+        ch.solve_mut(&mut nalgebra::DVectorViewMut::from_slice(dg, n));
+        *gram = ch.unpack_dirty().data.into();
         let d = rows
             .iter()
-            .zip(lambda.iter())
+            .zip(dg.iter())
             .fold(Vector3::zeros(), |acc, (r, &l)| acc + inv * r.0 * l);
         moves.push((f, d));
     }
-    moves
 }

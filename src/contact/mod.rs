@@ -16,7 +16,7 @@ pub use broad_phase::BroadPhase;
 pub use vertex_edge::{candidate, Candidate};
 
 use crate::geometry::{displacement_matrix, BlockGeometry, Vec6};
-use nalgebra::Vector2;
+use nalgebra::{Vector2, Vector3};
 use rustc_hash::FxHashMap;
 
 /// State of a contact spring pair.
@@ -134,6 +134,60 @@ pub struct Contact {
     /// For a contact that opens during the step: the fraction of `start_normal_force` that the
     /// step's force average keeps (1 = all; see `contact_springs::release_load`).
     pub release_factor: f64,
+}
+
+/// A contact's rows on one of its blocks: the derivatives of its normal gap g and of its shear
+/// displacement s with respect to that block's unknowns D = (u0 m, v0 m, r0 rad, εx, εy, γxy),
+/// signed so that g = g0 + Σ normal·D and s = s0 + Σ shear·D over the contact's two blocks (m
+/// per m for u0 and v0, m per rad for r0, m for the strains).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlockRows {
+    pub normal: Vec6,
+    pub shear: Vec6,
+}
+
+impl BlockRows {
+    /// The normal and shear rows on the block's rigid-body unknowns (u0, v0, r0): what an
+    /// impulse or a rigid move of the block acts on.
+    pub fn rigid(&self) -> (Vector3<f64>, Vector3<f64>) {
+        let three = |v: &Vec6| Vector3::new(v[0], v[1], v[2]);
+        (three(&self.normal), three(&self.shear))
+    }
+}
+
+impl Contact {
+    /// The rows on the vertex block (`e_i`, `f_i`) and on the edge block (−`e_j`, −`f_j`), in
+    /// that order. Why one place: the sign of the edge block's side is easy to get wrong, and
+    /// the impact law, its weight hand-over and the rigid move of a block all need it.
+    pub fn rows(&self) -> [BlockRows; 2] {
+        [self.vertex_rows(), self.edge_rows()]
+    }
+
+    /// The rows on block `b`: the vertex block's or the edge block's (a contact joins two
+    /// different blocks); `None` when `b` is neither.
+    pub fn rows_on(&self, b: usize) -> Option<BlockRows> {
+        if self.vertex_block == b {
+            Some(self.vertex_rows())
+        } else if self.edge_block == b {
+            Some(self.edge_rows())
+        } else {
+            None
+        }
+    }
+
+    fn vertex_rows(&self) -> BlockRows {
+        BlockRows {
+            normal: self.e_i,
+            shear: self.f_i,
+        }
+    }
+
+    fn edge_rows(&self) -> BlockRows {
+        BlockRows {
+            normal: -self.e_j,
+            shear: -self.f_j,
+        }
+    }
 }
 
 /// All contacts of the scene, carried from step to step.

@@ -53,6 +53,22 @@ pub(super) struct SimState {
 }
 
 impl SimState {
+    /// Move free block `f` by the rigid increment `d` (u0 m, v0 m, r0 rad) between detection
+    /// and the solve (`ImpactParams::hand_over_weight`): its geometry, and the step-start gaps
+    /// and shear displacements of its contacts to first order in `d` (|d| ≈ 5e-8 m, r0 ≈ 4e-7 rad:
+    /// the neglected terms are ≈ 1e-13 m).
+    pub(super) fn move_rigidly(&mut self, f: usize, d: Vector3<f64>) {
+        let b = self.dofs.block_of[f];
+        let d6 = Vec6::new(d[0], d[1], d[2], 0.0, 0.0, 0.0);
+        crate::integrate::move_block(&mut self.geoms[b], &d6);
+        for c in &mut self.contacts.contacts {
+            if let Some(rows) = c.rows_on(b) {
+                c.g0 += rows.normal.dot(&d6);
+                c.s0 += rows.shear.dot(&d6);
+            }
+        }
+    }
+
     /// The scene at rest at t = 0 (free blocks at their initial velocity).
     pub(super) fn new(scene: &Scene, motion: &GroundMotion) -> Self {
         let geoms: Vec<BlockGeometry> = scene

@@ -455,6 +455,9 @@ pub struct OpenCloseScratch {
     light: Vec<(usize, LightChange)>,
     /// Scratch for grouping contacts by interface.
     pairs: Vec<(usize, usize, usize)>,
+    /// Per interface, in `interface` numbering: its blocks (lower index first) and its first
+    /// contact. Built with `interface` once per step: the stone rule's passes over interfaces.
+    interfaces: Vec<(usize, usize, usize)>,
     /// Per block, its interfaces loaded at the step start (`OpenCloseParams::
     /// stone_settle_interfaces`).
     loaded_interfaces: Vec<usize>,
@@ -463,6 +466,9 @@ pub struct OpenCloseScratch {
     supports: Vec<usize>,
     /// Per block, whether the stone settle rule may apply to its contacts.
     many_stone: Vec<bool>,
+    /// Per contact, whether both its stones (its free blocks) are `many_stone`: the stone
+    /// settle rule's test, fixed for the step.
+    many_stones: Vec<bool>,
     local: LocalScratch,
     /// The last iterate (`OpenCloseParams::line_search`), the undamped solution, and per free
     /// block the direction between them.
@@ -529,10 +535,14 @@ pub fn iterate(
     let interfaces = params.light_state_changes && params.light_state_interface;
     let stone_settle = params.stone_settle();
     if interfaces || stone_settle {
-        group_interfaces(contacts, &mut scratch.pairs, &mut scratch.interface);
-        let n = scratch.interface.iter().max().map_or(0, |&m| m + 1);
+        group_interfaces(
+            contacts,
+            &mut scratch.pairs,
+            &mut scratch.interface,
+            &mut scratch.interfaces,
+        );
         scratch.interface_load.clear();
-        scratch.interface_load.resize(n, 0.0);
+        scratch.interface_load.resize(scratch.interfaces.len(), 0.0);
     }
     for (c, law) in contacts.iter_mut().zip(laws) {
         c.flips = 0;
@@ -566,7 +576,7 @@ pub fn iterate(
     }
     if stone_settle {
         // Count each block's interfaces that carried a comparable share of its load at the
-        // step start (`pairs` is sorted by block pair: one interface per run of equal pairs).
+        // step start.
         let counts = &mut scratch.loaded_interfaces;
         counts.clear();
         counts.resize(block_force.len(), 0);
@@ -574,11 +584,7 @@ pub fn iterate(
         supports.clear();
         supports.resize(block_force.len(), 0);
         let free = |x: usize| dofs.free_index[x].is_some();
-        for (n, &(a, b, k)) in scratch.pairs.iter().enumerate() {
-            if n > 0 && (scratch.pairs[n - 1].0, scratch.pairs[n - 1].1) == (a, b) {
-                continue;
-            }
-            let load = scratch.interface_load[scratch.interface[k]];
+        for (&(a, b, k), &load) in scratch.interfaces.iter().zip(&scratch.interface_load) {
             let c = &contacts[k];
             for (blk, other) in [(a, b), (b, a)] {
                 if load > 0.0 && load >= params.light_load * block_force[blk] {
@@ -606,11 +612,7 @@ pub fn iterate(
         many_stone.extend((0..counts.len()).map(core));
         if params.stone_settle_neighbours {
             // A stone loaded against a stone of the web belongs to it.
-            for (n, &(a, b, k)) in scratch.pairs.iter().enumerate() {
-                if n > 0 && (scratch.pairs[n - 1].0, scratch.pairs[n - 1].1) == (a, b) {
-                    continue;
-                }
-                let load = scratch.interface_load[scratch.interface[k]];
+            for (&(a, b, _), &load) in scratch.interfaces.iter().zip(&scratch.interface_load) {
                 for (x, y) in [(a, b), (b, a)] {
                     if free(y)
                         && core(y)
@@ -624,12 +626,24 @@ pub fn iterate(
         }
     }
     // Whether both of a contact's stones (its free blocks) are held by many loaded interfaces.
-    let many = |c: &Contact, many_stone: &[bool]| {
+    let many_stone = &scratch.many_stone;
+    scratch.many_stones.clear();
+    scratch.many_stones.extend(contacts.iter().map(|c| {
         stone_settle
             && [c.vertex_block, c.edge_block]
                 .into_iter()
                 .filter(|&b| dofs.free_index[b].is_some())
                 .all(|b| many_stone[b])
+    }));
+    let block_force: &[f64] = block_force;
+    // One contact's update at an iterate: the pass after the solve, the pass again at the
+    // undamped solution, and the local rounds' passes.
+    let rule = Rule {
+        springs,
+        dofs,
+        prescribed,
+        params,
+        block_force,
     };
     let limit = params.iteration_limit();
     for it in 1..=limit {
@@ -670,7 +684,6 @@ pub fn iterate(
         anderson.begin();
         scratch.light.clear();
         for (k, (c, law)) in contacts.iter_mut().zip(laws).enumerate() {
-            let scale = force_scale(block_force, c, dofs);
             let (old_state, n_in, old_release) = (c.state, c.friction_normal, c.release_factor);
             if interfaces {
                 // The load the solve used (a closed contact's force of the last iterate).
@@ -679,21 +692,7 @@ pub fn iterate(
                     *load = load.max(c.normal_force);
                 }
             }
-            let many_stones = many(c, &scratch.many_stone);
-            let update = update_state(
-                c,
-                law,
-                springs,
-                x,
-                dofs,
-                prescribed,
-                params,
-                it,
-                scale,
-                many_stones,
-                counts,
-            );
-            match update {
+            match rule.update(c, law, x, it, scratch.many_stones[k], counts) {
                 Update::Quiet => {}
                 Update::Changed => {
                     changed += 1;
@@ -737,21 +736,7 @@ pub fn iterate(
             // so a converged step is always an undamped solve whose states hold.
             x.clone_from(&scratch.x_new);
             for (k, (c, law)) in contacts.iter_mut().zip(laws).enumerate() {
-                let scale = force_scale(block_force, c, dofs);
-                let many_stones = many(c, &scratch.many_stone);
-                match update_state(
-                    c,
-                    law,
-                    springs,
-                    x,
-                    dofs,
-                    prescribed,
-                    params,
-                    it,
-                    scale,
-                    many_stones,
-                    counts,
-                ) {
+                match rule.update(c, law, x, it, scratch.many_stones[k], counts) {
                     Update::Quiet => {}
                     // The interface check is skipped here: such a change asks for a solve.
                     Update::Changed | Update::Light(_) => {
@@ -779,15 +764,11 @@ pub fn iterate(
         if params.local_sweeps > 0 && it >= params.local_after && it < limit {
             local_rounds(
                 sys,
-                dofs,
+                &rule,
                 contacts,
                 laws,
-                springs,
-                prescribed,
                 x,
-                params,
                 it,
-                block_force,
                 counts,
                 &mut scratch.local,
             );
@@ -891,18 +872,16 @@ fn state_changed(old: ContactState, new: ContactState) -> bool {
 #[allow(clippy::too_many_arguments)]
 fn local_rounds(
     sys: &mut BlockSystem,
-    dofs: &Dofs,
+    rule: &Rule,
     contacts: &mut [Contact],
     laws: &[JointLaw],
-    springs: &SpringParams,
-    prescribed: &[Prescribed],
     x: &mut [f64],
-    params: &OpenCloseParams,
     iteration: usize,
-    block_force: &[f64],
     counts: &mut ChangeCounts,
     local: &mut LocalScratch,
 ) {
+    let (dofs, springs, prescribed, params) =
+        (rule.dofs, rule.springs, rule.prescribed, rule.params);
     let nf = dofs.ndof.len();
     local.nbr.iter_mut().for_each(Vec::clear);
     local.nbr.resize_with(nf, Vec::new);
@@ -958,21 +937,8 @@ fn local_rounds(
         }
         let mut changed = 0;
         for (c, law) in contacts.iter_mut().zip(laws) {
-            let scale = force_scale(block_force, c, dofs);
             let (old, flips) = (c.state, c.flips);
-            update_state(
-                c,
-                law,
-                springs,
-                x,
-                dofs,
-                prescribed,
-                params,
-                iteration,
-                scale,
-                false,
-                &mut ignored,
-            );
+            rule.update(c, law, x, iteration, false, &mut ignored);
             c.flips = flips;
             changed += state_changed(old, c.state) as u64;
         }
@@ -984,11 +950,13 @@ fn local_rounds(
     }
 }
 
-/// Number the interfaces (unordered block pairs) of `contacts`: `interface[k]` is contact k's.
+/// Number the interfaces (unordered block pairs) of `contacts`: `interface[k]` is contact k's,
+/// `interfaces[i]` is interface i's blocks (lower first) and first contact.
 fn group_interfaces(
     contacts: &[Contact],
     pairs: &mut Vec<(usize, usize, usize)>,
     interface: &mut Vec<usize>,
+    interfaces: &mut Vec<(usize, usize, usize)>,
 ) {
     pairs.clear();
     pairs.extend(contacts.iter().enumerate().map(|(k, c)| {
@@ -998,12 +966,12 @@ fn group_interfaces(
     pairs.sort_unstable();
     interface.clear();
     interface.resize(contacts.len(), 0);
-    let mut id = 0;
+    interfaces.clear();
     for (n, &(a, b, k)) in pairs.iter().enumerate() {
-        if n > 0 && (pairs[n - 1].0, pairs[n - 1].1) != (a, b) {
-            id += 1;
+        if n == 0 || (pairs[n - 1].0, pairs[n - 1].1) != (a, b) {
+            interfaces.push((a, b, k));
         }
-        interface[k] = id;
+        interface[k] = interfaces.len() - 1;
     }
 }
 
@@ -1025,6 +993,44 @@ fn force_scale(block_force: &[f64], c: &Contact, dofs: &Dofs) -> f64 {
         .map(|b| block_force[b])
         .fold(f64::INFINITY, f64::min)
         .min(block_force[c.vertex_block].max(block_force[c.edge_block]))
+}
+
+/// What a contact's update reads besides the contact and the iterate: the step's constants.
+struct Rule<'a> {
+    springs: &'a SpringParams,
+    dofs: &'a Dofs,
+    prescribed: &'a [Prescribed],
+    params: &'a OpenCloseParams,
+    /// Per block, its largest contact force at the step start (`force_scale`), N.
+    block_force: &'a [f64],
+}
+
+impl Rule<'_> {
+    /// Contact `c`'s new state at the iterate `x`, at its force scale (`update_state`).
+    fn update(
+        &self,
+        c: &mut Contact,
+        law: &JointLaw,
+        x: &[f64],
+        iteration: usize,
+        many_stones: bool,
+        counts: &mut ChangeCounts,
+    ) -> Update {
+        let scale = force_scale(self.block_force, c, self.dofs);
+        update_state(
+            c,
+            law,
+            self.springs,
+            x,
+            self.dofs,
+            self.prescribed,
+            self.params,
+            iteration,
+            scale,
+            many_stones,
+            counts,
+        )
+    }
 }
 
 /// New state of one contact given the trial solution; returns whether it changed.

@@ -7,7 +7,8 @@
 //! a rectangle, r = 1 − 1.5 sin²α, a closed form that shares nothing with the engine.
 //!
 //! θ̇ on either side of a landing is fitted by least squares on [−2, −0.3] ms before and
-//! [1.5, 3] ms after it and extrapolated to it (the method of `examples/reduced_history.rs`):
+//! [1.5, 3] ms after it and extrapolated to it (`analysis::reference::landings`, as
+//! `examples/reduced_history.rs` measures):
 //! in free rocking at 15 µrad gravity's torque is constant to 1e-4 within a half-cycle, so
 //! θ̇ is linear there and the fit drops it exactly, and the contact's ringing after the
 //! landing falls outside the windows.
@@ -17,6 +18,7 @@
 //! dual solver for the record: mean r 0.9623 with the knob (two landings at 0.918 and 0.939),
 //! 0.9380 without.
 use crate::common::*;
+use ashlar::analysis::reference::{landings, Landing};
 use ashlar::assembly::restitution::ImpactParams;
 use ashlar::motion::GroundMotion;
 use ashlar::simulation::{SimParams, Simulation};
@@ -56,38 +58,9 @@ fn landing_ratios(impact: ImpactParams) -> (Vec<f64>, f64) {
             s.block_velocity(1)[2],
         ))
     });
-    let crossings: Vec<f64> = hist
-        .windows(2)
-        .filter(|w| w[0].1 != 0.0 && (w[0].1 > 0.0) != (w[1].1 > 0.0))
-        .map(|w| w[0].0 + (w[1].0 - w[0].0) * w[0].1 / (w[0].1 - w[1].1))
-        .collect();
-    let fit = |a: f64, b: f64, at: f64| {
-        let p: Vec<(f64, f64)> = hist
-            .iter()
-            .filter(|x| x.0 >= a && x.0 <= b)
-            .map(|x| (x.0, x.2))
-            .collect();
-        let n = p.len() as f64;
-        let mx = p.iter().map(|x| x.0).sum::<f64>() / n;
-        let my = p.iter().map(|x| x.1).sum::<f64>() / n;
-        let sxx: f64 = p.iter().map(|x| (x.0 - mx).powi(2)).sum();
-        let sxy: f64 = p.iter().map(|x| (x.0 - mx) * (x.1 - my)).sum();
-        assert!(p.len() >= 3 && sxx > 0.0, "too few samples to fit θ̇");
-        my + sxy / sxx * (at - mx)
-    };
-    let (mut ratios, mut fastest) = (Vec::new(), 0.0f64);
-    for (k, &t) in crossings.iter().enumerate() {
-        let prev = if k > 0 { crossings[k - 1] } else { 0.0 };
-        let next = crossings.get(k + 1).copied().unwrap_or(0.1);
-        // Both windows inside the half-cycles on either side.
-        if t - prev < 2.1e-3 || next - t < 3.1e-3 {
-            continue;
-        }
-        let before = fit(t - 2e-3, t - 3e-4, t).abs();
-        let after = fit(t + 1.5e-3, t + 3e-3, t).abs();
-        fastest = fastest.max(before);
-        ratios.push(after / before);
-    }
+    let found = landings(&hist, 0.0, 0.1);
+    let fastest = found.iter().fold(0.0f64, |a, l| a.max(l.before));
+    let ratios = found.iter().map(Landing::ratio).collect();
     (ratios, fastest)
 }
 

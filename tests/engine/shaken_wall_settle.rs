@@ -93,22 +93,51 @@ fn reference(scene: &Scene, gm: &GroundMotion, start: f64, sim: &Simulation) -> 
     reference
 }
 
-#[test]
-fn light_state_changes_skip_solves_and_keep_the_shaken_walls_answer() {
+/// The wall under the record with the loop's knobs `rule`, and with `off` if given.
+struct Outcome {
+    /// The run with `rule`, and its Δt cuts after the first step.
+    on: Simulation,
+    cuts_on: u64,
+    /// The run with `off`, and its cuts after the first step.
+    off: Option<(Simulation, u64)>,
+    /// The record's time at the start, s.
+    start: f64,
+    /// `on`'s largest vertex difference to the tight reference over the same simulated time,
+    /// and the reference's largest vertex displacement, m.
+    diff: f64,
+    moved: f64,
+}
+
+fn against_reference(rule: OpenCloseParams, off: Option<OpenCloseParams>) -> Outcome {
     let scene = wall();
     let (gm, start) = record();
+    let (on, cuts_on) = run(&scene, &gm, start, rule);
+    let off = off.map(|p| run(&scene, &gm, start, p));
+    let reference = reference(&scene, &gm, start, &on);
+    let (diff, moved) = compare(&on, &reference, &scene);
+    Outcome {
+        on,
+        cuts_on,
+        off,
+        start,
+        diff,
+        moved,
+    }
+}
+
+#[test]
+fn light_state_changes_skip_solves_and_keep_the_shaken_walls_answer() {
     let on_params = OpenCloseParams {
         light_state_changes: true,
         ..Default::default()
     };
-    let (on, cuts_on) = run(&scene, &gm, start, on_params);
     let off_params = OpenCloseParams {
         light_state_changes: false,
         ..Default::default()
     };
-    let (off, cuts_off) = run(&scene, &gm, start, off_params);
-    let reference = reference(&scene, &gm, start, &on);
-    let (diff, moved) = compare(&on, &reference, &scene);
+    let o = against_reference(on_params, Some(off_params));
+    let (on, cuts_on, start, diff, moved) = (o.on, o.cuts_on, o.start, o.diff, o.moved);
+    let (off, cuts_off) = o.off.expect("the run without the rule");
     let solves = |s: &Simulation| s.stats().open_close_iterations as f64 / s.stats().steps as f64;
     eprintln!(
         "light: solves/step {:.3} (off {:.3}), cuts {cuts_on} (off {cuts_off}), taken {}; simulated {:.4} s; vertex difference {diff:.3e} m of {moved:.3e} m",
@@ -134,17 +163,14 @@ fn light_state_changes_skip_solves_and_keep_the_shaken_walls_answer() {
 
 #[test]
 fn the_settle_rule_takes_the_shaken_walls_cycling_steps_and_keeps_the_answer() {
-    let scene = wall();
-    let (gm, start) = record();
     let settle = OpenCloseParams {
         settle_tolerance: 0.1,
         settle_after: 20,
         ..Default::default()
     };
-    let (sim, cuts) = run(&scene, &gm, start, settle);
-    let (_, cuts_off) = run(&scene, &gm, start, OpenCloseParams::default());
-    let reference = reference(&scene, &gm, start, &sim);
-    let (diff, moved) = compare(&sim, &reference, &scene);
+    let o = against_reference(settle, Some(OpenCloseParams::default()));
+    let (sim, cuts, start, diff, moved) = (o.on, o.cuts_on, o.start, o.diff, o.moved);
+    let (_, cuts_off) = o.off.expect("the run without the rule");
     eprintln!(
         "settle: cuts {cuts} (off: {cuts_off}); simulated {:.4} s; vertex difference {diff:.3e} m of {moved:.3e} m",
         sim.time() - start
@@ -169,8 +195,6 @@ fn the_settle_rule_takes_the_shaken_walls_cycling_steps_and_keeps_the_answer() {
 /// the solve. Its few-block counterparts (where it must not apply): stone_settle.rs.
 #[test]
 fn the_stone_rule_takes_the_walls_loaded_friction_updates_and_keeps_the_answer() {
-    let scene = wall();
-    let (gm, start) = record();
     let rule = OpenCloseParams {
         stone_settle_friction: 1e-3,
         stone_settle_after: 2,
@@ -178,9 +202,8 @@ fn the_stone_rule_takes_the_walls_loaded_friction_updates_and_keeps_the_answer()
         stone_settle_neighbours: false,
         ..Default::default()
     };
-    let (sim, cuts) = run(&scene, &gm, start, rule);
-    let reference = reference(&scene, &gm, start, &sim);
-    let (diff, moved) = compare(&sim, &reference, &scene);
+    let o = against_reference(rule, None);
+    let (sim, cuts, start, diff, moved) = (o.on, o.cuts_on, o.start, o.diff, o.moved);
     let solves = sim.stats().open_close_iterations as f64 / sim.stats().steps as f64;
     eprintln!(
         "stone rule: solves/step {solves:.3}, cuts {cuts}, taken {}; simulated {:.4} s; vertex difference {diff:.3e} m of {moved:.3e} m",
@@ -210,18 +233,15 @@ fn the_stone_rule_takes_the_walls_loaded_friction_updates_and_keeps_the_answer()
 /// The first 20 iterations of every step are the loop without the rule.
 #[test]
 fn the_cycle_rule_finishes_the_walls_cut_steps_and_keeps_the_answer() {
-    let scene = wall();
-    let (gm, start) = record();
     let rule = OpenCloseParams {
         cycle_flips: 4,
         cycle_after: 21,
         cycle_extra: 10,
         ..Default::default()
     };
-    let (sim, _) = run(&scene, &gm, start, rule);
-    let (off, _) = run(&scene, &gm, start, OpenCloseParams::default());
-    let reference = reference(&scene, &gm, start, &sim);
-    let (diff, moved) = compare(&sim, &reference, &scene);
+    let o = against_reference(rule, Some(OpenCloseParams::default()));
+    let (sim, start, diff, moved) = (o.on, o.start, o.diff, o.moved);
+    let (off, _) = o.off.expect("the run without the rule");
     let (cuts, cuts_off) = (sim.stats().time_step_cuts, off.stats().time_step_cuts);
     eprintln!(
         "cycle rule: cuts {cuts} (off: {cuts_off}); simulated {:.4} s; vertex difference {diff:.3e} m of {moved:.3e} m",
