@@ -18,7 +18,8 @@
 //!  [--seconds S] [--settle TOL] [--settle-after K] [--light-states on|off] [--light-tilt DEG]
 //!  [--stone-settle TOL] [--stone-settle-state TOL] [--stone-settle-after K]
 //!  [--stone-settle-interfaces N] [--stone-settle-neighbours] [--weight-scale on|off]
-//!  [--cycle-flips N] [--cycle-after K] [--cycle-extra E] [--time-step DT]
+//!  [--cycle-flips N] [--cycle-after K] [--cycle-extra E] [--time-step DT] [--closing F]
+//!  [--closing-floor R]
 //!  [--light-interface on|off] [--simplicial] [--ordering scalar|block-amd|dissection|coordinates]
 //!  [--relax faer|none|wide] [--dissection-leaf N] [--digest] [--no-settle] [--settle-max S]
 //!  [--lead-in S] [--motions …,sine3]`
@@ -171,8 +172,25 @@ fn measured_steps(
             _ => {}
         }
         let max_dt = end.map_or(f64::INFINITY, |end| end - sim.time());
+        let before = (
+            sim.stats().open_close_iterations,
+            sim.stats().time_step_cuts,
+        );
         match sim.step(max_dt) {
-            Ok(dt) => min_dt = min_dt.min(dt),
+            Ok(dt) => {
+                min_dt = min_dt.min(dt);
+                // `--step-log`: one line a step (time, Δt, solves, cuts, the closing
+                // contacts and their largest approach / elastic range, with `--closing`).
+                if std::env::args().any(|a| a == "--step-log") {
+                    let (n, ratio) = sim.last_closing();
+                    eprintln!(
+                        "  step {done}: t {:.5} s, dt {dt:.2e} s, solves {}, cuts {}, closing {n}, approach/range {ratio:.3e}",
+                        sim.time(),
+                        sim.stats().open_close_iterations - before.0,
+                        sim.stats().time_step_cuts - before.1
+                    );
+                }
+            }
             Err(e) => {
                 eprintln!("  {label}: stopped after {done} steps: {e}");
                 break;
@@ -447,6 +465,15 @@ fn main() {
             if let Some(v) = arg("--cycle-extra") {
                 params.open_close.cycle_extra = v.parse().expect("--cycle-extra");
             }
+            // `--closing F [--closing-floor R]`: the next Δt is limited so that a contact
+            // closing within a step approaches by at most F of its elastic range W/k_n,
+            // never below R × Δt (`SimParams::closing`, §22).
+            if let Some(v) = arg("--closing") {
+                params.closing.elastic_fraction = Some(v.parse().expect("--closing"));
+            }
+            if let Some(v) = arg("--closing-floor") {
+                params.closing.min_step_ratio = v.parse().expect("--closing-floor");
+            }
             if let Some(v) = arg("--friction-tol") {
                 params.open_close.friction_tolerance = v.parse().expect("--friction-tol");
             }
@@ -564,6 +591,11 @@ fn main() {
                 deepest
             );
             if diag {
+                eprintln!(
+                    "  {} stones, {m}: {} measured steps shortened the next by the closing limit",
+                    scene.blocks.len() - 1,
+                    s1.closing_limited_steps - s0.closing_limited_steps
+                );
                 eprintln!(
                     "  {} stones, {m} (settling included): contacts {}, factorizations {}, reuse CG iterations {}, detections {}",
                     scene.blocks.len() - 1,

@@ -157,6 +157,44 @@ impl Simulation {
         }
     }
 
+    /// The longest next step the closing-contact limit allows (`SimParams::closing`; adaptive
+    /// runs only, infinite when off or when nothing closed): for each contact open at the step
+    /// start and closed at its end, with approach a = g0 − gap (m) within the step just taken
+    /// (`dt`, s), Δt ≤ f · δ · dt / a, δ = W/k_n the elastic range of its lighter free stone
+    /// (m); never below `min_step_ratio` × `control.time_step`.
+    pub(super) fn closing_bound(&mut self, dt: f64) -> f64 {
+        let Some(fraction) = self.params.closing.elastic_fraction else {
+            return f64::INFINITY;
+        };
+        if !self.state.scene.control.adaptive_time_step {
+            return f64::INFINITY;
+        }
+        let k = self.stepper.springs.normal;
+        let mut bound = f64::INFINITY;
+        self.stepper.last_closing = (0, 0.0);
+        for c in &self.state.contacts.contacts {
+            let weight = &self.stepper.system.weight;
+            let free = &self.state.dofs.free_index;
+            let approach = c.g0 - c.gap;
+            if !(c.g0 > 0.0 && c.state.is_closed() && approach > 0.0) {
+                continue;
+            }
+            // The lighter free stone's weight (a fixed or driven block has none of its own).
+            let w = [c.vertex_block, c.edge_block]
+                .iter()
+                .filter_map(|&b| free[b].and_then(|f| weight.get(f).copied()))
+                .fold(f64::INFINITY, f64::min);
+            if !w.is_finite() || w <= 0.0 || k <= 0.0 {
+                continue;
+            }
+            bound = bound.min(fraction * (w / k) * dt / approach);
+            let last = &mut self.stepper.last_closing;
+            *last = (last.0 + 1, last.1.max(approach * k / w));
+        }
+        let floor = self.params.closing.min_step_ratio * self.state.scene.control.time_step;
+        bound.max(floor)
+    }
+
     /// The accuracy bounds of the adaptive step (impact location, rotation per step): the
     /// worst violation, if any, as a refusal with the factor that meets its bound. Never
     /// below `min_dt` × 10 (a step this short is no longer an accuracy question).

@@ -41,6 +41,9 @@ pub struct Stats {
     pub max_dt: f64,
     /// Contacts that closed under Newton's impact law (`control.restitution` a number).
     pub impacts: u64,
+    /// Accepted steps after which the closing-contact limit (`SimParams::closing`) shortened
+    /// the next step.
+    pub closing_limited_steps: u64,
 }
 
 impl Simulation {

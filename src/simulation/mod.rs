@@ -18,7 +18,7 @@ mod stepper;
 pub use diagnostics::{Stats, StepProfile};
 pub use energy::Energy;
 pub use error::SimError;
-pub use params::{resolve_penalty, SimParams, IMPACT_APPROACH_RATIO};
+pub use params::{resolve_penalty, ClosingParams, SimParams, IMPACT_APPROACH_RATIO};
 
 use crate::assembly::contact_springs::SpringParams;
 use crate::assembly::{BlockState, BlockSystem, Dofs};
@@ -323,6 +323,13 @@ impl Simulation {
     /// Per block: retired (see [`Simulation::retire`]).
     pub fn retired(&self) -> &[bool] {
         &self.state.retired
+    }
+
+    /// The last accepted step's closing contacts as the closing limit saw them (with
+    /// `SimParams::closing` on; (0, 0) otherwise): how many closed within the step, and the
+    /// largest approach among them as a multiple of its elastic range W/k_n.
+    pub fn last_closing(&self) -> (usize, f64) {
+        self.stepper.last_closing
     }
 
     pub fn stats(&self) -> Stats {

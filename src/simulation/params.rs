@@ -90,6 +90,37 @@ pub struct SimParams {
     /// Newmark constants in place of the scene's integrator's (for studies of the integrator,
     /// examples/records_history `nm:γ`). `None`: the scene's `control.integrator`.
     pub newmark: Option<crate::assembly::Newmark>,
+    /// The closing-contact limit on the next Δt (adaptive runs only; off by default).
+    pub closing: ClosingParams,
+}
+
+/// A physical limit on the next step's length from the contacts that closed within the last
+/// one (adaptive runs only): a vertex that approached its edge by `a` within a step of length
+/// Δt closes at v = a/Δt; the next step is shortened to `elastic_fraction` · δ / v, with
+/// δ = W/k_n the elastic range of the contact (the penetration of the normal spring under the
+/// weight W of the lighter free stone of the pair; N, N/m → m). So no step lets a contact
+/// close by more than that fraction of what its spring resolves: the small impacts between
+/// stones (head joints closing and opening within a step, docs/contact-solve.md §13, §18, §22)
+/// are taken in several steps instead of being undecided within one. The step is accepted as
+/// it is (this is not a cut); the next ones grow back at `SimParams::growth`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClosingParams {
+    /// Largest approach of a closing contact within one step, as a fraction of its elastic
+    /// range W/k_n. `None`: off (the default: opt-in until measured on every suite, §22).
+    pub elastic_fraction: Option<f64>,
+    /// The shortest step the limit may ask for, as a fraction of `control.time_step`: 0.1
+    /// (0.1 ms at the default 1 ms) is the tight reference's Δt, at which the cycle rule's
+    /// answer is within 1 % of it (§18); shorter steps would cost without a measured gain.
+    pub min_step_ratio: f64,
+}
+
+impl Default for ClosingParams {
+    fn default() -> Self {
+        Self {
+            elastic_fraction: None,
+            min_step_ratio: 0.1,
+        }
+    }
 }
 
 /// A starting value for [`SimParams::impact_approach_ratio`] (off by default, see
@@ -151,6 +182,7 @@ impl Default for SimParams {
             // on the records, docs/accuracy-vs-speed.md "Why the trapezoidal rule gave −91 %").
             restart_after_impact: true,
             newmark: None,
+            closing: ClosingParams::default(),
         }
     }
 }

@@ -335,6 +335,12 @@ impl Simulation {
             self.stepper.dt =
                 (self.stepper.dt * self.params.growth).min(self.state.scene.control.time_step);
         }
+        let closing = self.closing_bound(dt);
+        if closing < self.stepper.dt {
+            // Accept this step, shorten the next (a limit, not a cut: nothing is redone).
+            self.stepper.dt = closing;
+            self.stepper.stats.closing_limited_steps += 1;
+        }
         if let Some(e) = error {
             // The next step from the estimate (local error ∝ Δt²), never below the floor.
             let tol = self.local_error_tolerance();

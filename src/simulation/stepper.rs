@@ -49,6 +49,10 @@ pub(super) struct Stepper {
     pub(super) impact_immobile: Vec<[f64; 3]>,
     /// Per contact: tan φ of its joint, the impact law's input, refilled each step.
     pub(super) impact_friction: Vec<f64>,
+    /// The last accepted step's closing contacts as the closing limit saw them
+    /// (`SimParams::closing`, on only): how many closed within the step, and the largest
+    /// approach among them as a multiple of its elastic range W/k_n.
+    pub(super) last_closing: (usize, f64),
 }
 
 impl Stepper {
@@ -90,6 +94,7 @@ impl Stepper {
             impact_scratch: ImpactScratch::default(),
             impact_immobile: Vec::new(),
             impact_friction: Vec::new(),
+            last_closing: (0, 0.0),
         }
     }
 }
