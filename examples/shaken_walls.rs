@@ -13,9 +13,10 @@
 //!  [--seconds S] [--settle TOL] [--settle-after K] [--light-states on|off] [--light-tilt DEG]
 //!  [--stone-settle TOL] [--stone-settle-state TOL] [--stone-settle-after K]
 //!  [--stone-settle-interfaces N] [--stone-settle-neighbours] [--weight-scale on|off]
-//!  [--light-interface on|off] [--simplicial] [--digest]`
+//!  [--light-interface on|off] [--simplicial] [--start-check K] [--digest]`
 //!
-//! `--simplicial` turns off faer's supernodal factorization (`SparseParams::supernodal`);
+//! `--start-check K` sets `SparseParams::start_check_samples` (opt-in cheaper start of a
+//! reused-factor solve); `--simplicial` turns off faer's supernodal factorization (`SparseParams::supernodal`);
 //! `--digest` prints a hash of every vertex and velocity at the end (bit-identity checks).
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
@@ -289,6 +290,10 @@ fn main() {
                 params.open_close = ashlar::solve::open_close::OpenCloseParams::legacy();
                 params.open_close.max_iterations = 200;
             }
+            if let Some(v) = arg("--start-check") {
+                // `SparseParams::start_check_samples` (docs/contact-solve.md §19).
+                params.solver.sparse.start_check_samples = v.parse().expect("--start-check");
+            }
             if std::env::args().any(|a| a == "--simplicial") {
                 params.solver.sparse.supernodal = false;
             }
@@ -345,6 +350,12 @@ fn main() {
                     c.reuse_iterations,
                     sim.contacts().detections
                 );
+                if c.start_skips > 0 {
+                    eprintln!(
+                        "  reused-factor starts accepted by the estimate: {}",
+                        c.start_skips
+                    );
+                }
                 let fc = c.factor_cost;
                 eprintln!(
                     "  factor cost (solve multiply-adds): factorization {:.3e}, pair {:.3e}, matvec {:.3e}, n {}, break-even {:.2} iterations",

@@ -71,6 +71,8 @@ pub struct SparseCounts {
     pub reuse_table: ReuseTable,
     /// Cost model of the current factor (zero before the first sparse solve).
     pub factor_cost: FactorCost,
+    /// Reused-factor solves accepted at the start (`SparseParams::start_check_samples`).
+    pub start_skips: u64,
 }
 
 impl LinearSolver {
@@ -89,6 +91,7 @@ impl LinearSolver {
             reuse_max_error: self.sparse.reuse_max_error,
             reuse_table: self.sparse.reuse_table,
             factor_cost: self.sparse.cost(),
+            start_skips: self.sparse.start_skips,
         }
     }
 
