@@ -11,7 +11,7 @@
 //! Δt ≤ 1 ms with Zheng et al.'s displacement ratio 0.003.
 //!
 //! Run: `cargo run --release --example pile` (`-- --help` lists the options; add `-- --write pile.json` to save the scene,
-//! `-- --steps N` to change the step count, `-- --only dual|penalty` to time one solver, `-- --trace` to print per-step work counts, `-- --cg-budget N` to
+//! `-- --steps N` to change the step count, `-- --ordering block-amd|dissection|coordinates` and `-- --relax none|wide` for the sparse factorization's ordering and supernode amalgamation, `-- --only dual|penalty` to time one solver, `-- --trace` to print per-step work counts, `-- --cg-budget N` to
 //! give the dual solver's MPRGP minimisation N products with W, 0 for the projection–contraction
 //! iteration alone), `-- --dual-tolerance X` to stop its iterations at X × the smallest
 //! block's half size instead of the default 1e-9, `-- --proportioning G` for MPRGP's
@@ -23,6 +23,7 @@
 use ashlar::motion::GroundMotion;
 use ashlar::scene::{parse_scene, Scene};
 use ashlar::simulation::{SimParams, Simulation};
+use ashlar::solve::{SparseOrdering, SupernodeRelax};
 use clap::Parser;
 use serde_json::{json, Value};
 use std::time::Instant;
@@ -130,6 +131,20 @@ fn time_run(solver: &str, cli: &Cli) -> Result<(f64, Simulation), String> {
     if let Some(r) = cli.locate_speed_ratio {
         params.impact.locate_speed_ratio = r;
     }
+    params.solver.sparse.ordering = match cli.ordering.as_str() {
+        "block-amd" => SparseOrdering::BlockAmd,
+        "dissection" => SparseOrdering::BlockDissection,
+        "coordinates" => SparseOrdering::BlockCoordinates,
+        _ => SparseOrdering::ScalarAmd,
+    };
+    params.solver.sparse.relax = match cli.relax.as_str() {
+        "none" => SupernodeRelax::None,
+        "wide" => SupernodeRelax::Wide,
+        _ => SupernodeRelax::Faer,
+    };
+    if let Some(l) = cli.dissection_leaf {
+        params.solver.sparse.dissection_leaf = l;
+    }
     let mut sim = Simulation::new(&scene, &GroundMotion::none(), params);
     let t = Instant::now();
     if trace {
@@ -224,6 +239,17 @@ struct Cli {
     /// Diagnosis: locate only impacts faster than R × the settling threshold (`ImpactParams::locate_speed_ratio`).
     #[arg(long, value_name = "R", value_parser = positive)]
     locate_speed_ratio: Option<f64>,
+    /// The sparse factorization's ordering (`SparseParams::ordering`): faer's minimum degree
+    /// on the unknowns (`scalar`, the default), on the blocks (`block-amd`), or nested
+    /// dissection of the blocks by level sets (`dissection`) or straight cuts (`coordinates`).
+    #[arg(long, default_value = "scalar", value_parser = ["scalar", "block-amd", "dissection", "coordinates"])]
+    ordering: String,
+    /// faer's supernode amalgamation (`SparseParams::relax`): `faer` (default), `none`, `wide`.
+    #[arg(long, default_value = "faer", value_parser = ["faer", "none", "wide"])]
+    relax: String,
+    /// Blocks in a leaf of the nested dissection (`SparseParams::dissection_leaf`).
+    #[arg(long, value_name = "N")]
+    dissection_leaf: Option<usize>,
     /// Write each block's final centroid (x, y, m) and rotation (rad), one line a block, to
     /// compare the final states of two runs (shortest round-trip digits: equal files mean
     /// equal bits).
@@ -298,6 +324,18 @@ fn main() -> std::process::ExitCode {
             "         profile: {:?}; impacting contacts {}",
             sim.profile(),
             sim.stats().impacts
+        );
+        let (c, w) = (sim.solver_counts(), SimParams::default().solver.sparse);
+        println!(
+            "         factor: nnz(L) {:.4e}, factorization multiply-adds {:.4e} (ordering {}, relax {}), \
+             numeric factorizations {}, symbolic {}, reuse CG iterations {}",
+            c.factor_cost.pair / 2.0,
+            c.factor_cost.factor / w.factor_work_weight,
+            cli.ordering,
+            cli.relax,
+            c.numeric,
+            c.symbolic,
+            c.reuse_iterations,
         );
         if let Some(path) = &cli.write_state {
             let text: String = scene(solver, &cli)

@@ -5,7 +5,7 @@
 //! Prints one line per (column, record, PGA, control): peak |θ|, fell, error against Housner
 //! and against the converged run, steps, cuts, wall time.
 //! Run: `cargo run --release --example records_dt -- [records…]` (default: Friuli only);
-//! `ASHLAR_LEVELS="0.3 0.5"` picks the PGA levels (g), `ASHLAR_BLOCK=rigid` the block model, `ASHLAR_COLUMNS="0"` the column.
+//! `ASHLAR_LEVELS="0.3 0.5"` picks the PGA levels (g), `ASHLAR_BLOCK=rigid` the block model, `ASHLAR_COLUMNS="0"` the column, `ASHLAR_ROBUST=1` Housner's verdict at ±3 % of the PGA.
 use ashlar::analysis::study_records::{self as sr, COLUMNS};
 use ashlar::simulation::SimParams;
 use serde_json::json;
@@ -28,7 +28,9 @@ fn main() {
     // ASHLAR_VARIANTS: comma-separated list of `old` (the defaults before the rocking step
     // control, `SimParams::rocking_velocity_change` off), `new` (the defaults), `rock:C` (the
     // rocking control at C), `trap` (the trapezoidal integrator, rocking control off), `imp:R` (impact_approach_ratio R), `rot:R`
-    // (max_rotation_step R rad, no impact location), `dt:S` (time_step S, no impact location).
+    // (max_rotation_step R rad, no impact location), `dt:S` (time_step S, no impact location), `hand`
+    // (ImpactParams::hand_over_weight with slow_factor 0), `handover` (hand_over_weight alone),
+    // `hand4` (`hand` at the converged run's Δt 1e-4 s and params).
     let spec = std::env::var("ASHLAR_VARIANTS").unwrap_or_else(|_| "old,new".into());
     let no_impact = SimParams {
         impact_approach_ratio: None,
@@ -96,6 +98,27 @@ fn main() {
                         ..SimParams::default()
                     },
                 )
+            } else if v == "hand" {
+                // ImpactParams::hand_over_weight with every landing an impact (slow_factor 0).
+                let mut p = SimParams::default();
+                p.impact.hand_over_weight = true;
+                p.impact.slow_factor = 0.0;
+                (json!({}), p)
+            } else if v == "hand4" {
+                // `hand` at the converged run's Δt = 1e-4 s and its params (no rocking
+                // step control beyond the defaults').
+                let mut p = SimParams {
+                    impact_approach_ratio: None,
+                    ..SimParams::default()
+                };
+                p.impact.hand_over_weight = true;
+                p.impact.slow_factor = 0.0;
+                (json!({ "time_step": 1e-4 }), p)
+            } else if v == "handover" {
+                // ImpactParams::hand_over_weight alone (slow landings left to the springs).
+                let mut p = SimParams::default();
+                p.impact.hand_over_weight = true;
+                (json!({}), p)
             } else if v.starts_with("dt:") {
                 (json!({ "time_step": num("dt:") }), no_impact)
             } else {
@@ -143,8 +166,16 @@ fn main() {
                     let m = sr::load_record(dir, rec, pga * f).expect("record");
                     sr::housner(col, &m, t_end, sr::HOUSNER_DT).peak
                 };
+                // ASHLAR_ROBUST=1: Housner's verdict at 0.97 and 1.03 × the PGA too (the records
+                // study's *robust*), printed as `robust true|false`.
+                let robust = if std::env::var("ASHLAR_ROBUST").as_deref() == Ok("1") {
+                    let (_, r) = sr::robust_verdict(col, dir, rec, pga).expect("record");
+                    format!(" robust {r}")
+                } else {
+                    String::new()
+                };
                 println!(
-                    "{} | {rec} | {pga:.2} | HOUSNER | {:.5} | {} | ±1 % PGA: {:+.2} % {:+.2} % | | | |",
+                    "{} | {rec} | {pga:.2} | HOUSNER | {:.5} | {} | ±1 % PGA: {:+.2} % {:+.2} %{robust} | | | |",
                     col.name,
                     h.peak,
                     h.fallen,

@@ -10,7 +10,7 @@
 //! Run: `cargo run --release --example reduced_history -- SCENE RECORD PGA [T_END]`, SCENE one of
 //! `column` (examples/column.json), `slender` (0.24 × 1.6 m, φ = 75°), `slender9` (the same over
 //! the record's first 9 s); PGA in m/s² (handover.md's column); T_END cuts every run (s).
-//! Diagnosis switches of the engine run (SLOW, HOVER, GROUP, SPLIT, AVG, DUAL, KPEN, EDT), the
+//! Diagnosis switches of the engine run (SLOW, HOVER, GROUP, SPLIT, AVG, DUAL, DTOL, KPEN, EDT, HAND), the
 //! per-landing ratio r (LAND0, LAND1) and a sample dump (DUMP0, DUMP1): docs/accuracy-vs-speed.md,
 //! "Micro-rocking: what parts the engine from Housner (session 34)".
 use ashlar::analysis::reduced::{self, Modes, Phase, Reduced, ReducedParams};
@@ -105,7 +105,8 @@ fn main() {
     // "Micro-rocking"): SLOW = ImpactParams::slow_factor, HOVER/GROUP/SPLIT = 0 turn off
     // close_hover/group_landings/split_before, KPEN = penalty stiffness (N/m) in place of 10 E,
     // DUAL = 1 the dual (penalty-free) contact solver, AVG = 1 SimParams::average_ground_load,
-    // EDT = the engine's Δt (s).
+    // EDT = the engine's Δt (s), HAND = 1 ImpactParams::hand_over_weight, DTOL = the dual solver's
+    // tolerance.
     let mut sp = SimParams::default();
     if let Some(f) = env("SLOW") {
         sp.impact.slow_factor = f;
@@ -117,8 +118,16 @@ fn main() {
     if env("AVG") == Some(1.0) {
         sp.average_ground_load = true;
     }
+    if env("HAND") == Some(1.0) {
+        sp.impact.hand_over_weight = true;
+    }
     if env("DUAL") == Some(1.0) {
         fine.control.contact_solver = ashlar::scene::ContactSolver::Dual;
+    }
+    if let Some(t) = env("DTOL") {
+        // The dual solver's tolerance (DualParams::tolerance, fraction of the smallest block's
+        // half size).
+        fine.control.dual_tolerance = Some(t);
     }
     if let Some(k) = env("KPEN") {
         fine.control.penalty_stiffness = ashlar::scene::Penalty::Value(k);

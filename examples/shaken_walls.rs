@@ -2,8 +2,13 @@
 //! walls of 0.6 × 0.3 m rigid stones (`scene::generate::running_bond_wall`, 35° dry joints) on a
 //! fixed foundation, at rest, under a base sine of 1 m/s² at 1 Hz, and under the Northridge
 //! (Mulholland 009) record of `data/ground-motions/` scaled to a PGA of 0.3 g and started 0.2 s
-//! before its peak (so a short run sees the strong motion). Δt = 1 ms with the default
-//! (adaptive) time-step control. Prints one Markdown row per wall and motion: s/step, linear
+//! before its peak (so a short run sees the strong motion); `sine3` is a base sine of 3 m/s² at
+//! 2 Hz. Δt = 1 ms with the default (adaptive) time-step control. A wall is first settled
+//! under gravity alone, as a user's wall is built at rest, and the record is tapered in over
+//! `--lead-in` s (0.1) before its start (`settle`, `tapered_in`; `--no-settle` drops the wall
+//! onto its springs from zero contact forces as the record starts mid-way with a step of its
+//! acceleration, as before session 35); the row counts only the steps from the start on
+//! (docs/contact-solve.md §21). Prints one Markdown row per wall and motion: s/step, linear
 //! solves a step, Δt cuts, the deepest penetration; `--diag` adds why the open–close loop
 //! iterated (`ChangeCounts`), why steps were refused and the time per stage.
 //!
@@ -13,10 +18,15 @@
 //!  [--seconds S] [--settle TOL] [--settle-after K] [--light-states on|off] [--light-tilt DEG]
 //!  [--stone-settle TOL] [--stone-settle-state TOL] [--stone-settle-after K]
 //!  [--stone-settle-interfaces N] [--stone-settle-neighbours] [--weight-scale on|off]
-//!  [--light-interface on|off] [--simplicial] [--start-check K] [--digest]`
+//!  [--cycle-flips N] [--cycle-after K] [--cycle-extra E] [--time-step DT]
+//!  [--light-interface on|off] [--simplicial] [--ordering scalar|block-amd|dissection|coordinates]
+//!  [--relax faer|none|wide] [--dissection-leaf N] [--start-check K] [--digest] [--no-settle]
+//!  [--settle-max S] [--lead-in S] [--motions …,sine3]`
 //!
-//! `--start-check K` sets `SparseParams::start_check_samples` (opt-in cheaper start of a
+//! `--start-check K` sets `SparseParams::start_check_samples` (cheaper start of a
 //! reused-factor solve); `--simplicial` turns off faer's supernodal factorization (`SparseParams::supernodal`);
+//! `--ordering`, `--relax` and `--dissection-leaf` choose its ordering and supernode
+//! amalgamation (`SparseParams::ordering`, `relax`, `dissection_leaf`);
 //! `--digest` prints a hash of every vertex and velocity at the end (bit-identity checks).
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
@@ -24,12 +34,14 @@
 //!
 //! `--tight`: the reference configuration of docs/contact-solve.md (Δt = 1e-4 s, the open–close
 //! loop run to convergence with the previous defaults of `OpenCloseParams::legacy`).
-use ashlar::motion::{self, GroundMotion, Signal};
+use ashlar::analysis::run_end::{self, RunEndParams};
+use ashlar::motion::{self, GroundMotion, Sampled, Signal};
 use ashlar::presets;
 use ashlar::scene::generate::WallParams;
 use ashlar::scene::{validate, BlockModel};
 use ashlar::simulation::{SimParams, Simulation};
 use ashlar::solve::open_close::CHANGE_KINDS;
+use ashlar::solve::{SparseOrdering, SupernodeRelax};
 use std::time::Instant;
 
 fn arg(name: &str) -> Option<String> {
@@ -50,6 +62,129 @@ fn record() -> GroundMotion {
     presets::shaken_wall_record().expect("the repository's Northridge record")
 }
 
+/// The settling phase before the motion (docs/contact-solve.md §21).
+struct Settled {
+    steps: u64,
+    solves: u64,
+    cuts: u64,
+    /// Simulated time it took, s.
+    time: f64,
+    /// Every stone quiet for `RunEndParams::settle_window` (else stopped at the cap).
+    quiet: bool,
+}
+
+/// `gm` at rest until `start − lead`, tapered in over `lead` s (a(t)·(1 − cos(π τ/lead))/2,
+/// τ the time since `start − lead`), the record's own from `start` on. Starting a record
+/// mid-way is a step of the ground's acceleration (−0.96 m/s² at the Northridge row's start),
+/// a load no user's run sees: `ashlar run` starts a record at its t = 0, where it grows from
+/// the noise. Returns the motion and the end of its quiet part (one sample before the taper,
+/// so that the interpolation between the last zero and the first tapered sample is not inside
+/// settling). Analytic signals (the sines, zero before t = 0) are left as they are.
+fn tapered_in(gm: &GroundMotion, start: f64, lead: f64) -> (GroundMotion, f64) {
+    let mut gm = gm.clone();
+    let mut quiet_end = start;
+    for sig in [&mut gm.horizontal, &mut gm.vertical] {
+        if let Signal::Sampled(s) = sig {
+            let mut a = s.accel.clone();
+            for (i, x) in a.iter_mut().enumerate() {
+                let tau = i as f64 * s.dt - (start - lead);
+                if tau < 0.0 {
+                    *x = 0.0;
+                } else if tau < lead {
+                    *x *= 0.5 * (1.0 - (std::f64::consts::PI * tau / lead).cos());
+                }
+            }
+            quiet_end = quiet_end.min(start - lead - s.dt);
+            *s = Sampled::new(s.dt, a);
+        }
+    }
+    (gm, quiet_end)
+}
+
+/// Settles the freshly built wall under gravity alone (the ground is still: `tapered_in`):
+/// steps from `quiet_end − max_time` until every stone is quiet (kinetic energy below
+/// `RunEndParams::settle_energy_ratio` · m g L, the run-end rule of `ashlar run`) for
+/// `settle_window`, or `quiet_end` is reached; then sets the clock to `start`, where the motion
+/// begins. Why settle rather than preload the springs with static forces: the settled state is
+/// the engine's own equilibrium (no second method to keep consistent), and its cost is outside
+/// the measured row.
+fn settle(sim: &mut Simulation, quiet_end: f64, start: f64, max_time: f64) -> Settled {
+    let s0 = sim.stats();
+    let t0 = quiet_end - max_time;
+    sim.set_time(t0);
+    let end_params = RunEndParams::default();
+    let mut quiet_since: Option<f64> = None;
+    let mut quiet = false;
+    while sim.time() < quiet_end - 1e-12 {
+        if let Err(e) = sim.step(quiet_end - sim.time()) {
+            eprintln!("  settling stopped at t = {:.4} s: {e}", sim.time());
+            break;
+        }
+        if run_end::all_quiet(sim, &end_params) {
+            let since = *quiet_since.get_or_insert(sim.time());
+            if sim.time() - since >= end_params.settle_window {
+                quiet = true;
+                break;
+            }
+        } else {
+            quiet_since = None;
+        }
+    }
+    let s = sim.stats();
+    let settled = Settled {
+        steps: s.steps - s0.steps,
+        solves: s.open_close_iterations - s0.open_close_iterations,
+        cuts: s.time_step_cuts - s0.time_step_cuts,
+        time: sim.time() - t0,
+        quiet,
+    };
+    sim.set_time(start);
+    settled
+}
+
+/// The deepest penetration of a closed contact after the last step, m (what
+/// `Stats::max_penetration` takes the maximum of, read here so the row excludes settling).
+fn penetration(sim: &Simulation) -> f64 {
+    sim.contacts()
+        .contacts
+        .iter()
+        .filter(|c| c.state.is_closed())
+        .fold(0.0, |p, c| p.max(-c.gap))
+}
+
+/// The measured steps (kept out of line: `valgrind --tool=callgrind --collect-atstart=no
+/// --toggle-collect='*measured_steps*'` counts them alone, without building or settling).
+/// Returns (steps, smallest step, deepest penetration).
+#[inline(never)]
+fn measured_steps(
+    sim: &mut Simulation,
+    steps: usize,
+    end: Option<f64>,
+    label: &str,
+) -> (usize, f64, f64) {
+    let mut done = 0;
+    let mut min_dt = f64::INFINITY;
+    let mut deepest: f64 = 0.0;
+    loop {
+        match end {
+            Some(end) if sim.time() >= end - 1e-12 => break,
+            None if done >= steps => break,
+            _ => {}
+        }
+        let max_dt = end.map_or(f64::INFINITY, |end| end - sim.time());
+        match sim.step(max_dt) {
+            Ok(dt) => min_dt = min_dt.min(dt),
+            Err(e) => {
+                eprintln!("  {label}: stopped after {done} steps: {e}");
+                break;
+            }
+        }
+        deepest = deepest.max(penetration(sim));
+        done += 1;
+    }
+    (done, min_dt, deepest)
+}
+
 /// Runs the tight reference (Δt = 1e-4 s fixed, the previous open–close loop run to
 /// convergence) over the same simulated time as `sim` and prints the largest difference of a
 /// stone's position (any vertex, m) and the deepest penetration of both.
@@ -58,6 +193,7 @@ fn compare_with_reference(
     scene: &ashlar::scene::Scene,
     gm: &GroundMotion,
     start: f64,
+    settling: Option<(f64, f64)>,
 ) {
     let mut params = SimParams {
         open_close: ashlar::solve::open_close::OpenCloseParams::legacy(),
@@ -69,6 +205,10 @@ fn compare_with_reference(
     scene.control.adaptive_time_step = false;
     let mut reference = Simulation::new(&scene, gm, params);
     reference.set_time(start);
+    // Settled the same way as the run (`settling`: quiet end and cap, s).
+    if let Some((quiet_end, max_time)) = settling {
+        settle(&mut reference, quiet_end, start, max_time);
+    }
     while reference.time() < sim.time() - 1e-12 {
         let left = sim.time() - reference.time();
         if let Err(e) = reference.step(left) {
@@ -164,7 +304,13 @@ fn main() {
                     m.poisson_ratio = v.parse().expect("--poisson");
                 }
             }
-            let scene = validate(&spec).expect("wall");
+            let mut scene = validate(&spec).expect("wall");
+            // `--time-step DT`: a fixed Δt, s, as the tight reference's (separates the Δt
+            // error from a loop variant's, docs/contact-solve.md §18).
+            if let Some(v) = arg("--time-step") {
+                scene.control.time_step = v.parse().expect("--time-step");
+                scene.control.adaptive_time_step = false;
+            }
             let (gm, start) = match m {
                 "rest" => (GroundMotion::none(), 0.0),
                 "sine" => (
@@ -174,8 +320,15 @@ fn main() {
                     }),
                     0.0,
                 ),
+                "sine3" => (
+                    GroundMotion::horizontal(Signal::Sine {
+                        amplitude: 3.0,
+                        frequency: 2.0,
+                    }),
+                    0.0,
+                ),
                 "record" => (rec.clone(), rec_start),
-                other => panic!("--motions: unknown {other:?} (rest, sine, record)"),
+                other => panic!("--motions: unknown {other:?} (rest, sine, sine3, record)"),
             };
             let mut params = SimParams::default();
             if let Some(v) = arg("--reuse-rule") {
@@ -283,6 +436,18 @@ fn main() {
             if let Some(v) = arg("--weight-scale") {
                 params.open_close.weight_scale = v == "on";
             }
+            // `--cycle-flips N [--cycle-after K] [--cycle-extra E]`: a contact that has
+            // flipped N times in the step closes sliding, from iteration K on, with E
+            // iterations beyond the limit (`OpenCloseParams::cycle_flips`, §18).
+            if let Some(v) = arg("--cycle-flips") {
+                params.open_close.cycle_flips = v.parse().expect("--cycle-flips");
+            }
+            if let Some(v) = arg("--cycle-after") {
+                params.open_close.cycle_after = v.parse().expect("--cycle-after");
+            }
+            if let Some(v) = arg("--cycle-extra") {
+                params.open_close.cycle_extra = v.parse().expect("--cycle-extra");
+            }
             if let Some(v) = arg("--friction-tol") {
                 params.open_close.friction_tolerance = v.parse().expect("--friction-tol");
             }
@@ -297,24 +462,79 @@ fn main() {
             if std::env::args().any(|a| a == "--simplicial") {
                 params.solver.sparse.supernodal = false;
             }
+            // `--ordering block-amd|dissection`, `--relax none|wide`, `--dissection-leaf N`
+            // (`SparseParams`, docs/contact-solve.md §20).
+            match arg("--ordering").as_deref() {
+                Some("block-amd") => params.solver.sparse.ordering = SparseOrdering::BlockAmd,
+                Some("dissection") => {
+                    params.solver.sparse.ordering = SparseOrdering::BlockDissection
+                }
+                Some("coordinates") => {
+                    params.solver.sparse.ordering = SparseOrdering::BlockCoordinates
+                }
+                Some("scalar") | None => {}
+                Some(o) => panic!("--ordering {o}: scalar, block-amd, dissection or coordinates"),
+            }
+            match arg("--relax").as_deref() {
+                Some("none") => params.solver.sparse.relax = SupernodeRelax::None,
+                Some("wide") => params.solver.sparse.relax = SupernodeRelax::Wide,
+                Some("faer") | None => {}
+                Some(r) => panic!("--relax {r}: faer, none or wide"),
+            }
+            if let Some(l) = arg("--dissection-leaf") {
+                params.solver.sparse.dissection_leaf = l.parse().expect("--dissection-leaf");
+            }
+            // `--no-settle`: drop the wall onto its springs as the motion starts (before
+            // session 35); `--settle-max S`: the longest settling, s (0.5 s: walls of 105 to
+            // 1620 stones are quiet from their second step, §21). `--lead-in S`: a record is
+            // tapered in over S s before `start`, unmeasured (0.1 s: no cut in it and none in
+            // the first steps at 105–1620 stones; 0.05 s leaves the same, §21).
+            let lead_in: f64 = arg("--lead-in")
+                .map(|v| v.parse().expect("--lead-in"))
+                .unwrap_or(0.1);
+            let settling = (!std::env::args().any(|a| a == "--no-settle")).then(|| {
+                let max_time: f64 = arg("--settle-max")
+                    .map(|v| v.parse().expect("--settle-max"))
+                    .unwrap_or(0.5);
+                let (quiet, quiet_end) = tapered_in(&gm, start, lead_in);
+                (quiet, quiet_end, max_time)
+            });
+            let gm = settling.as_ref().map_or(gm.clone(), |s| s.0.clone());
             let mut sim = Simulation::new(&scene, &gm, params);
             sim.set_time(start);
-            let t = Instant::now();
-            let mut done = 0;
-            let end = seconds.map(|s| start + s);
-            loop {
-                match end {
-                    Some(end) if sim.time() >= end - 1e-12 => break,
-                    None if done >= steps => break,
-                    _ => {}
+            if let Some((_, quiet_end, max_time)) = settling {
+                let lead_start = quiet_end.max(start - lead_in);
+                let st = settle(&mut sim, quiet_end, lead_start, max_time);
+                if sim.time() < start {
+                    let l0 = sim.stats();
+                    measured_steps(&mut sim, 0, Some(start), "lead-in");
+                    let l1 = sim.stats();
+                    eprintln!(
+                        "  lead-in {lead_in} s (tapered): {} steps, {} solves, {} cuts",
+                        l1.steps - l0.steps,
+                        l1.open_close_iterations - l0.open_close_iterations,
+                        l1.time_step_cuts - l0.time_step_cuts
+                    );
                 }
-                let max_dt = end.map_or(f64::INFINITY, |end| end - sim.time());
-                if let Err(e) = sim.step(max_dt) {
-                    eprintln!("  {n} {m}: stopped after {done} steps: {e}");
-                    break;
-                }
-                done += 1;
+                eprintln!(
+                    "  ground acceleration at the start ({start:.3} s): {:.3} m/s²",
+                    gm.acceleration(start)[0]
+                );
+                eprintln!(
+                    "  {} stones, {m}: settled in {} steps ({:.3} s simulated, quiet {}), {} solves, {} cuts",
+                    scene.blocks.len() - 1,
+                    st.steps,
+                    st.time,
+                    st.quiet,
+                    st.solves,
+                    st.cuts
+                );
             }
+            let s0 = sim.stats();
+            let t = Instant::now();
+            let end = seconds.map(|s| start + s);
+            let label = format!("{n} {m}");
+            let (done, min_dt, deepest) = measured_steps(&mut sim, steps, end, &label);
             let wall = t.elapsed().as_secs_f64();
             if std::env::args().any(|a| a == "--digest") {
                 eprintln!(
@@ -325,10 +545,17 @@ fn main() {
                 );
             }
             if std::env::args().any(|a| a == "--reference") {
-                compare_with_reference(&sim, &scene, &gm, start);
+                compare_with_reference(
+                    &sim,
+                    &scene,
+                    &gm,
+                    start,
+                    settling.map(|(_, quiet_end, max_time)| (quiet_end, max_time)),
+                );
             }
             let c = sim.solver_counts();
-            let solves = sim.stats().open_close_iterations as f64;
+            let s1 = sim.stats();
+            let solves = (s1.open_close_iterations - s0.open_close_iterations) as f64;
             println!(
                 "| {} | {} | {} | {:.3e} | {:.2} | {:.2} | {} | {:.1e} | {:.2e} |",
                 scene.blocks.len() - 1,
@@ -336,14 +563,14 @@ fn main() {
                 done,
                 wall / done.max(1) as f64,
                 solves / done.max(1) as f64,
-                sim.stats().open_close_iterations as f64 / done.max(1) as f64,
-                sim.stats().time_step_cuts,
-                sim.stats().min_dt,
-                sim.stats().max_penetration
+                solves / done.max(1) as f64,
+                s1.time_step_cuts - s0.time_step_cuts,
+                min_dt,
+                deepest
             );
             if diag {
                 eprintln!(
-                    "  {} stones, {m}: contacts {}, factorizations {}, reuse CG iterations {}, detections {}",
+                    "  {} stones, {m} (settling included): contacts {}, factorizations {}, reuse CG iterations {}, detections {}",
                     scene.blocks.len() - 1,
                     sim.contacts().contacts.len(),
                     c.numeric,
@@ -358,8 +585,9 @@ fn main() {
                 }
                 let fc = c.factor_cost;
                 eprintln!(
-                    "  factor cost (solve multiply-adds): factorization {:.3e}, pair {:.3e}, matvec {:.3e}, n {}, break-even {:.2} iterations",
+                    "  factor cost (solve multiply-adds): factorization {:.3e} (unweighted {:.4e}), pair {:.3e}, matvec {:.3e}, n {}, break-even {:.2} iterations",
                     fc.factor,
+                    fc.factor / SimParams::default().solver.sparse.factor_work_weight,
                     fc.pair,
                     fc.matvec,
                     fc.n,

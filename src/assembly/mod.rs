@@ -50,6 +50,10 @@ pub struct Dofs {
     pub offset: Vec<usize>,
     /// Total unknowns.
     pub n: usize,
+    /// Per free block: the mean of its initial vertices (x, y), m. Only for the sparse
+    /// factorization's coordinate ordering (`SparseOrdering::BlockCoordinates`), which needs
+    /// where blocks are roughly, not where they are now; empty when not numbered from a scene.
+    pub position: Vec<[f64; 2]>,
 }
 
 impl Dofs {
@@ -68,6 +72,12 @@ impl Dofs {
                 dofs.ndof.push(nd);
                 dofs.offset.push(dofs.n);
                 dofs.n += nd;
+                let k = blk.vertices.len().max(1) as f64;
+                let (x, y) = blk
+                    .vertices
+                    .iter()
+                    .fold((0.0, 0.0), |(x, y), v| (x + v.x, y + v.y));
+                dofs.position.push([x / k, y / k]);
             }
         }
         dofs

@@ -97,6 +97,21 @@ pub struct ImpactParams {
     /// without the rule 14 % apart, bound 10 %) and the column example's golden digest moves
     /// (docs/pile.md, sessions 33–34). For diagnosis.
     pub locate_speed_ratio: f64,
+    /// At an impact on a free block whose contacts are all with fixed or driven blocks (a
+    /// column landing on its base), the block's pose is moved by a rigid displacement of order
+    /// (its weight)/k, 5e-8 m for a slender column, so that the landing contacts start the step
+    /// at the penetration the released ones had (the old pivot's spring force handed to the
+    /// new corner) and the released ones at zero gap ([`hand_over_weight`]). Why: the penalty
+    /// pivot stores (mg)²/2k; left to the springs, that energy moves from one corner to the
+    /// other through a ringing of period 2π/√(2k/m), three steps of 1e-4 s, that the step
+    /// damps: slow landings of micro-rocking lost 1.6 % more of θ̇ than Housner's law. The
+    /// move swaps the stored energy between the springs (equal penetrations) and changes
+    /// gravity's to second order in the rotation (≈ 4e-7 rad). It acts at impacts only: for
+    /// landings slower than the settling threshold set `slow_factor` to 0 as well (then the
+    /// slow landings' r is Housner's within 0.2 % at 1e-4 s). `false` (default): not a gain
+    /// on the records study at the default Δt (docs/accuracy-vs-speed.md, "Micro-rocking: the
+    /// landing corner takes the weight (session 35)").
+    pub hand_over_weight: bool,
 }
 
 impl Default for ImpactParams {
@@ -111,6 +126,7 @@ impl Default for ImpactParams {
             split_before: true,
             close_hover: true,
             locate_speed_ratio: 1.0,
+            hand_over_weight: false,
         }
     }
 }
@@ -558,4 +574,94 @@ pub fn apply_impacts(
         }
     }
     count
+}
+
+/// The rigid moves (free block index, (u0 m, v0 m, r0 rad)) that hand the weight over at this
+/// step's impacts ([`ImpactParams::hand_over_weight`]), from the `scratch` and velocities
+/// [`apply_impacts`] left. Per involved free block whose contacts all have a fixed or driven
+/// block on the other side: the *released* contacts (closed, penetrating at the step start,
+/// not impacting, separating at the velocities after the impulses) are brought to zero gap,
+/// the impacting ones take their summed penetration in equal shares, every other closed or
+/// impacting contact of the block keeps its gap; the move is the one of least kinetic
+/// metric (D = M⁻¹Gᵀ(GM⁻¹Gᵀ)⁻¹Δg on the rigid-body unknowns). A block with no released
+/// contact, or whose gap rows are dependent (more than three independent contacts), is
+/// left where it is.
+pub fn hand_over_weight(
+    input: &ImpactInput,
+    contacts: &[Contact],
+    states: &[BlockState],
+    scratch: &ImpactScratch,
+) -> Vec<(usize, Vector3<f64>)> {
+    let dofs = input.dofs;
+    let mut moves = Vec::new();
+    for (f, _) in scratch.involved.iter().enumerate().filter(|(_, &i)| i) {
+        let b = dofs.block_of[f];
+        // Per contact of the block: its gradient on the block's rigid unknowns, and Δg.
+        let mut rows: Vec<(Vector3<f64>, f64)> = Vec::new();
+        let mut landing = Vec::new();
+        let mut released = 0.0;
+        let mut coupled = false;
+        for (k, c) in contacts.iter().enumerate() {
+            let (grad, other) = if c.vertex_block == b {
+                (rigid(&c.e_i), c.edge_block)
+            } else if c.edge_block == b {
+                (-rigid(&c.e_j), c.vertex_block)
+            } else {
+                continue;
+            };
+            if !(c.state.is_closed() || scratch.impacting[k]) || !takes_part(input, c) {
+                continue;
+            }
+            if dofs.free_index[other].is_some() {
+                coupled = true;
+                break;
+            }
+            if scratch.impacting[k] {
+                landing.push(rows.len());
+                rows.push((grad, 0.0));
+                // The landing corner does not slide in the move: a shear increment of h·r0
+                // (3e-7 m for the slender column) would load its shear spring with k·h·r0, six
+                // times the block's weight.
+                let shear = if c.vertex_block == b {
+                    rigid(&c.f_i)
+                } else {
+                    -rigid(&c.f_j)
+                };
+                rows.push((shear, 0.0));
+                continue;
+            }
+            let (vi, _) = motion_of(input, c.vertex_block, states);
+            let (vj, _) = motion_of(input, c.edge_block, states);
+            let rate = c.e_i.dot(&vi) - c.e_j.dot(&vj);
+            if c.g0 < 0.0 && rate > 0.0 {
+                released += -c.g0;
+                rows.push((grad, -c.g0));
+            } else {
+                rows.push((grad, 0.0));
+            }
+        }
+        if coupled || landing.is_empty() || released == 0.0 || rows.len() > 3 {
+            continue;
+        }
+        let share = released / landing.len() as f64;
+        for &r in &landing {
+            rows[r].1 = -share;
+        }
+        let m = input.geoms[b].mass_matrix(input.densities[f]);
+        let Some(inv) = m.fixed_view::<3, 3>(0, 0).clone_owned().try_inverse() else {
+            continue;
+        };
+        let n = rows.len();
+        let gram = nalgebra::DMatrix::from_fn(n, n, |i, j| rows[i].0.dot(&(inv * rows[j].0)));
+        let dg = nalgebra::DVector::from_fn(n, |i, _| rows[i].1);
+        let Some(lambda) = gram.cholesky().map(|ch| ch.solve(&dg)) else {
+            continue;
+        };
+        let d = rows
+            .iter()
+            .zip(lambda.iter())
+            .fold(Vector3::zeros(), |acc, (r, &l)| acc + inv * r.0 * l);
+        moves.push((f, d));
+    }
+    moves
 }

@@ -4,11 +4,14 @@
 //! reused symbolic factorization for large ones.
 mod anderson;
 mod dense_cholesky;
+mod dissection;
 pub mod dual;
 pub mod open_close;
 mod sparse_cholesky;
 
-pub use sparse_cholesky::{FactorCost, ReuseTable, SparseParams, REUSE_TABLE_LEN};
+pub use sparse_cholesky::{
+    FactorCost, ReuseTable, SparseOrdering, SparseParams, SupernodeRelax, REUSE_TABLE_LEN,
+};
 
 use crate::assembly::{BlockSystem, Dofs};
 

@@ -18,6 +18,7 @@ mod foundation;
 mod incline;
 mod invariants;
 mod light_state_rocking;
+mod micro_rocking;
 mod multiblock_references;
 mod records_housner;
 mod restitution;

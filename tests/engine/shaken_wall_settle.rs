@@ -4,7 +4,8 @@
 //! stone's force scale is taken instead of cut. And the light state changes
 //! (`OpenCloseParams::light_state_changes`, the default since §12): a lightly loaded head
 //! joint's opening, closing or slip that misjudges at most 1e-3 of the force scale skips the
-//! solve (its rocking-stack test: light_state_rocking.rs).
+//! solve (its rocking-stack test: light_state_rocking.rs). And the cycle rule at the iteration
+//! limit (`OpenCloseParams::cycle_flips`, opt-in, §18), which finishes the steps that were cut.
 //!
 //! The scene is the 105-stone running-bond wall of `examples/shaken_walls.rs` (0.6 × 0.3 m
 //! rigid stones, 35° dry joints) under the Northridge record (Mulholland 009) scaled to 0.3 g,
@@ -198,4 +199,41 @@ fn the_stone_rule_takes_the_walls_loaded_friction_updates_and_keeps_the_answer()
         diff <= LIGHT_BOUND,
         "vertex difference {diff:.3e} m above {LIGHT_BOUND:e} m"
     );
+}
+
+/// The cycle rule at the iteration limit (`OpenCloseParams::cycle_flips`, docs/contact-solve.md
+/// §18): a step whose loop reaches its 20th iteration gets up to 10 more, in which a contact
+/// that has changed state 4 times in the step closes sliding at the Coulomb limit instead of
+/// locked. On this wall the loop without the rule cuts Δt twice, both in the first step (the
+/// wall lands on its springs while the ground moves, the head joints cycling open → locked →
+/// sliding → open); with the rule that step converges at 1 ms and the run has no cut at all.
+/// The first 20 iterations of every step are the loop without the rule.
+#[test]
+fn the_cycle_rule_finishes_the_walls_cut_steps_and_keeps_the_answer() {
+    let scene = wall();
+    let (gm, start) = record();
+    let rule = OpenCloseParams {
+        cycle_flips: 4,
+        cycle_after: 21,
+        cycle_extra: 10,
+        ..Default::default()
+    };
+    let (sim, _) = run(&scene, &gm, start, rule);
+    let (off, _) = run(&scene, &gm, start, OpenCloseParams::default());
+    let reference = reference(&scene, &gm, start, &sim);
+    let (diff, moved) = compare(&sim, &reference, &scene);
+    let (cuts, cuts_off) = (sim.stats().time_step_cuts, off.stats().time_step_cuts);
+    eprintln!(
+        "cycle rule: cuts {cuts} (off: {cuts_off}); simulated {:.4} s; vertex difference {diff:.3e} m of {moved:.3e} m",
+        sim.time() - start
+    );
+    // Measured (release example, `--sizes 100 --motions record --steps 200 --diag`): 2 cuts
+    // without the rule, 0 with it.
+    assert!(cuts_off > 0, "the loop without the rule cuts on this wall");
+    assert_eq!(cuts, 0, "the rule finishes every step at 1 ms");
+    // Measured (`... --reference --cycle-flips 4`): 2.255e-8 m of 8.533e-7 m (2.6 %) over
+    // 0.2 s; without the rule 1.237e-8 m over 0.183 s. Bound 5e-8 m, the record bound of
+    // docs/contact-solve.md §6/§13 and the settle rule's above (2.2× the measured): the Δt error
+    // (1 ms against 0.1 ms) plus the first step's head joints closed sliding, grown by the record.
+    assert!(diff <= 5e-8, "vertex difference {diff:.3e} m above 5e-8 m");
 }
