@@ -20,11 +20,13 @@
 //!  [--stone-settle-interfaces N] [--stone-settle-neighbours] [--weight-scale on|off]
 //!  [--cycle-flips N] [--cycle-after K] [--cycle-extra E] [--time-step DT]
 //!  [--light-interface on|off] [--simplicial] [--ordering scalar|block-amd|dissection|coordinates]
-//!  [--relax faer|none|wide] [--dissection-leaf N] [--start-check K] [--digest] [--no-settle]
-//!  [--settle-max S] [--lead-in S] [--motions …,sine3]`
+//!  [--relax faer|none|wide] [--dissection-leaf N] [--start-check K] [--start-check-audit]
+//!  [--digest] [--no-settle] [--settle-max S] [--lead-in S] [--motions …,sine3]`
 //!
 //! `--start-check K` sets `SparseParams::start_check_samples` (cheaper start of a
-//! reused-factor solve); `--simplicial` turns off faer's supernodal factorization (`SparseParams::supernodal`);
+//! reused-factor solve, default 2; 0 = the exact test at every start), `--start-check-audit`
+//! counts the accepted starts the exact test rejects (`SparseParams::start_check_audit`);
+//! `--simplicial` turns off faer's supernodal factorization (`SparseParams::supernodal`);
 //! `--ordering`, `--relax` and `--dissection-leaf` choose its ordering and supernode
 //! amalgamation (`SparseParams::ordering`, `relax`, `dissection_leaf`);
 //! `--digest` prints a hash of every vertex and velocity at the end (bit-identity checks).
@@ -459,6 +461,10 @@ fn main() {
                 // `SparseParams::start_check_samples` (docs/contact-solve.md §19).
                 params.solver.sparse.start_check_samples = v.parse().expect("--start-check");
             }
+            if std::env::args().any(|a| a == "--start-check-audit") {
+                // `SparseParams::start_check_audit`: count accepted starts the exact test rejects.
+                params.solver.sparse.start_check_audit = true;
+            }
             if std::env::args().any(|a| a == "--simplicial") {
                 params.solver.sparse.supernodal = false;
             }
@@ -579,8 +585,8 @@ fn main() {
                 );
                 if c.start_skips > 0 {
                     eprintln!(
-                        "  reused-factor starts accepted by the estimate: {}",
-                        c.start_skips
+                        "  reused-factor starts accepted by the estimate: {} (audited misses {})",
+                        c.start_skips, c.start_check_misses
                     );
                 }
                 let fc = c.factor_cost;

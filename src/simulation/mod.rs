@@ -419,52 +419,33 @@ mod tests {
         let n = states(&held);
         assert!(n.iter().all(|&k| k > 0), "every state occurs: {n:?}");
         let st = &sim.state;
-        let sp = &mut sim.stepper;
-        let springs = sp.springs;
-        // Reference: a full assembly of the moved contacts.
-        sp.system.reset_to_blocks();
-        add_contacts(
-            &mut sp.system,
-            &st.dofs,
-            &moved,
-            &st.laws,
-            &springs,
-            &st.prescribed,
-        );
-        let bits = |sys: &BlockSystem| {
+        let sys = &mut sim.stepper.system;
+        let springs = sim.stepper.springs;
+        // A full assembly (`MATRIX`) or the loads only, of `cs`, from the block terms.
+        let assemble = |sys: &mut BlockSystem, cs: &[crate::contact::Contact], matrix: bool| {
+            let add = if matrix {
+                sys.reset_to_blocks();
+                add_contacts
+            } else {
+                sys.reset_rhs_to_blocks();
+                add_contact_loads
+            };
+            add(sys, &st.dofs, cs, &st.laws, &springs, &st.prescribed);
             let mut b = Vec::new();
             for m in sys.diag.iter().chain(&sys.off) {
                 b.extend(m.iter().map(|v| v.to_bits()));
             }
-            for r in &sys.rhs {
-                b.extend(r.iter().map(|v| v.to_bits()));
-            }
+            b.extend(sys.rhs.iter().flat_map(|r| r.iter().map(|v| v.to_bits())));
             b
         };
-        let full = bits(&sp.system);
+        // Reference: a full assembly of the moved contacts.
+        let full = assemble(sys, &moved, true);
         // The rule: the held contacts' full assembly, then the moved contacts' loads only.
-        sp.system.reset_to_blocks();
-        add_contacts(
-            &mut sp.system,
-            &st.dofs,
-            &held,
-            &st.laws,
-            &springs,
-            &st.prescribed,
-        );
-        let before = bits(&sp.system);
+        let before = assemble(sys, &held, true);
         assert_ne!(before, full, "the loads moved, so the systems must differ");
-        sp.system.reset_rhs_to_blocks();
-        add_contact_loads(
-            &mut sp.system,
-            &st.dofs,
-            &moved,
-            &st.laws,
-            &springs,
-            &st.prescribed,
-        );
+        let kept = assemble(sys, &moved, false);
         assert!(
-            bits(&sp.system) == full,
+            kept == full,
             "rhs-only re-assembly differs from the full one"
         );
     }

@@ -76,6 +76,8 @@ pub struct SparseCounts {
     pub factor_cost: FactorCost,
     /// Reused-factor solves accepted at the start (`SparseParams::start_check_samples`).
     pub start_skips: u64,
+    /// See [`SparseParams::start_check_audit`]; 0 when unaudited.
+    pub start_check_misses: u64,
 }
 
 impl LinearSolver {
@@ -95,6 +97,7 @@ impl LinearSolver {
             reuse_table: self.sparse.reuse_table,
             factor_cost: self.sparse.cost(),
             start_skips: self.sparse.start_skips,
+            start_check_misses: self.sparse.start_check_misses,
         }
     }
 
