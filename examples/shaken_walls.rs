@@ -585,9 +585,15 @@ fn main() {
                 );
                 if c.start_skips > 0 {
                     eprintln!(
-                        "  reused-factor starts accepted by the estimate: {} (audited misses {})",
-                        c.start_skips, c.start_check_misses
+                        "  reused-factor starts accepted by the estimate: {}",
+                        c.start_skips
                     );
+                    if sim.params().solver.sparse.start_check_audit {
+                        eprintln!(
+                            "  of which rejected by the exact test (audited): {}",
+                            c.start_check_misses
+                        );
+                    }
                 }
                 let fc = c.factor_cost;
                 eprintln!(
