@@ -21,9 +21,12 @@
 //!  [--cycle-flips N] [--cycle-after K] [--cycle-extra E] [--time-step DT] [--closing F]
 //!  [--closing-floor R]
 //!  [--light-interface on|off] [--simplicial] [--ordering scalar|block-amd|dissection|coordinates]
-//!  [--relax faer|none|wide] [--dissection-leaf N] [--digest] [--no-settle] [--settle-max S]
-//!  [--lead-in S] [--motions …,sine3]`
+//!  [--relax faer|none|wide] [--dissection-leaf N] [--start-check K] [--start-check-audit]
+//!  [--digest] [--no-settle] [--settle-max S] [--lead-in S] [--motions …,sine3]`
 //!
+//! `--start-check K` sets `SparseParams::start_check_samples` (cheaper start of a
+//! reused-factor solve, default 2; 0 = the exact test at every start), `--start-check-audit`
+//! counts the accepted starts the exact test rejects (`SparseParams::start_check_audit`);
 //! `--simplicial` turns off faer's supernodal factorization (`SparseParams::supernodal`);
 //! `--ordering`, `--relax` and `--dissection-leaf` choose its ordering and supernode
 //! amalgamation (`SparseParams::ordering`, `relax`, `dissection_leaf`);
@@ -481,6 +484,14 @@ fn main() {
                 params.open_close = ashlar::solve::open_close::OpenCloseParams::legacy();
                 params.open_close.max_iterations = 200;
             }
+            if let Some(v) = arg("--start-check") {
+                // `SparseParams::start_check_samples` (docs/contact-solve.md §19).
+                params.solver.sparse.start_check_samples = v.parse().expect("--start-check");
+            }
+            if std::env::args().any(|a| a == "--start-check-audit") {
+                // `SparseParams::start_check_audit`: count accepted starts the exact test rejects.
+                params.solver.sparse.start_check_audit = true;
+            }
             if std::env::args().any(|a| a == "--simplicial") {
                 params.solver.sparse.supernodal = false;
             }
@@ -604,6 +615,18 @@ fn main() {
                     c.reuse_iterations,
                     sim.contacts().detections
                 );
+                if c.start_skips > 0 {
+                    eprintln!(
+                        "  reused-factor starts accepted by the estimate: {}",
+                        c.start_skips
+                    );
+                    if sim.params().solver.sparse.start_check_audit {
+                        eprintln!(
+                            "  of which rejected by the exact test (audited): {}",
+                            c.start_check_misses
+                        );
+                    }
+                }
                 let fc = c.factor_cost;
                 eprintln!(
                     "  factor cost (solve multiply-adds): factorization {:.3e} (unweighted {:.4e}), pair {:.3e}, matvec {:.3e}, n {}, break-even {:.2} iterations",

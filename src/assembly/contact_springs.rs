@@ -83,6 +83,46 @@ pub fn add_contacts(
     springs: &SpringParams,
     prescribed: &[Prescribed],
 ) {
+    assemble::<true>(sys, dofs, contacts, laws, springs, prescribed);
+}
+
+/// The right-hand side part of [`add_contacts`] alone (spring gap constants, friction and
+/// release loads), for a matrix that already holds the springs of the same contact states: the
+/// same operations on `rhs` in the same order as [`add_contacts`], so the right-hand side is
+/// the same to the bit. The open–close loop uses it when no spring was added or removed since
+/// its last assembly (docs/contact-solve.md §19).
+pub fn add_contact_loads(
+    sys: &mut BlockSystem,
+    dofs: &Dofs,
+    contacts: &[Contact],
+    laws: &[JointLaw],
+    springs: &SpringParams,
+    prescribed: &[Prescribed],
+) {
+    assemble::<false>(sys, dofs, contacts, laws, springs, prescribed);
+}
+
+/// Which springs a contact's state puts into the matrix (normal: closed; shear: locked):
+/// two states with the same key assemble the same matrix entries.
+#[inline]
+pub fn spring_key(state: ContactState) -> u8 {
+    match state {
+        ContactState::Open => 0,
+        ContactState::Sliding { .. } => 1,
+        ContactState::Locked => 2,
+    }
+}
+
+/// [`add_contacts`], with the matrix part (`MATRIX`) or without.
+#[inline(always)]
+fn assemble<const MATRIX: bool>(
+    sys: &mut BlockSystem,
+    dofs: &Dofs,
+    contacts: &[Contact],
+    laws: &[JointLaw],
+    springs: &SpringParams,
+    prescribed: &[Prescribed],
+) {
     for (k, (c, law)) in contacts.iter().zip(laws).enumerate() {
         if !c.state.is_closed() {
             let l = release_load(c, springs);
@@ -100,7 +140,7 @@ pub fn add_contacts(
         let fj = dofs.free_index[c.edge_block];
         let slot = sys.contact_slots[k];
         let (g0, s0) = constants(c, prescribed);
-        add_spring(
+        add_spring::<MATRIX>(
             sys,
             dofs,
             (fi, fj, slot),
@@ -111,7 +151,7 @@ pub fn add_contacts(
         );
         match c.state {
             ContactState::Locked => {
-                add_spring(sys, dofs, (fi, fj, slot), &c.f_i, &c.f_j, springs.shear, s0)
+                add_spring::<MATRIX>(sys, dofs, (fi, fj, slot), &c.f_i, &c.f_j, springs.shear, s0)
             }
             ContactState::Sliding { dir } => {
                 let f = dir * shear_limit(c, law, c.friction_normal);
@@ -127,9 +167,10 @@ pub fn add_contacts(
     }
 }
 
-/// Spring of stiffness `k` on the measure `m = m0 + a·D_i − b·D_j`: energy k/2·m².
+/// Spring of stiffness `k` on the measure `m = m0 + a·D_i − b·D_j`: energy k/2·m². The
+/// matrix part only with `MATRIX` (the right-hand side always).
 #[inline]
-fn add_spring(
+fn add_spring<const MATRIX: bool>(
     sys: &mut BlockSystem,
     dofs: &Dofs,
     (fi, fj, slot): (Option<usize>, Option<usize>, Option<CouplingSlot>),
@@ -140,12 +181,19 @@ fn add_spring(
 ) {
     let rigid = |f: usize| dofs.ndof[f] == 3;
     if let Some(i) = fi {
-        rank_one(&mut sys.diag[i], k, a, a, rigid(i));
+        if MATRIX {
+            rank_one(&mut sys.diag[i], k, a, a, rigid(i));
+        }
         sys.rhs[i] -= a * (k * m0);
     }
     if let Some(j) = fj {
-        rank_one(&mut sys.diag[j], k, b, b, rigid(j));
+        if MATRIX {
+            rank_one(&mut sys.diag[j], k, b, b, rigid(j));
+        }
         sys.rhs[j] += b * (k * m0);
+    }
+    if !MATRIX {
+        return;
     }
     if let (Some(i), Some(j), Some(slot)) = (fi, fj, slot) {
         let both_rigid = rigid(i) && rigid(j);

@@ -242,6 +242,12 @@ impl BlockSystem {
         self.off.fill(Mat6::zeros());
     }
 
+    /// Reset the right-hand side only to the block terms, keeping the matrix (for
+    /// [`contact_springs::add_contact_loads`], when the contacts' springs did not change).
+    pub fn reset_rhs_to_blocks(&mut self) {
+        self.rhs.clone_from(&self.base_rhs);
+    }
+
     /// Declare the off-diagonal pattern (free-block pairs a < b) for this step.
     pub fn set_pattern(&mut self, mut pairs: Vec<(usize, usize)>) {
         pairs.sort_unstable();

@@ -381,4 +381,82 @@ mod tests {
             other => panic!("expected NonFinite naming the column, got {other:?}"),
         }
     }
+
+    /// The open–close loop's kept-matrix rule (docs/contact-solve.md §19): when no contact's
+    /// spring key changed since the last full assembly, `reset_rhs_to_blocks` +
+    /// `add_contact_loads` must give the matrix and right-hand side of a full re-assembly to
+    /// the bit (tolerance 0: the rule is only sound if it is bit-identical). On a 4 × 5 wall
+    /// after one step at rest, the contacts' loads are then changed without changing a key
+    /// (sliding directions flipped, friction normals, gap constants and release factors
+    /// moved); a fifth of the contacts are made sliding and a fifth open, so all three states occur.
+    #[test]
+    fn the_rhs_only_reassembly_gives_the_full_assemblys_system_to_the_bit() {
+        use crate::assembly::contact_springs::{add_contact_loads, add_contacts};
+        use crate::contact::ContactState;
+        let scene = crate::scene::validate(&crate::presets::wall(4, 5)).expect("wall scene");
+        let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
+        sim.step(1.0).expect("a step at rest");
+        let mut held = sim.state.contacts.contacts.clone();
+        for (k, c) in held.iter_mut().enumerate() {
+            match k % 5 {
+                0 => c.state = ContactState::Sliding { dir: 1.0 },
+                1 => c.state = ContactState::Open,
+                _ => {}
+            }
+        }
+        let mut moved = held.clone();
+        for c in &mut moved {
+            if let ContactState::Sliding { dir } = c.state {
+                c.state = ContactState::Sliding { dir: -dir };
+            }
+            c.friction_normal = 1.5 * c.friction_normal + 10.0;
+            c.g0 += 1e-6;
+            c.s0 -= 2e-6;
+            c.start_normal_force = 100.0;
+            c.release_factor = 0.25;
+        }
+        let states = |cs: &[crate::contact::Contact]| {
+            let mut n = [0usize; 3];
+            for c in cs {
+                n[match c.state {
+                    ContactState::Open => 0,
+                    ContactState::Locked => 1,
+                    ContactState::Sliding { .. } => 2,
+                }] += 1;
+            }
+            n
+        };
+        let n = states(&held);
+        assert!(n.iter().all(|&k| k > 0), "every state occurs: {n:?}");
+        let st = &sim.state;
+        let sys = &mut sim.stepper.system;
+        let springs = sim.stepper.springs;
+        // A full assembly (`MATRIX`) or the loads only, of `cs`, from the block terms.
+        let assemble = |sys: &mut BlockSystem, cs: &[crate::contact::Contact], matrix: bool| {
+            let add = if matrix {
+                sys.reset_to_blocks();
+                add_contacts
+            } else {
+                sys.reset_rhs_to_blocks();
+                add_contact_loads
+            };
+            add(sys, &st.dofs, cs, &st.laws, &springs, &st.prescribed);
+            let mut b = Vec::new();
+            for m in sys.diag.iter().chain(&sys.off) {
+                b.extend(m.iter().map(|v| v.to_bits()));
+            }
+            b.extend(sys.rhs.iter().flat_map(|r| r.iter().map(|v| v.to_bits())));
+            b
+        };
+        // Reference: a full assembly of the moved contacts.
+        let full = assemble(sys, &moved, true);
+        // The rule: the held contacts' full assembly, then the moved contacts' loads only.
+        let before = assemble(sys, &held, true);
+        assert_ne!(before, full, "the loads moved, so the systems must differ");
+        let kept = assemble(sys, &moved, false);
+        assert!(
+            kept == full,
+            "rhs-only re-assembly differs from the full one"
+        );
+    }
 }

@@ -74,6 +74,10 @@ pub struct SparseCounts {
     pub reuse_table: ReuseTable,
     /// Cost model of the current factor (zero before the first sparse solve).
     pub factor_cost: FactorCost,
+    /// Reused-factor solves accepted at the start (`SparseParams::start_check_samples`).
+    pub start_skips: u64,
+    /// See [`SparseParams::start_check_audit`]; 0 when unaudited.
+    pub start_check_misses: u64,
 }
 
 impl LinearSolver {
@@ -92,6 +96,8 @@ impl LinearSolver {
             reuse_max_error: self.sparse.reuse_max_error,
             reuse_table: self.sparse.reuse_table,
             factor_cost: self.sparse.cost(),
+            start_skips: self.sparse.start_skips,
+            start_check_misses: self.sparse.start_check_misses,
         }
     }
 

@@ -4,7 +4,8 @@
 use super::anderson::FrictionAnderson;
 use super::{LinearSolver, SolveError};
 use crate::assembly::contact_springs::{
-    add_contacts, constants, shear_limit, JointLaw, Prescribed, SpringParams,
+    add_contact_loads, add_contacts, constants, shear_limit, spring_key, JointLaw, Prescribed,
+    SpringParams,
 };
 use crate::assembly::{BlockSystem, Dofs};
 use crate::contact::{Contact, ContactState};
@@ -475,6 +476,9 @@ pub struct OpenCloseScratch {
     x_old: Vec<f64>,
     x_new: Vec<f64>,
     dir: Vec<Vec6>,
+    /// Per contact, the springs (`spring_key`) that the system's matrix holds: an iteration
+    /// whose contacts hold the same springs keeps the matrix and re-adds only the loads.
+    spring_keys: Vec<u8>,
 }
 
 /// Buffers of the local rounds (`OpenCloseParams::local_sweeps`).
@@ -646,9 +650,31 @@ pub fn iterate(
         block_force,
     };
     let limit = params.iteration_limit();
+    // Whether `sys`'s matrix holds the block terms and the springs of `spring_keys` (set by
+    // this call's assemblies only: the first iteration always assembles).
+    let mut matrix_holds_keys = false;
     for it in 1..=limit {
-        sys.reset_to_blocks();
-        add_contacts(sys, dofs, contacts, laws, springs, prescribed);
+        // The matrix depends on which springs the contacts hold, not on their loads (friction,
+        // gap constants, release): when no spring was added or removed since the last
+        // assembly, the same rank-one updates would rebuild the same matrix to the bit, so
+        // only the right-hand side is rebuilt (the same operations on it, in the same order).
+        let keys = &mut scratch.spring_keys;
+        if matrix_holds_keys
+            && keys.len() == contacts.len()
+            && contacts
+                .iter()
+                .zip(keys.iter())
+                .all(|(c, &k)| spring_key(c.state) == k)
+        {
+            sys.reset_rhs_to_blocks();
+            add_contact_loads(sys, dofs, contacts, laws, springs, prescribed);
+        } else {
+            sys.reset_to_blocks();
+            add_contacts(sys, dofs, contacts, laws, springs, prescribed);
+            keys.clear();
+            keys.extend(contacts.iter().map(|c| spring_key(c.state)));
+            matrix_holds_keys = true;
+        }
         if params.line_search {
             scratch.x_old.clone_from(x);
         }
@@ -762,6 +788,8 @@ pub fn iterate(
             }
         }
         if params.local_sweeps > 0 && it >= params.local_after && it < limit {
+            // The rounds assemble the system themselves.
+            matrix_holds_keys = false;
             local_rounds(
                 sys,
                 &rule,

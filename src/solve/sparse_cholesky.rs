@@ -159,6 +159,17 @@ pub struct SparseCholesky {
     pub reuse_iterations: u64,
     /// Attempts, iterations, failures and rule skips per predicted count (diagnostics).
     pub reuse_table: ReuseTable,
+    /// [`SparseParams::start_check_samples`]: the largest ratio max|z₀| / max|r₀| of the
+    /// preconditioned to the plain start residual seen on the current factor, and how many
+    /// starts it was taken from (both reset by `factorize`).
+    start_ratio: f64,
+    start_samples: usize,
+    /// Reused-factor attempts accepted at the start by the estimate, without their second
+    /// triangular-solve pair (diagnostics).
+    pub start_skips: u64,
+    /// With [`SparseParams::start_check_audit`]: starts accepted by the estimate whose exact
+    /// test (max|z₀| ≤ `reuse_tolerance`·max|x₀|) fails.
+    pub start_check_misses: u64,
     /// With [`SparseParams::check_reuse`]: the largest difference between a reused-factor
     /// solution and the refactored solution of the same system, relative to the largest
     /// unknown of the latter.
@@ -212,6 +223,27 @@ pub struct SparseParams {
     /// prediction judged too costly is tried again after about 1/rate solves (the matrix
     /// changes may have become smaller). 0.1: a retry costs at most one failed attempt in ten.
     pub reuse_forget_rate: f64,
+    /// Cheaper start of a reused-factor solve (0 = off: every start preconditions its
+    /// residual, a second triangular-solve pair, to test convergence). With k > 0, once k
+    /// starts on the current factor have measured the ratio ρ = max|z₀| / max|r₀| of the
+    /// preconditioned to the plain residual, a start whose `start_check_margin`·ρ·max|r₀|
+    /// already meets `reuse_tolerance` is accepted without computing z₀. ρ is a sample of
+    /// ‖M⁻¹‖ (M the old factor's matrix) in the directions the residuals took, not a bound;
+    /// an accepted start the exact test would reject is counted by `start_check_audit`.
+    /// Default 2 (docs/contact-solve.md §19): one sample would trust a single direction; two
+    /// were enough for every start of the 105- and 410-stone walls at rest, under the sine and
+    /// the record (no accepted start the exact test rejects, state digests unchanged), and a
+    /// factor at rest lives ~100 solves, so a larger k gives up little of the −10 % there.
+    pub start_check_samples: usize,
+    /// Safety factor on the sampled ratio of `start_check_samples` (dimensionless): 10 asks the
+    /// estimated preconditioned residual to be ten times below the tolerance, an order of
+    /// magnitude for the directions the samples did not see.
+    pub start_check_margin: f64,
+    /// Diagnostics of `start_check_samples`: a start accepted by the estimate also computes
+    /// the exact test's z₀ and counts it in `SparseCounts::start_check_misses` if that test
+    /// fails. The accepted solution is kept either way, so the run's path does not change;
+    /// off by default (it costs the pair the check saves). For tests of the heuristic.
+    pub start_check_audit: bool,
     /// The fill-reducing ordering of the factorization (docs/contact-solve.md §20). Changes
     /// the factor's round-off, not the system solved.
     pub ordering: SparseOrdering,
@@ -287,6 +319,9 @@ impl Default for SparseParams {
             cost_rule_min_work: COST_RULE_MIN_WORK,
             reuse_learning_rate: 0.25,
             reuse_forget_rate: 0.1,
+            start_check_samples: 2,
+            start_check_margin: 10.0,
+            start_check_audit: false,
             ordering: SparseOrdering::ScalarAmd,
             dissection_leaf: 8,
             relax: SupernodeRelax::Faer,
@@ -509,12 +544,22 @@ impl SparseCholesky {
                         Some(k) => (&sys.off[k].as_slice()[6 * c..], dofs.ndof[a]),
                     };
                     let new = &src[..rows];
-                    self.values[at..at + rows].copy_from_slice(new);
+                    let dst = &mut self.values[at..at + rows];
                     if let (true, Some(k)) = (track_changes, slot) {
-                        let [delta, size] = &mut self.change[k];
-                        for (new, old) in new.iter().zip(&self.factored_values[at..at + rows]) {
-                            *delta = delta.max((new - old).abs());
-                            *size = size.max(new.abs()).max(old.abs());
+                        // Copy and compare in one loop over the column's (≤ 6) entries: a
+                        // `copy_from_slice` of so few entries was a `memcpy` call each, and
+                        // the loop's maxima are the same as before (same order).
+                        let old = &self.factored_values[at..at + rows];
+                        let [mut delta, mut size] = self.change[k];
+                        for ((d, &new), &old) in dst.iter_mut().zip(new).zip(old) {
+                            *d = new;
+                            delta = delta.max((new - old).abs());
+                            size = size.max(new.abs()).max(old.abs());
+                        }
+                        self.change[k] = [delta, size];
+                    } else {
+                        for (d, &new) in dst.iter_mut().zip(new) {
+                            *d = new;
                         }
                     }
                     at += rows;
@@ -687,6 +732,8 @@ impl SparseCholesky {
                 dof: first_bad_pivot(sys, dofs),
             })?;
         self.factored = true;
+        self.start_ratio = 0.0;
+        self.start_samples = 0;
         self.factored_values.clone_from(&self.values);
         self.numeric_count += 1;
         Ok(())
@@ -713,8 +760,36 @@ impl SparseCholesky {
         self.r.clear();
         self.r
             .extend(self.b.iter().zip(&self.ap).map(|(b, ax)| b - ax));
+        let sampling = params.start_check_samples > 0;
+        if sampling && self.start_samples >= params.start_check_samples {
+            let (scale, res) = (max_abs(x), max_abs(&self.r));
+            if scale.is_finite()
+                && res.is_finite()
+                && params.start_check_margin * self.start_ratio * res
+                    <= params.reuse_tolerance * scale
+            {
+                self.start_skips += 1;
+                if params.start_check_audit {
+                    self.z.clone_from(&self.r);
+                    precondition(&mut self.z);
+                    let err = max_abs(&self.z);
+                    if !(err <= params.reuse_tolerance * scale || err == 0.0) {
+                        self.start_check_misses += 1;
+                    }
+                }
+                return true;
+            }
+        }
         self.z.clone_from(&self.r);
         precondition(&mut self.z);
+        if sampling {
+            let res = max_abs(&self.r);
+            let ratio = max_abs(&self.z) / res;
+            if res > 0.0 && ratio.is_finite() {
+                self.start_ratio = self.start_ratio.max(ratio);
+                self.start_samples += 1;
+            }
+        }
         self.p.clone_from(&self.z);
         let mut rz = dot(&self.r, &self.z);
         for _ in 0..params.max_reuse_iterations {

@@ -29,5 +29,6 @@ mod single_contact;
 mod sliding_newmark;
 mod solver_reuse;
 mod stacked_column;
+mod start_check;
 mod stone_settle;
 mod templates;
