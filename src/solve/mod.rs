@@ -74,6 +74,13 @@ pub struct SparseCounts {
     pub reuse_table: ReuseTable,
     /// Cost model of the current factor (zero before the first sparse solve).
     pub factor_cost: FactorCost,
+    /// Solves by the low-rank correction of the last factor
+    /// ([`SparseParams::low_rank_max_rank`]), the sum of their ranks, the corrections
+    /// declined (change too large) and failed (refinement short of the tolerance).
+    pub low_rank_solves: u64,
+    pub low_rank_rank: u64,
+    pub low_rank_declined: u64,
+    pub low_rank_failed: u64,
 }
 
 impl LinearSolver {
@@ -92,6 +99,10 @@ impl LinearSolver {
             reuse_max_error: self.sparse.reuse_max_error,
             reuse_table: self.sparse.reuse_table,
             factor_cost: self.sparse.cost(),
+            low_rank_solves: self.sparse.low_rank_solves,
+            low_rank_rank: self.sparse.low_rank_rank,
+            low_rank_declined: self.sparse.low_rank_declined,
+            low_rank_failed: self.sparse.low_rank_failed,
         }
     }
 
