@@ -343,7 +343,8 @@ fn main() -> std::process::ExitCode {
         println!(
             "         factor: nnz(L) {:.4e}, factorization multiply-adds {:.4e} (ordering {}, relax {}), \
              numeric factorizations {}, symbolic {}, reuse CG iterations {}, reuse attempts {} ({} failed), \
-             low-rank solves {} (rank sum {}, declined {}, failed {})",
+             low-rank solves {} (rank sum {}, declined {} of which {} after the eigen-decomposition, \
+             Σ their support³ {:.3e}, failed {})",
             c.factor_cost.pair / 2.0,
             c.factor_cost.factor / w.factor_work_weight,
             cli.ordering,
@@ -356,6 +357,8 @@ fn main() -> std::process::ExitCode {
             c.low_rank_solves,
             c.low_rank_rank,
             c.low_rank_declined,
+            c.low_rank_declined_rank,
+            c.low_rank_declined_cube,
             c.low_rank_failed,
         );
         if let Some(path) = &cli.write_state {

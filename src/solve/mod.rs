@@ -81,6 +81,9 @@ pub struct SparseCounts {
     pub low_rank_rank: u64,
     pub low_rank_declined: u64,
     pub low_rank_failed: u64,
+    /// Declined after the eigen-decomposition (rank above the bound), and Σ support³.
+    pub low_rank_declined_rank: u64,
+    pub low_rank_declined_cube: f64,
 }
 
 impl LinearSolver {
@@ -103,6 +106,8 @@ impl LinearSolver {
             low_rank_rank: self.sparse.low_rank_rank,
             low_rank_declined: self.sparse.low_rank_declined,
             low_rank_failed: self.sparse.low_rank_failed,
+            low_rank_declined_rank: self.sparse.low_rank_declined_rank,
+            low_rank_declined_cube: self.sparse.low_rank_declined_cube,
         }
     }
 

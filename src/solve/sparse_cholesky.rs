@@ -173,6 +173,10 @@ pub struct SparseCholesky {
     /// Low-rank corrections declined (the change's support or rank above the bound, e.g. every
     /// block drifted since the factor was made in an earlier step).
     pub low_rank_declined: u64,
+    /// Of those, the ones declined after the eigen-decomposition (rank above the bound: its
+    /// cost was spent), and the sum of their supports' cubes (unknowns³, the cost's scale).
+    pub low_rank_declined_rank: u64,
+    pub low_rank_declined_cube: f64,
     /// Low-rank corrections whose refinement did not reach `reuse_tolerance` (then the
     /// solver went on as without the correction).
     pub low_rank_failed: u64,
@@ -687,6 +691,8 @@ impl SparseCholesky {
         let r = kept.len();
         if r > max_rank {
             self.low_rank_declined += 1;
+            self.low_rank_declined_rank += 1;
+            self.low_rank_declined_cube += (m as f64).powi(3);
             return false;
         }
         let (Some(symbolic), Some(mem1)) = (self.symbolic.as_ref(), self.mem.as_mut()) else {
