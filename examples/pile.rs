@@ -11,7 +11,7 @@
 //! Δt ≤ 1 ms with Zheng et al.'s displacement ratio 0.003.
 //!
 //! Run: `cargo run --release --example pile` (`-- --help` lists the options; add `-- --write pile.json` to save the scene,
-//! `-- --steps N` to change the step count, `-- --ordering block-amd|dissection|coordinates` and `-- --relax none|wide` for the sparse factorization's ordering and supernode amalgamation, `-- --only dual|penalty` to time one solver, `-- --trace` to print per-step work counts, `-- --cg-budget N` to
+//! `-- --steps N` to change the step count, `-- --ordering block-amd|dissection|coordinates` and `-- --relax none|wide` for the sparse factorization's ordering and supernode amalgamation, `-- --only dual|penalty` to time one solver, `-- --trace` to print per-step work counts (with reused-factor attempts and low-rank solves), `-- --low-rank R` for the low-rank correction of the factor, `-- --cg-budget N` to
 //! give the dual solver's MPRGP minimisation N products with W, 0 for the projection–contraction
 //! iteration alone), `-- --dual-tolerance X` to stop its iterations at X × the smallest
 //! block's half size instead of the default 1e-9, `-- --proportioning G` for MPRGP's
@@ -145,10 +145,13 @@ fn time_run(solver: &str, cli: &Cli) -> Result<(f64, Simulation), String> {
     if let Some(l) = cli.dissection_leaf {
         params.solver.sparse.dissection_leaf = l;
     }
+    if let Some(r) = cli.low_rank {
+        params.solver.sparse.low_rank_max_rank = r;
+    }
     let mut sim = Simulation::new(&scene, &GroundMotion::none(), params);
     let t = Instant::now();
     if trace {
-        println!("step  dt(s)      cuts  oc  numeric  symbolic  cg  mprgp  pc  loose  detect  contacts  closed  ms");
+        println!("step  dt(s)      cuts  oc  numeric  symbolic  cg  mprgp  pc  loose  detect  contacts  closed  ms  attempts  failed  lowrank  rank  declined");
     }
     for k in 0..steps {
         let (stats, counts, detections) =
@@ -171,8 +174,10 @@ fn time_run(solver: &str, cli: &Cli) -> Result<(f64, Simulation), String> {
                 .iter()
                 .filter(|c| c.state.is_closed())
                 .count();
+            let table =
+                |t: &ashlar::solve::ReuseTable, i: usize| t.iter().map(|r| r[i]).sum::<u64>();
             println!(
-                "{k:4}  {dt:.3e}  {:4}  {:2}  {:7}  {:8}  {:2}  {:6}  {:5}  {:5}  {:6}  {:8}  {:6}  {:.0}",
+                "{k:4}  {dt:.3e}  {:4}  {:2}  {:7}  {:8}  {:2}  {:6}  {:5}  {:5}  {:6}  {:8}  {:6}  {:.0}  {:8}  {:6}  {:7}  {:4}  {:8}",
                 sim.stats().time_step_cuts - stats.time_step_cuts,
                 sim.stats().open_close_iterations - stats.open_close_iterations,
                 c.numeric - counts.numeric,
@@ -185,6 +190,11 @@ fn time_run(solver: &str, cli: &Cli) -> Result<(f64, Simulation), String> {
                 sim.contacts().contacts.len(),
                 closed,
                 ts.elapsed().as_secs_f64() * 1e3,
+                table(&c.reuse_table, 0) - table(&counts.reuse_table, 0),
+                table(&c.reuse_table, 2) - table(&counts.reuse_table, 2),
+                c.low_rank_solves - counts.low_rank_solves,
+                c.low_rank_rank - counts.low_rank_rank,
+                c.low_rank_declined - counts.low_rank_declined,
             );
         }
     }
@@ -250,6 +260,10 @@ struct Cli {
     /// Blocks in a leaf of the nested dissection (`SparseParams::dissection_leaf`).
     #[arg(long, value_name = "N")]
     dissection_leaf: Option<usize>,
+    /// Solve changes of the matrix up to this rank since the last factorization by a
+    /// low-rank correction of the factor (`SparseParams::low_rank_max_rank`; default 0: off).
+    #[arg(long, value_name = "R")]
+    low_rank: Option<usize>,
     /// Write each block's final centroid (x, y, m) and rotation (rad), one line a block, to
     /// compare the final states of two runs (shortest round-trip digits: equal files mean
     /// equal bits).
@@ -328,7 +342,9 @@ fn main() -> std::process::ExitCode {
         let (c, w) = (sim.solver_counts(), SimParams::default().solver.sparse);
         println!(
             "         factor: nnz(L) {:.4e}, factorization multiply-adds {:.4e} (ordering {}, relax {}), \
-             numeric factorizations {}, symbolic {}, reuse CG iterations {}",
+             numeric factorizations {}, symbolic {}, reuse CG iterations {}, reuse attempts {} ({} failed), \
+             low-rank solves {} (rank sum {}, declined {} of which {} after the eigen-decomposition, \
+             Σ their support³ {:.3e}, failed {})",
             c.factor_cost.pair / 2.0,
             c.factor_cost.factor / w.factor_work_weight,
             cli.ordering,
@@ -336,6 +352,14 @@ fn main() -> std::process::ExitCode {
             c.numeric,
             c.symbolic,
             c.reuse_iterations,
+            c.reuse_table.iter().map(|r| r[0]).sum::<u64>(),
+            c.reuse_table.iter().map(|r| r[2]).sum::<u64>(),
+            c.low_rank_solves,
+            c.low_rank_rank,
+            c.low_rank_declined,
+            c.low_rank_declined_rank,
+            c.low_rank_declined_cube,
+            c.low_rank_failed,
         );
         if let Some(path) = &cli.write_state {
             let text: String = scene(solver, &cli)

@@ -78,6 +78,16 @@ pub struct SparseCounts {
     pub start_skips: u64,
     /// See [`SparseParams::start_check_audit`]; 0 when unaudited.
     pub start_check_misses: u64,
+    /// Solves by the low-rank correction of the last factor
+    /// ([`SparseParams::low_rank_max_rank`]), the sum of their ranks, the corrections
+    /// declined (change too large) and failed (refinement short of the tolerance).
+    pub low_rank_solves: u64,
+    pub low_rank_rank: u64,
+    pub low_rank_declined: u64,
+    pub low_rank_failed: u64,
+    /// Declined after the eigen-decomposition (rank above the bound), and Σ support³.
+    pub low_rank_declined_rank: u64,
+    pub low_rank_declined_cube: f64,
 }
 
 impl LinearSolver {
@@ -98,6 +108,12 @@ impl LinearSolver {
             factor_cost: self.sparse.cost(),
             start_skips: self.sparse.start_skips,
             start_check_misses: self.sparse.start_check_misses,
+            low_rank_solves: self.sparse.low_rank_solves,
+            low_rank_rank: self.sparse.low_rank_rank,
+            low_rank_declined: self.sparse.low_rank_declined,
+            low_rank_failed: self.sparse.low_rank_failed,
+            low_rank_declined_rank: self.sparse.low_rank_declined_rank,
+            low_rank_declined_cube: self.sparse.low_rank_declined_cube,
         }
     }
 

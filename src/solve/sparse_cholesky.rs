@@ -21,6 +21,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::linalg::{SupernodalThreshold, SymbolicSupernodalParams};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Par, Side};
+use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
 /// Relative change of an off-diagonal block that counts as a changed spring in
 /// [`SparseCholesky::major_changes`]: a spring opening or closing changes its coupling block by
@@ -174,7 +175,54 @@ pub struct SparseCholesky {
     /// solution and the refactored solution of the same system, relative to the largest
     /// unknown of the latter.
     pub reuse_max_error: f64,
+    /// Scratch of [`SparseCholesky::low_rank_solve`].
+    low_rank: LowRankScratch,
+    /// Solves done by the low-rank correction of the last factor
+    /// ([`SparseParams::low_rank_max_rank`]), and the sum of their ranks.
+    pub low_rank_solves: u64,
+    pub low_rank_rank: u64,
+    /// Low-rank corrections declined (the change's support or rank above the bound, e.g. every
+    /// block drifted since the factor was made in an earlier step).
+    pub low_rank_declined: u64,
+    /// Of those, the ones declined after the eigen-decomposition (rank above the bound: its
+    /// cost was spent), and the sum of their supports' cubes (unknowns³, the cost's scale).
+    pub low_rank_declined_rank: u64,
+    pub low_rank_declined_cube: f64,
+    /// Low-rank corrections whose refinement did not reach `reuse_tolerance` (then the
+    /// solver went on as without the correction).
+    pub low_rank_failed: u64,
 }
+
+/// Scratch of the low-rank correction: per unknown its index in the change's support (or
+/// `usize::MAX`), the support, the changed entries (support-local row, column, change), the
+/// right-hand sides solved with the old factor (column-major, n × (1 + rank)) and faer's
+/// workspace for that many columns.
+#[derive(Default)]
+struct LowRankScratch {
+    local: Vec<usize>,
+    support: Vec<usize>,
+    entries: Vec<(usize, usize, f64)>,
+    cols: Vec<f64>,
+    residual: Vec<f64>,
+    mem: Option<MemBuffer>,
+    mem_cols: usize,
+}
+
+/// Unknowns the change of one spring touches at most: its two blocks' (≤ 6 each). The
+/// low-rank correction declines a change touching more than this × its rank bound
+/// before the eigen-decomposition (whose cost grows as the cube of the support).
+const LOW_RANK_SUPPORT_PER_RANK: usize = 12;
+
+/// Eigenvalues of the change below this fraction of its largest are round-off of the
+/// entries' differences (≈ 1e-16 of the penalty stiffness a spring adds) and dropped from the
+/// rank; the refinement corrects what they leave.
+const LOW_RANK_DROP: f64 = 1e-12;
+
+/// Refinement steps (residual with the new matrix, correction through the same low-rank
+/// inverse) after the correction's solve: the first is the check that the solve reached
+/// `reuse_tolerance`; a second catches a correction that lost digits to a poorly conditioned
+/// capacitance matrix. If neither reaches it, the solver refactors.
+const LOW_RANK_REFINEMENTS: usize = 2;
 
 /// Tuning of the sparse path.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -255,6 +303,15 @@ pub struct SparseParams {
     /// faer's amalgamation of supernodes (merging adjacent supernodes into one with explicit
     /// zeros, so its dense kernels run on wider blocks).
     pub relax: SupernodeRelax,
+    /// Largest rank of a change of the matrix since its last factorization that is solved by
+    /// a low-rank correction of that factor (Woodbury: K' = K + U Λ Uᵀ from the exactly
+    /// changed entries, `rank` + 1 triangular-solve pairs and a `rank` × `rank` dense solve,
+    /// exact to round-off, checked by a refinement) instead of the conjugate gradients or a
+    /// factorization. Within one step (fixed geometry and Δt) the matrix changes only by the
+    /// springs that opened or closed, each a rank-1 term, so the change is low-rank; across
+    /// steps every block drifts and the correction declines. 0 (the default): off, the path
+    /// of every session before 36 bit for bit (docs/pile.md, "Session 36").
+    pub low_rank_max_rank: usize,
 }
 
 /// Fill-reducing orderings of the sparse factorization. The scalar and the block orderings
@@ -324,6 +381,7 @@ impl Default for SparseParams {
             start_check_audit: false,
             ordering: SparseOrdering::ScalarAmd,
             dissection_leaf: 8,
+            low_rank_max_rank: 0,
             relax: SupernodeRelax::Faer,
         }
     }
@@ -580,6 +638,9 @@ impl SparseCholesky {
         }
         let try_reuse = self.factored && params.max_reuse_iterations > 0;
         self.fill_values(sys, dofs, try_reuse);
+        if self.factored && params.low_rank_max_rank > 0 && self.low_rank_solve(x, params) {
+            return Ok(());
+        }
         let predicted = if try_reuse { self.major_changes() } else { 0 };
         if try_reuse && predicted < params.max_reuse_iterations {
             if !self.reuse_pays(predicted, params) {
@@ -599,6 +660,186 @@ impl SparseCholesky {
         }
         self.factorize(sys, dofs)?;
         self.factor_solve_in_place(x)
+    }
+
+    /// Solve with the last factor corrected for the exact change of the matrix since it was
+    /// made ([`SparseParams::low_rank_max_rank`]). The change D = K' − K (the entries that
+    /// differ, on the unknowns they touch) is decomposed D = V Λ Vᵀ, keeping the eigenvalues
+    /// above round-off; with U = the rows of V placed on those unknowns, Woodbury's identity
+    /// gives K'⁻¹b = y − Z (Λ⁻¹ + Uᵀ Z)⁻¹ Uᵀ y with y = K⁻¹ b and Z = K⁻¹ U (one solve of
+    /// 1 + rank right-hand sides with the old factor). The residual with K' is then corrected
+    /// through the same inverse ([`LOW_RANK_REFINEMENTS`] at most) until the correction is
+    /// within `reuse_tolerance` of the largest unknown (the reused-factor solve's criterion).
+    /// Returns false with `x` unchanged when the change is too large or the check fails.
+    fn low_rank_solve(&mut self, x: &mut [f64], params: &SparseParams) -> bool {
+        let n = self.n;
+        let max_rank = params.low_rank_max_rank;
+        let max_support = LOW_RANK_SUPPORT_PER_RANK * max_rank;
+        let lr = &mut self.low_rank;
+        lr.local.resize(n, usize::MAX);
+        lr.support.clear();
+        lr.entries.clear();
+        // The changed entries and the unknowns they touch; stop as soon as the support
+        // exceeds the bound (a step's drift changes every entry: this ends in a few columns).
+        let mut fits = true;
+        'columns: for j in 0..n {
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                let d = self.values[p] - self.factored_values[p];
+                if d == 0.0 {
+                    continue;
+                }
+                let i = self.row_idx[p];
+                if !d.is_finite() {
+                    fits = false;
+                    break 'columns;
+                }
+                for v in [i, j] {
+                    if lr.local[v] == usize::MAX {
+                        if lr.support.len() == max_support {
+                            fits = false;
+                            break 'columns;
+                        }
+                        lr.local[v] = lr.support.len();
+                        lr.support.push(v);
+                    }
+                }
+                lr.entries.push((lr.local[i], lr.local[j], d));
+            }
+        }
+        for &v in &lr.support {
+            lr.local[v] = usize::MAX;
+        }
+        if !fits {
+            self.low_rank_declined += 1;
+            return false;
+        }
+        let m = lr.support.len();
+        if m == 0 {
+            // The very matrix factored: its factor's solve is the fresh factorization's.
+            self.low_rank_solves += 1;
+            return self.factor_solve_in_place(x).is_ok();
+        }
+        let mut d = DMatrix::<f64>::zeros(m, m);
+        for &(i, j, v) in &lr.entries {
+            d[(i, j)] = v;
+            d[(j, i)] = v;
+        }
+        // Eigen-decomposition of the change (symmetric); None only without convergence.
+        let Some(eig) = SymmetricEigen::try_new(d, f64::EPSILON, 10_000) else {
+            self.low_rank_declined += 1;
+            return false;
+        };
+        let largest = eig.eigenvalues.amax();
+        let kept: Vec<usize> = (0..m)
+            .filter(|&k| eig.eigenvalues[k].abs() > LOW_RANK_DROP * largest)
+            .collect();
+        let r = kept.len();
+        if r > max_rank {
+            self.low_rank_declined += 1;
+            self.low_rank_declined_rank += 1;
+            self.low_rank_declined_cube += (m as f64).powi(3);
+            return false;
+        }
+        let (Some(symbolic), Some(mem1)) = (self.symbolic.as_ref(), self.mem.as_mut()) else {
+            return false;
+        };
+        if lr.mem_cols < max_rank + 1 {
+            lr.mem = Some(MemBuffer::new(
+                symbolic.solve_in_place_scratch::<f64>(max_rank + 1, Par::Seq),
+            ));
+            lr.mem_cols = max_rank + 1;
+        }
+        let Some(mem) = lr.mem.as_mut() else {
+            return false;
+        };
+        let llt = LltRef::new(symbolic, &self.l_values);
+        // Column 0: b; column 1 + k: U_k = eigenvector k on the support's unknowns.
+        lr.cols.clear();
+        lr.cols.resize(n * (r + 1), 0.0);
+        lr.cols[..n].copy_from_slice(x);
+        for (c, &k) in kept.iter().enumerate() {
+            let col = &mut lr.cols[n * (c + 1)..n * (c + 2)];
+            for (s, &v) in lr.support.iter().enumerate() {
+                col[v] = eig.eigenvectors[(s, k)];
+            }
+        }
+        let rhs = faer::MatMut::from_column_major_slice_mut(&mut lr.cols, n, r + 1);
+        llt.solve_in_place_with_conj(faer::Conj::No, rhs, Par::Seq, MemStack::new(mem));
+        // Capacitance C = Λ⁻¹ + Uᵀ Z (r × r; indefinite when springs opened: LU).
+        let z = |c: usize, row: usize| lr.cols[n * (c + 1) + row];
+        let mut cap = DMatrix::<f64>::zeros(r, r);
+        for (a, &ka) in kept.iter().enumerate() {
+            cap[(a, a)] = 1.0 / eig.eigenvalues[ka];
+            for c in 0..r {
+                cap[(a, c)] += lr
+                    .support
+                    .iter()
+                    .enumerate()
+                    .map(|(s, &v)| eig.eigenvectors[(s, ka)] * z(c, v))
+                    .sum::<f64>();
+            }
+        }
+        let lu = cap.lu();
+        // y ← y − Z C⁻¹ Uᵀ y for a y solved with the old factor; None if C is singular.
+        let correct = |y: &mut [f64], cols: &[f64]| -> Option<()> {
+            let t = DVector::<f64>::from_iterator(
+                r,
+                kept.iter().map(|&k| {
+                    lr.support
+                        .iter()
+                        .enumerate()
+                        .map(|(s, &v)| eig.eigenvectors[(s, k)] * y[v])
+                        .sum::<f64>()
+                }),
+            );
+            let w = lu.solve(&t)?;
+            for (c, wc) in w.iter().enumerate() {
+                let zc = &cols[n * (c + 1)..n * (c + 2)];
+                for (yi, zi) in y.iter_mut().zip(zc) {
+                    *yi -= wc * zi;
+                }
+            }
+            Some(())
+        };
+        self.b.clear();
+        self.b.extend_from_slice(x);
+        let mut sol = lr.cols[..n].to_vec();
+        if correct(&mut sol, &lr.cols).is_none() {
+            self.low_rank_failed += 1;
+            return false;
+        }
+        for _ in 0..LOW_RANK_REFINEMENTS {
+            symmetric_upper_matvec(
+                &self.col_ptr,
+                &self.row_idx,
+                &self.values,
+                &sol,
+                &mut self.ap,
+            );
+            lr.residual.clear();
+            lr.residual
+                .extend(self.b.iter().zip(&self.ap).map(|(b, ax)| b - ax));
+            let res = faer::MatMut::from_column_major_slice_mut(&mut lr.residual, n, 1);
+            llt.solve_in_place_with_conj(faer::Conj::No, res, Par::Seq, MemStack::new(mem1));
+            if correct(&mut lr.residual, &lr.cols).is_none() {
+                break;
+            }
+            for (s, dx) in sol.iter_mut().zip(&lr.residual) {
+                *s += dx;
+            }
+            let (err, scale) = (max_abs(&lr.residual), max_abs(&sol));
+            if !(err.is_finite() && scale.is_finite()) {
+                break;
+            }
+            if err <= params.reuse_tolerance * scale {
+                x.copy_from_slice(&sol);
+                self.low_rank_solves += 1;
+                self.low_rank_rank += r as u64;
+                return true;
+            }
+        }
+        self.low_rank_failed += 1;
+        false
     }
 
     /// Cost model of the current factor.
@@ -1146,6 +1387,83 @@ mod tests {
         assert_eq!(failed, tries, "every attempt failed");
         assert_eq!(skipped, 1, "then the rule refactors without trying");
         assert_eq!(chol.numeric_count, 1 + tries + skipped);
+    }
+
+    /// Add a spring of stiffness `k` along `g` (3 unknowns of block a, then 3 of block b)
+    /// between the blocks of coupling `pair`: K += k g gᵀ on their unknowns, a rank-1 change
+    /// (k < 0 removes it: a spring opening).
+    fn add_spring(sys: &mut BlockSystem, pair: usize, g: [f64; 6], k: f64) {
+        let (a, b) = sys.pairs[pair];
+        for r in 0..3 {
+            for c in 0..3 {
+                sys.diag[a][(r, c)] += k * g[r] * g[c];
+                sys.diag[b][(r, c)] += k * g[3 + r] * g[3 + c];
+                sys.off[pair][(r, c)] += k * g[r] * g[3 + c];
+            }
+        }
+    }
+
+    /// The low-rank correction: after three springs changed since the factorization (two
+    /// closed, one opened: a rank-3 change), the solve with the old factor and Woodbury's
+    /// capacitance matrix equals a fresh factorization's solve to round-off (1e-12 of the
+    /// largest unknown: a direct solve's round-off at this condition number, ≈ 10, is ~1e-15,
+    /// and the refinement stops within `reuse_tolerance` 1e-12), with no new factorization, no
+    /// CG iteration and rank 3 found from the changed entries. A drift of every block (a new
+    /// step) is declined and takes the old path.
+    #[test]
+    fn low_rank_solve_equals_a_fresh_factorization() {
+        let (mut sys, dofs) = grid_system(150, 10);
+        let params = SparseParams {
+            low_rank_max_rank: 8,
+            ..Default::default()
+        };
+        let springs = [
+            (3, [0.3, -0.8, 0.1, -0.3, 0.8, -0.2], 50.0),
+            (40, [0.0, 1.0, 0.4, 0.0, -1.0, -0.4], 80.0),
+            (41, [1.0, 0.0, 0.2, -1.0, 0.0, 0.5], 30.0),
+        ];
+        // The third spring is closed when the matrix is factored, and opens later.
+        add_spring(&mut sys, springs[2].0, springs[2].1, springs[2].2);
+        let mut chol = SparseCholesky::default();
+        let mut x = rhs_of(&sys, &dofs);
+        chol.factor_solve(&sys, &dofs, &mut x, &params)
+            .expect("positive definite");
+        add_spring(&mut sys, springs[0].0, springs[0].1, springs[0].2);
+        add_spring(&mut sys, springs[1].0, springs[1].1, springs[1].2);
+        add_spring(&mut sys, springs[2].0, springs[2].1, -springs[2].2);
+        let b = rhs_of(&sys, &dofs);
+        let mut low = b.clone();
+        chol.factor_solve(&sys, &dofs, &mut low, &params)
+            .expect("positive definite");
+        assert_eq!(chol.low_rank_solves, 1, "solved by the correction");
+        assert_eq!(chol.low_rank_rank, 3, "three springs changed");
+        assert_eq!(chol.numeric_count, 1, "no new factorization");
+        assert_eq!(chol.reuse_iterations, 0, "no CG iteration");
+        let mut fresh = b.clone();
+        SparseCholesky::default()
+            .factor_solve(&sys, &dofs, &mut fresh, &SparseParams::default())
+            .expect("positive definite");
+        let d = max_diff(&low, &fresh);
+        assert!(d <= 1e-12 * max_abs(&fresh), "low-rank differs by {d:e}");
+        assert!(
+            max_diff(&b, &fresh) > 1e-3 * max_abs(&fresh),
+            "the system changed"
+        );
+
+        // Every block drifts (a new step): declined, solved the old way.
+        for m in sys.diag.iter_mut().chain(sys.off.iter_mut()) {
+            *m *= 1.0 + 1e-4;
+        }
+        let mut x = rhs_of(&sys, &dofs);
+        chol.factor_solve(&sys, &dofs, &mut x, &params)
+            .expect("positive definite");
+        assert_eq!(chol.low_rank_declined, 1);
+        assert_eq!(chol.low_rank_solves, 1);
+        let mut fresh = rhs_of(&sys, &dofs);
+        SparseCholesky::default()
+            .factor_solve(&sys, &dofs, &mut fresh, &SparseParams::default())
+            .expect("positive definite");
+        assert!(max_diff(&x, &fresh) <= 1e-11 * max_abs(&fresh));
     }
 
     /// The simplicial path (faer's automatic choice) solves the same way.
