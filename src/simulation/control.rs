@@ -172,9 +172,9 @@ impl Simulation {
         let k = self.stepper.springs.normal;
         let mut bound = f64::INFINITY;
         self.stepper.last_closing = (0, 0.0);
+        let weight = &self.stepper.system.weight;
+        let free = &self.state.dofs.free_index;
         for c in &self.state.contacts.contacts {
-            let weight = &self.stepper.system.weight;
-            let free = &self.state.dofs.free_index;
             let approach = c.g0 - c.gap;
             if !(c.g0 > 0.0 && c.state.is_closed() && approach > 0.0) {
                 continue;

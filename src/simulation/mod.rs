@@ -391,7 +391,7 @@ mod tests {
     /// moved); a fifth of the contacts are made sliding and a fifth open, so all three states occur.
     #[test]
     fn the_rhs_only_reassembly_gives_the_full_assemblys_system_to_the_bit() {
-        use crate::assembly::contact_springs::{add_contact_loads, add_contacts};
+        use crate::assembly::contact_springs::{add_contact_loads, add_contacts, spring_key};
         use crate::contact::ContactState;
         let scene = crate::scene::validate(&crate::presets::wall(4, 5)).expect("wall scene");
         let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
@@ -415,14 +415,11 @@ mod tests {
             c.start_normal_force = 100.0;
             c.release_factor = 0.25;
         }
+        // Contacts per spring key (open, sliding, locked).
         let states = |cs: &[crate::contact::Contact]| {
             let mut n = [0usize; 3];
             for c in cs {
-                n[match c.state {
-                    ContactState::Open => 0,
-                    ContactState::Locked => 1,
-                    ContactState::Sliding { .. } => 2,
-                }] += 1;
+                n[usize::from(spring_key(c.state))] += 1;
             }
             n
         };

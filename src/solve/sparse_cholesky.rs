@@ -204,6 +204,9 @@ struct LowRankScratch {
     entries: Vec<(usize, usize, f64)>,
     cols: Vec<f64>,
     residual: Vec<f64>,
+    /// The change's eigenvalues kept (indices above round-off), and the corrected solution.
+    kept: Vec<usize>,
+    sol: Vec<f64>,
     mem: Option<MemBuffer>,
     mem_cols: usize,
 }
@@ -730,9 +733,10 @@ impl SparseCholesky {
             return false;
         };
         let largest = eig.eigenvalues.amax();
-        let kept: Vec<usize> = (0..m)
-            .filter(|&k| eig.eigenvalues[k].abs() > LOW_RANK_DROP * largest)
-            .collect();
+        lr.kept.clear();
+        lr.kept
+            .extend((0..m).filter(|&k| eig.eigenvalues[k].abs() > LOW_RANK_DROP * largest));
+        let kept = &lr.kept;
         let r = kept.len();
         if r > max_rank {
             self.low_rank_declined += 1;
@@ -803,8 +807,10 @@ impl SparseCholesky {
         };
         self.b.clear();
         self.b.extend_from_slice(x);
-        let mut sol = lr.cols[..n].to_vec();
-        if correct(&mut sol, &lr.cols).is_none() {
+        let sol = &mut lr.sol;
+        sol.clear();
+        sol.extend_from_slice(&lr.cols[..n]);
+        if correct(sol, &lr.cols).is_none() {
             self.low_rank_failed += 1;
             return false;
         }
@@ -813,7 +819,7 @@ impl SparseCholesky {
                 &self.col_ptr,
                 &self.row_idx,
                 &self.values,
-                &sol,
+                sol,
                 &mut self.ap,
             );
             lr.residual.clear();
@@ -827,12 +833,12 @@ impl SparseCholesky {
             for (s, dx) in sol.iter_mut().zip(&lr.residual) {
                 *s += dx;
             }
-            let (err, scale) = (max_abs(&lr.residual), max_abs(&sol));
+            let (err, scale) = (max_abs(&lr.residual), max_abs(sol));
             if !(err.is_finite() && scale.is_finite()) {
                 break;
             }
             if err <= params.reuse_tolerance * scale {
-                x.copy_from_slice(&sol);
+                x.copy_from_slice(sol);
                 self.low_rank_solves += 1;
                 self.low_rank_rank += r as u64;
                 return true;
