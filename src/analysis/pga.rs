@@ -276,6 +276,41 @@ impl Combine {
     }
 }
 
+/// A `scan` that is neither `full` nor `lowest` (the text given).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("scan: expected \"full\" or \"lowest\", got {got:?}")]
+pub struct ScanParseError {
+    pub got: String,
+}
+
+/// Which scan points a search evaluates before it refines the lowest change of outcome.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ScanOrder {
+    /// Every scan point, all at once: `monotonic` and `failing_intervals` cover the whole
+    /// range. The library's default (the searches the docs and tests record).
+    #[default]
+    Full,
+    /// Ascending batches of `width` scan points, stopping after the first batch that holds a
+    /// failing point; the refinement is the same. The answer needs no run above that batch,
+    /// and on a many-block wall the runs far above the threshold are the slow ones
+    /// (docs/pga.md). A range whose lowest point fails (a `not:` criterion) is scanned in full.
+    Lowest,
+}
+
+impl ScanOrder {
+    /// Parse `full` / `lowest`.
+    pub fn parse(text: &str) -> Result<Self, ScanParseError> {
+        match text {
+            "full" => Ok(ScanOrder::Full),
+            "lowest" => Ok(ScanOrder::Lowest),
+            other => Err(ScanParseError {
+                got: other.to_string(),
+            }),
+        }
+    }
+}
+
 /// A PGA search request (amplitudes in m/s²). The criteria combine by `combine` into "failed".
 #[derive(Debug, Clone, PartialEq)]
 pub struct PgaRequest {
@@ -287,6 +322,8 @@ pub struct PgaRequest {
     /// Scan points before the refinement, evenly spaced over [min, max]: their spacing
     /// (max − min)/(scan_points − 1) is the search's resolution ([`PgaResult::resolution`]).
     pub scan_points: usize,
+    /// Which scan points are run before the refinement ([`ScanOrder`]).
+    pub scan: ScanOrder,
 }
 
 impl PgaRequest {
@@ -302,6 +339,7 @@ impl PgaRequest {
             max: 2.0 * g,
             tolerance: 0.01,
             scan_points: 40,
+            scan: ScanOrder::Full,
         }
     }
 }
@@ -321,8 +359,10 @@ pub struct PgaResult {
     /// Smallest amplitude found to meet it.
     pub failing_pga: Option<f64>,
     pub units: String,
-    /// No amplitude above `failing_pga` was found safe. This holds at the scan's resolution:
-    /// a safe (or failing) interval narrower than `resolution` may lie between two scan points.
+    /// No amplitude above `failing_pga` was found safe, and the scan ran to the top of the
+    /// range (`scanned_to` = max). This holds at the scan's resolution: a safe (or failing)
+    /// interval narrower than `resolution` may lie between two scan points. Always false when
+    /// the scan stopped at the first failure (nothing above `scanned_to` was run).
     pub monotonic: bool,
     /// m/s², spacing of the scan grid: every failing interval wider than this holds a scan
     /// point and was found; narrower ones may have been missed. (0 in results written before
@@ -334,6 +374,17 @@ pub struct PgaResult {
     /// the tolerance, every other end known to the `resolution`).
     #[serde(default)]
     pub failing_intervals: Vec<[f64; 2]>,
+    /// The scan that was run: `full` (every scan point) or `lowest` (ascending, stopped after
+    /// the first batch holding a failing point). A `lowest` request that reached the top of
+    /// the range, or whose lowest point failed, reports `full`. (`full` in results written
+    /// before the field existed.)
+    #[serde(default)]
+    pub scan: ScanOrder,
+    /// m/s², the highest scan point run: the range's max after a full scan. Above it nothing
+    /// was run, so `failing_intervals` and `monotonic` say nothing there. (`null` in results
+    /// written before the field existed.)
+    #[serde(default)]
+    pub scanned_to: Option<f64>,
     pub runs: Vec<PgaRun>,
 }
 
@@ -539,15 +590,35 @@ pub fn plan(
     let grid: Vec<f64> = (0..n)
         .map(|k| req.min + (req.max - req.min) * k as f64 / (n - 1) as f64)
         .collect();
-    let mut runs = match batch(&grid) {
-        Ok(r) => r,
-        Err(pending) => {
-            return Step::Pending {
-                batch: pending,
-                done,
+    // The scan: every point at once, or ascending batches of `width` up to the first batch
+    // holding a failing point. The refinement below reads only the runs made, so it is the full
+    // scan's whenever the outcomes above the stop would have added no change of outcome (they
+    // all fail, as above a clean threshold): its split of the lowest bracket counts the
+    // changes it sees (`pga::tests`, the property test).
+    let mut scanned = 0;
+    let mut runs = Vec::with_capacity(n);
+    while scanned < n {
+        let end = match req.scan {
+            ScanOrder::Full => n,
+            // The first batch failing at its lowest point (a range that starts failing: the
+            // change asked for is where failure ends) takes the rest of the scan at once.
+            ScanOrder::Lowest if runs.first().is_some_and(|r: &PgaRun| r.failed) => n,
+            ScanOrder::Lowest => (scanned + width).min(n),
+        };
+        match batch(&grid[scanned..end]) {
+            Ok(r) => runs.extend(r),
+            Err(pending) => {
+                return Step::Pending {
+                    batch: pending,
+                    done,
+                }
             }
         }
-    };
+        scanned = end;
+        if runs.iter().any(|r| r.failed) && !runs[0].failed {
+            break;
+        }
+    }
     // Refine the lowest change of outcome between neighbouring amplitudes (the threshold the
     // search answers: the lowest failing amplitude, or for a range that starts failing, e.g. a
     // `not:` criterion, the highest amplitude that still fails) to the tolerance. A failing
@@ -600,14 +671,21 @@ pub fn plan(
         }
     }
     let (safe, fail, monotonic) = bracket_of(&runs);
+    let full = scanned == n;
     Step::Done(PgaResult {
         criterion: req.combine.label(&req.criteria),
         safe_pga: safe,
         failing_pga: fail,
         units: "m/s2".into(),
-        monotonic,
+        monotonic: monotonic && full,
         resolution: (req.max - req.min) / (n - 1) as f64,
         failing_intervals: failing_intervals(&runs),
+        scan: if full {
+            ScanOrder::Full
+        } else {
+            ScanOrder::Lowest
+        },
+        scanned_to: Some(grid[scanned - 1]),
         runs,
     })
 }
@@ -676,9 +754,15 @@ pub fn search(
         let outcomes: Vec<bool> = batch
             .par_iter()
             .map(|&(_, pga)| {
-                evaluate_combined(scene, motion, &req.criteria, req.combine, pga, cancel)
+                let start = std::time::Instant::now();
+                let failed =
+                    evaluate_combined(scene, motion, &req.criteria, req.combine, pga, cancel)?;
+                // A long search's progress, run by run (`RUST_LOG=ashlar::analysis::pga=info`
+                // with `ashlar pga`): amplitude m/s², verdict, wall seconds.
+                tracing::info!(pga, failed, seconds = start.elapsed().as_secs_f64(), "run");
+                Ok(failed)
             })
-            .collect::<Result<_, _>>()?;
+            .collect::<Result<_, RunError>>()?;
         for (&(_, pga), failed) in batch.iter().zip(outcomes) {
             known.insert(pga.to_bits(), failed);
         }
@@ -925,6 +1009,7 @@ mod tests {
             max,
             tolerance,
             scan_points,
+            scan: ScanOrder::Full,
         }
     }
 
@@ -1111,6 +1196,182 @@ mod tests {
         assert!((7.0..7.5).contains(&r.failing_intervals[1][0]));
     }
 
+    /// A result's answer to the bit.
+    fn bits(r: &PgaResult) -> (Option<u64>, Option<u64>) {
+        (
+            r.safe_pga.map(f64::to_bits),
+            r.failing_pga.map(f64::to_bits),
+        )
+    }
+
+    fn lowest(mut req: PgaRequest) -> PgaRequest {
+        req.scan = ScanOrder::Lowest;
+        req
+    }
+
+    /// Whether every scan point above `to` has the outcome at `to`: the condition under which
+    /// the lowest-first scan's refinement sees the changes the full scan's does.
+    fn constant_above(req: &PgaRequest, to: f64, fails: &dyn Fn(f64) -> bool) -> bool {
+        let n = req.scan_points;
+        (0..n)
+            .map(|k| req.min + (req.max - req.min) * k as f64 / (n - 1) as f64)
+            .filter(|&p| p >= to)
+            .all(|p| fails(p) == fails(to))
+    }
+
+    #[test]
+    fn a_lowest_scan_stops_at_the_first_failing_batch_with_the_full_scans_answer() {
+        // Threshold 2.37 on [0, 10] with 11 scan points: the full scan runs all 11; the lowest
+        // scan runs 0..=3 in batches of 2 (0,1 / 2,3: 3 fails), then the same refinement.
+        let req = request(0.0, 10.0, 0.01, 11);
+        let clean = |p: f64| p >= 2.37;
+        // Fragmented below the resolution next to the threshold, and failing for good above.
+        let fragmented = |p: f64| {
+            (2.37..2.41).contains(&p)
+                || (2.45..2.47).contains(&p)
+                || (2.6..2.9).contains(&p)
+                || p >= 2.95
+        };
+        let cases: [(&str, &dyn Fn(f64) -> bool); 2] =
+            [("clean", &clean), ("fragmented", &fragmented)];
+        for (name, fails) in cases {
+            for width in [1, 2, 3, 4, 8] {
+                let (full, _) = drive(&req, width, fails);
+                let (low, batches) = drive(&lowest(req.clone()), width, fails);
+                let why = format!("{name}, width {width}");
+                assert_eq!(bits(&full), bits(&low), "{why}: {full:?} {low:?}");
+                // Ascending batches of `width` up to the first holding a failing point (3.0,
+                // the 4th): points 0..stop, then the refinement.
+                let stop = ((3 / width + 1) * width).min(11);
+                let scan: Vec<f64> = batches[..stop.div_ceil(width)]
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .collect();
+                assert_eq!(
+                    scan,
+                    (0..stop).map(|k| k as f64).collect::<Vec<_>>(),
+                    "{why}"
+                );
+                assert_eq!(low.scanned_to, Some((stop - 1) as f64), "{why}");
+                assert_eq!(full.scanned_to, Some(10.0));
+                assert_eq!(
+                    full.runs.len() - low.runs.len(),
+                    11 - stop,
+                    "{why}: the refinement is shared"
+                );
+                if stop < 11 {
+                    assert_eq!(low.scan, ScanOrder::Lowest, "{why}");
+                    assert!(!low.monotonic, "{why}: nothing above the stop was run");
+                }
+                assert_eq!(full.scan, ScanOrder::Full);
+            }
+        }
+        // A range that starts failing (a `not:` criterion) is scanned in full: the same search.
+        let not = |p: f64| p < 4.37;
+        let (full, _) = drive(&req, 2, not);
+        let (low, _) = drive(&lowest(req.clone()), 2, not);
+        assert_eq!(full, low);
+        // Never failing: every point run, reported as a full scan.
+        let (full, _) = drive(&req, 2, |_| false);
+        let (low, _) = drive(&lowest(req.clone()), 2, |_| false);
+        assert_eq!(full, low);
+        // The lowest scan is a pure planner too: any subset of its outcomes known replays to
+        // the missing part of the same batch (as `replay_after_partial_results...` shows for
+        // the full scan), and the records' planner gives each record's own search.
+        let (_, batches) = drive(&lowest(req.clone()), 2, clean);
+        let all: Vec<f64> = batches.iter().flatten().copied().collect();
+        for cut in 0..all.len() {
+            let known: std::collections::HashMap<u64, bool> = all[..cut]
+                .iter()
+                .map(|&p| (p.to_bits(), clean(p)))
+                .collect();
+            let Step::Pending { batch, done } = plan(&lowest(req.clone()), 2, &|p| {
+                known.get(&p.to_bits()).copied()
+            }) else {
+                panic!("cut {cut}: done too early")
+            };
+            assert_eq!(done, cut);
+            assert_eq!(batch[0].1, all[cut], "cut {cut}");
+        }
+        let thresholds = [2.37, 6.1];
+        let mut known = std::collections::HashMap::new();
+        let results = loop {
+            match plan_records(2, &lowest(req.clone()), 2, &|i, p| {
+                known.get(&(i, p.to_bits())).copied()
+            }) {
+                Step::Done(r) => break r,
+                Step::Pending { batch, .. } => {
+                    for (i, p) in batch {
+                        known.insert((i, p.to_bits()), p >= thresholds[i]);
+                    }
+                }
+            }
+        };
+        for (i, r) in results.iter().enumerate() {
+            let (single, _) = drive(&lowest(req.clone()), 2, |p| p >= thresholds[i]);
+            assert_eq!(r, &single, "record {i} as searched alone");
+        }
+    }
+
+    #[test]
+    fn a_lowest_scan_gives_the_full_answer_whenever_nothing_changes_above_its_stop() {
+        // Property: random outcome functions (seeded), fragmented below and above the
+        // resolution. Whenever every scan point above the lowest scan's stop has the outcome
+        // at the stop, the two answers are the same to the bit; otherwise the split of the
+        // lowest bracket (which counts the changes seen, docs/pga.md) may differ, and the
+        // lowest scan's answer is still a bracket of the same outcome function to the
+        // tolerance, at or below the first failing scan point.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut same, mut other) = (0, 0);
+        for case in 0..400 {
+            // Failing intervals: 1–6 of them, widths from 0.002 to 3 m/s², over [0, 12].
+            let k = 1 + (next() * 6.0) as usize;
+            let mut edges: Vec<f64> = (0..2 * k).map(|_| 0.3 + next() * 11.0).collect();
+            edges.sort_by(f64::total_cmp);
+            for pair in edges.chunks_mut(2) {
+                if next() < 0.5 {
+                    pair[1] = pair[0] + 0.002 + next() * 0.05;
+                }
+            }
+            let tail = next() < 0.5;
+            let top = edges[2 * k - 1];
+            let fails =
+                |p: f64| edges.chunks(2).any(|w| (w[0]..w[1]).contains(&p)) || (tail && p >= top);
+            let width = 1 + (next() * 4.0) as usize;
+            let req = request(0.0, 10.0, 0.01, 21);
+            let (full, _) = drive(&req, width, fails);
+            let (low, _) = drive(&lowest(req.clone()), width, fails);
+            let to = low.scanned_to.expect("scanned");
+            assert!(low.runs.len() <= full.runs.len() + 8, "case {case}");
+            if constant_above(&req, to, &fails) {
+                assert_eq!(
+                    bits(&full),
+                    bits(&low),
+                    "case {case}: {edges:?} tail {tail} width {width}"
+                );
+                same += 1;
+            } else {
+                other += 1;
+                let (s, f) = (low.safe_pga.expect("safe"), low.failing_pga.expect("fails"));
+                assert!(
+                    !fails(s) && fails(f) && f - s <= 0.01 && f <= to,
+                    "case {case}"
+                );
+            }
+        }
+        assert!(
+            same > 100 && other > 50,
+            "both kinds exercised: {same} {other}"
+        );
+    }
+
     #[test]
     fn records_are_planned_side_by_side() {
         let req = request(0.0, 4.0, 0.05, 5);
@@ -1150,6 +1411,8 @@ mod tests {
             monotonic: true,
             resolution: 1.0,
             failing_intervals: vec![],
+            scan: ScanOrder::Full,
+            scanned_to: None,
             runs: vec![],
         };
         assert_eq!(

@@ -87,6 +87,9 @@ pub enum CliError {
     /// `--combine` is neither `all` nor `any`.
     #[error("--{0}")]
     Combine(#[from] crate::analysis::pga::CombineParseError),
+    /// `--scan` is neither `full` nor `lowest`.
+    #[error("--{0}")]
+    Scan(#[from] crate::analysis::pga::ScanParseError),
     /// `--fit` is neither `interval` nor `binary`.
     #[error("--fit: {0}")]
     Fit(#[from] crate::analysis::fragility::MethodParseError),

@@ -2,7 +2,7 @@
 //! records `--motion` names, the amplitude range of a search. Thin: files and arguments in,
 //! `scene` / `motion` / `analysis` values out.
 use super::error::CliError;
-use crate::analysis::pga::{Combine, Criterion, PgaRequest};
+use crate::analysis::pga::{Combine, Criterion, PgaRequest, ScanOrder};
 use crate::motion::{self, parse_acceleration, GroundMotion, LoadParams};
 use crate::scene::{parse_scene, Scene};
 use std::path::{Path, PathBuf};
@@ -28,6 +28,7 @@ impl RangeArgs {
         criteria: Vec<Criterion>,
         combine: Combine,
         scan_points: usize,
+        scan: ScanOrder,
     ) -> Result<PgaRequest, CliError> {
         Ok(PgaRequest {
             criteria,
@@ -36,6 +37,7 @@ impl RangeArgs {
             max: acceleration_option("max", &self.max)?,
             tolerance: acceleration_option("tolerance", &self.tolerance)?,
             scan_points,
+            scan,
         })
     }
 }

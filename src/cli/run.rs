@@ -2,7 +2,7 @@
 use super::error::{pretty, CliError};
 use super::load::{load_records, load_scene, record_name, RangeArgs};
 use crate::analysis::fragility::Method;
-use crate::analysis::pga::{fragility_svg, search, search_records, Combine, Criterion};
+use crate::analysis::pga::{fragility_svg, search, search_records, Combine, Criterion, ScanOrder};
 use crate::analysis::run::{run as run_scene, RunOptions};
 use crate::motion::{self, GroundMotion, RecordArgs, UnitsArg};
 use crate::scene::Scene;
@@ -80,6 +80,12 @@ pub struct PgaArgs {
     /// over the default range (docs/pga.md).
     #[arg(long, default_value_t = 40)]
     pub scan_points: usize,
+    /// `full`: run every scan point (`monotonic` and `failing_intervals` cover the range);
+    /// `lowest`: ascending batches of the pool's threads, stopping at the first batch with a
+    /// failure (same answer when nothing changes above it; far fewer slow strong-motion runs on
+    /// a many-block wall; docs/pga.md).
+    #[arg(long, default_value = "full")]
+    pub scan: String,
     /// Fragility fit over several records: `interval` (each record's capacity censored in
     /// its bracket) or `binary` (every run a pass/fail outcome, Baker 2015).
     #[arg(long, default_value = "interval")]
@@ -196,13 +202,24 @@ fn run_end_params(
 }
 
 pub fn pga(args: &PgaArgs) -> Result<(), CliError> {
+    // With RUST_LOG set (`ashlar::analysis::pga=info`), each run of the search is logged to
+    // standard error as it ends: the progress of a search that takes hours.
+    if std::env::var_os("RUST_LOG").is_some() {
+        let _ = tracing_subscriber::fmt()
+            .with_writer(std::io::stderr)
+            .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
+            .try_init();
+    }
     let criteria = args
         .criterion
         .iter()
         .map(|c| Criterion::parse(c).map_err(CliError::criterion("--criterion")))
         .collect::<Result<Vec<_>, _>>()?;
     let combine = Combine::parse(&args.combine)?;
-    let req = args.range.request(criteria, combine, args.scan_points)?;
+    let scan = ScanOrder::parse(&args.scan)?;
+    let req = args
+        .range
+        .request(criteria, combine, args.scan_points, scan)?;
     let method = Method::parse(&args.fit)?;
     let mut scene = load_scene(&args.scene)?;
     apply_model(&mut scene, args.model.as_deref())?;

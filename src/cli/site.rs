@@ -55,9 +55,12 @@ pub fn run(args: &SiteArgs) -> Result<(), CliError> {
             "site: give at least one --seen or --not-seen observation".into(),
         ));
     }
-    let base = args
-        .range
-        .request(Vec::new(), Combine::All, args.scan_points)?;
+    let base = args.range.request(
+        Vec::new(),
+        Combine::All,
+        args.scan_points,
+        crate::analysis::pga::ScanOrder::Full,
+    )?;
     let mut scene = load_scene(&args.scene)?;
     apply_duration(&mut scene, args.duration)?;
     let params = args.units.load_params()?;

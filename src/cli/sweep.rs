@@ -291,6 +291,8 @@ pub fn bracket(criterion: &str, runs: &[PgaRun]) -> PgaResult {
             .map(|w| w[1].pga - w[0].pga)
             .fold(0.0, f64::max),
         failing_intervals: crate::analysis::pga::failing_intervals(&runs),
+        scan: crate::analysis::pga::ScanOrder::Full,
+        scanned_to: runs.last().map(|r| r.pga),
         runs,
     }
 }

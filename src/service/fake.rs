@@ -76,6 +76,8 @@ pub fn fake_runner(wall_per_simulated_second: Duration) -> JobRunner {
                 monotonic: true,
                 resolution: request.max - request.min,
                 failing_intervals: vec![[hi, request.max]],
+                scan: crate::analysis::pga::ScanOrder::Full,
+                scanned_to: Some(request.max),
                 runs,
             };
             let value = serde_json::to_value(&result)?;

@@ -12,6 +12,7 @@ mod pga_frequency_sweep;
 mod pga_honesty;
 mod pga_incline;
 mod pga_range;
+mod pga_scan;
 mod pga_search;
 mod reduced_fallback;
 mod reduced_records;

@@ -182,6 +182,7 @@ fn site_distribution_of_one_observation_reduces_to_its_lognormal_fragility() {
         max,
         tolerance: 0.01,
         scan_points: 8,
+        scan: ashlar::analysis::pga::ScanOrder::Full,
     };
     let records: Vec<RecordResult> = caps
         .iter()
@@ -196,6 +197,8 @@ fn site_distribution_of_one_observation_reduces_to_its_lognormal_fragility() {
                 monotonic: true,
                 resolution: 0.0,
                 failing_intervals: Vec::new(),
+                scan: ashlar::analysis::pga::ScanOrder::Full,
+                scanned_to: None,
                 runs: Vec::new(),
             },
         })

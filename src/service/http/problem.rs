@@ -366,6 +366,7 @@ impl From<RequestError> for ApiError {
             | E::MotionAndMotions
             | E::NoMotion
             | E::Combine(_)
+            | E::Scan(_)
             | E::Fit(_)
             | E::FitNeedsRecords
             | E::Amplitude { .. }

@@ -8,7 +8,7 @@ use super::budget::{num, GROUND_ACCELERATION};
 use super::{MAX_OBSERVATIONS, MAX_RECORDS};
 use crate::analysis::criteria::CriterionError;
 use crate::analysis::fragility::MethodParseError;
-use crate::analysis::pga::{CombineParseError, CriterionParseError};
+use crate::analysis::pga::{CombineParseError, CriterionParseError, ScanParseError};
 use crate::analysis::run::RunError;
 use crate::motion::{AccelerationError, MotionError};
 use crate::scene::SceneError;
@@ -251,6 +251,8 @@ pub enum RequestError {
     Combine(#[source] CombineParseError),
     #[error("/fit: {0}")]
     Fit(#[source] MethodParseError),
+    #[error("/{0}")]
+    Scan(#[source] ScanParseError),
     #[error("/fit: a fragility fit needs several records (\"motions\")")]
     FitNeedsRecords,
     /// An amplitude of the searched range (`/range/min`, `/range/max`, `/tolerance`).
@@ -329,6 +331,7 @@ impl RequestError {
             E::InRecord { index, source } => source.pointer().map(|p| at_record(&p, *index)),
             E::NoMotion => p("/motion"),
             E::Combine(_) => p("/combine"),
+            E::Scan(_) => p("/scan"),
             E::Fit(_) | E::FitNeedsRecords => p("/fit"),
             E::RangeOrder { .. } => p("/range/max"),
             E::Tolerance => p("/tolerance"),

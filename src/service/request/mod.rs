@@ -498,6 +498,24 @@ mod tests {
     }
 
     #[test]
+    fn a_pga_search_takes_its_scan_and_a_wrong_one_names_the_field() {
+        let l = Limits::default();
+        let body = |scan: Value| {
+            json!({"scene": scene(), "motion": {"horizontal": {"pulse": {"amplitude": 1, "period": 1}}},
+                   "criterion": "toppled:col", "range": {"min": 1, "max": 9}, "scan": scan})
+        };
+        let scan_of = |b: Value| match parse_pga(&b, &l).expect("parses").input {
+            JobInput::PgaSearch { request, .. } => request.scan,
+            _ => panic!("a search"),
+        };
+        use crate::analysis::pga::ScanOrder;
+        assert_eq!(scan_of(body(Value::Null)), ScanOrder::Full);
+        assert_eq!(scan_of(body(json!("full"))), ScanOrder::Full);
+        assert_eq!(scan_of(body(json!("lowest"))), ScanOrder::Lowest);
+        assert_eq!(pointer_of(parse_pga(&body(json!("upward")), &l)), "/scan");
+    }
+
+    #[test]
     fn limits_name_the_field() {
         let l = Limits {
             max_total_steps: 999,

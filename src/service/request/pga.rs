@@ -4,7 +4,7 @@ use super::RequestError;
 use super::{motion_summary, parse_criteria, scene_and_motion, typed, JobInput, Limits, Parsed};
 use crate::analysis::fragility::Method;
 use crate::analysis::pga::Criterion;
-use crate::analysis::pga::{Combine, PgaRequest};
+use crate::analysis::pga::{Combine, PgaRequest, ScanOrder};
 use crate::motion::GroundMotion;
 use crate::motion::{Amplitude, Units};
 use crate::scene::Scene;
@@ -46,6 +46,9 @@ struct PgaBody {
     tolerance: Option<Amplitude>,
     #[serde(default)]
     scan_points: Option<usize>,
+    /// `"full"` or `"lowest"` ([`ScanOrder`]).
+    #[serde(default)]
+    scan: Option<String>,
 }
 
 /// Scan points of a PGA search when the request does not say (as `ashlar pga`): 40 puts
@@ -130,6 +133,10 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, RequestError> 
         None => Combine::All,
         Some(t) => Combine::parse(t).map_err(RequestError::Combine)?,
     };
+    let scan = match &b.scan {
+        None => ScanOrder::Full,
+        Some(t) => ScanOrder::parse(t).map_err(RequestError::Scan)?,
+    };
     let fit = match &b.fit {
         None => Method::Interval,
         Some(t) => Method::parse(t).map_err(RequestError::Fit)?,
@@ -166,6 +173,7 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, RequestError> 
         max,
         tolerance,
         scan_points,
+        scan,
     };
     let motion_summary = summary_with_records(&motion, &records);
     let joined = texts.join(",");

@@ -94,6 +94,7 @@ pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, RequestError>
                 max,
                 tolerance,
                 scan_points,
+                scan: crate::analysis::pga::ScanOrder::Full,
             },
         },
         motion_summary,
