@@ -71,7 +71,7 @@ fn the_floor_keeps_a_collapsing_wall_from_crawling_at_tiny_steps() {
         unconverged_floor_ratio: Some(FLOOR),
         ..Default::default()
     };
-    let sim = run(&scene, &gm, floored.clone(), END, u64::MAX);
+    let sim = run(&scene, &gm, floored, END, u64::MAX);
     let s = sim.stats();
     // The mend. Bound: the floor's own count, (END − START)/(FLOOR × 1 ms) = 3,300 steps.
     // Measured (release): 712 steps with the floor (167 cuts, 301 unconverged steps taken);
