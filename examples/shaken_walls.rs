@@ -22,7 +22,13 @@
 //!  [--closing-floor R]
 //!  [--light-interface on|off] [--simplicial] [--ordering scalar|block-amd|dissection|coordinates]
 //!  [--relax faer|none|wide] [--dissection-leaf N] [--start-check K] [--start-check-audit]
-//!  [--digest] [--no-settle] [--settle-max S] [--lead-in S] [--motions …,sine3]`
+//!  [--digest] [--no-settle] [--settle-max S] [--lead-in S] [--motions …,sine3]
+//!  [--wall-set length=12,height=6,openings=0] [--record FILE] [--pga G] [--window S]
+//!  [--unconverged-floor R] [--min-located R] [--growth G]`
+//!
+//! `--wall-set`, `--record`/`--pga`, `--window S` (a line of counters every S simulated
+//! seconds) and the knobs `--unconverged-floor`, `--min-located`, `--growth` are the wall shaken
+//! to collapse of docs/contact-solve.md §24.
 //!
 //! `--start-check K` sets `SparseParams::start_check_samples` (cheaper start of a
 //! reused-factor solve, default 2; 0 = the exact test at every start), `--start-check-audit`
@@ -155,6 +161,116 @@ fn penetration(sim: &Simulation) -> f64 {
         .fold(0.0, |p, c| p.max(-c.gap))
 }
 
+/// One window's counters (`--window S`, docs/contact-solve.md §24): the totals at its start.
+struct WindowStart {
+    time: f64,
+    stats: ashlar::simulation::Stats,
+    refusals: [u64; 4],
+    factorizations: u64,
+    profile: ashlar::simulation::StepProfile,
+    changes: [[u64; 2]; 7],
+    min_dt: f64,
+    wall: Instant,
+}
+
+impl WindowStart {
+    fn at(sim: &Simulation) -> Self {
+        Self {
+            time: sim.time(),
+            stats: sim.stats(),
+            refusals: sim.refusals(),
+            factorizations: sim.solver_counts().numeric,
+            profile: sim.profile(),
+            changes: sim.changes().by_kind,
+            min_dt: f64::INFINITY,
+            wall: Instant::now(),
+        }
+    }
+}
+
+/// Prints one window's line (`--window S`): steps, mean and smallest Δt, cuts by the reason of
+/// the refused attempt, open–close iterations and factorizations a step, the contacts at its
+/// end (closed = locked + sliding, and those whose vertex is within 1 % of an edge end: the
+/// vertex–vertex corners), stones moving faster than 1 cm/s, the time per stage and the state
+/// changes by kind.
+fn window_line(sim: &Simulation, w: &WindowStart) {
+    let s = sim.stats();
+    let steps = (s.steps - w.stats.steps).max(1) as f64;
+    let r = sim.refusals();
+    let p = sim.profile();
+    let (mut locked, mut sliding, mut open, mut corner) = (0, 0, 0, 0);
+    for c in &sim.contacts().contacts {
+        match c.state {
+            ashlar::contact::ContactState::Open => open += 1,
+            ashlar::contact::ContactState::Locked => locked += 1,
+            ashlar::contact::ContactState::Sliding { .. } => sliding += 1,
+        }
+        if c.state.is_closed() && (c.xi < 0.01 || c.xi > 0.99) {
+            corner += 1;
+        }
+    }
+    // Relative to the foundation (block 0, driven with the ground): speed and displacement.
+    let v0 = sim.block_velocity(0);
+    let moving = (1..sim.geoms().len())
+        .filter(|&b| {
+            let v = sim.block_velocity(b);
+            (v[0] - v0[0]).hypot(v[1] - v0[1]) > 0.01
+        })
+        .count();
+    let shift = |b: usize| sim.geoms()[b].vertices[0] - sim.scene().blocks[b].vertices[0];
+    let (mut displaced, mut drop, mut rise) = (0, 0.0f64, 0.0f64);
+    for b in 1..sim.geoms().len() {
+        let d = shift(b) - shift(0);
+        if d.norm() > 0.01 {
+            displaced += 1;
+        }
+        drop = drop.max(-d.y);
+        rise = rise.max(d.y);
+    }
+    let e = sim.energy();
+    let ch = sim.changes().by_kind;
+    let kinds: Vec<u64> = (0..7)
+        .map(|k| ch[k][0] + ch[k][1] - w.changes[k][0] - w.changes[k][1])
+        .collect();
+    let secs = |a: std::time::Duration, b: std::time::Duration| (a - b).as_secs_f64();
+    eprintln!(
+        "  window {:.2}–{:.2} s: steps {}, Δt mean {:.2e} min {:.2e}, cuts {} (unconverged {}, moved {}, overshot {}, bound {}), taken unconverged {}, located steps {}, impacts {}, solves/step {:.2}, factorizations/step {:.2}, closing-limited {}, contacts locked {} sliding {} open {} corner {}, moving {} (>1 cm/s), displaced {} (>1 cm), largest drop {:.3} m rise {:.2e} m, gravity energy {:.6e} J, springs {:.3e} J, max penetration {:.2e} m, wall {:.1} s (detect {:.1}, assemble {:.1}, solve {:.1}, integrate {:.1}), changes by kind {:?}",
+        w.time,
+        sim.time(),
+        s.steps - w.stats.steps,
+        (sim.time() - w.time) / steps,
+        w.min_dt,
+        s.time_step_cuts - w.stats.time_step_cuts,
+        r[0] - w.refusals[0],
+        r[1] - w.refusals[1],
+        r[2] - w.refusals[2],
+        r[3] - w.refusals[3],
+        s.unconverged_taken - w.stats.unconverged_taken,
+        s.located_steps - w.stats.located_steps,
+        s.impacts - w.stats.impacts,
+        (s.open_close_iterations - w.stats.open_close_iterations) as f64 / steps,
+        (sim.solver_counts().numeric - w.factorizations) as f64 / steps,
+        s.closing_limited_steps - w.stats.closing_limited_steps,
+        locked,
+        sliding,
+        open,
+        corner,
+        moving,
+        displaced,
+        drop,
+        rise,
+        e.gravity,
+        e.springs,
+        s.max_penetration,
+        w.wall.elapsed().as_secs_f64(),
+        secs(p.detect, w.profile.detect),
+        secs(p.assemble, w.profile.assemble),
+        secs(p.solve, w.profile.solve),
+        secs(p.integrate, w.profile.integrate),
+        kinds
+    );
+}
+
 /// The measured steps (kept out of line: `valgrind --tool=callgrind --collect-atstart=no
 /// --toggle-collect='*measured_steps*'` counts them alone, without building or settling).
 /// Returns (steps, smallest step, deepest penetration).
@@ -168,7 +284,15 @@ fn measured_steps(
     let mut done = 0;
     let mut min_dt = f64::INFINITY;
     let mut deepest: f64 = 0.0;
+    let window: Option<f64> = arg("--window").map(|v| v.parse().expect("--window"));
+    let mut w = WindowStart::at(sim);
     loop {
+        if let Some(len) = window {
+            if sim.time() >= w.time + len - 1e-12 {
+                window_line(sim, &w);
+                w = WindowStart::at(sim);
+            }
+        }
         match end {
             Some(end) if sim.time() >= end - 1e-12 => break,
             None if done >= steps => break,
@@ -182,6 +306,7 @@ fn measured_steps(
         match sim.step(max_dt) {
             Ok(dt) => {
                 min_dt = min_dt.min(dt);
+                w.min_dt = w.min_dt.min(dt);
                 // `--step-log`: one line a step (time, Δt, solves, cuts, the closing
                 // contacts and their largest approach / elastic range, with `--closing`).
                 if std::env::args().any(|a| a == "--step-log") {
@@ -201,6 +326,9 @@ fn measured_steps(
         }
         deepest = deepest.max(penetration(sim));
         done += 1;
+    }
+    if window.is_some() && sim.stats().steps > w.stats.steps {
+        window_line(sim, &w);
     }
     (done, min_dt, deepest)
 }
@@ -294,7 +422,17 @@ fn main() {
         Some("deformable") => BlockModel::Deformable,
         _ => BlockModel::Rigid,
     };
-    let rec = record();
+    // `--record FILE [--pga G]`: a record of `data/ground-motions` scaled to a PGA of G g
+    // (0.3 g, the shaken walls' record, unless given) instead of Northridge at 0.3 g.
+    let rec = match arg("--record") {
+        Some(f) => {
+            let pga: f64 = arg("--pga").map_or(0.3, |v| v.parse().expect("--pga"));
+            presets::record(&f)
+                .expect("--record: a record of data/ground-motions")
+                .scaled_to_pga(pga * motion::STANDARD_GRAVITY)
+        }
+        None => record(),
+    };
     // `--record-start T`: start the record at T s (default 0.2 s before its peak); with
     // `--seconds S` the run covers S s of simulated time instead of `--steps` steps (the
     // whole-record run of docs/contact-solve.md §8: `--record-start 0 --seconds 20`).
@@ -325,6 +463,20 @@ fn main() {
                 }
             }
             let mut scene = validate(&spec).expect("wall");
+            // `--wall-set length=12,height=6,openings=0`: the `ashlar scene wall` template with
+            // these values instead of the √n × √n wall (the walls a PGA search runs, §24).
+            if let Some(v) = arg("--wall-set") {
+                let given: std::collections::BTreeMap<String, serde_json::Value> = v
+                    .split(',')
+                    .map(|kv| {
+                        let (k, x) = kv.split_once('=').expect("--wall-set KEY=VALUE,…");
+                        (k.to_string(), serde_json::Value::String(x.to_string()))
+                    })
+                    .collect();
+                scene = ashlar::scene::templates::build("wall", &given)
+                    .expect("--wall-set: the wall template")
+                    .1;
+            }
             // `--time-step DT`: a fixed Δt, s, as the tight reference's (separates the Δt
             // error from a loop variant's, docs/contact-solve.md §18).
             if let Some(v) = arg("--time-step") {
@@ -476,6 +628,20 @@ fn main() {
             }
             if let Some(v) = arg("--closing-floor") {
                 params.closing.min_step_ratio = v.parse().expect("--closing-floor");
+            }
+            // `--unconverged-floor R`: a non-converging loop's step is cut no shorter than
+            // R × Δt and taken there (`SimParams::unconverged_floor_ratio`, §24).
+            if let Some(v) = arg("--unconverged-floor") {
+                params.unconverged_floor_ratio = Some(v.parse().expect("--unconverged-floor"));
+            }
+            // `--min-located R`: no impact located sooner than R × Δt
+            // (`ImpactParams::min_located_ratio`, §24).
+            if let Some(v) = arg("--min-located") {
+                params.impact.min_located_ratio = v.parse().expect("--min-located");
+            }
+            // `--growth G`: Δt's growth a step after a cut (`SimParams::growth`, §24).
+            if let Some(v) = arg("--growth") {
+                params.growth = v.parse().expect("--growth");
             }
             if let Some(v) = arg("--friction-tol") {
                 params.open_close.friction_tolerance = v.parse().expect("--friction-tol");

@@ -112,6 +112,13 @@ pub struct ImpactParams {
     /// on the records study at the default Δt (docs/accuracy-vs-speed.md, "Micro-rocking: the
     /// landing corner takes the weight (session 35)").
     pub hand_over_weight: bool,
+    /// Shortest located step, as a fraction of `control.time_step`: an impact predicted
+    /// sooner than this (beyond the `window`) is not located; the step runs whole and the
+    /// contact closes within it on its springs. 0 (default): every impact is located. Why a
+    /// floor: location is global, so in a wall shaken to collapse, with hundreds of stones
+    /// landing, the next impact somewhere is always near and every step ends before it
+    /// (docs/contact-solve.md §24). Off by default: the engine suites were not run with it on.
+    pub min_located_ratio: f64,
 }
 
 impl Default for ImpactParams {
@@ -127,6 +134,7 @@ impl Default for ImpactParams {
             close_hover: true,
             locate_speed_ratio: 1.0,
             hand_over_weight: false,
+            min_located_ratio: 0.0,
         }
     }
 }
@@ -363,10 +371,15 @@ pub fn located_step(
 ) -> f64 {
     debug_assert_eq!(scratch.times.len(), contacts.len());
     let dt = input.dt;
-    match next_impact(input, contacts, states, params, scratch) {
+    let located = match next_impact(input, contacts, states, params, scratch) {
         Some(t) if t <= dt => t - params.margin * dt,
         Some(t) if t <= 2.0 * dt && params.split_before => 0.5 * (t - params.margin * dt),
         _ => dt,
+    };
+    if params.min_located_ratio > 0.0 && located < params.min_located_ratio * input.nominal_dt {
+        dt
+    } else {
+        located
     }
 }
 

@@ -44,6 +44,11 @@ pub struct Stats {
     /// Accepted steps after which the closing-contact limit (`SimParams::closing`) shortened
     /// the next step.
     pub closing_limited_steps: u64,
+    /// Steps taken at `SimParams::unconverged_floor_ratio` with the open–close loop's last
+    /// iterate, unconverged.
+    pub unconverged_taken: u64,
+    /// Steps the impact law's event location ended early (before a predicted impact).
+    pub located_steps: u64,
 }
 
 impl Simulation {

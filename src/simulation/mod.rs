@@ -93,7 +93,11 @@ impl Simulation {
             .min(self.rotation_bound())
             .min(self.rocking_bound());
         let impacts_before = self.stepper.stats.impacts;
+        let full = dt;
         let dt = self.restitution(dt);
+        if dt < full {
+            self.stepper.stats.located_steps += 1;
+        }
         // The trapezoidal rule averages a₀, the acceleration stored at the last step's end,
         // which an impact just made stale (it is the motion before the impulse: a rocking
         // column's θ̈ about the pivot it left); the step after an impact then takes DDA's rule,
@@ -165,6 +169,19 @@ impl Simulation {
                 },
             };
             self.stepper.profile.solve += t2.elapsed();
+            // At the floor of `unconverged_floor_ratio`, an unconverged loop's last iterate is
+            // taken if the step's other checks accept it.
+            let floor = self.unconverged_floor();
+            let refusal = match refusal {
+                Some(Refusal::Unconverged(_)) if dt <= floor * (1.0 + 1e-9) => {
+                    let r = self.check_step(dt);
+                    if r.is_none() {
+                        self.stepper.stats.unconverged_taken += 1;
+                    }
+                    r
+                }
+                r => r,
+            };
             let Some(refusal) = refusal else { break };
             self.stepper.refusals[match refusal {
                 Refusal::Unconverged(_) => 0,
@@ -184,9 +201,20 @@ impl Simulation {
                 return Err(self.refused(cuts, dt, refusal));
             }
             dt *= refusal.factor(self.params.cut_factor);
+            if matches!(refusal, Refusal::Unconverged(_)) {
+                dt = dt.max(floor);
+            }
             self.state.states.clone_from(&self.state.start_states);
         }
         Ok((dt, cuts))
+    }
+
+    /// The shortest Δt a non-converging loop is cut to (`SimParams::unconverged_floor_ratio`),
+    /// s; 0 without the floor.
+    fn unconverged_floor(&self) -> f64 {
+        self.params
+            .unconverged_floor_ratio
+            .map_or(0.0, |r| r * self.state.scene.control.time_step)
     }
 
     /// Work counters of the sparse linear solver (factorizations, reused-factor iterations).

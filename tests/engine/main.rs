@@ -4,6 +4,7 @@
 //! ~35 MB of disk and a link each. Run one with `cargo test --test engine NAME::`.
 
 mod block_model_auto;
+mod collapse_floor;
 #[path = "../common/mod.rs"]
 mod common;
 mod damping;
