@@ -82,6 +82,18 @@ struct StreamState {
     params: EventParams,
 }
 
+/// `next` with its progress raised to the last one sent (a stale store read, or a worker's
+/// late report, must not move a client's progress bar back).
+fn never_back(last: Option<JobEvent>, next: JobEvent) -> JobEvent {
+    match last {
+        Some(l) if l.progress > next.progress => JobEvent {
+            progress: l.progress,
+            ..next
+        },
+        _ => next,
+    }
+}
+
 fn sse_event(id: Uuid, ev: JobEvent) -> Event {
     let name = if ev.status.is_terminal() {
         "end"
@@ -103,6 +115,23 @@ pub fn job_stream(
     shutdown: watch::Receiver<bool>,
     params: EventParams,
 ) -> impl Stream<Item = Result<Event, std::convert::Infallible>> {
+    use futures_util::StreamExt;
+    job_events(id, current, store, hub, shutdown, params).map(move |ev| Ok(sse_event(id, ev)))
+}
+
+/// The updates [`job_stream`] sends, as plain events: each differs from the one before, the
+/// last is terminal (unless the server shuts down), and progress never goes back. The hub
+/// carries every update while the store is written at most every `progress_write_interval`,
+/// so a store read after a silence can be older than the last hub value; it may change the
+/// status but not lower the progress already sent.
+pub fn job_events(
+    id: Uuid,
+    current: JobEvent,
+    store: Arc<dyn JobStore>,
+    hub: &Hub,
+    shutdown: watch::Receiver<bool>,
+    params: EventParams,
+) -> impl Stream<Item = JobEvent> {
     let rx = if current.status.is_terminal() {
         None
     } else {
@@ -123,11 +152,11 @@ pub fn job_stream(
             if s.done {
                 return None;
             }
-            if s.last != Some(s.pending) {
-                let ev = s.pending;
+            let ev = never_back(s.last, s.pending);
+            if s.last != Some(ev) {
                 s.last = Some(ev);
                 s.done = ev.status.is_terminal();
-                return Some((Ok(sse_event(s.id, ev)), s));
+                return Some((ev, s));
             }
             if *s.shutdown.borrow() {
                 return None;

@@ -17,6 +17,7 @@ mod regression_reported_controls;
 mod regression_sigterm_after_listening;
 mod regression_simultaneous_landings;
 mod regression_soft_penalty;
+mod regression_stale_progress_event;
 mod regression_step_limit_diagnostic;
 mod regression_trapezoidal_impact;
 mod regression_trapezoidal_release;
