@@ -6,6 +6,7 @@
 mod block_model_auto;
 #[path = "../common/mod.rs"]
 mod common;
+mod cycle_rule;
 mod damping;
 mod dual_mprgp;
 mod dual_seed;
