@@ -18,7 +18,8 @@
 //!  [--seconds S] [--settle TOL] [--settle-after K] [--light-states on|off] [--light-tilt DEG]
 //!  [--stone-settle TOL] [--stone-settle-state TOL] [--stone-settle-after K]
 //!  [--stone-settle-interfaces N] [--stone-settle-neighbours] [--weight-scale on|off]
-//!  [--cycle-flips N] [--cycle-after K] [--cycle-extra E] [--time-step DT] [--closing F]
+//!  [--cycle-flips N] [--cycle-after K] [--cycle-extra E] [--cycle-interface on|off]
+//!  [--time-step DT] [--closing F]
 //!  [--closing-floor R]
 //!  [--light-interface on|off] [--simplicial] [--ordering scalar|block-amd|dissection|coordinates]
 //!  [--relax faer|none|wide] [--dissection-leaf N] [--start-check K] [--start-check-audit]
@@ -620,6 +621,11 @@ fn main() {
             if let Some(v) = arg("--cycle-extra") {
                 params.open_close.cycle_extra = v.parse().expect("--cycle-extra");
             }
+            // `--cycle-interface on|off`: the rule only on lightly loaded interfaces
+            // (`OpenCloseParams::cycle_light_interface`, §25).
+            if let Some(v) = arg("--cycle-interface") {
+                params.open_close.cycle_light_interface = v == "on";
+            }
             // `--closing F [--closing-floor R]`: the next Δt is limited so that a contact
             // closing within a step approaches by at most F of its elastic range W/k_n,
             // never below R × Δt (`SimParams::closing`, §22).
@@ -866,6 +872,10 @@ fn main() {
                 eprintln!(
                     "  stone settle rule: friction updates taken {}, state changes taken {}",
                     ch.stone_settled_friction, ch.stone_settled_state
+                );
+                eprintln!(
+                    "  cycle rule: closed sliding light {} loaded {}, kept locked {}, steps finished in the extra iterations {}",
+                    ch.cycle_closed[0], ch.cycle_closed[1], ch.cycle_kept_locked, ch.cycle_extra_steps
                 );
             }
         }

@@ -7,6 +7,7 @@ mod block_model_auto;
 mod collapse_floor;
 #[path = "../common/mod.rs"]
 mod common;
+mod cycle_rule;
 mod damping;
 mod dual_mprgp;
 mod dual_seed;
