@@ -11,7 +11,9 @@
 //! (trapezoidal rule), `stale` (`restart_after_impact` off: the trapezoidal rule as it was before
 //! the restart), `avg` (`average_ground_load`), `rigid` (block model), `rock:C`, `err:R`, `nm:G` (Newmark γ = G,
 //! β = (G + ½)²/4), `slow:F` (`impact.slow_factor`), `dt:S` (the coarse run's step), `fine:S` (the reference run's
-//! step, 1e-4 s unless given); the reference run takes the same modifiers except `rock`, `err`, `dt`).
+//! step, 1e-4 s unless given), `hand` (`impact.hand_over_weight`), `hslow:F` (the hand-over with its own
+//! threshold, `impact.hand_over_below` = F), `vsnew` (the second run is the defaults at the default step
+//! instead of the 1e-4 s one); the reference run takes the same modifiers except `rock`, `err`, `dt`).
 use ashlar::analysis::reference::{half_cycles, housner_rocking, HousnerColumn};
 use ashlar::analysis::study_records::{self as sr, COLUMNS};
 use ashlar::assembly::Newmark;
@@ -48,6 +50,7 @@ fn main() {
     let mut coarse_p = SimParams::default();
     let mut fine_p = SimParams::default();
     let mut fine_c = json!({ "time_step": 1e-4 });
+    let mut vs_new = false;
     for v in variant.split('+') {
         match v {
             "new" | "old" => {}
@@ -94,8 +97,28 @@ fn main() {
             v if v.starts_with("fine:") => {
                 fine_c["time_step"] = json!(v[5..].parse::<f64>().expect("dt"))
             }
+            // ImpactParams::hand_over_weight (with `slow:0`: session 35's `hand`).
+            "hand" => {
+                coarse_p.impact.hand_over_weight = true;
+                fine_p.impact.hand_over_weight = true;
+            }
+            // The hand-over with its own threshold F (ImpactParams::hand_over_below).
+            v if v.starts_with("hslow:") => {
+                let f = v[6..].parse().expect("factor");
+                for p in [&mut coarse_p, &mut fine_p] {
+                    p.impact.hand_over_weight = true;
+                    p.impact.hand_over_below = Some(f);
+                }
+            }
+            // The second run is the defaults at the default step instead (a variant against
+            // the defaults, landing by landing).
+            "vsnew" => vs_new = true,
             v => panic!("unknown variant {v}"),
         }
+    }
+    if vs_new {
+        fine_c = json!({});
+        fine_p = SimParams::default();
     }
     let (coarse, n_coarse, i_coarse) = run(coarse_c, coarse_p);
     let (fine, n_fine, i_fine) = run(fine_c, fine_p);

@@ -212,22 +212,11 @@ fn fit_restitution(theta: &[f64], duration: f64) -> Result<(f64, f64), StudyErro
     let mut best = (f64::NAN, f64::INFINITY);
     for i in 0..=200 {
         let e = 0.5 + 0.0025 * i as f64;
-        let frames = Mutex::new(Vec::new());
-        let record = |f: &Frame| {
-            if let Ok(mut fr) = frames.lock() {
-                fr.push(f.blocks[1].rotation);
-            }
+        let reduced = ReducedParams {
+            restitution: super::reduced::Restitution::Coefficient(e),
+            ..ReducedParams::default()
         };
-        let opts = RunOptions {
-            on_frame: Some(&record),
-            reduced_params: Some(ReducedParams {
-                restitution: super::reduced::Restitution::Coefficient(e),
-                ..ReducedParams::default()
-            }),
-            ..Default::default()
-        };
-        run(&scene, &pulse(5.0), &opts)?;
-        let red = frames.into_inner().unwrap_or_default();
+        let red = pulse_rotations(&scene, None, Some(reduced))?;
         let n = red.len().min(theta.len()).max(1);
         let rms = (red
             .iter()
@@ -243,6 +232,29 @@ fn fit_restitution(theta: &[f64], duration: f64) -> Result<(f64, f64), StudyErro
     Ok(best)
 }
 
+/// The column's rotation (rad) at every output frame of `scene` under the study's 5 m/s² pulse,
+/// with the engine's or the reduced model's params given.
+fn pulse_rotations(
+    scene: &crate::scene::Scene,
+    sim_params: Option<crate::simulation::SimParams>,
+    reduced_params: Option<ReducedParams>,
+) -> Result<Vec<f64>, StudyError> {
+    let frames = Mutex::new(Vec::new());
+    let record = |f: &Frame| {
+        if let Ok(mut fr) = frames.lock() {
+            fr.push(f.blocks[1].rotation);
+        }
+    };
+    let opts = RunOptions {
+        on_frame: Some(&record),
+        sim_params,
+        reduced_params,
+        ..Default::default()
+    };
+    run(scene, &pulse(5.0), &opts)?;
+    Ok(frames.into_inner().unwrap_or_default())
+}
+
 fn restitution_study(quick: bool) -> Result<Vec<RestitutionFit>, StudyError> {
     let alpha = (COL_B / COL_H).atan();
     let mut out = vec![RestitutionFit {
@@ -250,36 +262,38 @@ fn restitution_study(quick: bool) -> Result<Vec<RestitutionFit>, StudyError> {
         coefficient: 1.0 - 1.5 * alpha.sin().powi(2),
         rms_misfit: 0.0,
     }];
-    let duration = 2.0;
     for integ in ["dda", "trapezoidal"] {
         for block_model in ["rigid", "deformable"] {
             if quick && block_model == "deformable" {
                 continue;
             }
-            let mut v = column_scene();
-            v["control"] = json!({ "duration": duration, "model": "dda", "integrator": integ, "block_model": block_model, "output_interval": 0.01 });
-            let scene = scene_from_value(&v)?;
-            let frames = Mutex::new(Vec::new());
-            let record = |f: &Frame| {
-                if let Ok(mut fr) = frames.lock() {
-                    fr.push(f.blocks[1].rotation);
-                }
-            };
-            let opts = RunOptions {
-                on_frame: Some(&record),
-                ..Default::default()
-            };
-            run(&scene, &pulse(5.0), &opts)?;
-            let theta = frames.into_inner().unwrap_or_default();
-            let (e, rms) = fit_restitution(&theta, duration)?;
-            out.push(RestitutionFit {
-                source: format!("DDA ({integ} integrator, {block_model} blocks, other controls at defaults), fitted"),
-                coefficient: e,
-                rms_misfit: rms,
-            });
+            out.push(fitted_restitution(integ, block_model, None)?);
         }
     }
     Ok(out)
+}
+
+/// The fitted restitution of the DDA column under the study's pulse over 2 s (see
+/// [`StudyResult::restitution`]) with the given integrator and block model, and `sim_params`
+/// (`None`: the defaults; e.g. an `ImpactParams` knob to compare, `examples/restitution_fit.rs`).
+pub fn fitted_restitution(
+    integ: &str,
+    block_model: &str,
+    sim_params: Option<crate::simulation::SimParams>,
+) -> Result<RestitutionFit, StudyError> {
+    let duration = 2.0;
+    let mut v = column_scene();
+    v["control"] = json!({ "duration": duration, "model": "dda", "integrator": integ, "block_model": block_model, "output_interval": 0.01 });
+    let scene = scene_from_value(&v)?;
+    let theta = pulse_rotations(&scene, sim_params, None)?;
+    let (e, rms) = fit_restitution(&theta, duration)?;
+    Ok(RestitutionFit {
+        source: format!(
+            "DDA ({integ} integrator, {block_model} blocks, other controls at defaults), fitted"
+        ),
+        coefficient: e,
+        rms_misfit: rms,
+    })
 }
 
 /// A benchmark scene as reported.

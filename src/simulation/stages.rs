@@ -118,6 +118,7 @@ impl Simulation {
                 &input,
                 &self.state.contacts.contacts,
                 &self.state.states,
+                &self.params.impact,
                 &mut self.stepper.impact_scratch,
             );
         }
