@@ -46,7 +46,9 @@ async fn a_stale_store_read_does_not_move_progress_back() {
     hub.publish(job.id, running(0.9));
     // Silence for several polls: the stream reads the store's 0.4.
     tokio::time::sleep(Duration::from_millis(200)).await;
-    store.finish(job.id, &Finish::Cancelled(None)).expect("finish");
+    store
+        .finish(job.id, &Finish::Cancelled(None))
+        .expect("finish");
     let got = tokio::time::timeout(Duration::from_secs(10), collect)
         .await
         .expect("the stream ends after the terminal status")
