@@ -107,16 +107,13 @@ fn sse_event(id: Uuid, ev: JobEvent) -> Event {
 /// Server-sent events for one job: a `progress` event whenever status or progress changes
 /// (starting with the current state), and a final `end` event with the terminal status, after
 /// which the stream closes. It also closes when the server shuts down.
+/// `events` is [`job_events`] of job `id`.
 pub fn job_stream(
     id: Uuid,
-    current: JobEvent,
-    store: Arc<dyn JobStore>,
-    hub: &Hub,
-    shutdown: watch::Receiver<bool>,
-    params: EventParams,
+    events: impl Stream<Item = JobEvent>,
 ) -> impl Stream<Item = Result<Event, std::convert::Infallible>> {
     use futures_util::StreamExt;
-    job_events(id, current, store, hub, shutdown, params).map(move |ev| Ok(sse_event(id, ev)))
+    events.map(move |ev| Ok(sse_event(id, ev)))
 }
 
 /// The updates [`job_stream`] sends, as plain events: each differs from the one before, the

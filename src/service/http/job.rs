@@ -6,7 +6,7 @@ use super::state::{
     blocking, check_json_content_type, json_response, load, parse_id, ApiResult, AppState,
 };
 use crate::service::auth::Access;
-use crate::service::events::{job_stream, EventParams, JobEvent};
+use crate::service::events::{job_events, job_stream, EventParams, JobEvent};
 use crate::service::request::budget;
 use crate::service::request::{json_body, parse_pga, parse_run, parse_site};
 use crate::service::store::{
@@ -279,7 +279,7 @@ pub(super) async fn events(
         status: j.status,
         progress: j.progress,
     };
-    let stream = job_stream(
+    let events = job_events(
         j.id,
         current,
         s.core.store.clone(),
@@ -287,6 +287,7 @@ pub(super) async fn events(
         s.core.shutdown_signal.subscribe(),
         EventParams::default(),
     );
+    let stream = job_stream(j.id, events);
     Ok(Sse::new(stream)
         .keep_alive(KeepAlive::new().interval(Duration::from_secs(15)))
         .into_response())
