@@ -204,12 +204,7 @@ fn run_end_params(
 pub fn pga(args: &PgaArgs) -> Result<(), CliError> {
     // With RUST_LOG set (`ashlar::analysis::pga=info`), each run of the search is logged to
     // standard error as it ends: the progress of a search that takes hours.
-    if std::env::var_os("RUST_LOG").is_some() {
-        let _ = tracing_subscriber::fmt()
-            .with_writer(std::io::stderr)
-            .with_env_filter(tracing_subscriber::EnvFilter::from_default_env())
-            .try_init();
-    }
+    crate::service::serve::init_logging(None);
     let criteria = args
         .criterion
         .iter()

@@ -26,15 +26,7 @@ pub struct WorkerArgs {
 
 pub fn run(args: &WorkerArgs) -> Result<(), super::error::CliError> {
     use super::error::CliError;
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
-        )
-        .with_writer(std::io::stderr)
-        // Colour codes only for a terminal: a log written to a file or a pipe stays plain text.
-        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
-        .try_init();
+    service::serve::init_logging(Some("info"));
     let url = match service::parse_database(&args.database)? {
         service::Database::Postgres(url) => url,
         service::Database::Sqlite(_) => {

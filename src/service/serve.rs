@@ -253,17 +253,28 @@ impl Default for IsolationFlag {
     }
 }
 
-/// Entry point of `ashlar serve`: blocks until SIGINT/SIGTERM, then shuts down gracefully.
-pub fn serve_cli(args: ServeArgs) -> Result<(), ServeError> {
+/// The commands' log on standard error: `RUST_LOG`'s filter, else `default` (`None`: no log
+/// unless `RUST_LOG` is set). A second call keeps the first subscriber.
+pub fn init_logging(default: Option<&str>) {
+    let filter = match (
+        tracing_subscriber::EnvFilter::try_from_default_env(),
+        default,
+    ) {
+        (Ok(filter), _) => filter,
+        (Err(_), Some(d)) => tracing_subscriber::EnvFilter::new(d),
+        (Err(_), None) => return,
+    };
     let _ = tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
-        )
+        .with_env_filter(filter)
         .with_writer(std::io::stderr)
         // Colour codes only for a terminal: a log written to a file or a pipe stays plain text.
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .try_init();
+}
+
+/// Entry point of `ashlar serve`: blocks until SIGINT/SIGTERM, then shuts down gracefully.
+pub fn serve_cli(args: ServeArgs) -> Result<(), ServeError> {
+    init_logging(Some("info"));
     let mut config = ServiceConfig::new(&args.process.data);
     match args
         .database
