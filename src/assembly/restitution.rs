@@ -295,10 +295,8 @@ fn pivot_landing(
     let Some(f) = params.hand_over_below.filter(|_| params.hand_over_weight) else {
         return false;
     };
-    let free = |b: usize| input.dofs.free_index[b];
-    let block = match (free(c.vertex_block), free(c.edge_block)) {
-        (Some(b), None) | (None, Some(b)) => b,
-        _ => return false,
+    let Some(block) = lone_free_block(input, c) else {
+        return false;
     };
     pivoted.get(block).copied().unwrap_or(false)
         && rate < 0.0
@@ -322,24 +320,29 @@ fn find_pivoted(
     out.resize(input.dofs.block_of.len(), false);
     // Two passes with no buffer: weight-carrying pivots first, then blocks touching another
     // free block are struck off.
-    let free = |c: &Contact| {
-        (
-            input.dofs.free_index[c.vertex_block],
-            input.dofs.free_index[c.edge_block],
-        )
-    };
     for c in contacts.iter().filter(|c| takes_part(input, c)) {
-        if let (Some(f), None) | (None, Some(f)) = free(c) {
+        if let Some(f) = lone_free_block(input, c) {
             if c.state.is_closed() && !c.closed_within_last_step && c.g0 < 0.0 {
                 out[f] = true;
             }
         }
     }
     for c in contacts.iter().filter(|c| takes_part(input, c)) {
-        if let (Some(a), Some(b)) = free(c) {
+        let free = &input.dofs.free_index;
+        if let (Some(a), Some(b)) = (free[c.vertex_block], free[c.edge_block]) {
             out[a] = false;
             out[b] = false;
         }
+    }
+}
+
+/// The free block of a contact with a fixed or driven block (its free index), `None` when
+/// both sides are free or neither is.
+fn lone_free_block(input: &ImpactInput, c: &Contact) -> Option<usize> {
+    let free = &input.dofs.free_index;
+    match (free[c.vertex_block], free[c.edge_block]) {
+        (Some(b), None) | (None, Some(b)) => Some(b),
+        _ => None,
     }
 }
 

@@ -759,7 +759,7 @@ pub fn iterate(
             let cycle = cycle_interface(
                 &rule,
                 c,
-                loads(track, &scratch.interface, &scratch.interface_load),
+                (&scratch.interface, &scratch.interface_load),
                 &sys.weight,
                 k,
             );
@@ -813,7 +813,7 @@ pub fn iterate(
                 let cycle = cycle_interface(
                     &rule,
                     c,
-                    loads(track, &scratch.interface, &scratch.interface_load),
+                    (&scratch.interface, &scratch.interface_load),
                     &sys.weight,
                     k,
                 );
@@ -1164,35 +1164,25 @@ impl From<bool> for CycleInterface {
 /// of `force_tolerance`: that scale is 0 in the first step of a scene dropped onto its springs
 /// (every interface would count as loaded) and 100× the weight right after an impact (a pivot
 /// would count as light, docs/contact-solve.md §12); "carries a stone" is a load against its
-/// weight. Without tracked loads (rule off) every contact counts as light.
+/// weight. With the rule off every contact counts as light (the loads are tracked, and read,
+/// only with it on).
 fn cycle_interface(
     rule: &Rule,
     c: &Contact,
-    loads: Option<(&[usize], &[f64])>,
+    (interface, load): (&[usize], &[f64]),
     weight: &[f64],
     k: usize,
 ) -> CycleInterface {
     let params = rule.params;
-    match loads {
-        Some((interface, load)) if params.cycle_flips > 0 => {
-            let lighter = [c.vertex_block, c.edge_block]
-                .into_iter()
-                .filter_map(|b| rule.dofs.free_index[b])
-                .map(|f| weight.get(f).copied().unwrap_or(0.0))
-                .fold(f64::INFINITY, f64::min);
-            CycleInterface::from(load[interface[k]] <= params.light_load * lighter)
-        }
-        _ => CycleInterface::Light,
+    if params.cycle_flips == 0 {
+        return CycleInterface::Light;
     }
-}
-
-/// The running interface loads when they are tracked (`cycle_interface`).
-fn loads<'a>(
-    track: bool,
-    interface: &'a [usize],
-    load: &'a [f64],
-) -> Option<(&'a [usize], &'a [f64])> {
-    track.then_some((interface, load))
+    let lighter = [c.vertex_block, c.edge_block]
+        .into_iter()
+        .filter_map(|b| rule.dofs.free_index[b])
+        .map(|f| weight.get(f).copied().unwrap_or(0.0))
+        .fold(f64::INFINITY, f64::min);
+    CycleInterface::from(load[interface[k]] <= params.light_load * lighter)
 }
 
 /// New state of one contact given the trial solution; returns whether it changed.
