@@ -545,15 +545,11 @@ pub fn apply_impacts(
             }
         }
     }
-    // The pivot landings among them, at their approach rates before the impulses.
+    // The pivot landings among them, at their approach rates before the impulses: marked in
+    // the row loop below, which computes those rates anyway.
     taken.clear();
     if !pivoted.is_empty() {
-        taken.extend(
-            contacts
-                .iter()
-                .zip(impacting.iter())
-                .map(|(c, &i)| i && pivot_landing(input, c, gap_rate(c, states), params, pivoted)),
-        );
+        taken.resize(contacts.len(), false);
     }
     let count = impacting.iter().filter(|&&i| i).count();
     if count == 0 {
@@ -581,6 +577,9 @@ pub fn apply_impacts(
             continue;
         }
         let rate = gap_rate(c, states);
+        if impacting[k] && !pivoted.is_empty() {
+            taken[k] = pivot_landing(input, c, rate, params, pivoted);
+        }
         let target = if impacting[k] {
             // A contact still open by g0 (the step before ended `margin` × Δt ahead of the
             // impact) that does not bounce clear of it within the step lands at the step's
