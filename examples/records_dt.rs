@@ -6,6 +6,8 @@
 //! and against the converged run, steps, cuts, wall time.
 //! Run: `cargo run --release --example records_dt -- [records…]` (default: Friuli only);
 //! `ASHLAR_LEVELS="0.3 0.5"` picks the PGA levels (g), `ASHLAR_BLOCK=rigid` the block model, `ASHLAR_COLUMNS="0"` the column, `ASHLAR_ROBUST=1` Housner's verdict at ±3 % of the PGA.
+//! The HOUSNER line gives Housner's own peak at ±1 % of the PGA and flags `ill-conditioned` a peak
+//! target where it moves by more than `study_records::ILL_CONDITIONED` (5 %).
 //! `ASHLAR_CONDITION=1` replaces the comparison by the conditioning of each point (docs/accuracy-vs-speed.md,
 //! "The last misses, conditioned"): Housner's peak on a grid of PGA × (0.94 … 1.06) and the
 //! engine's (default controls) at PGA × (1 ± 0.01), (1 ± 0.03), with the PGA shift that takes
@@ -35,7 +37,8 @@ fn main() {
     // (max_rotation_step R rad, no impact location), `dt:S` (time_step S, no impact location), `hand`
     // (ImpactParams::hand_over_weight with slow_factor 0), `handover` (hand_over_weight alone),
     // `hand4` (`hand` at the converged run's Δt 1e-4 s and params), `hslow:F` (hand_over_weight
-    // with its own threshold, `ImpactParams::hand_over_below` = F).
+    // with its own threshold, `ImpactParams::hand_over_below` = F; the default since session 38
+    // is `hslow:2`), `prehand` (the defaults before session 38: no hand-over).
     let spec = std::env::var("ASHLAR_VARIANTS").unwrap_or_else(|_| "old,new".into());
     let no_impact = SimParams {
         impact_approach_ratio: None,
@@ -107,7 +110,14 @@ fn main() {
                 // ImpactParams::hand_over_weight with every landing an impact (slow_factor 0).
                 let mut p = SimParams::default();
                 p.impact.hand_over_weight = true;
+                p.impact.hand_over_below = None;
                 p.impact.slow_factor = 0.0;
+                (json!({}), p)
+            } else if v == "prehand" {
+                // The defaults before session 38: no hand-over.
+                let mut p = SimParams::default();
+                p.impact.hand_over_weight = false;
+                p.impact.hand_over_below = None;
                 (json!({}), p)
             } else if v == "hand4" {
                 // `hand` at the converged run's Δt = 1e-4 s and its params (no rocking
@@ -117,12 +127,14 @@ fn main() {
                     ..SimParams::default()
                 };
                 p.impact.hand_over_weight = true;
+                p.impact.hand_over_below = None;
                 p.impact.slow_factor = 0.0;
                 (json!({ "time_step": 1e-4 }), p)
             } else if v == "handover" {
                 // ImpactParams::hand_over_weight alone (slow landings left to the springs).
                 let mut p = SimParams::default();
                 p.impact.hand_over_weight = true;
+                p.impact.hand_over_below = None;
                 (json!({}), p)
             } else if v.starts_with("hslow:") {
                 // The hand-over only for pivot landings slower than F g Δt, which are impacts
@@ -186,11 +198,13 @@ fn main() {
                     )
                 }
                 .expect("engine");
-                // Conditioning: Housner's own peak at ±1 % of the PGA.
+                // Conditioning: Housner's own peak at ±1 % of the PGA, and the study's flag.
                 let hp = |f: f64| {
                     let m = sr::load_record(dir, rec, pga * f).expect("record");
-                    sr::housner(col, &m, t_end, sr::HOUSNER_DT).peak
+                    sr::housner(col, &m, t_end, sr::HOUSNER_DT)
                 };
+                let near = [hp(0.99), hp(1.01)];
+                let ill = sr::ill_conditioned_peak(&h, sr::spread_of(&h, &near));
                 // ASHLAR_ROBUST=1: Housner's verdict at 0.97 and 1.03 × the PGA too (the records
                 // study's *robust*), printed as `robust true|false`.
                 let robust = if std::env::var("ASHLAR_ROBUST").as_deref() == Ok("1") {
@@ -200,12 +214,13 @@ fn main() {
                     String::new()
                 };
                 println!(
-                    "{} | {rec} | {pga:.2} | HOUSNER | {:.5} | {} | ±1 % PGA: {:+.2} % {:+.2} %{robust} | | | |",
+                    "{} | {rec} | {pga:.2} | HOUSNER | {:.5} | {} | ±1 % PGA: {:+.2} % {:+.2} %{robust}{} | | | |",
                     col.name,
                     h.peak,
                     h.fallen,
-                    100.0 * (hp(0.99) / h.peak - 1.0),
-                    100.0 * (hp(1.01) / h.peak - 1.0)
+                    100.0 * (near[0].peak / h.peak - 1.0),
+                    100.0 * (near[1].peak / h.peak - 1.0),
+                    if ill { " ill-conditioned" } else { "" }
                 );
                 println!(
                     "{} | {rec} | {pga:.2} | {} | {:.5} | {} | {:+.2} % | | {} | {} | {:.2}",
