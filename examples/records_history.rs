@@ -99,8 +99,10 @@ fn main() {
             }
             // ImpactParams::hand_over_weight (with `slow:0`: session 35's `hand`).
             "hand" => {
-                coarse_p.impact.hand_over_weight = true;
-                fine_p.impact.hand_over_weight = true;
+                for p in [&mut coarse_p, &mut fine_p] {
+                    p.impact.hand_over_weight = true;
+                    p.impact.hand_over_below = None;
+                }
             }
             // The hand-over with its own threshold F (ImpactParams::hand_over_below).
             v if v.starts_with("hslow:") => {

@@ -105,7 +105,8 @@ fn main() {
     // "Micro-rocking"): SLOW = ImpactParams::slow_factor, HOVER/GROUP/SPLIT = 0 turn off
     // close_hover/group_landings/split_before, KPEN = penalty stiffness (N/m) in place of 10 E,
     // DUAL = 1 the dual (penalty-free) contact solver, AVG = 1 SimParams::average_ground_load,
-    // EDT = the engine's Δt (s), HAND = 1 ImpactParams::hand_over_weight, DTOL = the dual solver's
+    // EDT = the engine's Δt (s), HAND = 1 ImpactParams::hand_over_weight with no threshold of its
+    // own (session 35), HAND = 0 no hand-over (unset: the defaults, `hand_over_below` 2), DTOL = the dual solver's
     // tolerance.
     let mut sp = SimParams::default();
     if let Some(f) = env("SLOW") {
@@ -118,8 +119,9 @@ fn main() {
     if env("AVG") == Some(1.0) {
         sp.average_ground_load = true;
     }
-    if env("HAND") == Some(1.0) {
-        sp.impact.hand_over_weight = true;
+    if let Some(h) = env("HAND") {
+        sp.impact.hand_over_weight = h == 1.0;
+        sp.impact.hand_over_below = None;
     }
     if env("DUAL") == Some(1.0) {
         fine.control.contact_solver = ashlar::scene::ContactSolver::Dual;

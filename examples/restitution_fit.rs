@@ -13,6 +13,7 @@ fn main() {
     let mut p = SimParams::default();
     if variant == "hand" {
         p.impact.hand_over_weight = true;
+        p.impact.hand_over_below = None;
         p.impact.slow_factor = 0.0;
     } else if let Some(f) = variant.strip_prefix("hslow:") {
         p.impact.hand_over_weight = true;
