@@ -339,18 +339,12 @@ fn conditioning(col: &sr::RecordColumn, dir: &Path, rec: &str, pga: f64, block: 
     let mid = at(1.0);
     // Housner's own spread: the largest relative change of its peak within ±1 % and ±3 %.
     let spread = |w: f64| {
-        grid.iter()
+        let near: Vec<sr::Response> = grid
+            .iter()
             .filter(|(f, _)| (f - 1.0).abs() <= w + 1e-9)
-            .map(|(_, r)| {
-                if r.fallen != mid.fallen {
-                    f64::INFINITY
-                } else if r.fallen {
-                    0.0
-                } else {
-                    (r.peak / mid.peak - 1.0).abs()
-                }
-            })
-            .fold(0.0, f64::max)
+            .map(|(_, r)| *r)
+            .collect();
+        sr::spread_of(mid, &near)
     };
     let pct = |x: f64| {
         if x.is_finite() {
