@@ -9,9 +9,9 @@
 //! sliding after at least `cycle_flips` state changes (the rule's closings, or their successors):
 //! block pair, interface load at the step end against the lighter stone's weight, normal, time.
 //! Run: `cargo run --release --example colonnade_rules -- [NAME,…] [--trace NAME]`.
-use ashlar::analysis::run::{run, RunOptions, Summary};
+use ashlar::analysis::run::Summary;
 use ashlar::contact::ContactState;
-use ashlar::motion::{self, GroundMotion};
+use ashlar::presets;
 use ashlar::simulation::{SimParams, Simulation};
 use ashlar::solve::open_close::OpenCloseParams;
 use std::collections::BTreeMap;
@@ -110,17 +110,6 @@ fn config(name: &str) -> Option<OpenCloseParams> {
     })
 }
 
-fn scene_and_motion() -> (ashlar::scene::Scene, GroundMotion) {
-    let text = std::fs::read_to_string("examples/doric-colonnade.json")
-        .expect("examples/doric-colonnade.json (run from the repository root)");
-    let mut scene = ashlar::scene::parse_scene(&text).expect("colonnade scene");
-    scene.control.duration = Some(DURATION);
-    let gm = ashlar::presets::record("friuli-1976-tolmezzo-000.at2")
-        .expect("Friuli record")
-        .scaled_to_pga(0.3 * motion::STANDARD_GRAVITY);
-    (scene, gm)
-}
-
 fn peak(s: &Summary) -> (f64, String) {
     s.blocks
         .iter()
@@ -129,7 +118,7 @@ fn peak(s: &Summary) -> (f64, String) {
 }
 
 fn trace(name: &str, oc: OpenCloseParams) {
-    let (scene, gm) = scene_and_motion();
+    let (scene, gm) = presets::rocking_colonnade(DURATION).expect("colonnade");
     let mut sim = Simulation::new(
         &scene,
         &gm,
@@ -233,20 +222,11 @@ fn main() {
         .map(str::to_string)
         .to_vec(),
     };
-    let (scene, gm) = scene_and_motion();
     let mut p_none = None;
     for name in &names {
         let oc = config(name).unwrap_or_else(|| panic!("unknown configuration {name}"));
-        let opts = RunOptions {
-            sim_params: Some(SimParams {
-                open_close: oc,
-                ..Default::default()
-            }),
-            no_trajectory: true,
-            ..Default::default()
-        };
         let t0 = std::time::Instant::now();
-        let s = run(&scene, &gm, &opts).expect("colonnade run").summary;
+        let s = presets::rocking_colonnade_run(oc, DURATION).expect("colonnade run");
         let (p, id) = peak(&s);
         if name == "none" {
             p_none = Some(p);

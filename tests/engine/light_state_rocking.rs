@@ -17,9 +17,7 @@
 //! rule and the cycle rule off; docs/contact-solve.md §27), each rule alone and the default (all
 //! of them) must keep its verdict and peak, and the check must fail for the rule as first
 //! written.
-use ashlar::analysis::run::{run, RunOptions, Summary};
-use ashlar::motion;
-use ashlar::simulation::SimParams;
+use ashlar::analysis::run::Summary;
 use ashlar::solve::open_close::OpenCloseParams;
 use std::sync::OnceLock;
 
@@ -35,24 +33,7 @@ const DURATION: f64 = 12.0;
 pub(crate) const PEAK_BOUND: f64 = 0.10;
 
 pub(crate) fn colonnade(oc: OpenCloseParams) -> Summary {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/doric-colonnade.json"
-    ))
-    .expect("examples/doric-colonnade.json");
-    let mut scene = ashlar::scene::parse_scene(&text).expect("colonnade scene");
-    scene.control.duration = Some(DURATION);
-    let gm = crate::common::record("friuli-1976-tolmezzo-000.at2")
-        .scaled_to_pga(0.3 * motion::STANDARD_GRAVITY);
-    let opts = RunOptions {
-        sim_params: Some(SimParams {
-            open_close: oc,
-            ..Default::default()
-        }),
-        no_trajectory: true,
-        ..Default::default()
-    };
-    run(&scene, &gm, &opts).expect("colonnade run").summary
+    ashlar::presets::rocking_colonnade_run(oc, DURATION).expect("colonnade run")
 }
 
 /// The loop without its approximate rules: the light rule (`light_state_changes`), the stone
