@@ -364,7 +364,7 @@ pub struct ChangeCounts {
     pub damped_t_sum: f64,
     /// Closings the cycle rule (`OpenCloseParams::cycle_flips`) made sliding, by whether the
     /// contact's interface was lightly loaded (0) or loaded (1) (`cycle_light_interface`), and
-    /// the closings of loaded interfaces it left locked because of that check.
+    /// the closings it left locked because of that check or of `cycle_tilt` (bed joints).
     pub cycle_closed: [u64; 2],
     pub cycle_kept_locked: u64,
     /// Steps that converged only in the iterations `cycle_extra` adds beyond `max_iterations`.
