@@ -19,6 +19,7 @@
 //!  [--stone-settle TOL] [--stone-settle-state TOL] [--stone-settle-after K]
 //!  [--stone-settle-interfaces N] [--stone-settle-neighbours] [--weight-scale on|off]
 //!  [--cycle-flips N] [--cycle-after K] [--cycle-extra E] [--cycle-interface on|off]
+//!  [--cycle-tilt DEG]
 //!  [--time-step DT] [--closing F]
 //!  [--closing-floor R]
 //!  [--light-interface on|off] [--simplicial] [--ordering scalar|block-amd|dissection|coordinates]
@@ -625,6 +626,12 @@ fn main() {
             // (`OpenCloseParams::cycle_light_interface`, §25).
             if let Some(v) = arg("--cycle-interface") {
                 params.open_close.cycle_light_interface = v == "on";
+            }
+            // `--cycle-tilt DEG`: the steepest joint the rule may close sliding
+            // (`OpenCloseParams::cycle_tilt`, §27; 90 = any orientation).
+            if let Some(v) = arg("--cycle-tilt") {
+                let deg: f64 = v.parse().expect("--cycle-tilt");
+                params.open_close.cycle_tilt = deg.to_radians();
             }
             // `--closing F [--closing-floor R]`: the next Δt is limited so that a contact
             // closing within a step approaches by at most F of its elastic range W/k_n,

@@ -441,6 +441,50 @@ pub fn shaken_wall_record() -> Result<GroundMotion, MotionError> {
     Ok(record("northridge-1994-mulholland-009.at2")?.scaled_to_pga(0.3 * motion::STANDARD_GRAVITY))
 }
 
+/// Why the rocking colonnade could not be run (`rocking_colonnade`, `rocking_colonnade_run`).
+#[derive(Debug, thiserror::Error)]
+pub enum ColonnadeError {
+    #[error("examples/doric-colonnade.json: {0}")]
+    Read(#[from] std::io::Error),
+    #[error("examples/doric-colonnade.json: {0}")]
+    Scene(#[from] SceneError),
+    #[error("Friuli record: {0}")]
+    Motion(#[from] MotionError),
+    #[error("colonnade run: {0}")]
+    Run(#[from] crate::analysis::run::RunError),
+}
+
+/// The rocking stack of the open–close loop's rule checks (tests/engine/light_state_rocking.rs,
+/// examples/colonnade_rules.rs, docs/contact-solve.md §12, §27): the bundled Doric colonnade
+/// (examples/doric-colonnade.json: three columns of seven marble drums with capitals and
+/// abaci, two architraves jointed over the middle column) run for `duration` s, and Friuli 1976
+/// Tolmezzo 000 scaled to a PGA of 0.3 g.
+pub fn rocking_colonnade(duration: f64) -> Result<(Scene, GroundMotion), ColonnadeError> {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples/doric-colonnade.json");
+    let mut scene = parse_scene(&std::fs::read_to_string(path)?)?;
+    scene.control.duration = Some(duration);
+    let gm = record("friuli-1976-tolmezzo-000.at2")?.scaled_to_pga(0.3 * motion::STANDARD_GRAVITY);
+    Ok((scene, gm))
+}
+
+/// `rocking_colonnade` run as `ashlar run` runs it (`analysis::run::run`, no trajectory) with the
+/// open–close loop `oc`: its summary.
+pub fn rocking_colonnade_run(
+    oc: crate::solve::open_close::OpenCloseParams,
+    duration: f64,
+) -> Result<crate::analysis::run_summary::Summary, ColonnadeError> {
+    let (scene, gm) = rocking_colonnade(duration)?;
+    let opts = crate::analysis::run::RunOptions {
+        sim_params: Some(crate::simulation::SimParams {
+            open_close: oc,
+            ..Default::default()
+        }),
+        no_trajectory: true,
+        ..Default::default()
+    };
+    Ok(crate::analysis::run::run(&scene, &gm, &opts)?.summary)
+}
+
 /// Drop the `null` members of every object (a serialized spec's unset options), so that the
 /// JSON reads as a user would write it.
 fn without_nulls(v: Value) -> Value {

@@ -237,21 +237,22 @@ pub struct OpenCloseParams {
     /// With `max_flips` keeping a cycling contact sliding, this is `max_flips`' answer ("both
     /// states are inconsistent; the consistent one is sliding at the limit with vanishing
     /// slip") extended to the closing. The loop's convergence test is unchanged (a solve whose
-    /// states hold). 0 = off. Default 0 (off). Candidate (docs/contact-solve.md §25): 4, from
-    /// the first iteration, kept out of loaded interfaces (`cycle_light_interface`): on the
-    /// settled 410-stone wall under the record it removes the Δt cuts (strong part 1 → 0, the
-    /// whole 20 s record 5 → 0) within the tight reference's bound (0.47 %, as without it) at
-    /// the same cost, the incline and the colonnade's own check pass, but with it on by default
-    /// two colonnade checks of the other rules fail (the light rule's and the stone rule's
-    /// comparisons: the colonnade's peak moves 5.4 → 7.2 cm with the light rule off), so it
-    /// stays opt-in. Without the interface check it moved the incline benchmark and the
-    /// colonnade (§25); on the unsettled wall at 1 ms it was 10 % from the reference (§18).
+    /// states hold). 0 = off. Default 4 (two full cycles, as `max_flips`), from the first
+    /// iteration (`cycle_after` 1), kept out of loaded interfaces (`cycle_light_interface`) and
+    /// bed joints (`cycle_tilt`): on the settled 410-stone wall under the record it removes the
+    /// Δt cuts (strong part 1 → 0, the whole 20 s record 5 → 0) within the tight reference's
+    /// bound (0.47 %, as without it) for +0.9 % instructions (docs/contact-solve.md §25, §27),
+    /// it takes nothing at rest or under the sine (bit-identical there), and every rule of the
+    /// loop alone and all of them keep the rocking colonnade's verdict and peak within 10 % of
+    /// the run without any (§27). Without the interface check it moved the incline benchmark
+    /// and the colonnade (§25); on the unsettled wall at 1 ms it was 10 % from the reference
+    /// (§18).
     pub cycle_flips: u32,
     /// First iteration (1-based) at which `cycle_flips` applies. `max_iterations` + 1 with
     /// `cycle_extra` > 0: the first `max_iterations` iterations are the loop without the rule,
     /// and a step that would be cut gets `cycle_extra` more iterations with it instead
-    /// (docs/contact-solve.md §18). 1 for the §25 candidate: the same answer on the settled
-    /// wall as at the limit (0.47 % of the tight reference, §22) at fewer solves.
+    /// (docs/contact-solve.md §18). Default 1: the same answer on the settled wall as at the
+    /// limit (0.47 % of the tight reference, §22, §25) at fewer solves.
     pub cycle_after: usize,
     /// Iterations allowed beyond `max_iterations` while `cycle_flips` is on: with `cycle_after`
     /// ≤ `max_iterations`, only in a step in which the rule closed a contact sliding (a step it
@@ -271,6 +272,17 @@ pub struct OpenCloseParams {
     /// check the bundled colonnade under Friuli 0.3 g slid 8.48 cm against 5.49 cm and the
     /// incline benchmark left its regression bound, docs/contact-solve.md §25). Default on.
     pub cycle_light_interface: bool,
+    /// Largest angle between a contact's normal and the horizontal, rad, at which `cycle_flips`
+    /// may close it sliding; a cycling contact of a steeper joint closes locked as without the
+    /// rule (counted in `ChangeCounts::cycle_kept_locked`). Default π/4: head (vertical) joints
+    /// only, the light rule's split (`light_state_tilt`). The interface check alone does not
+    /// keep the rule off a rocking stack's bed joints: in the bundled colonnade under Friuli
+    /// 0.3 g, 70–90 % of its closings were bed joints of drums, capitals and abaci whose whole
+    /// interface carried under 0.1 of the lighter stone's weight for a step (a stack above
+    /// bouncing on its landing), and with the light rule off that moved the peak +32 %; head
+    /// joints only, the shaken walls' closings are all taken as before (docs/contact-solve.md
+    /// §27). π/2: any orientation (session 37's rule).
+    pub cycle_tilt: f64,
 }
 
 impl Default for OpenCloseParams {
@@ -304,10 +316,11 @@ impl Default for OpenCloseParams {
             stone_settle_neighbours: true,
             stone_settle_supports: 2,
             weight_scale: false,
-            cycle_flips: 0,
-            cycle_after: 21,
+            cycle_flips: 4,
+            cycle_after: 1,
             cycle_extra: 10,
             cycle_light_interface: true,
+            cycle_tilt: std::f64::consts::FRAC_PI_4,
         }
     }
 }
@@ -351,7 +364,7 @@ pub struct ChangeCounts {
     pub damped_t_sum: f64,
     /// Closings the cycle rule (`OpenCloseParams::cycle_flips`) made sliding, by whether the
     /// contact's interface was lightly loaded (0) or loaded (1) (`cycle_light_interface`), and
-    /// the closings of loaded interfaces it left locked because of that check.
+    /// the closings it left locked because of that check or of `cycle_tilt` (bed joints).
     pub cycle_closed: [u64; 2],
     pub cycle_kept_locked: u64,
     /// Steps that converged only in the iterations `cycle_extra` adds beyond `max_iterations`.
@@ -480,6 +493,10 @@ pub struct OpenCloseScratch {
     /// Per interface, the largest normal force of its contacts at the step start, in the
     /// current solve and after it, N.
     interface_load: Vec<f64>,
+    /// Per interface, the load up to which the cycle rule counts it as light
+    /// (`OpenCloseParams::cycle_light_interface`): `light_load` × the weight of the lighter
+    /// free stone of its pair, N. Fixed for the step, built with `interface`.
+    cycle_limit: Vec<f64>,
     /// Contacts (with their change) that qualify for the light rule on their own, pending the
     /// check of their interface's load after the iteration's pass.
     light: Vec<(usize, LightChange)>,
@@ -580,6 +597,15 @@ pub fn iterate(
         );
         scratch.interface_load.clear();
         scratch.interface_load.resize(scratch.interfaces.len(), 0.0);
+        if cycle_interfaces {
+            cycle_limits(
+                &scratch.interfaces,
+                dofs,
+                &sys.weight,
+                params.light_load,
+                &mut scratch.cycle_limit,
+            );
+        }
     }
     for (c, law) in contacts.iter_mut().zip(laws) {
         c.flips = 0;
@@ -757,10 +783,12 @@ pub fn iterate(
                 }
             }
             let cycle = cycle_interface(
-                &rule,
-                c,
-                (&scratch.interface, &scratch.interface_load),
-                &sys.weight,
+                params,
+                (
+                    &scratch.interface,
+                    &scratch.interface_load,
+                    &scratch.cycle_limit,
+                ),
                 k,
             );
             match rule.update(c, law, x, it, scratch.many_stones[k], cycle, counts) {
@@ -811,10 +839,12 @@ pub fn iterate(
             x.clone_from(&scratch.x_new);
             for (k, (c, law)) in contacts.iter_mut().zip(laws).enumerate() {
                 let cycle = cycle_interface(
-                    &rule,
-                    c,
-                    (&scratch.interface, &scratch.interface_load),
-                    &sys.weight,
+                    params,
+                    (
+                        &scratch.interface,
+                        &scratch.interface_load,
+                        &scratch.cycle_limit,
+                    ),
                     k,
                 );
                 match rule.update(c, law, x, it, scratch.many_stones[k], cycle, counts) {
@@ -1159,30 +1189,44 @@ impl From<bool> for CycleInterface {
 }
 
 /// Contact `k`'s interface class for the cycle rule: its interface's running load (step start
-/// and the solves so far, when tracked) against `light_load` × the weight of the lighter free
-/// stone of the pair (`weight`: per free block, N). The weight, not the step-start force scale
-/// of `force_tolerance`: that scale is 0 in the first step of a scene dropped onto its springs
-/// (every interface would count as loaded) and 100× the weight right after an impact (a pivot
-/// would count as light, docs/contact-solve.md §12); "carries a stone" is a load against its
-/// weight. With the rule off every contact counts as light (the loads are tracked, and read,
-/// only with it on).
+/// and the solves so far, when tracked) against the interface's `cycle_limit` (`light_load` ×
+/// the weight of the lighter free stone of the pair, set once a step by `cycle_limits`). With
+/// the rule off every contact counts as light (the loads are tracked, and read, only with it
+/// on).
 fn cycle_interface(
-    rule: &Rule,
-    c: &Contact,
-    (interface, load): (&[usize], &[f64]),
-    weight: &[f64],
+    params: &OpenCloseParams,
+    (interface, load, limit): (&[usize], &[f64], &[f64]),
     k: usize,
 ) -> CycleInterface {
-    let params = rule.params;
     if params.cycle_flips == 0 {
         return CycleInterface::Light;
     }
-    let lighter = [c.vertex_block, c.edge_block]
-        .into_iter()
-        .filter_map(|b| rule.dofs.free_index[b])
-        .map(|f| weight.get(f).copied().unwrap_or(0.0))
-        .fold(f64::INFINITY, f64::min);
-    CycleInterface::from(load[interface[k]] <= params.light_load * lighter)
+    let i = interface[k];
+    CycleInterface::from(load[i] <= limit[i])
+}
+
+/// Per interface (`interfaces`: its blocks, lower first), the load up to which the cycle rule
+/// counts it as light: `light_load` × the weight of the lighter free stone of the pair (`weight`:
+/// per free block, N). The weight, not the step-start force scale of `force_tolerance`: that
+/// scale is 0 in the first step of a scene dropped onto its springs (every interface would count
+/// as loaded) and 100× the weight right after an impact (a pivot would count as light,
+/// docs/contact-solve.md §12); "carries a stone" is a load against its weight.
+fn cycle_limits(
+    interfaces: &[(usize, usize, usize)],
+    dofs: &Dofs,
+    weight: &[f64],
+    light_load: f64,
+    limit: &mut Vec<f64>,
+) {
+    limit.clear();
+    limit.extend(interfaces.iter().map(|&(a, b, _)| {
+        let lighter = [a, b]
+            .into_iter()
+            .filter_map(|x| dofs.free_index[x])
+            .map(|f| weight.get(f).copied().unwrap_or(0.0))
+            .fold(f64::INFINITY, f64::min);
+        light_load * lighter
+    }));
 }
 
 /// New state of one contact given the trial solution; returns whether it changed.
@@ -1247,11 +1291,12 @@ fn update_state(
                         dir: if s != 0.0 { s.signum() } else { 1.0 },
                     }
                 } else if params.closes_sliding(c.flips, iteration)
-                    && cycle == CycleInterface::Loaded
-                    && params.cycle_light_interface
+                    && ((cycle == CycleInterface::Loaded && params.cycle_light_interface)
+                        || c.n.y.abs() > params.cycle_tilt.sin() + 1e-12)
                 {
                     // A cycling corner of a loaded interface (a block's base, a rocking pivot's
-                    // joint): its closing decides the stone's balance, so it closes locked.
+                    // joint) or of a bed joint (a stack landing on it): its closing decides the
+                    // stone's balance, so it closes locked.
                     counts.cycle_kept_locked += 1;
                     ContactState::Locked
                 } else if params.closes_sliding(c.flips, iteration) {
