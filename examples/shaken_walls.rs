@@ -26,7 +26,7 @@
 //!  [--relax faer|none|wide] [--dissection-leaf N] [--start-check K] [--start-check-audit]
 //!  [--digest] [--no-settle] [--settle-max S] [--lead-in S] [--motions …,sine3]
 //!  [--wall-set length=12,height=6,openings=0] [--record FILE] [--pga G] [--window S]
-//!  [--unconverged-floor R] [--min-located R] [--growth G]`
+//!  [--unconverged-floor R] [--floor-hold on|off] [--min-located R] [--growth G]`
 //!
 //! `--wall-set`, `--record`/`--pga`, `--window S` (a line of counters every S simulated
 //! seconds) and the knobs `--unconverged-floor`, `--min-located`, `--growth` are the wall shaken
@@ -646,6 +646,11 @@ fn main() {
             // R × Δt and taken there (`SimParams::unconverged_floor_ratio`, §24).
             if let Some(v) = arg("--unconverged-floor") {
                 params.unconverged_floor_ratio = Some(v.parse().expect("--unconverged-floor"));
+            }
+            // `--floor-hold on|off`: the step after one taken at the floor starts at the floor
+            // (`SimParams::unconverged_floor_hold`, §26).
+            if let Some(v) = arg("--floor-hold") {
+                params.unconverged_floor_hold = v == "on";
             }
             // `--min-located R`: no impact located sooner than R × Δt
             // (`ImpactParams::min_located_ratio`, §24).

@@ -152,6 +152,7 @@ pub fn summary_units() -> serde_json::Value {
             "max_steps": "count",
             "dual_tolerance": "1",
             "dual_stall_acceptance": "1",
+            "unconverged_floor": "1",
             "restitution": "1",
         },
     })

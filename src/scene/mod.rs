@@ -142,6 +142,12 @@ pub struct Control {
     /// `None`: the engine's default (`DualParams::stall_acceptance`, 1: none accepted).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dual_stall_acceptance: Option<f64>,
+    /// The floor of the cuts of a step whose contact loop does not converge, as a fraction of
+    /// `time_step` (0: none). `None`: the engine's default (`SimParams::unconverged_floor_ratio`).
+    /// Omitted from the reported controls when unset, so recorded outputs of scenes without it
+    /// are unchanged.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unconverged_floor: Option<f64>,
     /// Restitution of impacts (docs/format.md § controls). Reported always: it is a physical
     /// choice, not a solver knob.
     #[serde(serialize_with = "ser_restitution")]
@@ -217,6 +223,7 @@ impl Default for Control {
             // repeat them).
             dual_tolerance: None,
             dual_stall_acceptance: None,
+            unconverged_floor: None,
             // Housner's law (e = 0 in the full engine): the reduced rocking model's law, and in
             // the engine it makes impacts independent of Δt; measured against the contacts' own
             // response in docs/restitution.md ("The default").

@@ -193,8 +193,12 @@ pub struct ControlSpec {
     /// Extension: the multiple of `dual_tolerance` up to which a stalled dual solve is taken.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dual_stall_acceptance: Option<f64>,
+    /// Extension: the shortest step a non-converging contact loop is cut to, a fraction of
+    /// `time_step` (0: no floor). Skipped when unset, like the two above.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unconverged_floor: Option<f64>,
     /// Restitution of impacts: `"housner"` or a coefficient in [0, 1] (docs/format.md §
-    /// controls). Skipped when unset, like the two above.
+    /// controls). Skipped when unset, like the three above.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub restitution: Option<RestitutionSpec>,
 }

@@ -423,6 +423,18 @@ fn control(c: &ControlSpec) -> Result<Control, SceneError> {
         out.max_steps = n;
     }
     dual_knobs(c, &mut out)?;
+    if let Some(r) = c.unconverged_floor {
+        finite("control.unconverged_floor", r)?;
+        if !(0.0..=1.0).contains(&r) {
+            return err(
+                "control.unconverged_floor",
+                format!(
+                    "must lie in [0, 1] (a fraction of control.time_step; 0: no floor), got {r}"
+                ),
+            );
+        }
+        out.unconverged_floor = Some(r);
+    }
     if let Some(r) = c.restitution {
         out.restitution = match r {
             RestitutionSpec::Housner => Restitution::Housner,
@@ -801,6 +813,27 @@ mod tests {
             assert!(
                 text.contains(field) && text.contains(reason),
                 "{control}: {text}"
+            );
+        }
+    }
+
+    /// `control.unconverged_floor`: a fraction of `time_step` in [0, 1] (0: no floor), taken
+    /// with either contact solver; unset stays unset (the engine's default).
+    #[test]
+    fn unconverged_floor_is_checked_by_name() {
+        for r in [0.0, 0.1, 1.0] {
+            let ok = parse_scene(&scene(json!({ "unconverged_floor": r }))).expect("valid");
+            assert_eq!(ok.control.unconverged_floor, Some(r));
+        }
+        let unset = parse_scene(&scene(json!({}))).expect("valid");
+        assert_eq!(unset.control.unconverged_floor, None);
+        for bad in [-0.1, 1.5] {
+            let text = parse_scene(&scene(json!({ "unconverged_floor": bad })))
+                .expect_err("refused")
+                .to_string();
+            assert!(
+                text.contains("control.unconverged_floor") && text.contains("[0, 1]"),
+                "{bad}: {text}"
             );
         }
     }

@@ -52,8 +52,8 @@ impl std::fmt::Debug for Simulation {
     }
 }
 
-/// The engine knobs a scene may set (`control.dual_tolerance`, `control.dual_stall_acceptance`)
-/// override the caller's; unset ones keep them. A scene's own dual tolerance is taken as given,
+/// The engine knobs a scene may set (`control.dual_tolerance`, `control.dual_stall_acceptance`,
+/// `control.unconverged_floor`) override the caller's; unset ones keep them. A scene's own dual tolerance is taken as given,
 /// without the small-Δt cap (`DualParams::settling_fraction`): it is the user's trade of
 /// accuracy for speed (the pile's 1e-4, docs/dual.md).
 fn with_scene_knobs(mut params: SimParams, control: &Control) -> SimParams {
@@ -63,6 +63,10 @@ fn with_scene_knobs(mut params: SimParams, control: &Control) -> SimParams {
     }
     if let Some(a) = control.dual_stall_acceptance {
         params.dual.stall_acceptance = a;
+    }
+    if let Some(r) = control.unconverged_floor {
+        // 0 is "no floor", as `None` in the engine's knob.
+        params.unconverged_floor_ratio = (r > 0.0).then_some(r);
     }
     params
 }
@@ -152,6 +156,7 @@ impl Simulation {
     /// last cut allowed.
     fn solve_with_cuts(&mut self, mut dt: f64) -> Result<(f64, u32), SimError> {
         self.state.start_states.clone_from(&self.state.states);
+        self.stepper.taken_unconverged = false;
         let mut cuts = 0u32;
         loop {
             self.assemble(dt);
@@ -173,10 +178,13 @@ impl Simulation {
             // taken if the step's other checks accept it.
             let floor = self.unconverged_floor();
             let refusal = match refusal {
-                Some(Refusal::Unconverged(_)) if dt <= floor * (1.0 + 1e-9) => {
+                Some(Refusal::Unconverged(_))
+                    if dt <= floor * (1.0 + self.params.unconverged_floor_tolerance) =>
+                {
                     let r = self.check_step(dt);
                     if r.is_none() {
                         self.stepper.stats.unconverged_taken += 1;
+                        self.stepper.taken_unconverged = true;
                     }
                     r
                 }
@@ -211,7 +219,7 @@ impl Simulation {
 
     /// The shortest Δt a non-converging loop is cut to (`SimParams::unconverged_floor_ratio`),
     /// s; 0 without the floor.
-    fn unconverged_floor(&self) -> f64 {
+    pub(super) fn unconverged_floor(&self) -> f64 {
         self.params
             .unconverged_floor_ratio
             .map_or(0.0, |r| r * self.state.scene.control.time_step)

@@ -333,7 +333,10 @@ impl Simulation {
         self.stepper.stats.steps += 1;
         self.stepper.stats.min_dt = self.stepper.stats.min_dt.min(dt);
         self.stepper.stats.max_dt = self.stepper.stats.max_dt.max(dt);
-        if cuts > 0 {
+        if self.stepper.taken_unconverged && self.params.unconverged_floor_hold {
+            // At the floor, also after a step the impact law's event location shortened.
+            self.stepper.dt = self.unconverged_floor();
+        } else if cuts > 0 {
             self.stepper.dt = dt;
         } else if self.state.scene.control.adaptive_time_step
             || self.stepper.dt < self.state.scene.control.time_step

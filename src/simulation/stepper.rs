@@ -53,6 +53,9 @@ pub(super) struct Stepper {
     /// (`SimParams::closing`, on only): how many closed within the step, and the largest
     /// approach among them as a multiple of its elastic range W/k_n.
     pub(super) last_closing: (usize, f64),
+    /// The step being taken was taken with the open–close loop unconverged at the floor
+    /// (`SimParams::unconverged_floor_ratio`); read by `unconverged_floor_hold`.
+    pub(super) taken_unconverged: bool,
 }
 
 impl Stepper {
@@ -95,6 +98,7 @@ impl Stepper {
             impact_immobile: Vec::new(),
             impact_friction: Vec::new(),
             last_closing: (0, 0.0),
+            taken_unconverged: false,
         }
     }
 }

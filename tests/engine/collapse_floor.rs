@@ -74,8 +74,9 @@ fn the_floor_keeps_a_collapsing_wall_from_crawling_at_tiny_steps() {
     let sim = run(&scene, &gm, floored, END, u64::MAX);
     let s = sim.stats();
     // The mend. Bound: the floor's own count, (END − START)/(FLOOR × 1 ms) = 3,300 steps.
-    // Measured (release): 712 steps with the floor (167 cuts, 301 unconverged steps taken);
-    // the default 5,195 steps (363 cuts, Δt down to 7.5e-8 s), so it fails without the floor.
+    // Measured: 719 steps with the floor (29 cuts, 300 unconverged steps taken; 712 steps and
+    // 167 cuts without `unconverged_floor_hold`, §24/§26); the default 5,195 steps (363 cuts,
+    // Δt down to 7.5e-8 s), so it fails without the floor.
     let bound = ((END - START) / (FLOOR * scene.control.time_step)).round() as u64;
     assert!(
         s.steps <= bound,
@@ -84,7 +85,7 @@ fn the_floor_keeps_a_collapsing_wall_from_crawling_at_tiny_steps() {
     );
     assert!(s.unconverged_taken > 0, "the floor was never reached");
     // Penetration: the unconverged iterates taken must not let stones sink in. Measured
-    // 1.77e-6 m with the floor, 1.59e-6 m for the default (converged steps) over the same
+    // 1.74e-6 m with the floor (1.77e-6 m without the hold), 1.59e-6 m for the default (converged steps) over the same
     // window; bound 5e-6 m, about 3× the default's: deeper would be the taken iterates
     // pushing stones into each other's springs, not the springs' compliance under impact.
     assert!(
@@ -104,4 +105,35 @@ fn the_floor_keeps_a_collapsing_wall_from_crawling_at_tiny_steps() {
     assert!(a.stats().min_dt > 0.05 * scene.control.time_step);
     assert_eq!(b.stats().unconverged_taken, 0);
     assert_eq!(digest(&a), digest(&b));
+}
+
+/// The scene's `control.unconverged_floor` (what CLI and service users set) is the engine's
+/// knob: over the window a scene with the control and default `SimParams` is bit-identical to
+/// the caller's `unconverged_floor_ratio` (and takes unconverged steps), and a scene's 0 turns
+/// a caller's floor off (bit-identical to the default, no step taken unconverged).
+#[test]
+fn the_scene_control_sets_the_floor() {
+    let gm = record();
+    let plain = wall();
+    let mut with = wall();
+    with.control.unconverged_floor = Some(FLOOR);
+    let mut off = wall();
+    off.control.unconverged_floor = Some(0.0);
+    let floored = SimParams {
+        unconverged_floor_ratio: Some(FLOOR),
+        ..Default::default()
+    };
+    let by_params = run(&plain, &gm, floored, END, u64::MAX);
+    let by_scene = run(&with, &gm, SimParams::default(), END, u64::MAX);
+    assert!(by_params.stats().unconverged_taken > 0, "the floor acts");
+    assert_eq!(
+        by_scene.stats().unconverged_taken,
+        by_params.stats().unconverged_taken
+    );
+    assert_eq!(digest(&by_scene), digest(&by_params));
+    let none = run(&plain, &gm, SimParams::default(), END, u64::MAX);
+    let turned_off = run(&off, &gm, floored, END, u64::MAX);
+    assert_eq!(turned_off.stats().unconverged_taken, 0);
+    assert_eq!(turned_off.stats().steps, none.stats().steps);
+    assert_eq!(digest(&turned_off), digest(&none));
 }

@@ -148,6 +148,7 @@ pub fn engine_controls_note(scene: &Scene) -> String {
         ("contact_solver", c.contact_solver.is_some()),
         ("dual_tolerance", c.dual_tolerance.is_some()),
         ("dual_stall_acceptance", c.dual_stall_acceptance.is_some()),
+        ("unconverged_floor", c.unconverged_floor.is_some()),
     ]
     .into_iter()
     .filter_map(|(name, given)| given.then_some(name))
