@@ -488,15 +488,8 @@ pub fn measures(c: &Contact, x: &[f64], dofs: &Dofs, prescribed: &[Prescribed]) 
 pub struct OpenCloseScratch {
     block_force: Vec<f64>,
     anderson: FrictionAnderson,
-    /// Per contact, the index of its interface (the unordered pair of its blocks).
-    interface: Vec<usize>,
-    /// Per interface, the largest normal force of its contacts at the step start, in the
-    /// current solve and after it, N.
-    interface_load: Vec<f64>,
-    /// Per interface, the load up to which the cycle rule counts it as light
-    /// (`OpenCloseParams::cycle_light_interface`): `light_load` × the weight of the lighter
-    /// free stone of its pair, N. Fixed for the step, built with `interface`.
-    cycle_limit: Vec<f64>,
+    /// Per contact its interface, per interface its running load and the cycle rule's limit.
+    iface: InterfaceLoads,
     /// Contacts (with their change) that qualify for the light rule on their own, pending the
     /// check of their interface's load after the iteration's pass.
     light: Vec<(usize, LightChange)>,
@@ -525,6 +518,48 @@ pub struct OpenCloseScratch {
     /// Per contact, the springs (`spring_key`) that the system's matrix holds: an iteration
     /// whose contacts hold the same springs keeps the matrix and re-adds only the loads.
     spring_keys: Vec<u8>,
+}
+
+/// The interfaces' loads, read by the light rule's and the cycle rule's interface checks.
+#[derive(Debug, Default, Clone)]
+struct InterfaceLoads {
+    /// Per contact, the index of its interface (the unordered pair of its blocks).
+    interface: Vec<usize>,
+    /// Per interface, the largest normal force of its contacts at the step start, in the
+    /// current solve and after it, N.
+    load: Vec<f64>,
+    /// Per interface, the load up to which the cycle rule counts it as light
+    /// (`OpenCloseParams::cycle_light_interface`): `light_load` × the weight of the lighter
+    /// free stone of its pair, N. Fixed for the step, built with `interface`.
+    cycle_limit: Vec<f64>,
+}
+
+impl InterfaceLoads {
+    /// The running load of contact `k`'s interface, N.
+    fn load_of(&self, k: usize) -> f64 {
+        self.load[self.interface[k]]
+    }
+
+    /// Raises each interface's running load to its contacts' `force`, N.
+    fn note_loads(&mut self, contacts: &[Contact], force: impl Fn(&Contact) -> f64) {
+        for (c, &i) in contacts.iter().zip(&self.interface) {
+            let load = &mut self.load[i];
+            *load = load.max(force(c));
+        }
+    }
+
+    /// Contact `k`'s interface class for the cycle rule: its interface's running load (step
+    /// start and the solves so far, when tracked) against the interface's `cycle_limit`
+    /// (`light_load` × the weight of the lighter free stone of the pair, set once a step by
+    /// `cycle_limits`). With the rule off every contact counts as light (the loads are
+    /// tracked, and read, only with it on).
+    fn cycle_class(&self, params: &OpenCloseParams, k: usize) -> CycleInterface {
+        if params.cycle_flips == 0 {
+            return CycleInterface::Light;
+        }
+        let i = self.interface[k];
+        CycleInterface::from(self.load[i] <= self.cycle_limit[i])
+    }
 }
 
 /// Buffers of the local rounds (`OpenCloseParams::local_sweeps`).
@@ -592,18 +627,18 @@ pub fn iterate(
         group_interfaces(
             contacts,
             &mut scratch.pairs,
-            &mut scratch.interface,
+            &mut scratch.iface.interface,
             &mut scratch.interfaces,
         );
-        scratch.interface_load.clear();
-        scratch.interface_load.resize(scratch.interfaces.len(), 0.0);
+        scratch.iface.load.clear();
+        scratch.iface.load.resize(scratch.interfaces.len(), 0.0);
         if cycle_interfaces {
             cycle_limits(
                 &scratch.interfaces,
                 dofs,
                 &sys.weight,
                 params.light_load,
-                &mut scratch.cycle_limit,
+                &mut scratch.iface.cycle_limit,
             );
         }
     }
@@ -632,10 +667,7 @@ pub fn iterate(
         }
     }
     if track || stone_settle {
-        for (c, &i) in contacts.iter().zip(&scratch.interface) {
-            let load = &mut scratch.interface_load[i];
-            *load = load.max(c.start_normal_force);
-        }
+        scratch.iface.note_loads(contacts, |c| c.start_normal_force);
     }
     if stone_settle {
         // Count each block's interfaces that carried a comparable share of its load at the
@@ -647,7 +679,7 @@ pub fn iterate(
         supports.clear();
         supports.resize(block_force.len(), 0);
         let free = |x: usize| dofs.free_index[x].is_some();
-        for (&(a, b, k), &load) in scratch.interfaces.iter().zip(&scratch.interface_load) {
+        for (&(a, b, k), &load) in scratch.interfaces.iter().zip(&scratch.iface.load) {
             let c = &contacts[k];
             for (blk, other) in [(a, b), (b, a)] {
                 if load > 0.0 && load >= params.light_load * block_force[blk] {
@@ -675,7 +707,7 @@ pub fn iterate(
         many_stone.extend((0..counts.len()).map(core));
         if params.stone_settle_neighbours {
             // A stone loaded against a stone of the web belongs to it.
-            for (&(a, b, _), &load) in scratch.interfaces.iter().zip(&scratch.interface_load) {
+            for (&(a, b, _), &load) in scratch.interfaces.iter().zip(&scratch.iface.load) {
                 for (x, y) in [(a, b), (b, a)] {
                     if free(y)
                         && core(y)
@@ -777,20 +809,12 @@ pub fn iterate(
             let (old_state, n_in, old_release) = (c.state, c.friction_normal, c.release_factor);
             if track {
                 // The load the solve used (a closed contact's force of the last iterate).
-                let load = &mut scratch.interface_load[scratch.interface[k]];
+                let load = &mut scratch.iface.load[scratch.iface.interface[k]];
                 if c.state.is_closed() {
                     *load = load.max(c.normal_force);
                 }
             }
-            let cycle = cycle_interface(
-                params,
-                (
-                    &scratch.interface,
-                    &scratch.interface_load,
-                    &scratch.cycle_limit,
-                ),
-                k,
-            );
+            let cycle = scratch.iface.cycle_class(params, k);
             match rule.update(c, law, x, it, scratch.many_stones[k], cycle, counts) {
                 Update::Quiet => {}
                 Update::Changed => {
@@ -810,10 +834,7 @@ pub fn iterate(
         }
         if track {
             // The loads the solve gave.
-            for (c, &i) in contacts.iter().zip(&scratch.interface) {
-                let load = &mut scratch.interface_load[i];
-                *load = load.max(c.normal_force);
-            }
+            scratch.iface.note_loads(contacts, |c| c.normal_force);
         }
         if interfaces {
             // The pending light changes against those loads: a light corner of a loaded
@@ -821,7 +842,7 @@ pub fn iterate(
             for &(k, change) in &scratch.light {
                 let c = &contacts[k];
                 let scale = force_scale(block_force, c, dofs);
-                if scratch.interface_load[scratch.interface[k]] <= params.light_load * scale {
+                if scratch.iface.load_of(k) <= params.light_load * scale {
                     counts.light += 1;
                 } else if params.settles(it, change.force, scale) {
                     // As in `update_state`: the settle rule still applies.
@@ -838,15 +859,7 @@ pub fn iterate(
             // so a converged step is always an undamped solve whose states hold.
             x.clone_from(&scratch.x_new);
             for (k, (c, law)) in contacts.iter_mut().zip(laws).enumerate() {
-                let cycle = cycle_interface(
-                    params,
-                    (
-                        &scratch.interface,
-                        &scratch.interface_load,
-                        &scratch.cycle_limit,
-                    ),
-                    k,
-                );
+                let cycle = scratch.iface.cycle_class(params, k);
                 match rule.update(c, law, x, it, scratch.many_stones[k], cycle, counts) {
                     Update::Quiet => {}
                     // The interface check is skipped here: such a change asks for a solve.
@@ -1186,23 +1199,6 @@ impl From<bool> for CycleInterface {
             Self::Loaded
         }
     }
-}
-
-/// Contact `k`'s interface class for the cycle rule: its interface's running load (step start
-/// and the solves so far, when tracked) against the interface's `cycle_limit` (`light_load` ×
-/// the weight of the lighter free stone of the pair, set once a step by `cycle_limits`). With
-/// the rule off every contact counts as light (the loads are tracked, and read, only with it
-/// on).
-fn cycle_interface(
-    params: &OpenCloseParams,
-    (interface, load, limit): (&[usize], &[f64], &[f64]),
-    k: usize,
-) -> CycleInterface {
-    if params.cycle_flips == 0 {
-        return CycleInterface::Light;
-    }
-    let i = interface[k];
-    CycleInterface::from(load[i] <= limit[i])
 }
 
 /// Per interface (`interfaces`: its blocks, lower first), the load up to which the cycle rule
