@@ -356,8 +356,8 @@ fn find_pivoted(
             }
         }
     }
+    let free = &input.dofs.free_index;
     for c in contacts.iter().filter(|c| takes_part(input, c)) {
-        let free = &input.dofs.free_index;
         if let (Some(a), Some(b)) = (free[c.vertex_block], free[c.edge_block]) {
             out[a] = false;
             out[b] = false;

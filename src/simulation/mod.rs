@@ -53,10 +53,15 @@ impl std::fmt::Debug for Simulation {
 }
 
 /// The engine knobs a scene may set (`control.dual_tolerance`, `control.dual_stall_acceptance`,
-/// `control.unconverged_floor`) override the caller's; unset ones keep them. A scene's own dual tolerance is taken as given,
-/// without the small-Δt cap (`DualParams::settling_fraction`): it is the user's trade of
-/// accuracy for speed (the pile's 1e-4, docs/dual.md).
+/// `control.unconverged_floor`) override the caller's; unset ones keep them. A scene's own dual
+/// tolerance is taken as given, without the small-Δt cap (`DualParams::settling_fraction`): it
+/// is the user's trade of accuracy for speed (the pile's 1e-4, docs/dual.md). Under the dual
+/// contact solver the impact law runs without the hand-over, which is the penalty pivot's
+/// (`ImpactParams::without_hand_over`).
 fn with_scene_knobs(mut params: SimParams, control: &Control) -> SimParams {
+    if control.contact_solver == ContactSolver::Dual {
+        params.impact = params.impact.without_hand_over();
+    }
     if let Some(t) = control.dual_tolerance {
         params.dual.tolerance = t;
         params.dual.settling_fraction = 0.0;

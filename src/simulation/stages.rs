@@ -8,7 +8,7 @@ use crate::assembly::restitution::{apply_impacts, hand_over_weight, located_step
 use crate::assembly::BodyLoads;
 use crate::contact::{ContactState, Mobility};
 use crate::integrate;
-use crate::scene::{ContactSolver, Excitation};
+use crate::scene::Excitation;
 use crate::solve::dual::{DualInput, DualOutcome};
 use crate::solve::open_close::{self, OpenClose};
 use std::time::Instant;
@@ -104,26 +104,21 @@ impl Simulation {
             nominal_dt: self.state.scene.control.time_step,
             gravity: self.state.scene.gravity,
         };
-        // The hand-over is the penalty pivot's (ImpactParams::without_hand_over).
-        let params = match self.state.scene.control.contact_solver {
-            ContactSolver::Penalty => self.params.impact,
-            ContactSolver::Dual => self.params.impact.without_hand_over(),
-        };
         let n = apply_impacts(
             &input,
             &self.state.contacts.contacts,
             &mut self.state.states,
-            &params,
+            &self.params.impact,
             &mut self.stepper.impact_scratch,
         );
         self.stepper.stats.impacts += n as u64;
-        let hand_over = n > 0 && params.hand_over_weight;
+        let hand_over = n > 0 && self.params.impact.hand_over_weight;
         if hand_over {
             hand_over_weight(
                 &input,
                 &self.state.contacts.contacts,
                 &self.state.states,
-                &params,
+                &self.params.impact,
                 &mut self.stepper.impact_scratch,
             );
         }
@@ -131,7 +126,7 @@ impl Simulation {
             &input,
             &self.state.contacts.contacts,
             &self.state.states,
-            &params,
+            &self.params.impact,
             &self.stepper.impact_scratch,
         );
         if hand_over {
