@@ -30,6 +30,7 @@ fn main() {
         max: 10.0,
         tolerance: 0.01,
         scan_points: 8,
+        resolution: None,
         scan: ashlar::analysis::pga::ScanOrder::Full,
     };
     let reps = 7;

@@ -2,7 +2,9 @@
 //! records `--motion` names, the amplitude range of a search. Thin: files and arguments in,
 //! `scene` / `motion` / `analysis` values out.
 use super::error::CliError;
-use crate::analysis::pga::{Combine, Criterion, PgaRequest, ScanOrder};
+use crate::analysis::pga::{
+    default_resolution, Combine, Criterion, PgaRequest, ScanOrder, DEFAULT_SCAN_POINTS,
+};
 use crate::motion::{self, parse_acceleration, GroundMotion, LoadParams};
 use crate::scene::{parse_scene, Scene};
 use std::path::{Path, PathBuf};
@@ -19,24 +21,39 @@ pub struct RangeArgs {
     /// Bracket width to stop at, with units (0.01m/s2, 0.001g, 1gal).
     #[arg(long, default_value = "0.01m/s2")]
     pub tolerance: String,
+    /// Scan resolution asked for, with units (0.64m/s2, 0.05g): the scan runs on the multiples
+    /// of h = tolerance × 2^K ≤ it, anchored at 0, so that searches sharing it share their
+    /// answer whatever their range (docs/pga.md). Default 0.64 m/s² (coarser over ranges wider
+    /// than 25 m/s²: at most 40 points asked).
+    #[arg(long, conflicts_with = "scan_points")]
+    pub resolution: Option<String>,
 }
 
 impl RangeArgs {
-    /// The search request over this range.
+    /// The search request over this range. The resolution asked for: `--resolution`, else
+    /// that of `scan_points` when given, else [`default_resolution`].
     pub fn request(
         &self,
         criteria: Vec<Criterion>,
         combine: Combine,
-        scan_points: usize,
+        scan_points: Option<usize>,
         scan: ScanOrder,
     ) -> Result<PgaRequest, CliError> {
+        let min = acceleration_option("min", &self.min)?;
+        let max = acceleration_option("max", &self.max)?;
+        let resolution = match (&self.resolution, scan_points) {
+            (Some(text), _) => Some(acceleration_option("resolution", text)?),
+            (None, Some(_)) => None,
+            (None, None) => Some(default_resolution(min, max)),
+        };
         Ok(PgaRequest {
             criteria,
             combine,
-            min: acceleration_option("min", &self.min)?,
-            max: acceleration_option("max", &self.max)?,
+            min,
+            max,
             tolerance: acceleration_option("tolerance", &self.tolerance)?,
-            scan_points,
+            scan_points: scan_points.unwrap_or(DEFAULT_SCAN_POINTS),
+            resolution,
             scan,
         })
     }

@@ -75,11 +75,11 @@ pub struct PgaArgs {
     /// `--min`, `--max`, `--tolerance`: the amplitude range, shared with `site`.
     #[command(flatten)]
     pub range: RangeArgs,
-    /// Scan points over [min, max] before the refinement; their spacing is the search's
-    /// resolution (failing intervals narrower than it may be missed): 40 gives 0.49 m/s²
-    /// over the default range (docs/pga.md).
-    #[arg(long, default_value_t = 40)]
-    pub scan_points: usize,
+    /// Scan points over [min, max] instead of `--resolution`: the resolution asked is then
+    /// their spacing (max − min)/(N − 1), rounded down to the lattice (docs/pga.md); two
+    /// searches share their answer only when they share the lattice.
+    #[arg(long)]
+    pub scan_points: Option<usize>,
     /// `full`: run every scan point (`monotonic` and `failing_intervals` cover the range);
     /// `lowest`: ascending batches of the pool's threads, stopping at the first batch with a
     /// failure (same answer when nothing changes above it; far fewer slow strong-motion runs on

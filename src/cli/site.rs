@@ -10,6 +10,11 @@ use crate::analysis::run::RunOptions;
 use crate::motion::UnitsArg;
 use std::path::PathBuf;
 
+/// Scan points of a site analysis's searches when neither `--scan-points` nor `--resolution`
+/// is given: each observation is a search per record, so the scan is kept coarse (8, as
+/// before the lattice; docs/observations.md).
+const SITE_SCAN_POINTS: usize = 8;
+
 #[derive(Debug, clap::Args)]
 pub struct SiteArgs {
     /// Scene file (ashlar.scene/1 JSON).
@@ -33,9 +38,10 @@ pub struct SiteArgs {
     /// `--min`, `--max`, `--tolerance`: the searched range, as for `pga`.
     #[command(flatten)]
     pub range: RangeArgs,
-    /// Coarse scan points before bisection.
-    #[arg(long, default_value_t = 8)]
-    pub scan_points: usize,
+    /// Scan points over the range instead of `--resolution` (default 8 when neither is given),
+    /// as for `pga`.
+    #[arg(long)]
+    pub scan_points: Option<usize>,
 }
 
 pub fn run(args: &SiteArgs) -> Result<(), CliError> {
@@ -58,7 +64,8 @@ pub fn run(args: &SiteArgs) -> Result<(), CliError> {
     let base = args.range.request(
         Vec::new(),
         Combine::All,
-        args.scan_points,
+        args.scan_points
+            .or(args.range.resolution.is_none().then_some(SITE_SCAN_POINTS)),
         crate::analysis::pga::ScanOrder::Full,
     )?;
     let mut scene = load_scene(&args.scene)?;

@@ -265,10 +265,15 @@ fn run_pga_takes_explicit_units_and_refuses_bare_numbers() {
     let r = read(&dir.join("g/result.json"));
     assert_eq!(r["units"], "m/s2");
     let runs = r["runs"].as_array().expect("runs");
+    // 4 scan points over 0.2–1 g ask for 0.267 g; the lattice is the tolerance 0.02 g × 2³ =
+    // 0.16 g = 1.569064 m/s², so the scan starts at floor(0.2 g / 0.16 g) × 0.16 g.
+    let h = 0.02 * 9.80665 * 8.0;
+    let resolution = r["resolution"].as_f64().expect("resolution");
+    assert!((resolution / h - 1.0).abs() < 1e-12, "{resolution} vs {h}");
     assert!(
         runs.iter()
-            .any(|x| (x["pga"].as_f64().expect("pga") - 0.2 * 9.80665).abs() < 1e-12),
-        "the scan starts at --min 0.2g = 1.96133 m/s²: {runs:?}"
+            .any(|x| (x["pga"].as_f64().expect("pga") - h).abs() < 1e-12),
+        "the scan starts at 0.16 g = 1.569064 m/s²: {runs:?}"
     );
     std::fs::remove_dir_all(&dir).ok();
 }

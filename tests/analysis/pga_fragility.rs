@@ -237,6 +237,7 @@ fn multi_record_search_fits_the_records_capacities() {
         max: 10.0,
         tolerance: 0.05,
         scan_points: 6,
+        resolution: None,
         scan: ashlar::analysis::pga::ScanOrder::Full,
     };
     let r = search_records(

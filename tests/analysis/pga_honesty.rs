@@ -127,6 +127,7 @@ fn full_runs_at_the_bracket_ends_agree_with_the_bracket() {
                 max: 25.0,
                 tolerance: 0.05,
                 scan_points: 6,
+                resolution: None,
                 scan: ashlar::analysis::pga::ScanOrder::Full,
             };
             let r = search(scene, gm, &req, &RunOptions::default()).expect("search");

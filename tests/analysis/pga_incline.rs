@@ -59,6 +59,7 @@ fn displacement_threshold_matches_newmark_bisection() {
         max: 5.0,
         tolerance: 0.01,
         scan_points: 8,
+        resolution: None,
         scan: ashlar::analysis::pga::ScanOrder::Full,
     };
     let unit = sine(1.0, F);

@@ -52,6 +52,7 @@ fn bracket_contains_housner_and_is_honest(scene: &ashlar::scene::Scene) {
         max: 10.0,
         tolerance: 0.01,
         scan_points: 8,
+        resolution: None,
         scan: ashlar::analysis::pga::ScanOrder::Full,
     };
     let r = search(scene, &pulse, &req, &RunOptions::default()).expect("search");
@@ -90,6 +91,7 @@ fn negated_criterion_bounds_from_above_and_bad_requests_are_named() {
         max: 2.0,
         tolerance: 0.1,
         scan_points: 4,
+        resolution: None,
         scan: ashlar::analysis::pga::ScanOrder::Full,
     };
     let e = search(&scene, &pulse, &bad, &RunOptions::default()).expect_err("unknown block");

@@ -182,6 +182,7 @@ fn site_distribution_of_one_observation_reduces_to_its_lognormal_fragility() {
         max,
         tolerance: 0.01,
         scan_points: 8,
+        resolution: None,
         scan: ashlar::analysis::pga::ScanOrder::Full,
     };
     let records: Vec<RecordResult> = caps

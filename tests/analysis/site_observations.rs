@@ -53,6 +53,7 @@ fn request() -> PgaRequest {
         max: 12.0,
         tolerance: 0.02,
         scan_points: 6,
+        resolution: None,
         scan: ashlar::analysis::pga::ScanOrder::Full,
     }
 }

@@ -114,6 +114,7 @@ async fn a_site_analysis_runs_as_a_job_and_matches_the_library() {
         max: 14.0,
         tolerance: 0.25,
         scan_points: 4,
+        resolution: None,
         scan: ashlar::analysis::pga::ScanOrder::Full,
     };
     let direct = site_analysis(&scene, &records, &observations, &base, &Default::default())

@@ -373,6 +373,9 @@ impl From<RequestError> for ApiError {
             | E::RangeOrder { .. }
             | E::Tolerance
             | E::ScanPoints { .. }
+            | E::Resolution
+            | E::ResolutionPoints { .. }
+            | E::ResolutionAndScanPoints
             | E::NoObservations
             | E::ObservationArray { .. } => {
                 (unprocessable, "invalid-field", "Request field is invalid")

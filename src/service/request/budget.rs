@@ -421,12 +421,14 @@ pub fn check_run_work(
     Ok(())
 }
 
-/// Runs a PGA search makes at most: per record, the coarse scan and the bisection of one
-/// bracket down to the tolerance.
-pub fn search_runs(records: usize, scan_points: usize, span: f64, tolerance: f64) -> f64 {
-    let bracket = span / (scan_points.max(2) - 1) as f64;
-    let bisections = (bracket / tolerance).max(1.0).log2().ceil().max(0.0);
-    records.max(1) as f64 * (scan_points as f64 + bisections)
+/// Runs a PGA search makes on one core: per record, the scan of its lattice and the k-section
+/// of one lattice cell down to the tolerance (k − 1 runs a level; the runs evaluated ahead on
+/// more cores are not counted, as before).
+pub fn search_runs(records: usize, request: &crate::analysis::pga::PgaRequest) -> f64 {
+    use crate::analysis::pga::{Lattice, SECTIONS};
+    let lattice = Lattice::of(request);
+    let refinement = f64::from(lattice.levels) * (SECTIONS - 1) as f64;
+    records.max(1) as f64 * (lattice.points() as f64 + refinement)
 }
 
 /// The work of a search: runs × blocks × steps within `--max-search-block-steps`.
@@ -503,8 +505,20 @@ mod tests {
 
     #[test]
     fn search_runs_count_scan_and_bisection() {
-        // 8 points over 0..7 → brackets of 1; tolerance 1/8 → 3 bisections.
-        assert_eq!(search_runs(1, 8, 7.0, 0.125), 11.0);
-        assert_eq!(search_runs(100, 64, 10.0, 0.1), 100.0 * (64.0 + 1.0));
+        use crate::analysis::pga::PgaRequest;
+        let req = |max: f64, tolerance: f64, scan_points: usize| PgaRequest {
+            min: 0.0,
+            max,
+            tolerance,
+            scan_points,
+            resolution: None,
+            ..PgaRequest::cli_default(Vec::new())
+        };
+        // 8 points over 0..7 → a lattice of 1 = 0.125 × 2³: 8 points, then 2 trisections (1/9 ≤
+        // 0.125) of 2 runs each.
+        assert_eq!(search_runs(1, &req(7.0, 0.125, 8)), 12.0);
+        // 64 points over 0..10 ask for 0.159; the lattice rounds down to the tolerance 0.1
+        // (no refinement) and holds 101 points: the budget counts the lattice, not the asked.
+        assert_eq!(search_runs(100, &req(10.0, 0.1, 64)), 100.0 * 101.0);
     }
 }

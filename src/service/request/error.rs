@@ -273,6 +273,13 @@ pub enum RequestError {
     Tolerance,
     #[error("/scan_points: must lie in 2..={limit}, got {got}")]
     ScanPoints { got: usize, limit: usize },
+    #[error("/resolution: must be a finite amplitude > 0")]
+    Resolution,
+    /// The scan points a resolution asks for over the range (span / resolution + 1).
+    #[error("/resolution: the range needs {got} scan points at this resolution, more than the server's limit of {limit} (max_scan_points): ask for a coarser resolution or a narrower range")]
+    ResolutionPoints { got: usize, limit: usize },
+    #[error("/resolution: give resolution or scan_points, not both")]
+    ResolutionAndScanPoints,
     #[error(
         "/observations: give a non-empty array of {{\"criterion\": …, \"observed\": true|false}}"
     )]
@@ -323,6 +330,9 @@ impl RequestError {
             E::Frames { .. } | E::RunOutput { .. } => p("/scene/control/output_interval"),
             E::RunWork { .. } => p("/scene"),
             E::SearchWork { .. } | E::ScanPoints { .. } => p("/scan_points"),
+            E::Resolution | E::ResolutionPoints { .. } | E::ResolutionAndScanPoints => {
+                p("/resolution")
+            }
             E::NotFreeBlocks { missing } => missing.first().map(|(p, _)| p.clone()),
             E::RecordName { index } | E::DuplicateRecord { index, .. } => {
                 Some(format!("/motions/{index}/name"))

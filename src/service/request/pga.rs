@@ -4,7 +4,7 @@ use super::RequestError;
 use super::{motion_summary, parse_criteria, scene_and_motion, typed, JobInput, Limits, Parsed};
 use crate::analysis::fragility::Method;
 use crate::analysis::pga::Criterion;
-use crate::analysis::pga::{Combine, PgaRequest, ScanOrder};
+use crate::analysis::pga::{default_resolution, Combine, PgaRequest, ScanOrder};
 use crate::motion::GroundMotion;
 use crate::motion::{Amplitude, Units};
 use crate::scene::Scene;
@@ -46,15 +46,18 @@ struct PgaBody {
     tolerance: Option<Amplitude>,
     #[serde(default)]
     scan_points: Option<usize>,
+    /// A number in `range.units`, or a string with its own units ("0.05g"): the scan
+    /// resolution asked for (instead of `scan_points`; default [`default_resolution`]).
+    #[serde(default)]
+    resolution: Option<Amplitude>,
     /// `"full"` or `"lowest"` ([`ScanOrder`]).
     #[serde(default)]
     scan: Option<String>,
 }
 
-/// Scan points of a PGA search when the request does not say (as `ashlar pga`): 40 puts
-/// them 0.49 m/s² apart over 0.05–2 g, finer than the failing intervals of a rocking column
-/// under the bundled records (docs/pga.md); the search reports this resolution.
-pub const DEFAULT_SCAN_POINTS: usize = 40;
+/// Scan points of a PGA search over a wide range that asks for neither a resolution nor scan
+/// points (as `ashlar pga`; [`crate::analysis::pga::default_resolution`]).
+pub const DEFAULT_SCAN_POINTS: usize = crate::analysis::pga::DEFAULT_SCAN_POINTS;
 
 /// Records of one multi-record search: 100 is more than any fragility study uses (FEMA P695
 /// has 44), and bounds one job to 100 searches; the body-size limit bounds their samples.
@@ -153,28 +156,25 @@ pub fn parse_pga(body: &Value, limits: &Limits) -> Result<Parsed, RequestError> 
         parse_criteria(&b.criterion, "/criterion", &scene)?
             .into_iter()
             .unzip();
-    let (min, max, tolerance, scan_points) =
-        search_range(&b.range, b.tolerance.as_ref(), b.scan_points, limits)?;
-    let runs = crate::service::request::budget::search_runs(
-        records.len(),
-        scan_points,
-        max - min,
-        tolerance,
-    );
+    let range = search_range(
+        &b.range,
+        b.tolerance.as_ref(),
+        b.scan_points,
+        b.resolution.as_ref(),
+        limits,
+    )?;
+    let request = PgaRequest {
+        criteria,
+        combine,
+        scan,
+        ..range
+    };
+    let runs = crate::service::request::budget::search_runs(records.len(), &request);
     let motions = records
         .iter()
         .map(|(_, m)| m)
         .chain(std::iter::once(&motion));
     check_records_work(&scene, motions, runs, limits)?;
-    let request = PgaRequest {
-        criteria,
-        combine,
-        min,
-        max,
-        tolerance,
-        scan_points,
-        scan,
-    };
     let motion_summary = summary_with_records(&motion, &records);
     let joined = texts.join(",");
     let criterion = match combine {
@@ -228,14 +228,18 @@ pub(super) fn summary_with_records(
     summary
 }
 
-/// The searched range of a request (`range`, `tolerance`, `scan_points`), amplitudes in m/s²:
-/// (min, max, tolerance, scan points), each error naming its field.
+/// The searched range of a request (`range`, `tolerance`, `scan_points`, `resolution`),
+/// amplitudes in m/s²: a request with no criterion and a full scan, each error naming its
+/// field. The resolution asked for: `resolution`, else that of `scan_points`, else
+/// [`default_resolution`]; the scan points it asks for (span / resolution + 1) within
+/// `max_scan_points` (the lattice may hold up to twice as many, which the work budget counts).
 pub(super) fn search_range(
     range: &RangeSpec,
     tolerance: Option<&Amplitude>,
     scan_points: Option<usize>,
+    resolution: Option<&Amplitude>,
     limits: &Limits,
-) -> Result<(f64, f64, f64, usize), RequestError> {
+) -> Result<PgaRequest, RequestError> {
     // Amplitudes in m/s² from here on.
     let units = range.units;
     let amplitude = |a: &Amplitude, p: &str| {
@@ -257,6 +261,18 @@ pub(super) fn search_range(
     if !(tolerance.is_finite() && tolerance > 0.0) {
         return Err(RequestError::Tolerance);
     }
+    let resolution = match (resolution, scan_points) {
+        (Some(_), Some(_)) => return Err(RequestError::ResolutionAndScanPoints),
+        (Some(r), None) => {
+            let r = amplitude(r, "/resolution")?;
+            if !(r.is_finite() && r > 0.0) {
+                return Err(RequestError::Resolution);
+            }
+            Some(r)
+        }
+        (None, Some(_)) => None,
+        (None, None) => Some(default_resolution(min, max)),
+    };
     let scan_points = scan_points.unwrap_or(DEFAULT_SCAN_POINTS);
     if !(2..=limits.max_scan_points).contains(&scan_points) {
         return Err(RequestError::ScanPoints {
@@ -264,5 +280,91 @@ pub(super) fn search_range(
             limit: limits.max_scan_points,
         });
     }
-    Ok((min, max, tolerance, scan_points))
+    if let Some(r) = resolution {
+        // The points asked for, within a part in 10⁹ (a span that is a multiple of `r`).
+        let asked = ((max - min) / r * (1.0 - 1e-9)).ceil() + 1.0;
+        if asked > limits.max_scan_points as f64 {
+            return Err(RequestError::ResolutionPoints {
+                got: asked.min(usize::MAX as f64) as usize,
+                limit: limits.max_scan_points,
+            });
+        }
+    }
+    Ok(PgaRequest {
+        criteria: Vec::new(),
+        combine: Combine::All,
+        min,
+        max,
+        tolerance,
+        scan_points,
+        resolution,
+        scan: ScanOrder::Full,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn range(body: Value) -> Result<PgaRequest, RequestError> {
+        #[derive(Deserialize)]
+        struct Body {
+            range: RangeSpec,
+            #[serde(default)]
+            tolerance: Option<Amplitude>,
+            #[serde(default)]
+            scan_points: Option<usize>,
+            #[serde(default)]
+            resolution: Option<Amplitude>,
+        }
+        let b: Body = serde_json::from_value(body).expect("body");
+        search_range(
+            &b.range,
+            b.tolerance.as_ref(),
+            b.scan_points,
+            b.resolution.as_ref(),
+            &Limits::default(),
+        )
+    }
+
+    #[test]
+    fn the_resolution_is_asked_for_or_defaulted_and_checked() {
+        let r = |extra: Value| {
+            let mut b = serde_json::json!({"range": {"min": 0.05, "max": 2.0, "units": "g"},
+                                           "tolerance": 0.01});
+            if let (Some(o), Value::Object(e)) = (b.as_object_mut(), extra) {
+                o.extend(e);
+            }
+            range(b)
+        };
+        // Neither: the default resolution (0.64 m/s² over a range narrower than 25 m/s²).
+        let d = r(serde_json::json!({})).expect("default");
+        assert_eq!(d.resolution, Some(crate::analysis::pga::DEFAULT_RESOLUTION));
+        // In the range's units, or with its own.
+        let g = r(serde_json::json!({"resolution": 0.05})).expect("in g");
+        assert_eq!(g.resolution, Some(0.05 * crate::motion::STANDARD_GRAVITY));
+        let own = r(serde_json::json!({"resolution": "0.32m/s2"})).expect("with units");
+        assert_eq!(own.resolution, Some(0.32));
+        // Scan points instead: the resolution follows from them.
+        let n = r(serde_json::json!({"scan_points": 12})).expect("points");
+        assert_eq!((n.resolution, n.scan_points), (None, 12));
+        for (extra, want) in [
+            (
+                serde_json::json!({"resolution": 0.5, "scan_points": 8}),
+                "not both",
+            ),
+            (serde_json::json!({"resolution": 0}), "> 0"),
+            // 19.1 m/s² at 0.1 m/s² asks for 193 points, over the default limit of 64.
+            (
+                serde_json::json!({"resolution": "0.1m/s2"}),
+                "193 scan points",
+            ),
+        ] {
+            let text = r(extra).expect_err("refused").to_string();
+            assert!(
+                text.starts_with("/resolution") && text.contains(want),
+                "{text}"
+            );
+        }
+    }
 }

@@ -4,7 +4,6 @@ use super::pga::{
 };
 use super::RequestError;
 use super::{parse_criteria, typed, JobInput, Limits, Parsed};
-use crate::analysis::pga::{Combine, PgaRequest};
 use crate::motion::Amplitude;
 use serde::Deserialize;
 use serde_json::Value;
@@ -21,6 +20,9 @@ struct SiteBody {
     tolerance: Option<Amplitude>,
     #[serde(default)]
     scan_points: Option<usize>,
+    /// The scan resolution asked for, as a search's.
+    #[serde(default)]
+    resolution: Option<Amplitude>,
 }
 
 /// One observation of a site analysis: a criterion and whether its damage was seen.
@@ -68,16 +70,16 @@ pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, RequestError>
             observed: spec.observed,
         });
     }
-    let (min, max, tolerance, scan_points) =
-        search_range(&b.range, b.tolerance.as_ref(), b.scan_points, limits)?;
+    let request = search_range(
+        &b.range,
+        b.tolerance.as_ref(),
+        b.scan_points,
+        b.resolution.as_ref(),
+        limits,
+    )?;
     // Each observation is one search per record.
     let runs = observations.len() as f64
-        * crate::service::request::budget::search_runs(
-            records.len(),
-            scan_points,
-            max - min,
-            tolerance,
-        );
+        * crate::service::request::budget::search_runs(records.len(), &request);
     check_records_work(&scene, records.iter().map(|(_, m)| m), runs, limits)?;
     let motion = records[0].1.clone();
     let motion_summary = summary_with_records(&motion, &records);
@@ -87,15 +89,7 @@ pub fn parse_site(body: &Value, limits: &Limits) -> Result<Parsed, RequestError>
             motion,
             records,
             observations,
-            request: PgaRequest {
-                criteria: Vec::new(),
-                combine: Combine::All,
-                min,
-                max,
-                tolerance,
-                scan_points,
-                scan: crate::analysis::pga::ScanOrder::Full,
-            },
+            request,
         },
         motion_summary,
     })
