@@ -2,7 +2,8 @@
 //! default, the unconverged floor and the tight run by verdict (docs/contact-solve.md §26).
 //!
 //! `cargo run --release --example collapse_verdicts -- --scene WALL.json --record FILE --pga G
-//!  --block ID --variant default|floor:R|floor-hold:R|tight [--duration S] [--limit S]`
+//!  --block ID --variant default|floor:R|floor-hold:R|tight [--duration S] [--limit S]
+//!  [--floor-penetration F] [--floor-iterations N]`
 //!
 //! `--scene`: a scene file (`ashlar scene wall --set length=6 --set height=3 --set openings=0`).
 //! `--record`: a record of `data/ground-motions`, scaled to `--pga` g. `--variant`: `default`
@@ -11,6 +12,8 @@
 //! Δt 1e-4 s, the legacy open–close loop to 200 iterations). The run stops once the block has
 //! fallen (|rotation| > 60°, as `ashlar pga` decides) or at its end (`--duration`, default the
 //! record + 2 s, then the run-end extension); `--limit S` cancels it after S s of wall time.
+//! The floor variants take session 39's penetration bound and iteration cap (§28) unless
+//! `--floor-penetration inf --floor-iterations 0` (session 38's floor).
 //! One line: the verdict (|final rotation| > 30°), the failure mode, the first frame time with
 //! |rotation| > 30°, how many free blocks toppled and the first frame any did, steps, cuts, min Δt, max penetration, where and why the run ended, its
 //! wall time (CPU: run it under `/usr/bin/time`).
@@ -63,6 +66,16 @@ fn main() {
             variant, "default",
             "--variant default|floor:R|floor-hold:R|tight"
         );
+    }
+    // `--floor-penetration F`, `--floor-iterations N`: the floor's penetration bound and its
+    // iteration limit (`SimParams::unconverged_floor_penetration`, `…_iterations`, §28; 0: the
+    // loop's own limit).
+    if let Some(f) = arg("--floor-penetration") {
+        params.unconverged_floor_penetration = f.parse().expect("--floor-penetration");
+    }
+    if let Some(n) = arg("--floor-iterations") {
+        let n: usize = n.parse().expect("--floor-iterations");
+        params.unconverged_floor_iterations = (n > 0).then_some(n);
     }
     if let Some(d) = arg("--duration") {
         scene.control.duration = Some(d.parse().expect("--duration"));

@@ -26,7 +26,8 @@
 //!  [--relax faer|none|wide] [--dissection-leaf N] [--start-check K] [--start-check-audit]
 //!  [--digest] [--no-settle] [--settle-max S] [--lead-in S] [--motions …,sine3]
 //!  [--wall-set length=12,height=6,openings=0] [--record FILE] [--pga G] [--window S]
-//!  [--unconverged-floor R] [--floor-hold on|off] [--min-located R] [--growth G]`
+//!  [--unconverged-floor R] [--floor-hold on|off] [--floor-penetration F]
+//!  [--floor-iterations N] [--min-located R] [--growth G]`
 //!
 //! `--wall-set`, `--record`/`--pga`, `--window S` (a line of counters every S simulated
 //! seconds) and the knobs `--unconverged-floor`, `--min-located`, `--growth` are the wall shaken
@@ -236,7 +237,7 @@ fn window_line(sim: &Simulation, w: &WindowStart) {
         .collect();
     let secs = |a: std::time::Duration, b: std::time::Duration| (a - b).as_secs_f64();
     eprintln!(
-        "  window {:.2}–{:.2} s: steps {}, Δt mean {:.2e} min {:.2e}, cuts {} (unconverged {}, moved {}, overshot {}, bound {}), taken unconverged {}, located steps {}, impacts {}, solves/step {:.2}, factorizations/step {:.2}, closing-limited {}, contacts locked {} sliding {} open {} corner {}, moving {} (>1 cm/s), displaced {} (>1 cm), largest drop {:.3} m rise {:.2e} m, gravity energy {:.6e} J, springs {:.3e} J, max penetration {:.2e} m, wall {:.1} s (detect {:.1}, assemble {:.1}, solve {:.1}, integrate {:.1}), changes by kind {:?}",
+        "  window {:.2}–{:.2} s: steps {}, Δt mean {:.2e} min {:.2e}, cuts {} (unconverged {}, moved {}, overshot {}, bound {}), taken unconverged {} (refused by the penetration bound {}), located steps {}, impacts {}, solves/step {:.2}, factorizations/step {:.2}, closing-limited {}, contacts locked {} sliding {} open {} corner {}, moving {} (>1 cm/s), displaced {} (>1 cm), largest drop {:.3} m rise {:.2e} m, gravity energy {:.6e} J, springs {:.3e} J, max penetration {:.2e} m, wall {:.1} s (detect {:.1}, assemble {:.1}, solve {:.1}, integrate {:.1}), changes by kind {:?}",
         w.time,
         sim.time(),
         s.steps - w.stats.steps,
@@ -248,6 +249,7 @@ fn window_line(sim: &Simulation, w: &WindowStart) {
         r[2] - w.refusals[2],
         r[3] - w.refusals[3],
         s.unconverged_taken - w.stats.unconverged_taken,
+        s.unconverged_floor_refused - w.stats.unconverged_floor_refused,
         s.located_steps - w.stats.located_steps,
         s.impacts - w.stats.impacts,
         (s.open_close_iterations - w.stats.open_close_iterations) as f64 / steps,
@@ -651,6 +653,17 @@ fn main() {
             // (`SimParams::unconverged_floor_hold`, §26).
             if let Some(v) = arg("--floor-hold") {
                 params.unconverged_floor_hold = v == "on";
+            }
+            // `--floor-penetration F`: the floor's penetration bound in elastic ranges
+            // (`SimParams::unconverged_floor_penetration`, §28; infinite: no bound).
+            if let Some(v) = arg("--floor-penetration") {
+                params.unconverged_floor_penetration = v.parse().expect("--floor-penetration");
+            }
+            // `--floor-iterations N`: the loop's iteration limit at the floor
+            // (`SimParams::unconverged_floor_iterations`, §28; 0: none, the loop's own).
+            if let Some(v) = arg("--floor-iterations") {
+                let n: usize = v.parse().expect("--floor-iterations");
+                params.unconverged_floor_iterations = (n > 0).then_some(n);
             }
             // `--min-located R`: no impact located sooner than R × Δt
             // (`ImpactParams::min_located_ratio`, §24).

@@ -88,6 +88,31 @@ impl Simulation {
         (limit / w).max(10.0 * self.params.min_dt)
     }
 
+    /// The first closed contact an unconverged iterate leaves deeper than the floor's bound
+    /// (`SimParams::unconverged_floor_penetration`): the deepest penetration a converged step
+    /// has left so far, `start` (the deepest contact closed at this step's start, m), or
+    /// `unconverged_floor_penetration` × the contact's elastic range W/k_n (m; W the lighter
+    /// free stone's weight), whichever is deepest. `None`: within the bound.
+    pub(super) fn floor_penetration_exceeded(&self, start: f64) -> Option<usize> {
+        let contacts = &self.state.contacts.contacts;
+        let deepest = start.max(self.stepper.converged_penetration);
+        let k = self.stepper.springs.normal;
+        let weight = &self.stepper.system.weight;
+        let free = &self.state.dofs.free_index;
+        let factor = self.params.unconverged_floor_penetration;
+        contacts.iter().position(|c| {
+            if !c.state.is_closed() || -c.gap <= deepest {
+                return false;
+            }
+            // The lighter free stone's weight (a fixed or driven block has none of its own).
+            let w = [c.vertex_block, c.edge_block]
+                .iter()
+                .filter_map(|&b| free[b].and_then(|f| weight.get(f).copied()))
+                .fold(f64::INFINITY, f64::min);
+            w.is_finite() && k > 0.0 && -c.gap > factor * w / k
+        })
+    }
+
     /// The longest step the rocking control allows (`SimParams::rocking_velocity_change`, adaptive
     /// runs only; infinite without it): for each free block in a rocking episode (recent peak
     /// angular speed Ω above `rocking_speed_floor`, and a pivot seen: see

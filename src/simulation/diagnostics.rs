@@ -47,6 +47,10 @@ pub struct Stats {
     /// Steps taken at `SimParams::unconverged_floor_ratio` with the open–close loop's last
     /// iterate, unconverged.
     pub unconverged_taken: u64,
+    /// Unconverged iterates at or below the floor that the step checks accepted but the
+    /// floor's penetration bound (`SimParams::unconverged_floor_penetration`) refused; each
+    /// cut the step below the floor.
+    pub unconverged_floor_refused: u64,
     /// Steps the impact law's event location ended early (before a predicted impact).
     pub located_steps: u64,
 }

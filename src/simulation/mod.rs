@@ -163,11 +163,32 @@ impl Simulation {
         self.state.start_states.clone_from(&self.state.states);
         self.stepper.taken_unconverged = false;
         let mut cuts = 0u32;
+        let floor = self.unconverged_floor();
+        // Once the floor's penetration bound refused an iterate, this step is cut below the
+        // floor like any non-converging step (no clamp to the floor).
+        let mut below_floor = false;
+        // The deepest contact closed at the step's start (m), read by the floor's bound: a
+        // candidate contact that is not closed may have a negative gap without touching (its
+        // vertex behind the edge's line, beyond the edge), so open ones are left out.
+        let start_depth = if floor > 0.0 {
+            self.state
+                .contacts
+                .contacts
+                .iter()
+                .filter(|c| c.state.is_closed())
+                .map(|c| -c.g0)
+                .fold(0.0, f64::max)
+        } else {
+            0.0
+        };
         loop {
             self.assemble(dt);
             let t2 = Instant::now();
+            let at_floor = dt <= floor * (1.0 + self.params.unconverged_floor_tolerance);
             let refusal = match self.state.scene.control.contact_solver {
-                ContactSolver::Penalty => match self.open_close()? {
+                // The iteration cap is the floor's; below it (after the bound refused an
+                // iterate) the loop runs as without the floor.
+                ContactSolver::Penalty => match self.open_close(at_floor && !below_floor)? {
                     OpenClose::Converged { .. } => self.check_step(dt),
                     OpenClose::NotConverged { contact, .. } => Some(Refusal::Unconverged(contact)),
                 },
@@ -180,19 +201,24 @@ impl Simulation {
             };
             self.stepper.profile.solve += t2.elapsed();
             // At the floor of `unconverged_floor_ratio`, an unconverged loop's last iterate is
-            // taken if the step's other checks accept it.
-            let floor = self.unconverged_floor();
+            // taken if the step's other checks accept it and it leaves no contact deeper than
+            // the floor's penetration bound.
             let refusal = match refusal {
-                Some(Refusal::Unconverged(_))
-                    if dt <= floor * (1.0 + self.params.unconverged_floor_tolerance) =>
-                {
-                    let r = self.check_step(dt);
-                    if r.is_none() {
-                        self.stepper.stats.unconverged_taken += 1;
-                        self.stepper.taken_unconverged = true;
-                    }
-                    r
-                }
+                Some(Refusal::Unconverged(_)) if at_floor => match self.check_step(dt) {
+                    None => match self.floor_penetration_exceeded(start_depth) {
+                        None => {
+                            self.stepper.stats.unconverged_taken += 1;
+                            self.stepper.taken_unconverged = true;
+                            None
+                        }
+                        Some(k) => {
+                            self.stepper.stats.unconverged_floor_refused += 1;
+                            below_floor = true;
+                            Some(Refusal::Unconverged(Some(k)))
+                        }
+                    },
+                    r => r,
+                },
                 r => r,
             };
             let Some(refusal) = refusal else { break };
@@ -214,7 +240,7 @@ impl Simulation {
                 return Err(self.refused(cuts, dt, refusal));
             }
             dt *= refusal.factor(self.params.cut_factor);
-            if matches!(refusal, Refusal::Unconverged(_)) {
+            if matches!(refusal, Refusal::Unconverged(_)) && !below_floor {
                 dt = dt.max(floor);
             }
             self.state.states.clone_from(&self.state.start_states);

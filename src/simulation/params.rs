@@ -49,6 +49,29 @@ pub struct SimParams {
     /// by `growth`, which fails again and is cut back to the floor (two loops run to their
     /// limit for one step). `false`: as after any step.
     pub unconverged_floor_hold: bool,
+    /// With `unconverged_floor_ratio`: the bound on what an unconverged iterate taken at (or
+    /// below) the floor may leave in any closed contact. Its depth may not exceed the deepest
+    /// penetration a converged step of the run has left so far, nor the deepest contact closed
+    /// at the step's start, nor this many elastic ranges δ = W/k_n of the contact (W the
+    /// weight of the lighter free stone of the pair, N; k_n the normal spring, N/m; δ in m),
+    /// whichever is deepest. Beyond it the iterate is refused and the step is cut below the
+    /// floor (by `cut_factor`, as a non-converging step without a floor), where an iterate is
+    /// again taken only within the bound. Why: the step checks bound a penetration's growth
+    /// within a step (`penetration_ratio`), not its depth, so a run of taken iterates sank the
+    /// colonnade's falling capital into a drum step by step to the contact search distance
+    /// (docs/contact-solve.md §28), where converged steps' springs hold it. With the bound,
+    /// taken iterates never leave a contact deeper than converged steps have. 2: the δ term
+    /// only matters before any contact has carried load (a stone on one corner sinks by δ);
+    /// infinite turns the bound off (session 38's floor).
+    pub unconverged_floor_penetration: f64,
+    /// With `unconverged_floor_ratio`: the open–close loop's iteration limit for a step at the
+    /// floor (`None`: `OpenCloseParams::max_iterations`, as above the floor). A step at the
+    /// floor that does not converge within it is taken there anyway (within the checks and the
+    /// penetration bound above), so the iterations beyond it buy nothing when the loop does not
+    /// converge at any Δt (docs/contact-solve.md §24, §26: ~20–30 solves a step at the floor).
+    /// Below the floor, after the penetration bound refused an iterate, the loop runs to its
+    /// full limit as without a floor.
+    pub unconverged_floor_iterations: Option<usize>,
     /// Smallest Δt (s) a cut may reach: below it the step fails with a typed diagnostic (a
     /// run crawling at nanosecond steps is a hang, not an answer).
     pub min_dt: f64,
@@ -173,6 +196,12 @@ impl Default for SimParams {
             // 1.0 g (docs/contact-solve.md §26), 24 % fewer solves over the collapse window and,
             // over the whole record, the same verdict with 2,552 cuts instead of 8,064.
             unconverged_floor_hold: true,
+            // Acts only with a floor; measured in docs/contact-solve.md §28.
+            unconverged_floor_penetration: 2.0,
+            // 10 (acts only with a floor), measured in docs/contact-solve.md §28 on the 105-stone
+            // wall under Northridge: −39 % solves over §24's window against the loop's full 20,
+            // the same verdicts at 0.8 and 1.0 g with −16 % / −31 % CPU.
+            unconverged_floor_iterations: Some(10),
             gap_tolerance_ratio: 1e-10,
             max_penetration_ratio: 0.05,
             // Off: measured on Friuli (docs/accuracy-vs-speed.md, "Records"), locating impacts to

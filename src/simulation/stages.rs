@@ -10,7 +10,7 @@ use crate::contact::{ContactState, Mobility};
 use crate::integrate;
 use crate::scene::Excitation;
 use crate::solve::dual::{DualInput, DualOutcome};
-use crate::solve::open_close::{self, OpenClose};
+use crate::solve::open_close::{self, OpenClose, OpenCloseParams};
 use std::time::Instant;
 
 impl Simulation {
@@ -191,7 +191,25 @@ impl Simulation {
         [(v1[0] - v0[0]) / dt, (v1[1] - v0[1]) / dt]
     }
 
-    pub(super) fn open_close(&mut self) -> Result<OpenClose, SimError> {
+    /// The open–close loop on the assembled step (`at_floor`: the step is at the unconverged
+    /// floor, where `SimParams::unconverged_floor_iterations` may cap it).
+    pub(super) fn open_close(&mut self, at_floor: bool) -> Result<OpenClose, SimError> {
+        // At the floor the loop may stop earlier (`SimParams::unconverged_floor_iterations`).
+        let capped;
+        let params = match self
+            .params
+            .unconverged_floor_iterations
+            .filter(|_| at_floor)
+        {
+            Some(n) => {
+                capped = OpenCloseParams {
+                    max_iterations: n,
+                    ..self.params.open_close
+                };
+                &capped
+            }
+            None => &self.params.open_close,
+        };
         let r = open_close::iterate(
             &mut self.stepper.system,
             &self.state.dofs,
@@ -201,7 +219,7 @@ impl Simulation {
             &self.state.prescribed,
             &mut self.stepper.solver,
             &mut self.stepper.x,
-            &self.params.open_close,
+            params,
             &mut self.stepper.changes,
             &mut self.stepper.open_close_scratch,
         );
@@ -296,6 +314,7 @@ impl Simulation {
     /// Contact bookkeeping and time-step control after an accepted step.
     pub(super) fn finish_step(&mut self, dt: f64, cuts: u32, error: Option<f64>) {
         let shear = self.stepper.springs.shear;
+        let mut deepest = 0.0f64;
         for (c, law) in self
             .state
             .contacts
@@ -315,8 +334,12 @@ impl Simulation {
                 ContactState::Locked => {}
             }
             if c.state.is_closed() {
-                self.stepper.stats.max_penetration = self.stepper.stats.max_penetration.max(-c.gap);
+                deepest = deepest.max(-c.gap);
             }
+        }
+        self.stepper.stats.max_penetration = self.stepper.stats.max_penetration.max(deepest);
+        if !self.stepper.taken_unconverged {
+            self.stepper.converged_penetration = self.stepper.converged_penetration.max(deepest);
         }
         if let Some(o) = self.stepper.last_dual.filter(|o| o.loose) {
             self.stepper.stats.dual_loose_solves += 1;

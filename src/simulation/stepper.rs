@@ -56,6 +56,9 @@ pub(super) struct Stepper {
     /// The step being taken was taken with the open–close loop unconverged at the floor
     /// (`SimParams::unconverged_floor_ratio`); read by `unconverged_floor_hold`.
     pub(super) taken_unconverged: bool,
+    /// The deepest penetration of a closed contact that a converged step has left so far, m:
+    /// the floor's penetration bound (`SimParams::unconverged_floor_penetration`).
+    pub(super) converged_penetration: f64,
 }
 
 impl Stepper {
@@ -99,6 +102,7 @@ impl Stepper {
             impact_friction: Vec::new(),
             last_closing: (0, 0.0),
             taken_unconverged: false,
+            converged_penetration: 0.0,
         }
     }
 }

@@ -10,6 +10,7 @@ mod regression_contact_chatter;
 mod regression_dual_phantom_corner;
 mod regression_dual_tolerance_small_dt;
 mod regression_dual_trapezoidal;
+mod regression_floor_penetration;
 mod regression_handover_verdict;
 mod regression_pga_range;
 mod regression_phantom_penetration;
