@@ -433,6 +433,15 @@ fn control(c: &ControlSpec) -> Result<Control, SceneError> {
                 ),
             );
         }
+        if r > 0.0 && out.contact_solver == ContactSolver::Dual {
+            // An unconverged dual solve leaves no iterate to take (the engine ignores the
+            // floor there): say so rather than run something else than asked.
+            return err(
+                "control.unconverged_floor",
+                "applies only with contact_solver \"penalty\" (an unconverged dual solve has no \
+                 iterate to take); remove it or use the penalty solver",
+            );
+        }
         out.unconverged_floor = Some(r);
     }
     if let Some(r) = c.restitution {
@@ -817,8 +826,8 @@ mod tests {
         }
     }
 
-    /// `control.unconverged_floor`: a fraction of `time_step` in [0, 1] (0: no floor), taken
-    /// with either contact solver; unset stays unset (the engine's default).
+    /// `control.unconverged_floor`: a fraction of `time_step` in [0, 1] (0: no floor), with
+    /// the penalty solver only; unset stays unset (the engine's default).
     #[test]
     fn unconverged_floor_is_checked_by_name() {
         for r in [0.0, 0.1, 1.0] {
@@ -836,5 +845,19 @@ mod tests {
                 "{bad}: {text}"
             );
         }
+        let dual = parse_scene(&scene(
+            json!({ "unconverged_floor": 0.1, "contact_solver": "dual" }),
+        ))
+        .expect_err("refused")
+        .to_string();
+        assert!(
+            dual.contains("control.unconverged_floor") && dual.contains("penalty"),
+            "{dual}"
+        );
+        // 0 is "no floor", meaningful with either solver.
+        parse_scene(&scene(
+            json!({ "unconverged_floor": 0.0, "contact_solver": "dual" }),
+        ))
+        .expect("valid");
     }
 }

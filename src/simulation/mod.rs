@@ -250,7 +250,13 @@ impl Simulation {
 
     /// The shortest Δt a non-converging loop is cut to (`SimParams::unconverged_floor_ratio`),
     /// s; 0 without the floor.
+    /// Penalty solver only: an unconverged dual solve leaves no iterate to take (its
+    /// increments are not written), so under the dual solver the floor is 0 and a
+    /// non-converging step is cut as without it (scene validation refuses the combination).
     pub(super) fn unconverged_floor(&self) -> f64 {
+        if self.state.scene.control.contact_solver == ContactSolver::Dual {
+            return 0.0;
+        }
         self.params
             .unconverged_floor_ratio
             .map_or(0.0, |r| r * self.state.scene.control.time_step)

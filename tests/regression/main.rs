@@ -7,6 +7,7 @@
 mod common;
 mod regression_auto_controls;
 mod regression_contact_chatter;
+mod regression_dual_floor;
 mod regression_dual_phantom_corner;
 mod regression_dual_tolerance_small_dt;
 mod regression_dual_trapezoidal;
