@@ -318,6 +318,12 @@ impl ScanOrder {
     }
 }
 
+/// m/s², the refinement's tolerance of a search that asks for none (`ashlar pga` and the
+/// service alike): an absolute amplitude, so that the lattice (h = tolerance × 2^K) and the
+/// answer do not depend on the range; 0.01 m/s² (0.1 % of g) is below what a record's own
+/// scaling tells apart, and from the default resolution it costs four trisection levels.
+pub const DEFAULT_TOLERANCE: f64 = 0.01;
+
 /// Scan points a search may hold (the lattice over its range): each is a full run.
 pub const MAX_SCAN_POINTS: usize = 1000;
 
@@ -427,7 +433,7 @@ impl PgaRequest {
             combine: Combine::All,
             min: 0.05 * g,
             max: 2.0 * g,
-            tolerance: 0.01,
+            tolerance: DEFAULT_TOLERANCE,
             scan_points: DEFAULT_SCAN_POINTS,
             resolution: Some(default_resolution(0.05 * g, 2.0 * g)),
             scan: ScanOrder::Full,

@@ -214,3 +214,39 @@ async fn the_default_model_is_auto_and_the_summary_says_which_ran() {
     svc.shutdown(Duration::ZERO);
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// A search's answer does not depend on its range (#20 point 5), through the service's own
+/// defaults: two single-record searches whose ranges both contain the threshold, asking for no
+/// tolerance and no resolution, give the same bracket to the bit, refined to the default
+/// tolerance (0.01 m/s², as `ashlar pga`). Until session 39 the service's default tolerance was
+/// 1 % of the range (0.115 against 0.105 m/s² here), which put the two searches on different
+/// lattices, and their brackets were that wide.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn two_ranges_that_contain_the_answer_give_it_to_the_bit() {
+    let (svc, app, dir) = start("pga-ranges");
+    let mut brackets = Vec::new();
+    for min in [0.5, 1.5] {
+        let body = json!({
+            "scene": column_scene(3.0),
+            "motion": {"horizontal": half_sine(1.0, "")["horizontal"]},
+            "criterion": "toppled:column",
+            "range": {"min": min, "max": 12.0, "units": "m/s2"},
+        });
+        let (_, j) =
+            submit_and_wait(&app, "/v1/pga-searches", &body, Duration::from_secs(120)).await;
+        assert_eq!(j["status"], "succeeded", "{j}");
+        let r = &j["result"];
+        let (safe, failing) = (
+            r["safe_pga"].as_f64().expect("a safe amplitude"),
+            r["failing_pga"].as_f64().expect("a failing amplitude"),
+        );
+        assert!(
+            failing > min && failing - safe <= 0.01,
+            "range from {min}: bracket [{safe}, {failing}] not refined to 0.01 m/s²"
+        );
+        brackets.push((safe.to_bits(), failing.to_bits()));
+    }
+    assert_eq!(brackets[0], brackets[1], "the two ranges disagree");
+    svc.shutdown(Duration::ZERO);
+    std::fs::remove_dir_all(dir).ok();
+}

@@ -253,10 +253,11 @@ pub(super) fn search_range(
     if !(max.is_finite() && max > min) {
         return Err(RequestError::RangeOrder { min, max });
     }
-    // Default resolution: 1 % of the searched range.
+    // The CLI's default, absolute: a tolerance relative to the range (1 % of it until session
+    // 39) made the lattice, and so the answer, depend on the range.
     let tolerance = match tolerance {
         Some(t) => amplitude(t, "/tolerance")?,
-        None => (max - min) / 100.0,
+        None => crate::analysis::pga::DEFAULT_TOLERANCE,
     };
     if !(tolerance.is_finite() && tolerance > 0.0) {
         return Err(RequestError::Tolerance);
