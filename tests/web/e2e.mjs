@@ -691,7 +691,7 @@ try {
     console.log(`     ${recs.join(" | ").slice(0, 200)}`);
     console.log(`     ${dist.slice(0, 200)}`);
     // The page's worked example is docs/observations.md's: A fell, B stands, under the bundled
-    // pulse; the interval there is [5.64, 8.60] m/s² (A's threshold is Housner's overturning
+    // pulse; the interval there is [5.63, 8.60] m/s² (A's threshold is Housner's overturning
     // amplitude, checked by an independent RK4 in tests/engine/rocking.rs).
     await page.click("#site-example");
     await page.waitForFunction(() => document.querySelectorAll("#obs-body tr").length === 2 && document.querySelectorAll("#scene-svg polygon").length === 3, null, { timeout: 10000 });
@@ -700,7 +700,12 @@ try {
     const id2 = (await page.textContent("#submit-status")).match(/Queued site analysis (\w+)/)[1];
     await page.waitForFunction((id) => new RegExp(`Site analysis ${id}: succeeded`).test(document.getElementById("result-head").textContent) && !document.getElementById("site-view").hidden, id2, { timeout: 300000 });
     const worked = await page.textContent("#site-records");
-    assert(worked.includes("5.64 m/s²") && worked.includes("8.6 m/s²"), `worked example: ${worked}`);
+    // The interval's ends as shown (3 significant digits): A's bracket is refined to the
+    // example's tolerance (0.02 m/s²) and holds Housner's 5.64, so its lower end is within
+    // 0.02 + the display's rounding (0.005) of it; B's upper end likewise of 8.60 (the engine's,
+    // docs/observations.md). The exact digits move with the search's lattice (session 39: 5.63).
+    const cells = await page.$$eval("#site-records tbody tr:first-child td", (tds) => tds.map((t) => parseFloat(t.textContent)));
+    assert(cells.length >= 2 && Math.abs(cells[0] - 5.64) <= 0.025 && Math.abs(cells[1] - 8.6) <= 0.025, `worked example: ${worked} (${JSON.stringify(cells)})`);
     console.log(`     worked example: ${worked.slice(0, 160)}`);
     await page.selectOption("#criterion-kind", "toppled");
     await page.check('input[name="analysis"][value="run"]');
