@@ -241,6 +241,7 @@ const POINTER_SLOTS = [
   ["/range/max", "range-max"],
   ["/range", "range-min"],
   ["/tolerance", "tolerance"],
+  ["/resolution", "resolution"],
   ["/scan_points", "scan-points"],
 ];
 
@@ -258,6 +259,7 @@ function slotInput(slot) {
     case "range-min": return $("range-min");
     case "range-max": return $("range-max");
     case "tolerance": return $("tolerance");
+    case "resolution": return $("resolution");
     case "scan-points": return $("scan-points");
     default: return slot.startsWith("tp-") ? $(slot) : null;
   }
@@ -678,6 +680,14 @@ function rangeSpec() {
   return { min: Number($("range-min").value), max: Number($("range-max").value), units: $("range-units").value };
 }
 
+// A search's or site analysis's optional fields beyond the range, in the range's units: the
+// tolerance, and the scan resolution or else the scan points (the API takes one of the two).
+function addSearchFields(body) {
+  if ($("tolerance").value !== "") body.tolerance = Number($("tolerance").value);
+  if ($("resolution").value !== "") body.resolution = Number($("resolution").value);
+  else if ($("scan-points").value !== "") body.scan_points = Number($("scan-points").value);
+}
+
 // The criterion of the form (docs/format.md §3), or null after showing why it is not valid.
 function currentCriterion() {
   const block = $("criterion-block").value;
@@ -749,6 +759,7 @@ async function fillSiteExample() {
   $("range-max").value = "12";
   $("range-units").value = "m/s2";
   $("tolerance").value = "0.02";
+  $("resolution").value = "";
   $("scan-points").value = "6";
   syncVisibility();
   scheduleInspect();
@@ -802,8 +813,7 @@ async function onSubmit(ev) {
     // Named by their files, so that the result's rows say which record is which.
     if (radio("motion-source") === "record") motions = motions.map((m, i) => (state.records[i] ? Object.assign({ name: state.records[i].name }, m) : m));
     body = { scene, motions, observations: state.observations.map((o) => ({ criterion: o.criterion, observed: o.observed })), range: rangeSpec() };
-    if ($("tolerance").value !== "") body.tolerance = Number($("tolerance").value);
-    if ($("scan-points").value !== "") body.scan_points = Number($("scan-points").value);
+    addSearchFields(body);
   } else if (kind === "run") {
     url = "/v1/jobs";
     body = { scene };
@@ -820,8 +830,7 @@ async function onSubmit(ev) {
     if (criterion === null) return;
     body = { scene, criterion, range: rangeSpec() };
     if (Array.isArray(criterion)) body.combine = $("crit-combine").value;
-    if ($("tolerance").value !== "") body.tolerance = Number($("tolerance").value);
-    if ($("scan-points").value !== "") body.scan_points = Number($("scan-points").value);
+    addSearchFields(body);
     if (!motions[0]) { showFieldError("motion", "A PGA search needs a ground motion to scale."); return; }
     if (motions.length > 1) body.motions = motions;
     else body.motion = motions[0];
@@ -1368,6 +1377,8 @@ function syncVisibility() {
   $("criterion-value").disabled = ck === "toppled" || ck === "json";
   $("criterion-block").disabled = ck === "json";
   $("criterion-json-box").hidden = ck !== "json";
+  // A resolution replaces the scan points (the API refuses both).
+  $("scan-points").disabled = $("resolution").value !== "";
 }
 
 async function init() {
@@ -1404,6 +1415,7 @@ async function init() {
   }
   $("criterion-kind").addEventListener("change", syncVisibility);
   $("run-judge").addEventListener("change", syncVisibility);
+  $("resolution").addEventListener("input", syncVisibility);
   $("job-form").addEventListener("submit", onSubmit);
   $("crit-add").addEventListener("click", addCriterion);
   $("obs-add-fell").addEventListener("click", () => addObservation(true));

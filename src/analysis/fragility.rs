@@ -68,7 +68,8 @@ pub struct Fragility {
     pub beta: f64,
     /// `"mle_interval_censored"` or `"mle_binary"`.
     pub method: String,
-    /// Every run of every record (what the plot shows).
+    /// The runs that entered the fit, every record's (what the plot shows); from a search,
+    /// the runs that do not depend on the number of cores (`pga::width_free_runs`).
     pub points: Vec<Point>,
     /// Log-likelihood at the optimum.
     pub log_likelihood: f64,

@@ -1090,11 +1090,33 @@ pub fn record_error(name: &str, e: RunError) -> RunError {
     }
 }
 
-/// The multi-record result from the records' searches: the fragility curve fitted by `method`.
+/// The runs of a search's result whose choice does not depend on the number of cores: the
+/// scan (a `lowest` scan up to its first failing point) and the refinement points the k-section
+/// rule chose, found by replaying [`plan`] at width 1 on `r.runs` (at width 1 the planner
+/// evaluates nothing ahead and scans one point a batch). Left out: the runs evaluated ahead on
+/// branches the refinement did not take, and a `lowest` scan's points above its first failure
+/// in the same batch, both of which come with the width. Every point the replay needs is in
+/// `r.runs` when `r` is [`plan`]'s result for `req` at any width; otherwise (a result of another
+/// request) all of `r.runs`.
+pub fn width_free_runs(r: &PgaResult, req: &PgaRequest) -> Vec<PgaRun> {
+    let known: std::collections::HashMap<u64, bool> = r
+        .runs
+        .iter()
+        .map(|run| (run.pga.to_bits(), run.failed))
+        .collect();
+    match plan(req, 1, &|p| known.get(&p.to_bits()).copied()) {
+        Step::Done(replayed) => replayed.runs,
+        Step::Pending { .. } => r.runs.clone(),
+    }
+}
+
+/// The multi-record result from the records' searches: the fragility curve fitted by `method`
+/// to each record's [`width_free_runs`] (so that the curve does not depend on the number of
+/// cores).
 pub fn multi_result(results: Vec<RecordResult>, req: &PgaRequest, method: Method) -> MultiResult {
     let points: Vec<Point> = results
         .iter()
-        .flat_map(|r| r.result.runs.iter())
+        .flat_map(|r| width_free_runs(&r.result, req))
         .filter(|r| r.pga > 0.0)
         .map(|r| Point {
             pga: r.pga,
@@ -1739,6 +1761,65 @@ mod tests {
         }
         assert_eq!(rounds, longest);
         assert_eq!(rounds, 4, "1 scan + 3 rounds of trisection");
+    }
+
+    /// `--fit binary` reads the runs, and the runs evaluated ahead (and a lowest scan's last
+    /// batch) come with the number of cores: the fit must read only [`width_free_runs`]. Six
+    /// records with fragmented outcome functions, full and lowest scans, widths 1 to 8: the
+    /// same curve (median, β, log-likelihood, points) to the bit, both methods. The test also
+    /// checks that the raw `runs` do differ between widths 1 and 4, so that it can fail.
+    #[test]
+    fn the_fragility_fit_does_not_depend_on_the_width() {
+        let fit_bits = |f: &Fragility| {
+            let pts: Vec<(u64, bool)> = f
+                .points
+                .iter()
+                .map(|p| (p.pga.to_bits(), p.failed))
+                .collect();
+            (
+                f.median.to_bits(),
+                f.beta.to_bits(),
+                f.log_likelihood.to_bits(),
+                f.observations,
+                pts,
+            )
+        };
+        for scan in [ScanOrder::Full, ScanOrder::Lowest] {
+            let req = PgaRequest {
+                scan,
+                ..request(0.0, 10.0, 0.01, 21)
+            };
+            let searched = |width: usize| -> Vec<RecordResult> {
+                (0..6u64)
+                    .map(|i| RecordResult {
+                        motion: format!("record {i}"),
+                        result: drive(&req, width, fragmented(0x9e37_79b9_7f4a_7c15 ^ (i << 24))).0,
+                    })
+                    .collect()
+            };
+            let one = searched(1);
+            let raw = |rs: &[RecordResult]| -> Vec<Vec<PgaRun>> {
+                rs.iter().map(|r| r.result.runs.clone()).collect()
+            };
+            assert_ne!(
+                raw(&one),
+                raw(&searched(4)),
+                "{scan:?}: widths 1 and 4 run the same points"
+            );
+            for method in [Method::Binary, Method::Interval] {
+                let base = multi_result(one.clone(), &req, method);
+                let base = base.fragility.as_ref().map(fit_bits);
+                assert!(base.is_some(), "{scan:?} {method:?}: no curve");
+                for width in [2, 3, 4, 8] {
+                    let other = multi_result(searched(width), &req, method);
+                    assert_eq!(
+                        other.fragility.as_ref().map(fit_bits),
+                        base,
+                        "{scan:?} {method:?}, width {width} against 1"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -182,6 +182,15 @@ impl ImpactParams {
             ..self
         }
     }
+
+    /// The hand-over's own threshold f (in g × Δt) when the hand-over is on and has one
+    /// ([`hand_over_weight`](Self::hand_over_weight) and
+    /// [`hand_over_below`](Self::hand_over_below) `Some(f)`), else `None`. Why one method: the
+    /// pivot-landing test, the pivoted-block scan, the impact solve and the move all ask this
+    /// same question and must agree.
+    pub fn hand_over_threshold(&self) -> Option<f64> {
+        self.hand_over_below.filter(|_| self.hand_over_weight)
+    }
 }
 
 impl Default for ImpactParams {
@@ -342,7 +351,7 @@ fn pivot_landing(
     params: &ImpactParams,
     pivoted: &mut Pivoted,
 ) -> bool {
-    let Some(f) = params.hand_over_below.filter(|_| params.hand_over_weight) else {
+    let Some(f) = params.hand_over_threshold() else {
         return false;
     };
     let Some(block) = lone_free_block(input, c) else {
@@ -391,7 +400,7 @@ fn find_pivoted(
     out: &mut Vec<bool>,
 ) {
     out.clear();
-    if !(params.hand_over_weight && params.hand_over_below.is_some()) {
+    if params.hand_over_threshold().is_none() {
         return;
     }
     out.resize(input.dofs.block_of.len(), false);
@@ -654,8 +663,7 @@ pub fn apply_impacts(
     // the row loop below, which computes those rates anyway.
     taken.clear();
     // As `find_pivoted` leaves its flags: empty when the knob is off or there is no block.
-    let hand_over_on =
-        params.hand_over_weight && params.hand_over_below.is_some() && !dofs.block_of.is_empty();
+    let hand_over_on = params.hand_over_threshold().is_some() && !dofs.block_of.is_empty();
     if hand_over_on {
         taken.resize(contacts.len(), false);
     }
@@ -856,7 +864,7 @@ pub fn hand_over_weight(
         taken,
         ..
     } = scratch;
-    let own_threshold = params.hand_over_below.is_some();
+    let own_threshold = params.hand_over_threshold().is_some();
     let HandOver {
         rows,
         landing,

@@ -376,7 +376,13 @@ try {
     await page.fill("#range-max", "1.5");
     await page.selectOption("#range-units", "g");
     await page.fill("#tolerance", "0.1");
+    // The scan resolution in the range's units (g), sent as the API's `resolution` instead of
+    // the scan points, which it disables: 0.5 g gives the lattice h = 0.1 g × 2² = 0.4 g, the
+    // one 4 scan points (1.4 g / 3 = 0.47 g) gave before, so the outcomes below are unchanged.
     await page.fill("#scan-points", "4");
+    await page.fill("#resolution", "0.5");
+    assert(await page.isDisabled("#scan-points"), "the scan points stay enabled with a resolution");
+    const sentSearch = page.waitForRequest((r) => r.url().endsWith("/v1/pga-searches") && r.method() === "POST", { timeout: 20000 });
     // The page's first read of the new search is held until the search has finished, as when
     // a short job ends before the page follows it: CI once never showed such a search.
     const firstRead = { held: false, status: "" };
@@ -391,6 +397,8 @@ try {
       await route.continue();
     });
     await page.click("#submit-button");
+    const searchBody = (await sentSearch).postDataJSON();
+    assert(searchBody.resolution === 0.5 && !("scan_points" in searchBody) && searchBody.range.units === "g", `search request: ${JSON.stringify({ ...searchBody, scene: undefined, motion: undefined })}`);
     await page.waitForFunction(() => /Queued PGA search/.test(document.getElementById("submit-status").textContent), null, { timeout: 20000 });
     try {
       await page.waitForFunction(() => /PGA search \w+: succeeded/.test(document.getElementById("result-head").textContent) && !document.getElementById("pga-view").hidden, null, { timeout: 300000 });
@@ -413,6 +421,11 @@ try {
     assert(text.includes("rotation:column:2"), text);
     const outcomes = await page.evaluate(() => document.getElementById("plot-scan").__e2e.spec.points.map((p) => p.label));
     assert(outcomes.includes("failed") && outcomes.includes("safe"), `scan outcomes: ${outcomes}`);
+    // The stored result's lattice spacing (m/s²): 0.4 g, the largest 0.1 g × 2^K not above 0.5 g.
+    const searched = (await (await fetch(`${base}/v1/jobs?kind=pga_search&limit=1`)).json()).jobs[0].result;
+    assert(Math.abs(searched.resolution - 0.4 * 9.80665) < 1e-9, `result resolution ${searched.resolution} m/s², not 0.4 g`);
+    await page.fill("#resolution", "");
+    assert(!(await page.isDisabled("#scan-points")), "the scan points stay disabled with the resolution cleared");
     // Every held request of the cancelled run has been answered and its handlers have run.
     for (let quiet = 0; quiet < 2; ) {
       await page.waitForTimeout(500);

@@ -26,6 +26,16 @@ fn default_units() -> Units {
     Units::MetresPerSecond2
 }
 
+// `range`, `tolerance`, `scan_points` and `resolution` are declared here and again in
+// `site::SiteBody`, not in one shared struct: they are top-level members of both bodies
+// (openapi.yaml), so one struct would take `#[serde(flatten)]`. With serde 1.0.229 and
+// serde_path_to_error 0.1.20 (checked on a scratch crate, session 40), an outer
+// `deny_unknown_fields` still refuses an unknown member through `flatten`, but every error
+// inside the flattened part loses its path: `"tolerance": "abc"`, `"range": {"max": "x"}` and
+// `"scan_points": -3` are reported at the body's root instead of `/tolerance`, `/range/max` and
+// `/scan_points` (the 422's pointer, which the web page puts beside the field), and an unknown
+// member's message loses its list of the expected ones. Nesting them in a member of their own
+// would change the contract. What they mean is shared: `RangeSpec` and `search_range`.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct PgaBody {
