@@ -726,7 +726,8 @@ pub fn apply_impacts(
     // that hold an involved block, by union–find in one pass over the contacts. The same set
     // as the fixed point it replaced (rescan every contact until nothing grows: one pass per
     // block of depth, a wall's whole height for a landing in it).
-    if params.cluster && impacting.iter().any(|&i| i) {
+    let count = impacting.iter().filter(|&&i| i).count();
+    if params.cluster && count > 0 {
         if params.cluster_fixed_point {
             join_clusters_fixed_point(input, contacts, involved);
         } else {
@@ -742,7 +743,6 @@ pub fn apply_impacts(
     if hand_over_on {
         taken.resize(contacts.len(), false);
     }
-    let count = impacting.iter().filter(|&&i| i).count();
     if count == 0 {
         // No velocity changed: `times` already holds the impact times `located_step` needs.
         return 0;
