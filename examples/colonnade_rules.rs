@@ -8,7 +8,8 @@
 //! step in which the cycle rule closed a contact sliding, lists the contacts that end the step
 //! sliding after at least `cycle_flips` state changes (the rule's closings, or their successors):
 //! block pair, interface load at the step end against the lighter stone's weight, normal, time.
-//! Run: `cargo run --release --example colonnade_rules -- [NAME,…] [--trace NAME]`.
+//! Run: `cargo run --release --example colonnade_rules -- [NAME,…] [--trace NAME] [--record FILE]
+//! [--pga G] [--duration S] [--impact-cluster on|off|fixed-point]`.
 use ashlar::analysis::run::Summary;
 use ashlar::contact::ContactState;
 use ashlar::presets;
@@ -98,6 +99,15 @@ fn config(name: &str) -> Option<OpenCloseParams> {
             },
             true,
         ),
+        // cycle_rule.rs's bed-joint check: the stone and cycle rules, the cycle rule of any
+        // orientation.
+        "stone+cycle-any" => any(cycle(
+            OpenCloseParams {
+                stone_settle_friction: 1e-3,
+                ..none
+            },
+            true,
+        )),
         "default+light-broken" => light_broken(d),
         "default+stone-broken" => stone_broken(d),
         "default+cycle-broken" => any(cycle(d, false)),
@@ -131,6 +141,9 @@ fn trace(name: &str, oc: OpenCloseParams) {
     let mut before = sim.changes().cycle_closed;
     // Closings by block pair: count, largest interface load / lighter weight.
     let mut by_pair: BTreeMap<(String, String), (u64, f64)> = BTreeMap::new();
+    // Contacts sliding after a cycle at a step end on bed joints (normal within 45° of
+    // vertical) and on head joints.
+    let mut bed_head = [0u64; 2];
     while sim.time() < DURATION - 1e-12 {
         sim.step(DURATION - sim.time()).expect("colonnade step");
         let now = sim.changes().cycle_closed;
@@ -176,6 +189,7 @@ fn trace(name: &str, oc: OpenCloseParams) {
                 ratio,
                 lighter
             );
+            bed_head[(c.n.y.abs() < c.n.x.abs()) as usize] += 1;
             let e = by_pair
                 .entry((ids[key.0].clone(), ids[key.1].clone()))
                 .or_insert((0, 0.0));
@@ -185,12 +199,17 @@ fn trace(name: &str, oc: OpenCloseParams) {
     }
     let ch = sim.changes();
     println!(
-        "{name} (Simulation::step, {DURATION} s): closed sliding light {} loaded {}, kept locked {}, steps finished in the extra iterations {}, cuts {}",
+        "{name} (Simulation::step, {DURATION} s): closed sliding light {} loaded {}, kept locked {}, steps finished in the extra iterations {}, cuts {}; sliding after a cycle: bed {} head {}; stone rule friction {} state {}; light rule {}",
         ch.cycle_closed[0],
         ch.cycle_closed[1],
         ch.cycle_kept_locked,
         ch.cycle_extra_steps,
-        sim.stats().time_step_cuts
+        sim.stats().time_step_cuts,
+        bed_head[0],
+        bed_head[1],
+        ch.stone_settled_friction,
+        ch.stone_settled_state,
+        ch.light
     );
     for ((a, b), (n, r)) in by_pair {
         println!("  {a}/{b}: {n} sliding after a cycle at a step end, interface ≤ {r:.3e} of the lighter weight");
@@ -222,11 +241,53 @@ fn main() {
         .map(str::to_string)
         .to_vec(),
     };
+    // `--record FILE --pga G --duration S`: another motion (a record of data/ground-motions
+    // scaled to G g) or length; `--impact-cluster on|off|fixed-point`: `ImpactParams::cluster`
+    // (on by default since session 40).
+    let opt = |k: &str| {
+        args.iter()
+            .position(|a| a == k)
+            .and_then(|i| args.get(i + 1).cloned())
+    };
+    let duration: f64 = opt("--duration").map_or(DURATION, |v| v.parse().expect("--duration"));
+    // `fixed-point`: on, with session 39's search for the joined blocks (same bits).
+    let cluster = opt("--impact-cluster");
+    let (mut scene, mut gm) = presets::rocking_colonnade(duration).expect("colonnade");
+    if let Some(r) = opt("--record") {
+        let g: f64 = opt("--pga").map_or(0.3, |v| v.parse().expect("--pga"));
+        gm = presets::record(&r)
+            .expect("--record: a record of data/ground-motions")
+            .scaled_to_pga(g * ashlar::motion::STANDARD_GRAVITY);
+    } else if let Some(g) = opt("--pga") {
+        let g: f64 = g.parse().expect("--pga");
+        gm = presets::record("friuli-1976-tolmezzo-000.at2")
+            .expect("Friuli")
+            .scaled_to_pga(g * ashlar::motion::STANDARD_GRAVITY);
+    }
+    scene.control.duration = Some(duration);
     let mut p_none = None;
     for name in &names {
         let oc = config(name).unwrap_or_else(|| panic!("unknown configuration {name}"));
         let t0 = std::time::Instant::now();
-        let s = presets::rocking_colonnade_run(oc, DURATION).expect("colonnade run");
+        let mut sim_params = SimParams {
+            open_close: oc,
+            ..Default::default()
+        };
+        match cluster.as_deref() {
+            Some("on") => sim_params.impact.cluster = true,
+            Some("off") => sim_params.impact.cluster = false,
+            Some("fixed-point") => sim_params.impact.cluster_fixed_point = true,
+            None => {}
+            Some(o) => panic!("--impact-cluster {o}: on, off or fixed-point"),
+        }
+        let opts = ashlar::analysis::run::RunOptions {
+            sim_params: Some(sim_params),
+            no_trajectory: true,
+            ..Default::default()
+        };
+        let s: Summary = ashlar::analysis::run::run(&scene, &gm, &opts)
+            .expect("colonnade run")
+            .summary;
         let (p, id) = peak(&s);
         if name == "none" {
             p_none = Some(p);
@@ -234,11 +295,29 @@ fn main() {
         let rel = p_none
             .map(|q| format!("{:+.1} % of none", 100.0 * (p - q) / q))
             .unwrap_or_default();
+        let rot = s
+            .blocks
+            .iter()
+            .map(|b| b.max_rotation.abs())
+            .fold(0.0, f64::max);
+        let fin = s
+            .blocks
+            .iter()
+            .map(|b| b.final_displacement[0].hypot(b.final_displacement[1]))
+            .fold(0.0, f64::max);
+        let slid = s
+            .blocks
+            .iter()
+            .map(|b| b.sliding_distance)
+            .fold(0.0, f64::max);
         println!(
-            "{name}: {} peak {p:.4e} m ({id}) {rel}, {} steps, {} cuts, {:.0} s",
+            "{name}: {} peak {p:.4e} m ({id}) {rel}, {} steps, {} cuts, max rotation {rot:.4e} rad, final {fin:.4e} m, sliding {slid:.4e} m, penetration {:.3e} m, impacts {:?}, toppled {}, {:.0} s",
             s.failure_mode,
             s.steps,
             s.diagnostics.time_step_cuts,
+            s.diagnostics.max_penetration,
+            s.diagnostics.impacts,
+            s.blocks.iter().filter(|b| b.toppled).count(),
             t0.elapsed().as_secs_f64()
         );
     }

@@ -27,7 +27,8 @@
 //!   lands at the step's end, `ImpactParams::group_landings`): a rocking frame's two columns
 //!   land a fraction of a step apart, and stopped one at a time they parted;
 //! - the contacts involved are the impacting ones and every closed contact of the blocks they
-//!   touch (e.g. the pivot a rocking column leaves);
+//!   touch (e.g. the pivot a rocking column leaves), and of the free blocks joined to those by
+//!   closed contacts (`ImpactParams::cluster`);
 //! - normal impulses pₙ ≥ 0 and friction impulses |pₜ| ≤ tanφ·pₙ on the blocks' rigid-body
 //!   unknowns (u0, v0, r0: the impact law is a rigid-body law; strain rates are kept) make
 //!   ġ⁺ = −e·ġ⁻ at impacting contacts (ġ⁺ ≥ −e·ġ⁻ where pₙ = 0) and ġ⁺ ≥ min(ġ⁻, 0) at the
@@ -35,8 +36,9 @@
 //!   this small set.
 //!
 //! Momentum is conserved (the impulses act equal and opposite on the two blocks; fixed blocks
-//! take the rest). Free blocks joined to the impact's blocks by closed contacts also take the
-//! rest without moving unless `ImpactParams::cluster` is on, which can add energy
+//! take the rest). Free blocks joined to the impact's blocks by closed contacts, transitively,
+//! take impulses with their own mass (`ImpactParams::cluster`, default since session 40);
+//! without it they took the rest without moving, which added energy
 //! (docs/energy-after-record.md). A column landing on its other corner with e = 0 and no slip
 //! keeps its angular momentum about that corner: Housner's r = 1 − 3/2 sin²α; with e > 0 the
 //! corner bounces, r = 1 − 3/2 (1 + e) sin²α (tests/engine/restitution.rs derives both).
@@ -148,21 +150,31 @@ pub struct ImpactParams {
     /// hand-over with its own threshold (session 37)" and "The hand-over's threshold as the
     /// default (session 38)".
     pub hand_over_below: Option<f64>,
-    /// `true`: every free block joined to an impact's blocks through closed contacts (the
-    /// whole stack a landing drum or architrave rests in, transitively) takes part in the
-    /// impulse solve with its own mass. `false` (default): only the blocks the impacting
+    /// `true` (default since session 40): every free block joined to an impact's blocks
+    /// through closed contacts (the whole stack a landing drum or architrave rests in,
+    /// transitively; found by union–find, [`join_clusters`]) takes part in the impulse solve
+    /// with its own mass. `false` (the law before session 40): only the blocks the impacting
     /// contacts touch take impulses; their closed contacts with other free blocks still act,
     /// but those blocks keep their velocities, i.e. they act as bodies of infinite mass
     /// moving at their velocity, and an e = 0 impact against one that moves towards the
     /// impacting block *adds* kinetic energy no other block pays for: +1 005 J in one step
     /// of the Doric colonnade after Northridge 0.4 g (architrave2 landing on c2_abacus while
-    /// column c2 lifts it; docs/energy-after-record.md). With all connected blocks taking
-    /// part and the fixed blocks at rest, the normal impulses are a projection onto a convex
-    /// set that holds zero velocity (every target ≤ 0), and the kinetic energy cannot grow
-    /// (friction's bounded impulses are outside this argument; no impact step of the
-    /// colonnade gained energy with it on). Off by default: the engine suites and golden
-    /// digests were not run with it on.
+    /// column c2 lifts it), impact steps adding 0.5–1.2 kJ each in 9 seconds of that record,
+    /// and the colonnade toppled at 37 s with the ground still (docs/energy-after-record.md).
+    /// With all connected blocks taking part and the fixed blocks at rest, the normal
+    /// impulses are a projection onto a convex set that holds zero velocity (every target
+    /// ≤ 0), and the kinetic energy cannot grow (friction's bounded impulses are outside this
+    /// argument; measured: no impact step of the colonnade gained more than 91 J, the summed
+    /// impact steps lost energy in every second of the record, and the colonnade stands).
+    /// A single block has no free neighbour: its impacts are unchanged. Cost and suites:
+    /// docs/energy-after-record.md, "The cluster as the default (session 40)".
     pub cluster: bool,
+    /// With [`cluster`](Self::cluster): find the joined blocks by session 39's fixed point
+    /// (every contact scanned again until nothing grows) instead of the union–find. The same
+    /// set, so the same bits (checked: state digests of the shaken wall, docs/energy-after-record.md
+    /// "The cluster as the default (session 40)"). `false` (default); for diagnosis and cost
+    /// comparison.
+    pub cluster_fixed_point: bool,
 }
 
 impl ImpactParams {
@@ -208,7 +220,8 @@ impl Default for ImpactParams {
             hand_over_weight: true,
             min_located_ratio: 0.0,
             hand_over_below: Some(2.0),
-            cluster: false,
+            cluster: true,
+            cluster_fixed_point: false,
         }
     }
 }
@@ -261,6 +274,11 @@ pub struct ImpactScratch {
     pivoted: Vec<bool>,
     /// Per contact: a pivot landing the hand-over takes ([`ImpactParams::hand_over_below`]).
     taken: Vec<bool>,
+    /// [`join_clusters`]'s union–find: per free block, its parent (a root is its own).
+    parent: Vec<usize>,
+    /// [`join_clusters`]: per free block, whether it is the root of a component holding an
+    /// impact's block.
+    hit: Vec<bool>,
 }
 
 impl ImpactScratch {
@@ -432,6 +450,83 @@ fn lone_free_block(input: &ImpactInput, c: &Contact) -> Option<usize> {
     }
 }
 
+/// Marks in `involved` (per free block) every free block joined to one already marked through
+/// closed contacts between two free blocks that take part ([`ImpactParams::cluster`]),
+/// transitively. Union–find with path halving over one pass of the contacts, then one pass over
+/// the blocks: O(contacts + blocks) whatever the stack's depth. `parent` and `hit` are kept
+/// buffers (no allocation once grown).
+fn join_clusters(
+    input: &ImpactInput,
+    contacts: &[Contact],
+    involved: &mut [bool],
+    parent: &mut Vec<usize>,
+    hit: &mut Vec<bool>,
+) {
+    let n = involved.len();
+    parent.clear();
+    parent.extend(0..n);
+    fn root(parent: &mut [usize], mut a: usize) -> usize {
+        while parent[a] != a {
+            parent[a] = parent[parent[a]];
+            a = parent[a];
+        }
+        a
+    }
+    let free = &input.dofs.free_index;
+    for c in contacts {
+        if !c.state.is_closed() || !takes_part(input, c) {
+            continue;
+        }
+        let (Some(fi), Some(fj)) = (free[c.vertex_block], free[c.edge_block]) else {
+            continue;
+        };
+        let (ri, rj) = (root(parent, fi), root(parent, fj));
+        if ri != rj {
+            parent[ri] = rj;
+        }
+    }
+    hit.clear();
+    hit.resize(n, false);
+    for f in 0..n {
+        if involved[f] {
+            let r = root(parent, f);
+            hit[r] = true;
+        }
+    }
+    for f in 0..n {
+        if !involved[f] {
+            let r = root(parent, f);
+            involved[f] = hit[r];
+        }
+    }
+}
+
+/// [`join_clusters`] as session 39 wrote it, a fixed point: every contact is scanned again
+/// until no block is added (one pass per block of depth). Kept for
+/// [`ImpactParams::cluster_fixed_point`].
+fn join_clusters_fixed_point(input: &ImpactInput, contacts: &[Contact], involved: &mut [bool]) {
+    let free = &input.dofs.free_index;
+    loop {
+        let mut grown = false;
+        for c in contacts {
+            if !c.state.is_closed() || !takes_part(input, c) {
+                continue;
+            }
+            let (Some(fi), Some(fj)) = (free[c.vertex_block], free[c.edge_block]) else {
+                continue;
+            };
+            if involved[fi] != involved[fj] {
+                involved[fi] = true;
+                involved[fj] = true;
+                grown = true;
+            }
+        }
+        if !grown {
+            break;
+        }
+    }
+}
+
 /// Whether an impact approaching at the normal gap rate `rate` (m/s, negative closing) is
 /// located (`ImpactParams::locate_speed_ratio`; at 1 or less every impact is).
 fn fast_enough(rate: f64, input: &ImpactInput, params: &ImpactParams) -> bool {
@@ -582,6 +677,8 @@ pub fn apply_impacts(
         involved,
         pivoted,
         taken,
+        parent,
+        hit,
         ..
     } = scratch;
     let mut pivoted = Pivoted {
@@ -634,29 +731,16 @@ pub fn apply_impacts(
         }
     }
     // With `ImpactParams::cluster`, the free blocks joined to them through closed contacts,
-    // transitively (a fixed point over the contacts: stacks are a few blocks deep).
-    if params.cluster && impacting.iter().any(|&i| i) {
-        loop {
-            let mut grown = false;
-            for c in contacts {
-                if !c.state.is_closed() || !takes_part(c) {
-                    continue;
-                }
-                let (Some(fi), Some(fj)) = (
-                    dofs.free_index[c.vertex_block],
-                    dofs.free_index[c.edge_block],
-                ) else {
-                    continue;
-                };
-                if involved[fi] != involved[fj] {
-                    involved[fi] = true;
-                    involved[fj] = true;
-                    grown = true;
-                }
-            }
-            if !grown {
-                break;
-            }
+    // transitively: the connected components (over closed contacts between two free blocks)
+    // that hold an involved block, by union–find in one pass over the contacts. The same set
+    // as the fixed point it replaced (rescan every contact until nothing grows: one pass per
+    // block of depth, a wall's whole height for a landing in it).
+    let count = impacting.iter().filter(|&&i| i).count();
+    if params.cluster && count > 0 {
+        if params.cluster_fixed_point {
+            join_clusters_fixed_point(input, contacts, involved);
+        } else {
+            join_clusters(input, contacts, involved, parent, hit);
         }
     }
     // The pivot landings among them, at their approach rates before the impulses: marked in
@@ -667,7 +751,6 @@ pub fn apply_impacts(
     if hand_over_on {
         taken.resize(contacts.len(), false);
     }
-    let count = impacting.iter().filter(|&&i| i).count();
     if count == 0 {
         // No velocity changed: `times` already holds the impact times `located_step` needs.
         return 0;

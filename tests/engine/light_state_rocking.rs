@@ -16,7 +16,8 @@
 //! run with none of the loop's approximate rules (`no_rules`: the light rule, the stone settle
 //! rule and the cycle rule off; docs/contact-solve.md §27), each rule alone and the default (all
 //! of them) must keep its verdict and peak, and the check must fail for the rule as first
-//! written.
+//! written (since session 40, by the penetration: with the energy-safe impact law the first
+//! rule no longer collapses the colonnade, see the test).
 use ashlar::analysis::run::Summary;
 use ashlar::solve::open_close::OpenCloseParams;
 use std::sync::OnceLock;
@@ -34,6 +35,37 @@ pub(crate) const PEAK_BOUND: f64 = 0.10;
 
 pub(crate) fn colonnade(oc: OpenCloseParams) -> Summary {
     ashlar::presets::rocking_colonnade_run(oc, DURATION).expect("colonnade run")
+}
+
+/// The stronger shaking of the checks that need it: Friuli scaled to 0.4 g, g. Why: with the
+/// energy-safe impact law (`ImpactParams::cluster`, session 40) the colonnade loses energy at
+/// every landing and a broken rule's effect at 0.3 g shrank to a few per cent of the peak
+/// (docs/energy-after-record.md, "The cluster as the default (session 40)").
+pub(crate) const STRONG_PGA: f64 = 0.4;
+
+/// `colonnade` under Friuli scaled to `pga` g instead of 0.3 g (same scene, same 12 s).
+pub(crate) fn colonnade_at(oc: OpenCloseParams, pga: f64) -> Summary {
+    let (scene, _) = ashlar::presets::rocking_colonnade(DURATION).expect("colonnade");
+    let gm = ashlar::presets::record("friuli-1976-tolmezzo-000.at2")
+        .expect("Friuli record")
+        .scaled_to_pga(pga * ashlar::motion::STANDARD_GRAVITY);
+    let opts = ashlar::analysis::run::RunOptions {
+        sim_params: Some(ashlar::simulation::SimParams {
+            open_close: oc,
+            ..Default::default()
+        }),
+        no_trajectory: true,
+        ..Default::default()
+    };
+    ashlar::analysis::run::run(&scene, &gm, &opts)
+        .expect("colonnade run")
+        .summary
+}
+
+/// The colonnade run with `no_rules` at `STRONG_PGA`, computed once.
+pub(crate) fn strong_reference() -> &'static Summary {
+    static REFERENCE: OnceLock<Summary> = OnceLock::new();
+    REFERENCE.get_or_init(|| colonnade_at(no_rules(), STRONG_PGA))
 }
 
 /// The loop without its approximate rules: the light rule (`light_state_changes`), the stone
@@ -96,8 +128,27 @@ pub(crate) fn assert_agrees(name: &str, s: &Summary, reference: &Summary) {
     );
 }
 
+/// Bound on the deepest penetration of a run against the run without the rules, as a multiple of
+/// the latter: the first light rule's failure was contact forces running away (1.6e7–5.6e7 N on
+/// 1.3e5 N columns), and the penetration is the contact force over the penalty stiffness.
+/// Measured with the energy-safe impact law (session 40, release, examples/colonnade_rules.rs):
+/// the light rule 0.92× (0.3 g) and 1.00× (0.4 g), the rule as first written 1.65× and 1.67×;
+/// 1.3 lies between them with room for the chaotic history on either side.
+pub(crate) const PENETRATION_BOUND: f64 = 1.3;
+
+/// Whether `s`'s deepest penetration is within `PENETRATION_BOUND` of `reference`'s.
+pub(crate) fn penetration_agrees(s: &Summary, reference: &Summary) -> bool {
+    s.diagnostics.max_penetration <= PENETRATION_BOUND * reference.diagnostics.max_penetration
+}
+
 /// Measured (release, examples/colonnade_rules.rs): no rules 5.404 cm; the light rule alone
-/// 5.375 cm (−0.5 %); the rule as first written, alone: collapse.
+/// 5.375 cm (−0.5 %); the rule as first written, alone: collapse. With the energy-safe impact
+/// law (`ImpactParams::cluster`, the default since session 40): no rules 5.242 cm, deepest
+/// penetration 4.98e-6 m; the light rule 5.091 cm (−2.9 %), 4.57e-6 m; the rule as first
+/// written 5.219 cm (−0.4 %): it no longer collapses the colonnade nor moves its peak (the
+/// collapse was its effect amplified by the impacts' injected energy), but it still pushes the
+/// contacts deeper, 8.23e-6 m (1.65×; at 0.4 g 1.67× against the light rule's 1.00×): what the
+/// check now asks (`PENETRATION_BOUND`).
 #[test]
 fn the_light_rule_keeps_the_rocking_colonnades_verdict_and_peak() {
     let reference = reference();
@@ -122,10 +173,20 @@ fn the_light_rule_keeps_the_rocking_colonnades_verdict_and_peak() {
         p_ref < 0.2,
         "without the rules the colonnade rocks and stands (peak {p_ref:.3e} m)"
     );
+    eprintln!(
+        "deepest penetration: no rules {:.3e} m, light rule {:.3e} m, first light rule {:.3e} m",
+        reference.diagnostics.max_penetration,
+        on.diagnostics.max_penetration,
+        first.diagnostics.max_penetration
+    );
     assert_agrees("with the light rule", &on, reference);
     assert!(
-        !agrees(&first, reference),
-        "the check must fail for the rule as first written (it did: the colonnade collapsed)"
+        penetration_agrees(&on, reference),
+        "with the light rule the contacts went deeper than {PENETRATION_BOUND}× the run without the rules"
+    );
+    assert!(
+        !penetration_agrees(&first, reference),
+        "the check must fail for the rule as first written (1.65× the penetration without the rules)"
     );
 }
 

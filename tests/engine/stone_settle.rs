@@ -116,28 +116,35 @@ fn the_stone_rule_keeps_the_rocking_colonnades_verdict_and_peak() {
     // approximate rules (`light_state_rocking::no_rules`, docs/contact-solve.md §27), the rule
     // runs alone on it. Measured (release, examples/colonnade_rules.rs): no rules 5.404 cm; the
     // rule 5.298 cm (−2.0 %); the count only 6.875 cm (+27.2 %).
+    //
+    // Since session 40 (the energy-safe impact law, `ImpactParams::cluster`) the count-only
+    // rule is indistinguishable from the rule on this colonnade: peaks against no rules, the
+    // rule / the count only: +0.7 % / +1.2 % at 0.3 g, +1.1 % / +0.1 % at 0.4 g, −2.7 % /
+    // +6.7 % at 0.5 g; deepest penetration +4 % / +18 %, +40 % / +19 %; summed slip +16 % /
+    // +29 %, +31 % / +36 % (release, examples/colonnade_rules.rs). It still takes 5.6× the
+    // rule's friction updates (5,919 against 1,052 at 0.3 g), but nothing measurable follows:
+    // its +28 % was the injected energy of the old impact law amplifying it. So the check of the
+    // count-only rule is gone (docs/energy-after-record.md, "The cluster as the default
+    // (session 40)"); what can fail is the rule's agreement with the run without the rules at
+    // 0.3 g and at 0.4 g (`STRONG_PGA`), where the broken cycle rule collapses the colonnade.
     use crate::light_state_rocking::{
-        agrees, assert_agrees, colonnade, no_rules, print_runs, reference,
+        assert_agrees, colonnade, colonnade_at, no_rules, print_runs, reference, strong_reference,
+        STRONG_PGA,
     };
     let reference = reference();
-    let on = colonnade(OpenCloseParams {
+    let rule = OpenCloseParams {
         stone_settle_friction: 1e-3,
         ..no_rules()
-    });
-    // The interface count alone (supports not asked): the rule as first made the default.
-    let count_only = colonnade(OpenCloseParams {
-        stone_settle_friction: 1e-3,
-        stone_settle_supports: 0,
-        ..no_rules()
-    });
+    };
+    let on = colonnade(rule);
+    let strong = strong_reference();
+    let strong_on = colonnade_at(rule, STRONG_PGA);
     print_runs(&[
         ("no rules", reference),
         ("stone rule", &on),
-        ("count only", &count_only),
+        ("no rules, 0.4 g", strong),
+        ("stone rule, 0.4 g", &strong_on),
     ]);
     assert_agrees("with the stone rule", &on, reference);
-    assert!(
-        !agrees(&count_only, reference),
-        "the check must fail for the interface count alone (it moved the peak by 28 %)"
-    );
+    assert_agrees("with the stone rule at 0.4 g", &strong_on, strong);
 }
