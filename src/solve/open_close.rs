@@ -283,6 +283,15 @@ pub struct OpenCloseParams {
     /// joints only, the shaken walls' closings are all taken as before (docs/contact-solve.md
     /// §27). π/2: any orientation (session 37's rule).
     pub cycle_tilt: f64,
+    /// Predict a sliding contact's friction normal force at the step start from the last two
+    /// steps' converged normal forces, N₁ (the last step's) and N₀ (the one before):
+    /// N = max(0, N₁ + g·(N₁ − N₀)) with g this gain (1 = linear extrapolation, 0 = the last
+    /// solve's normal force), instead of the friction normal force the last step ended with.
+    /// Only the loop's starting guess moves: its convergence test and every tolerance are
+    /// unchanged, so a converged step is the same kind of fixed point. A contact not closed at
+    /// both step starts keeps today's start. The gain assumes equal steps (Δt is not read).
+    /// `None` = off. Default off: measured in docs/contact-solve.md §30.
+    pub friction_predict: Option<f64>,
 }
 
 impl Default for OpenCloseParams {
@@ -321,7 +330,24 @@ impl Default for OpenCloseParams {
             cycle_extra: 10,
             cycle_light_interface: true,
             cycle_tilt: std::f64::consts::FRAC_PI_4,
+            friction_predict: None,
         }
+    }
+}
+
+/// The friction normal's prediction at a step start (`OpenCloseParams::friction_predict`):
+/// call once per step, before its first open–close loop (a refused attempt's retry must not
+/// extrapolate again). Each contact's converged normal force is remembered for the next step;
+/// a sliding contact closed at both step starts starts from the extrapolated force, N.
+pub fn predict_friction_normals(contacts: &mut [Contact], gain: f64) {
+    for c in contacts {
+        let n1 = c.state.is_closed().then(|| c.normal_force.max(0.0));
+        if let (ContactState::Sliding { .. }, Some(n1), Some(n0)) =
+            (c.state, n1, c.prior_normal_force)
+        {
+            c.friction_normal = (n1 + gain * (n1 - n0)).max(0.0);
+        }
+        c.prior_normal_force = n1;
     }
 }
 
