@@ -638,6 +638,12 @@ fn main() {
             // `--closing F [--closing-floor R]`: the next Δt is limited so that a contact
             // closing within a step approaches by at most F of its elastic range W/k_n,
             // never below R × Δt (`SimParams::closing`, §22).
+            // The friction normal's prediction (`OpenCloseParams::friction_predict`, §30):
+            // the extrapolation gain (1 = linear), or `off`.
+            if let Some(v) = arg("--friction-predict") {
+                params.open_close.friction_predict =
+                    (v != "off").then(|| v.parse().expect("--friction-predict: a gain or off"));
+            }
             if let Some(v) = arg("--closing") {
                 params.closing.elastic_fraction = Some(v.parse().expect("--closing"));
             }

@@ -128,6 +128,14 @@ pub struct Contact {
     pub friction_secant: Option<(f64, f64)>,
     /// State changes within the current open–close loop (cycle detection).
     pub flips: u32,
+    /// Normal force at the start of the last step (the converged force of the step before),
+    /// N, if the contact was closed then; read and set once a step by the friction normal's
+    /// prediction (`OpenCloseParams::friction_predict`), `None` while it is off.
+    pub prior_normal_force: Option<f64>,
+    /// The friction normal force predicted for this step from `prior_normal_force` and the
+    /// last step's (N), if the contact is sliding and was closed at both step starts; the loop
+    /// starts from it where `OpenCloseParams::friction_predict` applies.
+    pub predicted_friction_normal: Option<f64>,
     /// Normal force carried into the step, N: its share of the stored acceleration a₀ that the
     /// trapezoidal rule averages with the step-end forces.
     pub start_normal_force: f64,
@@ -250,6 +258,8 @@ impl ContactSet {
                             bonded: old.bonded,
                             normal_force: old.normal_force,
                             friction_normal: old.friction_normal,
+                            prior_normal_force: old.prior_normal_force,
+                            predicted_friction_normal: old.predicted_friction_normal,
                             slide_offset: old.slide_offset,
                             closed_within_last_step: old.closed_within_last_step,
                             ..new_contact(cand)
@@ -355,6 +365,8 @@ fn new_contact(cand: &Candidate) -> Contact {
         closed_within_last_step: false,
         friction_secant: None,
         flips: 0,
+        prior_normal_force: None,
+        predicted_friction_normal: None,
         start_normal_force: 0.0,
         release_factor: 1.0,
     }

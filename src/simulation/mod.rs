@@ -119,6 +119,12 @@ impl Simulation {
             self.stepper.newmark = crate::assembly::Newmark::of(crate::scene::Integrator::Dda);
             self.stepper.springs.release_weight = 0.0;
         }
+        if let (ContactSolver::Penalty, Some(gain)) = (
+            self.state.scene.control.contact_solver,
+            self.params.open_close.friction_predict,
+        ) {
+            open_close::predict_friction_normals(&mut self.state.contacts.contacts, gain);
+        }
         let taken = self.solve_and_integrate(dt);
         self.stepper.newmark = saved.0;
         self.stepper.springs.release_weight = saved.1;
@@ -453,6 +459,48 @@ mod tests {
             }
             other => panic!("expected NonFinite naming the column, got {other:?}"),
         }
+    }
+
+    /// The friction normal's prediction (`OpenCloseParams::friction_predict`) against its
+    /// closed form: a sliding contact closed at both step starts is predicted
+    /// max(0, N₁ + g·(N₁ − N₀)); without a remembered force, or not sliding, nothing; an open
+    /// contact forgets its force. Contacts of a 4 × 5 wall after one step at rest, with their
+    /// states and forces set by hand (exact arithmetic on integers, so the comparison is exact).
+    #[test]
+    fn the_friction_normal_prediction_extrapolates_the_last_two_steps() {
+        use crate::contact::ContactState;
+        use crate::solve::open_close::predict_friction_normals;
+        let scene = crate::scene::validate(&crate::presets::wall(4, 5)).expect("wall scene");
+        let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
+        sim.step(1.0).expect("a step at rest");
+        let mut cs: Vec<_> = sim.state.contacts.contacts[..4].to_vec();
+        let sliding = ContactState::Sliding { dir: 1.0 };
+        let states = [sliding, sliding, ContactState::Open, ContactState::Locked];
+        for (c, s) in cs.iter_mut().zip(states) {
+            c.state = s;
+            c.normal_force = 100.0;
+            c.prior_normal_force = None;
+        }
+        let predicted = |cs: &[crate::contact::Contact]| -> Vec<Option<f64>> {
+            cs.iter().map(|c| c.predicted_friction_normal).collect()
+        };
+        // First step start: nothing remembered, nothing predicted.
+        predict_friction_normals(&mut cs, 1.0);
+        assert_eq!(predicted(&cs), [None, None, None, None]);
+        let prior: Vec<_> = cs.iter().map(|c| c.prior_normal_force).collect();
+        assert_eq!(prior, [Some(100.0), Some(100.0), None, Some(100.0)]);
+        // Second step start: the last step ended at 130, 20 (sliding), open, 40 (locked).
+        cs[0].normal_force = 130.0;
+        cs[1].normal_force = 20.0;
+        cs[3].normal_force = 40.0;
+        cs[2].state = sliding;
+        predict_friction_normals(&mut cs, 1.0);
+        // 130 + (130 − 100); 20 − 80 clamped to 0; no remembered force; locked: none.
+        assert_eq!(predicted(&cs), [Some(160.0), Some(0.0), None, None]);
+        // Gain 0.5 from (130 remembered, 160 now).
+        cs[0].normal_force = 160.0;
+        predict_friction_normals(&mut cs, 0.5);
+        assert_eq!(cs[0].predicted_friction_normal, Some(175.0));
     }
 
     /// The open–close loop's kept-matrix rule (docs/contact-solve.md §19): when no contact's
