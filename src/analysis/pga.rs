@@ -620,6 +620,7 @@ pub fn evaluate_with_summary(
         stop_when: Some(&decided),
         cancel,
         no_trajectory: true,
+        end_when_still: true,
         ..Default::default()
     };
     let out = run(scene, &gm, &opts)?;
@@ -980,11 +981,20 @@ pub fn search(
             .par_iter()
             .map(|&(_, pga)| {
                 let start = std::time::Instant::now();
-                let failed =
-                    evaluate_combined(scene, motion, &req.criteria, req.combine, pga, cancel)?;
+                let (failed, s) =
+                    evaluate_with_summary(scene, motion, &req.criteria, req.combine, pga, cancel)?;
                 // A long search's progress, run by run (`RUST_LOG=ashlar::analysis::pga=info`
-                // with `ashlar pga`): amplitude m/s², verdict, wall seconds.
-                tracing::info!(pga, failed, seconds = start.elapsed().as_secs_f64(), "run");
+                // with `ashlar pga`): amplitude m/s², verdict, wall seconds, simulated seconds
+                // and steps, and why the run ended early (if it did).
+                tracing::info!(
+                    pga,
+                    failed,
+                    seconds = start.elapsed().as_secs_f64(),
+                    simulated = s.simulated_time,
+                    steps = s.steps,
+                    stopped = s.stopped_reason.as_deref().unwrap_or("-"),
+                    "run"
+                );
                 Ok(failed)
             })
             .collect::<Result<_, RunError>>()?;

@@ -63,6 +63,13 @@ pub struct RunOptions<'a> {
     /// reduced model takes the run back from there (`analysis::run_fallback::HandBackParams`;
     /// `None`: the defaults, on).
     pub hand_back: Option<super::run_fallback::HandBackParams>,
+    /// End a full-engine run before its duration once the ground is still for the rest of the
+    /// run and the structure has stayed settled under it for `RunEndParams::settle_window`
+    /// (`run_end::may_end_still`; `stopped_reason` "settled, ground still"). Set by the PGA
+    /// search's runs, whose verdict cannot change from there (a run at PGA 0, the lattice's
+    /// first point, ends once the structure has settled under gravity); `ashlar run` and the
+    /// service's runs keep their full length (their histories and final state are outputs).
+    pub end_when_still: bool,
     /// Called after every step of a full-engine run; returning true ends the run there with
     /// `stopped_reason` "handed back" (set by `analysis::run_fallback` only).
     pub engine_at_rest: Option<&'a (dyn Fn(&Simulation) -> bool + Sync)>,
@@ -461,6 +468,9 @@ pub fn run(
 /// `stopped_reason` of an engine run ended by `RunOptions::engine_at_rest`.
 pub(crate) const HANDED_BACK: &str = "handed back";
 
+/// `stopped_reason` of an engine run ended by `RunOptions::end_when_still`.
+pub const SETTLED_STILL: &str = "settled, ground still";
+
 /// Run the full DDA engine.
 pub(crate) fn run_dda(
     scene: &Scene,
@@ -477,6 +487,10 @@ pub(crate) fn run_dda(
     // The run goes on after `duration` while the structure moves, up to the cap.
     let cap = run_end::cap(duration, motion, &end);
     let floor = run_end::retirement_floor(scene);
+    let still = opts
+        .end_when_still
+        .then(|| run_end::still_from(scene, motion))
+        .flatten();
     let mut events = Vec::new();
     let mut watch = SettleWatch::default();
     let mut settled = false;
@@ -516,6 +530,12 @@ pub(crate) fn run_dda(
             run_end::all_quiet(&sim, &end),
             end.settle_window,
         );
+        if run_end::may_end_still(still, watch.quiet_since(), sim.time(), end.settle_window)
+            && sim.time() < duration
+        {
+            stopped_reason = Some(SETTLED_STILL.to_string());
+            break;
+        }
         if sim.time() >= next_frame - 1e-9 * interval {
             frame_index += 1;
             writers.emit(&frame(&sim, &failure), opts, Some(sim.time() / duration))?;

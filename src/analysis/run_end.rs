@@ -106,6 +106,30 @@ pub fn horizon(time: f64, duration: f64, cap: f64) -> f64 {
     }
 }
 
+/// s, the time from which the ground cannot load the structure any more: its acceleration is
+/// zero for ever after it ([`GroundMotion::still_from`]). Under a driven block the ground may
+/// go on moving at its last velocity (a record's integral need not end at rest), which moves
+/// the driven block against any fixed one: `None` there unless the motion is scaled to zero.
+pub fn still_from(scene: &Scene, motion: &GroundMotion) -> Option<f64> {
+    match scene.excitation {
+        Excitation::BaseAcceleration => motion.still_from(),
+        Excitation::DrivenBlock(_) => (motion.scale == 0.0).then_some(0.0),
+    }
+}
+
+/// A search's run may end here, before its duration (`RunOptions::end_when_still`): every free
+/// block has been quiet for the whole settle `window` (s) under a ground that is still from
+/// `still` (s) on, so nothing loads the structure any more: it is at rest in equilibrium and
+/// stays so (the reasoning of the continuation's end after the record, [`may_end`], taken as
+/// soon as it holds). `quiet_since` is [`SettleWatch::quiet_since`]; a structure quiet since
+/// before `still` counts from `still`.
+pub fn may_end_still(still: Option<f64>, quiet_since: Option<f64>, time: f64, window: f64) -> bool {
+    match (still, quiet_since) {
+        (Some(still), Some(since)) => time - since.max(still) >= window - 1e-12,
+        _ => false,
+    }
+}
+
 /// The run may end here: it has reached its duration and the structure has settled.
 pub fn may_end(time: f64, duration: f64, settled: bool) -> bool {
     settled && time >= duration - 1e-9
@@ -136,6 +160,11 @@ impl SettleWatch {
         }
         let t0 = *self.quiet_since.get_or_insert(time);
         time - t0 >= window - 1e-12
+    }
+
+    /// s, when the present quiet spell began (`None` while a block moves).
+    pub fn quiet_since(&self) -> Option<f64> {
+        self.quiet_since
     }
 }
 
@@ -235,6 +264,33 @@ mod tests {
         assert!(!w.update(0.08, false, 0.1), "motion restarts the window");
         assert!(!w.update(0.1, true, 0.1));
         assert!(w.update(0.2, true, 0.1));
+    }
+
+    #[test]
+    fn the_ground_is_still_after_the_last_non_zero_sample() {
+        use crate::motion::{Sampled, Signal};
+        let rec = GroundMotion::horizontal(Signal::Sampled(Sampled::new(
+            0.01,
+            vec![0.0, 1.0, -2.0, 0.0, 0.0, 0.0],
+        )));
+        // Linear between samples: a(t) ≠ 0 on (0, 0.03), zero from sample 3 (0.03 s) on.
+        assert!((rec.still_from().expect("a record ends") - 0.03).abs() < 1e-12);
+        assert_eq!(rec.scaled(0.0).still_from(), Some(0.0));
+        let sine = GroundMotion::horizontal(Signal::Sine {
+            amplitude: 1.0,
+            frequency: 2.0,
+        });
+        assert_eq!(sine.still_from(), None);
+        assert_eq!(sine.scaled(0.0).still_from(), Some(0.0));
+        assert_eq!(GroundMotion::none().still_from(), Some(0.0));
+        // The rule needs the whole settle window (0.1 s) quiet under the still ground (from
+        // 1 s), whenever the quiet spell began.
+        assert!(!may_end_still(Some(1.0), Some(0.5), 1.05, 0.1));
+        assert!(may_end_still(Some(1.0), Some(0.5), 1.1, 0.1));
+        assert!(!may_end_still(Some(1.0), Some(1.2), 1.25, 0.1));
+        assert!(may_end_still(Some(1.0), Some(1.2), 1.3, 0.1));
+        assert!(!may_end_still(Some(1.0), None, 5.0, 0.1));
+        assert!(!may_end_still(None, Some(0.0), 5.0, 0.1));
     }
 
     #[test]

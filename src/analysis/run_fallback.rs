@@ -496,6 +496,9 @@ pub(crate) fn from_rest(
         reduced_params: opts.reduced_params,
         run_end: opts.run_end,
         fallback_from_zero: false,
+        // The hand-over's engine runs to its end in a search as in `ashlar run` (the same
+        // path, the same verdict: pga_honesty); the hand-back ends it at rest instead.
+        end_when_still: false,
         hand_back: opts.hand_back,
         engine_at_rest: plan
             .is_some()
@@ -691,6 +694,7 @@ fn hand_back(
         reduced_params: opts.reduced_params,
         run_end: opts.run_end,
         fallback_from_zero: false,
+        end_when_still: false,
         hand_back: opts.hand_back,
         engine_at_rest: None,
     };

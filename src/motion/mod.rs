@@ -336,6 +336,30 @@ impl Signal {
         }
     }
 
+    /// s, the time from which the acceleration is zero for ever (0 for a zero signal or one
+    /// whose samples are all zero; `None` for a sine that never ends). A record is linear
+    /// between samples, so it is still from the sample after its last non-zero one.
+    pub fn still_from(&self) -> Option<f64> {
+        match self {
+            Signal::Zero => Some(0.0),
+            Signal::Sampled(s) => Some(match s.accel.iter().rposition(|&a| a != 0.0) {
+                Some(k) => ((k + 1) as f64 * s.dt).min(s.duration()),
+                None => 0.0,
+            }),
+            Signal::Pulse {
+                amplitude,
+                period,
+                cycles,
+                ..
+            } => Some(if *amplitude == 0.0 {
+                0.0
+            } else {
+                period * cycles
+            }),
+            Signal::Sine { amplitude, .. } => (*amplitude == 0.0).then_some(0.0),
+        }
+    }
+
     /// Peak absolute acceleration, m/s².
     pub fn peak(&self) -> f64 {
         match self {
@@ -451,6 +475,19 @@ impl GroundMotion {
             (Some(a), Some(b)) => Some(a.max(b)),
             (a, b) => a.or(b),
         }
+    }
+
+    /// s, the time from which the ground acceleration is zero for ever, both components after
+    /// scaling (0 when the scale is 0; `None` under a sine that never ends).
+    pub fn still_from(&self) -> Option<f64> {
+        if self.scale == 0.0 {
+            return Some(0.0);
+        }
+        Some(
+            self.horizontal
+                .still_from()?
+                .max(self.vertical.still_from()?),
+        )
     }
 
     /// Peak horizontal acceleration after scaling, m/s².

@@ -206,3 +206,96 @@ fn a_run_shorter_than_the_record_is_reported() {
         .summary;
     assert!(s.diagnostics.record_truncated.is_none());
 }
+
+/// Two free-standing columns on a fixed base (the full engine: more than one free block), a
+/// slender one (0.2 × 1.2 m, tan α = 1/6: it rocks from 1.64 m/s²) and a stocky one, friction
+/// 75°, for 10 s: the burst's 1 s, then 9 s of still ground (the blocks ring on their contact
+/// springs for seconds after the burst before they are quiet by `RunEndParams`' bound).
+fn pair() -> Scene {
+    let blocks = json!([
+        { "id": "base", "material": "stone", "fixed": true, "vertices": [[-2.0, -0.5], [2.0, -0.5], [2.0, 0.0], [-2.0, 0.0]] },
+        { "id": "slender", "material": "stone", "block_model": "rigid", "vertices": [[-1.1, 0.0], [-0.9, 0.0], [-0.9, 1.2], [-1.1, 1.2]] },
+        { "id": "stocky", "material": "stone", "block_model": "rigid", "vertices": [[0.75, 0.0], [1.25, 0.0], [1.25, 1.0], [0.75, 1.0]] },
+    ]);
+    parse(&common::scene_json(
+        blocks,
+        75.0,
+        json!({ "duration": 10.0 }),
+    ))
+}
+
+/// A PGA search's run ends once the structure has settled under a ground that stays still
+/// (`RunOptions::end_when_still`, docs/pga.md "The wall's search"): at PGA 0 (the lattice's
+/// first point) as soon as it has settled under gravity, and after a burst it stood once it
+/// has settled again, with the verdict of the full-length run (the path `ashlar run` takes, the
+/// reference) and its final state within 1e-5 rad and 1e-5 m. Why that bound: a settled block
+/// has kinetic energy below 1e-6·m·g·L, which carries a rocking block up by a few µrad and a
+/// sliding one on by 1e-6·L/μ (µm; `RunEndParams::settle_energy_ratio`); 10× that. Below the
+/// bound both runs sit on the same springs at rest: measured differences are stated in the
+/// failure message.
+#[test]
+fn a_search_run_ends_once_settled_under_a_still_ground() {
+    use ashlar::analysis::pga::{evaluate_with_summary, Combine, Criterion};
+    use ashlar::analysis::run::SETTLED_STILL;
+    let scene = pair();
+    let criteria = [Criterion::parse("toppled:slender").expect("criterion")];
+    // 0: gravity alone; 1.0 m/s²: below the slender column's uplift (1.64), nothing rocks;
+    // 2.0 m/s²: the slender column topples (the criterion ends both runs' verdicts alike).
+    for pga in [0.0, 1.0, 2.0] {
+        let gm = burst().scaled_to_pga(pga);
+        let (failed, early) =
+            evaluate_with_summary(&scene, &burst(), &criteria, Combine::All, pga, None)
+                .expect("search run");
+        let full = run(&scene, &gm, &RunOptions::default())
+            .expect("full run")
+            .summary;
+        assert!(
+            full.completed && full.settled,
+            "pga {pga}: the reference ends settled"
+        );
+        let slender = full
+            .blocks
+            .iter()
+            .find(|b| b.id == "slender")
+            .expect("slender");
+        let met = slender.final_rotation.abs() > 30f64.to_radians();
+        assert_eq!(failed, met, "pga {pga}: the same verdict as the full run");
+        if failed {
+            // Toppled: the criterion decides the run (past 60°) before anything settles.
+            assert_eq!(
+                early.stopped_reason.as_deref(),
+                Some("decided"),
+                "pga {pga}"
+            );
+            continue;
+        }
+        assert_eq!(
+            early.stopped_reason.as_deref(),
+            Some(SETTLED_STILL),
+            "pga {pga}: the search's run ends early ({} s)",
+            early.simulated_time
+        );
+        // Still from 0 at PGA 0, from the burst's end (1 s) otherwise.
+        let still = if pga == 0.0 { 0.0 } else { PERIOD };
+        assert!(
+            early.simulated_time > still && early.simulated_time < full.simulated_time,
+            "pga {pga}: ended at {} s, after the ground is still ({still} s) and before the full run's {} s",
+            early.simulated_time,
+            full.simulated_time
+        );
+        for (a, b) in early.blocks.iter().zip(&full.blocks) {
+            let dr = (a.final_rotation - b.final_rotation).abs();
+            let dd = (a.final_displacement[0] - b.final_displacement[0])
+                .hypot(a.final_displacement[1] - b.final_displacement[1]);
+            assert!(
+                dr <= 1e-5 && dd <= 1e-5,
+                "pga {pga}, {}: rotation {dr:.2e} rad, displacement {dd:.2e} m from the full run's",
+                a.id
+            );
+        }
+        eprintln!(
+            "pga {pga}: ended at {:.3} s ({} steps) against {:.3} s ({} steps)",
+            early.simulated_time, early.steps, full.simulated_time, full.steps
+        );
+    }
+}
