@@ -474,15 +474,17 @@ pub struct PgaResult {
     /// number of cores; the runs evaluated ahead of the refinement are in `runs` only.
     #[serde(default)]
     pub failing_intervals: Vec<[f64; 2]>,
-    /// The scan that was run: `full` (every scan point) or `lowest` (ascending, stopped after
-    /// the first batch holding a failing point). A `lowest` request that reached the top of
-    /// the range, or whose lowest point failed, reports `full`. (`full` in results written
-    /// before the field existed.)
+    /// The scan that was run: `full` (every scan point) or `lowest` (ascending, stopped at the
+    /// first failing point; on several cores the rest of that point's batch was run too and
+    /// is in `runs` only). A `lowest` request whose first failing point is the range's top,
+    /// or whose lowest point failed, reports `full`. (`full` in results written before the
+    /// field existed.)
     #[serde(default)]
     pub scan: ScanOrder,
-    /// m/s², the highest scan point run: the range's max after a full scan. Above it nothing
-    /// was run, so `failing_intervals` and `monotonic` say nothing there. (`null` in results
-    /// written before the field existed.)
+    /// m/s², the highest scan point the answer reads: the range's max after a full scan, the
+    /// first failing point after a lowest one (the same for any number of cores; points of
+    /// its batch above it may be in `runs`). Above it `failing_intervals` and `monotonic` say
+    /// nothing. (`null` in results written before the field existed.)
     #[serde(default)]
     pub scanned_to: Option<f64>,
     pub runs: Vec<PgaRun>,
@@ -838,9 +840,20 @@ pub fn plan(
             break;
         }
     }
+    // Where the scan would have stopped on one core: a lowest scan at its first failing point
+    // (the rest of its last batch was run only because `width` points go at once, so it stays
+    // in `runs` and out of the answer); a full scan, or one whose lowest point failed, at the
+    // top. `scanned_to`, `monotonic` and `failing_intervals` read this, not `scanned`.
+    let scan_end = match req.scan {
+        ScanOrder::Lowest if !runs.first().is_some_and(|r| r.failed) => runs
+            .iter()
+            .position(|r| r.failed)
+            .map_or(scanned, |k| k + 1),
+        _ => scanned,
+    };
     // The scan and the refinement's own points: what the result's answer, `monotonic` and
     // `failing_intervals` are read from, the same for any width.
-    let mut path = runs.clone();
+    let mut path = runs[..scan_end].to_vec();
     // Bisect the lowest change of outcome between neighbouring lattice points (the threshold
     // the search answers: the lowest failing amplitude, or for a range that starts failing,
     // e.g. a `not:` criterion, the highest amplitude that still fails) down to the tolerance.
@@ -897,7 +910,7 @@ pub fn plan(
     runs.sort_by(|a, b| a.pga.total_cmp(&b.pga));
     path.sort_by(|a, b| a.pga.total_cmp(&b.pga));
     let (safe, fail, monotonic) = bracket_of(&path);
-    let full = scanned == n;
+    let full = scan_end == n;
     Step::Done(PgaResult {
         criterion: req.combine.label(&req.criteria),
         safe_pga: safe,
@@ -911,7 +924,7 @@ pub fn plan(
         } else {
             ScanOrder::Lowest
         },
-        scanned_to: Some(grid[scanned - 1]),
+        scanned_to: Some(grid[scan_end - 1]),
         runs,
     })
 }
@@ -1546,17 +1559,36 @@ mod tests {
                     .copied()
                     .collect();
                 assert_eq!(scan, (0..stop).map(at).collect::<Vec<_>>(), "{why}");
-                assert_eq!(low.scanned_to, Some(at(stop - 1)), "{why}");
+                // What the answer reads stops at the first failing point whatever the width:
+                // the rest of its batch is in `runs` only.
+                assert_eq!(low.scanned_to, Some(at(first)), "{why}");
                 assert_eq!(full.scanned_to, Some(at(16)));
                 assert_eq!(
                     full.runs.len() - low.runs.len(),
                     17 - stop,
                     "{why}: the refinement is shared"
                 );
-                if stop < 17 {
-                    assert_eq!(low.scan, ScanOrder::Lowest, "{why}");
-                    assert!(!low.monotonic, "{why}: nothing above the stop was run");
-                }
+                assert_eq!(low.scan, ScanOrder::Lowest, "{why}");
+                assert!(
+                    !low.monotonic,
+                    "{why}: nothing above the first failure was read"
+                );
+                let (one, _) = drive(&lowest(req.clone()), 1, fails);
+                assert_eq!(
+                    (
+                        &low.failing_intervals,
+                        low.scanned_to,
+                        low.monotonic,
+                        low.scan
+                    ),
+                    (
+                        &one.failing_intervals,
+                        one.scanned_to,
+                        one.monotonic,
+                        one.scan
+                    ),
+                    "{why}: the lowest scan's result against one core's"
+                );
                 assert_eq!(full.scan, ScanOrder::Full);
             }
         }
@@ -1650,8 +1682,8 @@ mod tests {
     /// The property of the search's answer: for outcome functions fragmented below the
     /// resolution, the same `safe_pga`/`failing_pga` to the bit for widths 1, 2, 3, 4, 8, 16
     /// and for ranges that start anywhere below the lowest failing lattice point (and end
-    /// anywhere above it), from the full and the lowest scan; `monotonic` and
-    /// `failing_intervals` too for full scans of the same range. (The planner before the lattice,
+    /// anywhere above it), from the full and the lowest scan; `monotonic`, `failing_intervals`,
+    /// `scanned_to` and `scan` too, for both scans of the same range. (The planner before the lattice,
     /// given the same resolution as evenly spaced points, failed it: docs/pga.md.)
     fn same_answer_for_any_width_and_range(
         seed: u64,
@@ -1712,13 +1744,27 @@ mod tests {
                     }
                 }
             }
-            let one = run(&req(min, max), 1);
-            for &width in &widths[1..] {
-                let r = run(&req(min, max), width);
-                if (r.monotonic, &r.failing_intervals) != (one.monotonic, &one.failing_intervals) {
-                    return Err(format!(
-                        "range {i}, width {width}: monotonic or intervals moved"
-                    ));
+            for scan in [ScanOrder::Full, ScanOrder::Lowest] {
+                let req = PgaRequest {
+                    scan,
+                    ..req(min, max)
+                };
+                let one = run(&req, 1);
+                for &width in &widths[1..] {
+                    let r = run(&req, width);
+                    let read = |r: &PgaResult| {
+                        (
+                            r.monotonic,
+                            r.failing_intervals.clone(),
+                            r.scanned_to,
+                            r.scan,
+                        )
+                    };
+                    if read(&r) != read(&one) {
+                        return Err(format!(
+                            "range {i}, width {width}, {scan:?}: monotonic, intervals or scan moved"
+                        ));
+                    }
                 }
             }
         }
