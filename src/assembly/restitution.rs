@@ -171,9 +171,10 @@ pub struct ImpactParams {
     pub cluster: bool,
     /// With [`cluster`](Self::cluster): find the joined blocks by session 39's fixed point
     /// (every contact scanned again until nothing grows) instead of the union–find. The same
-    /// set, so the same bits (checked: state digests of the shaken wall, docs/energy-after-record.md
-    /// "The cluster as the default (session 40)"). `false` (default); for diagnosis and cost
-    /// comparison.
+    /// set, so the same bits, for components within [`cluster_max_blocks`](Self::cluster_max_blocks)
+    /// (checked before the cap: state digests of the shaken wall, docs/energy-after-record.md
+    /// "The cluster as the default (session 40)"); the fixed point ignores the cap. `false`
+    /// (default); for diagnosis and cost comparison.
     pub cluster_fixed_point: bool,
     /// With [`cluster`](Self::cluster): a component of blocks joined by closed contacts with
     /// more free blocks than this keeps the law before session 40 (only the blocks the
@@ -470,8 +471,9 @@ fn lone_free_block(input: &ImpactInput, c: &Contact) -> Option<usize> {
 /// Marks in `involved` (per free block) every free block joined to one already marked through
 /// closed contacts between two free blocks that take part ([`ImpactParams::cluster`]),
 /// transitively. Union–find with path halving over one pass of the contacts, then one pass over
-/// the blocks: O(contacts + blocks) whatever the stack's depth. `parent` and `hit` are kept
-/// buffers (no allocation once grown).
+/// the blocks: O(contacts + blocks) whatever the stack's depth. A component of more than
+/// `max_blocks` free blocks is not joined ([`ImpactParams::cluster_max_blocks`]). `parent`,
+/// `hit` and `size` are kept buffers (no allocation once grown).
 fn join_clusters(
     input: &ImpactInput,
     contacts: &[Contact],
