@@ -9,7 +9,7 @@
 //! sliding after at least `cycle_flips` state changes (the rule's closings, or their successors):
 //! block pair, interface load at the step end against the lighter stone's weight, normal, time.
 //! Run: `cargo run --release --example colonnade_rules -- [NAME,…] [--trace NAME] [--record FILE]
-//! [--pga G] [--duration S] [--impact-cluster on|off|fixed-point]`.
+//! [--pga G] [--duration S] [--impact-cluster on|off]`.
 use ashlar::analysis::run::Summary;
 use ashlar::contact::ContactState;
 use ashlar::presets;
@@ -242,7 +242,7 @@ fn main() {
         .to_vec(),
     };
     // `--record FILE --pga G --duration S`: another motion (a record of data/ground-motions
-    // scaled to G g) or length; `--impact-cluster on|off|fixed-point`: `ImpactParams::cluster`
+    // scaled to G g) or length; `--impact-cluster on|off`: `ImpactParams::cluster`
     // (on by default since session 40).
     let opt = |k: &str| {
         args.iter()
@@ -250,7 +250,6 @@ fn main() {
             .and_then(|i| args.get(i + 1).cloned())
     };
     let duration: f64 = opt("--duration").map_or(DURATION, |v| v.parse().expect("--duration"));
-    // `fixed-point`: on, with session 39's search for the joined blocks (same bits).
     let cluster = opt("--impact-cluster");
     let (mut scene, mut gm) = presets::rocking_colonnade(duration).expect("colonnade");
     if let Some(r) = opt("--record") {
@@ -276,9 +275,8 @@ fn main() {
         match cluster.as_deref() {
             Some("on") => sim_params.impact.cluster = true,
             Some("off") => sim_params.impact.cluster = false,
-            Some("fixed-point") => sim_params.impact.cluster_fixed_point = true,
             None => {}
-            Some(o) => panic!("--impact-cluster {o}: on, off or fixed-point"),
+            Some(o) => panic!("--impact-cluster {o}: on or off"),
         }
         let opts = ashlar::analysis::run::RunOptions {
             sim_params: Some(sim_params),

@@ -27,7 +27,7 @@
 //!  [--digest] [--no-settle] [--settle-max S] [--lead-in S] [--motions …,sine3]
 //!  [--wall-set length=12,height=6,openings=0] [--record FILE] [--pga G] [--window S]
 //!  [--unconverged-floor R] [--floor-hold on|off] [--floor-penetration F]
-//!  [--floor-iterations N] [--min-located R] [--growth G] [--impact-cluster on|off|fixed-point]`
+//!  [--floor-iterations N] [--min-located R] [--growth G] [--impact-cluster on|off]`
 //!
 //! `--wall-set`, `--record`/`--pga`, `--window S` (a line of counters every S simulated
 //! seconds) and the knobs `--unconverged-floor`, `--min-located`, `--growth` are the wall shaken
@@ -676,19 +676,15 @@ fn main() {
             if let Some(v) = arg("--min-located") {
                 params.impact.min_located_ratio = v.parse().expect("--min-located");
             }
-            // `--impact-cluster on|off|fixed-point`: the impact law's cluster
-            // (`ImpactParams::cluster`, on by default since session 40), `fixed-point` with
-            // session 39's search for the joined blocks (`cluster_fixed_point`: same bits,
-            // docs/energy-after-record.md).
+            // `--impact-cluster on|off`: the impact law's cluster (`ImpactParams::cluster`, on
+            // by default since session 40). Session 40's `fixed-point` value (session 39's
+            // search for the joined blocks) was removed in session 41: it ignored
+            // `cluster_max_blocks` (docs/energy-after-record.md).
             match arg("--impact-cluster").as_deref() {
                 Some("on") => params.impact.cluster = true,
                 Some("off") => params.impact.cluster = false,
-                Some("fixed-point") => {
-                    params.impact.cluster = true;
-                    params.impact.cluster_fixed_point = true;
-                }
                 None => {}
-                Some(o) => panic!("--impact-cluster {o}: on, off or fixed-point"),
+                Some(o) => panic!("--impact-cluster {o}: on or off"),
             }
             // `--growth G`: Δt's growth a step after a cut (`SimParams::growth`, §24).
             if let Some(v) = arg("--growth") {

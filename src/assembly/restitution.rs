@@ -169,13 +169,6 @@ pub struct ImpactParams {
     /// A single block has no free neighbour: its impacts are unchanged. Cost and suites:
     /// docs/energy-after-record.md, "The cluster as the default (session 40)".
     pub cluster: bool,
-    /// With [`cluster`](Self::cluster): find the joined blocks by session 39's fixed point
-    /// (every contact scanned again until nothing grows) instead of the union–find. The same
-    /// set, so the same bits, for components within [`cluster_max_blocks`](Self::cluster_max_blocks)
-    /// (checked before the cap: state digests of the shaken wall, docs/energy-after-record.md
-    /// "The cluster as the default (session 40)"); the fixed point ignores the cap. `false`
-    /// (default); for diagnosis and cost comparison.
-    pub cluster_fixed_point: bool,
     /// With [`cluster`](Self::cluster): a component of blocks joined by closed contacts with
     /// more free blocks than this keeps the law before session 40 (only the blocks the
     /// impacting contacts touch take impulses). Why: the impulse solve is a projected
@@ -235,7 +228,6 @@ impl Default for ImpactParams {
             min_located_ratio: 0.0,
             hand_over_below: Some(2.0),
             cluster: true,
-            cluster_fixed_point: false,
             cluster_max_blocks: 64,
         }
     }
@@ -527,32 +519,6 @@ fn join_clusters(
     }
 }
 
-/// [`join_clusters`] as session 39 wrote it, a fixed point: every contact is scanned again
-/// until no block is added (one pass per block of depth). Kept for
-/// [`ImpactParams::cluster_fixed_point`].
-fn join_clusters_fixed_point(input: &ImpactInput, contacts: &[Contact], involved: &mut [bool]) {
-    let free = &input.dofs.free_index;
-    loop {
-        let mut grown = false;
-        for c in contacts {
-            if !c.state.is_closed() || !takes_part(input, c) {
-                continue;
-            }
-            let (Some(fi), Some(fj)) = (free[c.vertex_block], free[c.edge_block]) else {
-                continue;
-            };
-            if involved[fi] != involved[fj] {
-                involved[fi] = true;
-                involved[fj] = true;
-                grown = true;
-            }
-        }
-        if !grown {
-            break;
-        }
-    }
-}
-
 /// Whether an impact approaching at the normal gap rate `rate` (m/s, negative closing) is
 /// located (`ImpactParams::locate_speed_ratio`; at 1 or less every impact is).
 fn fast_enough(rate: f64, input: &ImpactInput, params: &ImpactParams) -> bool {
@@ -759,22 +725,19 @@ pub fn apply_impacts(
     }
     // With `ImpactParams::cluster`, the free blocks joined to them through closed contacts,
     // transitively: the connected components (over closed contacts between two free blocks)
-    // that hold an involved block, by union–find in one pass over the contacts. The same set
-    // as the fixed point it replaced (rescan every contact until nothing grows: one pass per
-    // block of depth, a wall's whole height for a landing in it).
+    // that hold an involved block and have at most `cluster_max_blocks` free blocks, by
+    // union–find in one pass over the contacts. Within the cap, the same set as session 39's
+    // fixed point it replaced (rescan every contact until nothing grows: one pass per block of
+    // depth, a wall's whole height for a landing in it); that copy was removed in session 41.
     let count = impacting.iter().filter(|&&i| i).count();
     if params.cluster && count > 0 {
-        if params.cluster_fixed_point {
-            join_clusters_fixed_point(input, contacts, involved);
-        } else {
-            join_clusters(
-                input,
-                contacts,
-                involved,
-                (parent, hit, size),
-                params.cluster_max_blocks,
-            );
-        }
+        join_clusters(
+            input,
+            contacts,
+            involved,
+            (parent, hit, size),
+            params.cluster_max_blocks,
+        );
     }
     // The pivot landings among them, at their approach rates before the impulses: marked in
     // the row loop below, which computes those rates anyway.
