@@ -180,7 +180,9 @@ pub struct ImpactParams {
     /// instead of 0.2783 s, deepest penetration 3.1e-4 m instead of 8.0e-7 m, 37 s instead of
     /// 24 s (session 40, lead). 64: twice the largest stack the suites and bundled examples
     /// need (the colonnade, 29 free blocks). Above it the energy defect the cluster fixes is
-    /// still possible (docs/energy-after-record.md).
+    /// still possible (docs/energy-after-record.md). Not a size the sweeps are known to
+    /// converge at: an aligned 8 × 8 stack (64, joined) takes 4 Δt cuts at a landing, 5 × 13
+    /// (65, not joined) none, 30 with no cap (tests/regression/regression_impact_cluster_size.rs).
     pub cluster_max_blocks: usize,
 }
 

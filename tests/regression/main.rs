@@ -13,6 +13,7 @@ mod regression_dual_tolerance_small_dt;
 mod regression_dual_trapezoidal;
 mod regression_floor_penetration;
 mod regression_handover_verdict;
+mod regression_impact_cluster_size;
 mod regression_impact_energy_stack;
 mod regression_pga_range;
 mod regression_phantom_penetration;
