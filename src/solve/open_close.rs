@@ -500,28 +500,37 @@ pub enum OpenClose {
     },
 }
 
-/// Dot product of a contact gradient with a block's unknowns (rigid blocks use 3).
+/// A block's unknowns in `x` (`None` for a block without unknowns).
 #[inline]
-fn dot(v: &Vec6, x: &[f64], dofs: &Dofs, block: usize) -> f64 {
-    match dofs.free_index[block] {
-        Some(f) => {
-            let o = dofs.offset[f];
-            // Rigid: the same sum unrolled (a float sum starts from −0.0, which adds nothing).
-            match x.get(o..o + dofs.ndof[f]) {
-                Some(&[x0, x1, x2]) => v[0] * x0 + v[1] * x1 + v[2] * x2,
-                _ => (0..dofs.ndof[f]).map(|k| v[k] * x[o + k]).sum(),
-            }
-        }
+fn block_unknowns<'x>(x: &'x [f64], dofs: &Dofs, block: usize) -> Option<&'x [f64]> {
+    dofs.free_index[block].map(|f| {
+        let o = dofs.offset[f];
+        &x[o..o + dofs.ndof[f]]
+    })
+}
+
+/// Dot product of a contact gradient with a block's unknowns (rigid blocks use 3; 0 for a
+/// block without unknowns).
+#[inline]
+fn dot(v: &Vec6, xb: Option<&[f64]>) -> f64 {
+    match xb {
+        // Rigid: the same sum unrolled (a float sum starts from −0.0, which adds nothing).
+        Some(&[x0, x1, x2]) => v[0] * x0 + v[1] * x1 + v[2] * x2,
+        Some(xb) => xb.iter().enumerate().map(|(k, &xk)| v[k] * xk).sum(),
         None => 0.0,
     }
 }
 
-/// Gap and shear measure of a contact for the solution `x` (m).
+/// Gap and shear measure of a contact for the solution `x` (m). Each block's unknowns are
+/// looked up once for both measures (session 41; the same sums in the same order as four
+/// look-ups, docs/contact-solve.md §31).
 #[inline]
 pub fn measures(c: &Contact, x: &[f64], dofs: &Dofs, prescribed: &[Prescribed]) -> (f64, f64) {
     let (g0, s0) = constants(c, prescribed);
-    let g = g0 + dot(&c.e_i, x, dofs, c.vertex_block) - dot(&c.e_j, x, dofs, c.edge_block);
-    let s = s0 + dot(&c.f_i, x, dofs, c.vertex_block) - dot(&c.f_j, x, dofs, c.edge_block);
+    let xi = block_unknowns(x, dofs, c.vertex_block);
+    let xj = block_unknowns(x, dofs, c.edge_block);
+    let g = g0 + dot(&c.e_i, xi) - dot(&c.e_j, xj);
+    let s = s0 + dot(&c.f_i, xi) - dot(&c.f_j, xj);
     (g, s)
 }
 

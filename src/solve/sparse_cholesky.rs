@@ -588,6 +588,13 @@ impl SparseCholesky {
     /// since the factored values and the largest entry, for [`SparseCholesky::major_changes`]:
     /// one pass over the values instead of two. Not inlined: inlined into `factor_solve` it
     /// compiled to 1 % more instructions (callgrind, docs/contact-solve.md §15).
+    ///
+    /// Block by block (session 41): each block's entries are copied where its columns put them
+    /// (entry r of column c of the block at `col_ptr` of that column + the rows of the blocks
+    /// above it), so a slot's change maxima are kept in registers over its whole block and a
+    /// rigid pair's 3 × 3 copy unrolls; the maxima are taken over the same entries in the same
+    /// order (column by column) as the column-by-column pass did, and a maximum of |·| values
+    /// does not round: `change` is the same to the bit (docs/contact-solve.md §31).
     #[inline(never)]
     fn fill_values(&mut self, sys: &BlockSystem, dofs: &Dofs, track_changes: bool) {
         self.values.resize(self.row_idx.len(), 0.0);
@@ -595,35 +602,56 @@ impl SparseCholesky {
             self.change.clear();
             self.change.resize(sys.pairs.len(), [0.0; 2]);
         }
-        let mut at = 0;
-        for b in 0..dofs.ndof.len() {
-            for c in 0..dofs.ndof[b] {
-                for &(a, slot) in &self.col_blocks[b] {
-                    // Column c of a 6×6 block (nalgebra stores columns contiguously).
-                    let (src, rows) = match slot {
-                        None => (&sys.diag[b].as_slice()[6 * c..], c + 1),
-                        Some(k) => (&sys.off[k].as_slice()[6 * c..], dofs.ndof[a]),
-                    };
-                    let new = &src[..rows];
-                    let dst = &mut self.values[at..at + rows];
-                    if let (true, Some(k)) = (track_changes, slot) {
-                        // Copy and compare in one loop over the column's (≤ 6) entries: a
-                        // `copy_from_slice` of so few entries was a `memcpy` call each, and
-                        // the loop's maxima are the same as before (same order).
-                        let old = &self.factored_values[at..at + rows];
-                        let [mut delta, mut size] = self.change[k];
-                        for ((d, &new), &old) in dst.iter_mut().zip(new).zip(old) {
-                            *d = new;
-                            delta = delta.max((new - old).abs());
-                            size = size.max(new.abs()).max(old.abs());
-                        }
-                        self.change[k] = [delta, size];
-                    } else {
-                        for (d, &new) in dst.iter_mut().zip(new) {
-                            *d = new;
+        let values = &mut self.values[..];
+        let old_values = &self.factored_values[..];
+        for (b, col_blocks) in self.col_blocks.iter().enumerate() {
+            let nc = dofs.ndof[b];
+            let cols = &self.col_ptr[dofs.offset[b]..dofs.offset[b] + nc];
+            // Rows of the blocks above this one in each of the block's columns.
+            let mut above = 0;
+            for &(a, slot) in col_blocks {
+                match slot {
+                    None => {
+                        // The diagonal block, last in its columns: rows 0..=c of column c.
+                        let src = sys.diag[b].as_slice();
+                        for (c, &start) in cols.iter().enumerate() {
+                            let at = start + above;
+                            values[at..at + c + 1].copy_from_slice(&src[6 * c..6 * c + c + 1]);
                         }
                     }
-                    at += rows;
+                    Some(k) => {
+                        let nr = dofs.ndof[a];
+                        let src = sys.off[k].as_slice();
+                        if track_changes {
+                            let [mut delta, mut size] = self.change[k];
+                            let mut note = |at: usize, new: &[f64]| {
+                                let dst = &mut values[at..at + new.len()];
+                                let old = &old_values[at..at + new.len()];
+                                for ((d, &new), &old) in dst.iter_mut().zip(new).zip(old) {
+                                    *d = new;
+                                    delta = delta.max((new - old).abs());
+                                    size = size.max(new.abs()).max(old.abs());
+                                }
+                            };
+                            if nr == 3 && nc == 3 {
+                                // A rigid pair: constant sizes, the loops unroll.
+                                for (c, &start) in cols.iter().enumerate() {
+                                    note(start + above, &src[6 * c..6 * c + 3]);
+                                }
+                            } else {
+                                for (c, &start) in cols.iter().enumerate() {
+                                    note(start + above, &src[6 * c..6 * c + nr]);
+                                }
+                            }
+                            self.change[k] = [delta, size];
+                        } else {
+                            for (c, &start) in cols.iter().enumerate() {
+                                let at = start + above;
+                                values[at..at + nr].copy_from_slice(&src[6 * c..6 * c + nr]);
+                            }
+                        }
+                        above += nr;
+                    }
                 }
             }
         }
@@ -1188,6 +1216,92 @@ mod tests {
             sys.rhs.push(r);
         }
         (sys, dofs)
+    }
+
+    /// `fill_values` as it was before session 41 (column by column, every block of a column in
+    /// turn): the reference of its bit-identity test. Returns the values and the changes.
+    fn fill_values_by_column(
+        chol: &SparseCholesky,
+        sys: &BlockSystem,
+        dofs: &Dofs,
+    ) -> (Vec<f64>, Vec<[f64; 2]>) {
+        let mut values = vec![0.0; chol.row_idx.len()];
+        let mut change = vec![[0.0_f64; 2]; sys.pairs.len()];
+        let mut at = 0;
+        for b in 0..dofs.ndof.len() {
+            for c in 0..dofs.ndof[b] {
+                for &(a, slot) in &chol.col_blocks[b] {
+                    let (src, rows) = match slot {
+                        None => (&sys.diag[b].as_slice()[6 * c..], c + 1),
+                        Some(k) => (&sys.off[k].as_slice()[6 * c..], dofs.ndof[a]),
+                    };
+                    for r in 0..rows {
+                        let (new, old) = (src[r], chol.factored_values[at + r]);
+                        values[at + r] = new;
+                        if let Some(k) = slot {
+                            let [delta, size] = change[k];
+                            change[k] = [
+                                delta.max((new - old).abs()),
+                                size.max(new.abs()).max(old.abs()),
+                            ];
+                        }
+                    }
+                    at += rows;
+                }
+            }
+        }
+        (values, change)
+    }
+
+    /// The block-by-block `fill_values` (session 41) gives the column-by-column copy's values
+    /// and change maxima to the bit (tolerance 0: it is meant to do the same operations), on a
+    /// rigid grid and on one with every third block deformable (6 unknowns: the general path).
+    #[test]
+    fn block_fill_equals_the_column_by_column_fill_to_the_bit() {
+        for mixed in [false, true] {
+            let (mut sys, mut dofs) = grid_system(60, 7);
+            if mixed {
+                let mut offset = 0;
+                for f in 0..dofs.ndof.len() {
+                    dofs.ndof[f] = if f % 3 == 1 { 6 } else { 3 };
+                    dofs.offset[f] = offset;
+                    offset += dofs.ndof[f];
+                }
+                dofs.n = offset;
+                // Fill the 6-dof parts too (the grid filled only the leading 3 × 3).
+                let mut v = 0.37;
+                for m in sys.diag.iter_mut().chain(sys.off.iter_mut()) {
+                    for e in m.iter_mut() {
+                        if *e == 0.0 {
+                            v = (v * 7.31 + 0.11) % 1.0;
+                            *e = v - 0.5;
+                        }
+                    }
+                }
+            }
+            let mut chol = SparseCholesky::default();
+            chol.rebuild_pattern(&sys, &dofs, &SparseParams::default())
+                .expect("pattern");
+            chol.fill_values(&sys, &dofs, false);
+            chol.factored_values.clone_from(&chol.values);
+            for (k, m) in sys.off.iter_mut().enumerate() {
+                if k % 4 == 0 {
+                    *m *= 1.5;
+                } else {
+                    *m *= 1.0 + 1e-9 * k as f64;
+                }
+            }
+            chol.fill_values(&sys, &dofs, true);
+            let (values, change) = fill_values_by_column(&chol, &sys, &dofs);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&chol.values), bits(&values), "values, mixed {mixed}");
+            assert_eq!(
+                bits(&chol.change.concat()),
+                bits(&change.concat()),
+                "changes, mixed {mixed}"
+            );
+            assert!(chol.major_changes() > 0, "the test changes some blocks");
+        }
     }
 
     fn rhs_of(sys: &BlockSystem, dofs: &Dofs) -> Vec<f64> {
