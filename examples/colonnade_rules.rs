@@ -8,6 +8,8 @@
 //! step in which the cycle rule closed a contact sliding, lists the contacts that end the step
 //! sliding after at least `cycle_flips` state changes (the rule's closings, or their successors):
 //! block pair, interface load at the step end against the lighter stone's weight, normal, time.
+//! Configurations `no-predict`, `no-stick`, `no-slip`, `no-predictions`: the default without
+//! the stick–slip prediction, without one half of it, or without any prediction (§32).
 //! Run: `cargo run --release --example colonnade_rules -- [NAME,…] [--trace NAME] [--record FILE]
 //! [--pga G] [--duration S] [--impact-cluster on|off]`.
 use ashlar::analysis::run::Summary;
@@ -116,6 +118,28 @@ fn config(name: &str) -> Option<OpenCloseParams> {
             light_state_changes: false,
             ..d
         }),
+        // Session 41's stick–slip prediction (docs/contact-solve.md §32): the default without
+        // it, or without one of its halves, and session 40's default (no friction prediction
+        // either).
+        "no-predict" => OpenCloseParams {
+            stick_predict: None,
+            slip_predict: None,
+            ..d
+        },
+        "no-stick" => OpenCloseParams {
+            stick_predict: None,
+            ..d
+        },
+        "no-slip" => OpenCloseParams {
+            slip_predict: None,
+            ..d
+        },
+        "no-predictions" => OpenCloseParams {
+            stick_predict: None,
+            slip_predict: None,
+            friction_predict: None,
+            ..d
+        },
         _ => return None,
     })
 }

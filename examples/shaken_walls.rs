@@ -27,7 +27,9 @@
 //!  [--digest] [--no-settle] [--settle-max S] [--lead-in S] [--motions …,sine3]
 //!  [--wall-set length=12,height=6,openings=0] [--record FILE] [--pga G] [--window S]
 //!  [--unconverged-floor R] [--floor-hold on|off] [--floor-penetration F]
-//!  [--floor-iterations N] [--min-located R] [--growth G] [--impact-cluster on|off]`
+//!  [--floor-iterations N] [--min-located R] [--growth G] [--impact-cluster on|off]
+//!  [--friction-predict GAIN|off] [--stick-predict GAIN|off] [--slip-predict GAIN|off]
+//!  [--first-kinds]`
 //!
 //! `--wall-set`, `--record`/`--pga`, `--window S` (a line of counters every S simulated
 //! seconds) and the knobs `--unconverged-floor`, `--min-located`, `--growth` are the wall shaken
@@ -40,6 +42,11 @@
 //! `--ordering`, `--relax` and `--dissection-leaf` choose its ordering and supernode
 //! amalgamation (`SparseParams::ordering`, `relax`, `dissection_leaf`);
 //! `--digest` prints a hash of every vertex and velocity at the end (bit-identity checks).
+//!
+//! `--stick-predict` and `--slip-predict` set the stick–slip prediction's gains
+//! (`OpenCloseParams::stick_predict`, `slip_predict`, docs/contact-solve.md §32; `off` turns it
+//! off); `--first-kinds` prints, for the measured steps, the sets of change kinds the first
+//! solve of a step found and the steps and solves each set cost.
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
 //! fixed-point loop); `--anderson-restart` restarts its history whenever a contact changes state.
@@ -290,6 +297,10 @@ fn measured_steps(
     let mut deepest: f64 = 0.0;
     let window: Option<f64> = arg("--window").map(|v| v.parse().expect("--window"));
     let mut w = WindowStart::at(sim);
+    // `--first-kinds` (§32): per set of change kinds the first solve of a step found, the
+    // steps and their solves.
+    let first_kinds = std::env::args().any(|a| a == "--first-kinds");
+    let mut masks: std::collections::BTreeMap<u16, (u64, u64)> = Default::default();
     loop {
         if let Some(len) = window {
             if sim.time() >= w.time + len - 1e-12 {
@@ -307,10 +318,26 @@ fn measured_steps(
             sim.stats().open_close_iterations,
             sim.stats().time_step_cuts,
         );
+        let first_before = sim.changes().by_kind_iteration;
         match sim.step(max_dt) {
             Ok(dt) => {
                 min_dt = min_dt.min(dt);
                 w.min_dt = w.min_dt.min(dt);
+                if first_kinds {
+                    // The kinds (× bed/head) the step's first solve found changing.
+                    let now = &sim.changes().by_kind_iteration;
+                    let mut mask = 0u16;
+                    for k in 0..CHANGE_KINDS.len() {
+                        for o in 0..2 {
+                            if now[k][o][0] > first_before[k][o][0] {
+                                mask |= 1 << (2 * k + o);
+                            }
+                        }
+                    }
+                    let e = masks.entry(mask).or_insert((0u64, 0u64));
+                    e.0 += 1;
+                    e.1 += sim.stats().open_close_iterations - before.0;
+                }
                 // `--step-log`: one line a step (time, Δt, solves, cuts, the closing
                 // contacts and their largest approach / elastic range, with `--closing`).
                 if std::env::args().any(|a| a == "--step-log") {
@@ -334,7 +361,52 @@ fn measured_steps(
     if window.is_some() && sim.stats().steps > w.stats.steps {
         window_line(sim, &w);
     }
+    if first_kinds {
+        print_first_kinds(&masks);
+    }
     (done, min_dt, deepest)
+}
+
+/// `--first-kinds`: the steps by the set of change kinds their first solve found (the
+/// extra solves a prediction of those kinds could save), most solves first; then, per kind,
+/// the steps whose first solve found only that kind, and the steps without any change.
+fn print_first_kinds(masks: &std::collections::BTreeMap<u16, (u64, u64)>) {
+    let name = |bit: usize| {
+        format!(
+            "{} {}",
+            CHANGE_KINDS[bit / 2],
+            if bit % 2 == 0 { "bed" } else { "head" }
+        )
+    };
+    let mut rows: Vec<_> = masks.iter().collect();
+    rows.sort_by_key(|(_, &(_, solves))| std::cmp::Reverse(solves));
+    eprintln!("  first solve's change kinds (steps, solves):");
+    for (mask, (steps, solves)) in rows.iter().take(15) {
+        let kinds: Vec<String> = (0..16)
+            .filter(|b| *mask & (1 << b) != 0)
+            .map(name)
+            .collect();
+        eprintln!(
+            "    {steps:>6} steps, {solves:>7} solves: [{}]",
+            kinds.join(", ")
+        );
+    }
+    for bit in 0..2 * CHANGE_KINDS.len() {
+        let (steps, solves) = masks
+            .iter()
+            .filter(|(m, _)| **m == 1 << bit)
+            .fold((0, 0), |a, (_, v)| (a.0 + v.0, a.1 + v.1));
+        let any = masks
+            .iter()
+            .filter(|(m, _)| **m & (1 << bit) != 0)
+            .fold(0, |a, (_, v)| a + v.0);
+        if any > 0 {
+            eprintln!(
+                "    {:>32}: in {any} steps, the only kind in {steps} ({solves} solves)",
+                name(bit)
+            );
+        }
+    }
 }
 
 /// Runs the tight reference (Δt = 1e-4 s fixed, the previous open–close loop run to
@@ -644,6 +716,16 @@ fn main() {
                 params.open_close.friction_predict =
                     (v != "off").then(|| v.parse().expect("--friction-predict: a gain or off"));
             }
+            // The stick–slip prediction (`OpenCloseParams::stick_predict`, `slip_predict`,
+            // §32): the slip extrapolation's gain (1 = linear), or `off`.
+            if let Some(v) = arg("--stick-predict") {
+                params.open_close.stick_predict =
+                    (v != "off").then(|| v.parse().expect("--stick-predict: a gain or off"));
+            }
+            if let Some(v) = arg("--slip-predict") {
+                params.open_close.slip_predict =
+                    (v != "off").then(|| v.parse().expect("--slip-predict: a gain or off"));
+            }
             if let Some(v) = arg("--closing") {
                 params.closing.elastic_fraction = Some(v.parse().expect("--closing"));
             }
@@ -917,6 +999,13 @@ fn main() {
                 eprintln!(
                     "  cycle rule: closed sliding light {} loaded {}, kept locked {}, steps finished in the extra iterations {}",
                     ch.cycle_closed[0], ch.cycle_closed[1], ch.cycle_kept_locked, ch.cycle_extra_steps
+                );
+                eprintln!(
+                    "  stick–slip prediction: started locked {} (held after the first solve {}), started sliding {} (held {})",
+                    ch.predicted[0][0] + ch.predicted[0][1],
+                    ch.predicted[0][0],
+                    ch.predicted[1][0] + ch.predicted[1][1],
+                    ch.predicted[1][0]
                 );
             }
         }

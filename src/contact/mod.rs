@@ -136,6 +136,16 @@ pub struct Contact {
     /// last step's (N), if the contact is sliding and was closed at both step starts; the loop
     /// starts from it where `OpenCloseParams::friction_predict` applies.
     pub predicted_friction_normal: Option<f64>,
+    /// Slip along t of the last accepted step (the converged `slip`, m, vertex relative to the
+    /// edge), if the contact was closed at its end; and the same of the step before. Set once
+    /// a step by `finish_step`, read by the stick–slip prediction
+    /// (`OpenCloseParams::stick_predict`, `slip_predict`).
+    pub last_slip: Option<f64>,
+    pub prior_slip: Option<f64>,
+    /// The state the stick–slip prediction starts this step's loop from (`Locked` for a
+    /// sliding contact predicted to re-stick, `Sliding` for a locked one predicted to slip),
+    /// set at the step start and taken by the loop's first attempt.
+    pub predicted_state: Option<ContactState>,
     /// Normal force carried into the step, N: its share of the stored acceleration a₀ that the
     /// trapezoidal rule averages with the step-end forces.
     pub start_normal_force: f64,
@@ -260,6 +270,9 @@ impl ContactSet {
                             friction_normal: old.friction_normal,
                             prior_normal_force: old.prior_normal_force,
                             predicted_friction_normal: old.predicted_friction_normal,
+                            last_slip: old.last_slip,
+                            prior_slip: old.prior_slip,
+                            predicted_state: old.predicted_state,
                             slide_offset: old.slide_offset,
                             closed_within_last_step: old.closed_within_last_step,
                             ..new_contact(cand)
@@ -367,6 +380,9 @@ fn new_contact(cand: &Candidate) -> Contact {
         flips: 0,
         prior_normal_force: None,
         predicted_friction_normal: None,
+        last_slip: None,
+        prior_slip: None,
+        predicted_state: None,
         start_normal_force: 0.0,
         release_factor: 1.0,
     }

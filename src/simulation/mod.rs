@@ -119,6 +119,19 @@ impl Simulation {
             self.stepper.newmark = crate::assembly::Newmark::of(crate::scene::Integrator::Dda);
             self.stepper.springs.release_weight = 0.0;
         }
+        // Before the friction normal's prediction, which predicts a contact predicted to
+        // slip as a sliding one.
+        let oc = &self.params.open_close;
+        if self.state.scene.control.contact_solver == ContactSolver::Penalty
+            && (oc.stick_predict.is_some() || oc.slip_predict.is_some())
+        {
+            open_close::predict_stick_slip(
+                &mut self.state.contacts.contacts,
+                &self.state.laws,
+                &self.stepper.springs,
+                oc,
+            );
+        }
         if let (ContactSolver::Penalty, Some(gain)) = (
             self.state.scene.control.contact_solver,
             self.params.open_close.friction_predict,
@@ -501,6 +514,111 @@ mod tests {
         cs[0].normal_force = 160.0;
         predict_friction_normals(&mut cs, 0.5);
         assert_eq!(cs[0].predicted_friction_normal, Some(175.0));
+    }
+
+    /// The stick–slip prediction (`OpenCloseParams::stick_predict`, `slip_predict`) against its
+    /// closed form: the slip over the step is extrapolated, σ = σ₁ + g·(σ₁ − σ₀), and the loop's
+    /// own tests decide on it: a sliding contact (direction d) starts locked when σ·d <
+    /// −(h·limit/k_s + tol); a locked one starts sliding, in the direction of s₀ + σ, when
+    /// |k_s·(s₀ + σ)| > limit·(1 + h) + k_s·tol. Contacts of a 4 × 5 wall after one step at rest,
+    /// states and slips set by hand, thresholds from the wall's own springs and joint law; each
+    /// case sits at least a factor 2 inside or outside its threshold (a test of the decision,
+    /// not of the rounding at the boundary).
+    #[test]
+    fn the_stick_slip_prediction_extrapolates_the_last_two_slips() {
+        use crate::assembly::contact_springs::shear_limit;
+        use crate::contact::ContactState::{Locked, Open, Sliding};
+        use crate::solve::open_close::{predict_stick_slip, OpenCloseParams};
+        let scene = crate::scene::validate(&crate::presets::wall(4, 5)).expect("wall scene");
+        let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
+        sim.step(1.0).expect("a step at rest");
+        let springs = sim.stepper.springs;
+        let laws = &sim.state.laws[..8];
+        let mut cs: Vec<_> = sim.state.contacts.contacts[..8].to_vec();
+        for c in &mut cs {
+            c.normal_force = 1000.0;
+            c.s0 = 0.0;
+            c.bonded = false;
+        }
+        let params = OpenCloseParams {
+            stick_predict: Some(1.0),
+            slip_predict: Some(1.0),
+            ..OpenCloseParams::default()
+        };
+        let h = params.hysteresis;
+        let limit = shear_limit(&cs[0], &laws[0], 1000.0);
+        assert!(laws.iter().all(|l| *l == laws[0]) && limit > 0.0);
+        // Re-sticking threshold on the slip (m) and onset threshold on the displacement (m).
+        let stick = h * limit / springs.shear + springs.gap_tolerance;
+        let onset = (limit * (1.0 + h) + springs.shear * springs.gap_tolerance) / springs.shear;
+        // (state, σ₁, σ₀): the expected start.
+        let cases = [
+            // Slowing from 4·stick to stick: σ = −2·stick, reversal → locked.
+            (
+                Sliding { dir: 1.0 },
+                Some(stick),
+                Some(4.0 * stick),
+                Some(Locked),
+            ),
+            // Slowing from 4 to 3: σ = 2·stick, still forward → as it is.
+            (
+                Sliding { dir: 1.0 },
+                Some(3.0 * stick),
+                Some(4.0 * stick),
+                None,
+            ),
+            // The mirror of the first, sliding the other way.
+            (
+                Sliding { dir: -1.0 },
+                Some(-stick),
+                Some(-4.0 * stick),
+                Some(Locked),
+            ),
+            // No history of the step before: nothing predicted.
+            (Sliding { dir: 1.0 }, Some(stick), None, None),
+            // Locked, loading at 0.6·onset a step: s₀ + σ = 1.2·onset → slides forward.
+            (
+                Locked,
+                Some(0.6 * onset),
+                Some(0.0),
+                Some(Sliding { dir: 1.0 }),
+            ),
+            // Locked, loading at 0.4·onset: 0.8·onset → stays locked.
+            (Locked, Some(0.4 * onset), Some(0.0), None),
+            // Loading the other way, steady at −1.2·onset a step → slides backward.
+            (
+                Locked,
+                Some(-1.2 * onset),
+                Some(-1.2 * onset),
+                Some(Sliding { dir: -1.0 }),
+            ),
+            // Open: never.
+            (Open, Some(stick), Some(4.0 * stick), None),
+        ];
+        for (c, &(state, s1, s0, _)) in cs.iter_mut().zip(&cases) {
+            // A bed joint (the onset of slip is predicted on bed joints only).
+            c.n = nalgebra::Vector2::new(0.0, 1.0);
+            c.state = state;
+            c.last_slip = s1;
+            c.prior_slip = s0;
+            c.predicted_state = Some(Open);
+        }
+        predict_stick_slip(&mut cs, laws, &springs, &params);
+        for (k, (c, case)) in cs.iter().zip(&cases).enumerate() {
+            assert_eq!(c.predicted_state, case.3, "case {k}");
+        }
+        // A head joint (normal horizontal) loading as case 4: not predicted to slip.
+        cs[4].n = nalgebra::Vector2::new(1.0, 0.0);
+        predict_stick_slip(&mut cs, laws, &springs, &params);
+        assert_eq!(cs[4].predicted_state, None);
+        // Off: nothing predicted (and the stale mark cleared).
+        let off = OpenCloseParams {
+            stick_predict: None,
+            slip_predict: None,
+            ..params
+        };
+        predict_stick_slip(&mut cs, laws, &springs, &off);
+        assert!(cs.iter().all(|c| c.predicted_state.is_none()));
     }
 
     /// The open–close loop's kept-matrix rule (docs/contact-solve.md §19): when no contact's

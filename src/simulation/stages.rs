@@ -323,6 +323,9 @@ impl Simulation {
             .zip(&self.state.laws)
         {
             c.closed_within_last_step = c.g0 > 0.0 && c.state.is_closed();
+            // The step's converged slip, for the stick–slip prediction of the next steps.
+            c.prior_slip = c.last_slip;
+            c.last_slip = c.state.is_closed().then_some(c.slip);
             match c.state {
                 ContactState::Open => c.bonded = false,
                 ContactState::Sliding { dir } => {

@@ -305,6 +305,36 @@ pub struct OpenCloseParams {
     /// passes. g = 1 rather than the scan's best 1.2 (2.23 solves): linear extrapolation has a
     /// reason, 1.2 would be fitted to one scene.
     pub friction_predict: Option<f64>,
+    /// Predict a sliding contact's re-sticking at the step start: its slip over this step is
+    /// extrapolated from the last two steps' converged slips σ₁ (the last step's) and σ₀ (the
+    /// one before), σ = σ₁ + g·(σ₁ − σ₀) with g this gain (1 = linear extrapolation), and when
+    /// σ reverses against the slip direction by more than the loop's own re-sticking threshold
+    /// (hysteresis × limit / k_s + the length tolerance: the test `update_state` applies to a
+    /// solve's slip) the loop starts the contact locked instead of sliding. Only the loop's
+    /// starting guess moves, as for `friction_predict`: the convergence test and every tolerance
+    /// are unchanged, so a converged step is the same kind of fixed point (a wrong guess costs
+    /// the onset of slip the loop then finds, as a wrong "sliding" costs the re-sticking today).
+    /// Applied where `friction_predict` is (the stones the stone settle rule takes), on the
+    /// loop's first attempt of a step (a retry after a cut starts where the refused attempt
+    /// ended). The gain assumes equal steps (Δt is not read). `None` = off. Default `Some(1.0)`
+    /// (session 41, with `slip_predict`): on the shaken 410-stone wall the two take the record's
+    /// strong part from 2.35 to 1.96 solves a step (re-sticking alone 2.05; the head joints'
+    /// re-stickings after the first solve 920 → 365), the whole 20 s record from 1.60 to 1.53,
+    /// the 1 Hz sine from 1.22 to 1.14, 0 cuts, within §25's bound of the tight reference, and
+    /// every engine benchmark keeps its tolerance (docs/contact-solve.md §32). g = 1 for the
+    /// reason of `friction_predict` (linear extrapolation); 0.5 and 2 were measured worse.
+    pub stick_predict: Option<f64>,
+    /// The same extrapolated slip for a locked contact: when the shear spring would carry more
+    /// than the loop's slip threshold at the end of the step (|k_s·(s₀ + σ)| > limit·(1 + h) +
+    /// k_s·tolerance, the test `update_state` applies), the loop starts it sliding in the
+    /// direction of s₀ + σ, its friction normal force predicted as a sliding contact's
+    /// (`friction_predict`) or else the last step's. Same restrictions as `stick_predict`, and
+    /// bed joints only (normal more than `light_state_tilt` above horizontal): on every joint
+    /// it took the strong part from 2.05 to 2.34 solves a step (head joints started sliding
+    /// re-stick and slip again later). `None` = off. Default `Some(1.0)` (session 41, with
+    /// `stick_predict`: 2.05 → 1.96 on the strong part, 1.56 → 1.53 over the whole record,
+    /// docs/contact-solve.md §32).
+    pub slip_predict: Option<f64>,
 }
 
 impl Default for OpenCloseParams {
@@ -344,6 +374,54 @@ impl Default for OpenCloseParams {
             cycle_light_interface: true,
             cycle_tilt: std::f64::consts::FRAC_PI_4,
             friction_predict: Some(1.0),
+            stick_predict: Some(1.0),
+            slip_predict: Some(1.0),
+        }
+    }
+}
+
+/// The stick–slip prediction at a step start (`OpenCloseParams::stick_predict`,
+/// `slip_predict`): call once per step, before its first open–close loop, after the contacts
+/// are linearized (a locked contact's test reads its step-start shear displacement `s0`).
+/// Sets `Contact::predicted_state` of a sliding contact predicted to re-stick (`Locked`) or a
+/// locked one predicted to slip (`Sliding`), from the slips of the last two accepted steps;
+/// clears it everywhere else. `iterate` starts from it where the rule applies.
+pub fn predict_stick_slip(
+    contacts: &mut [Contact],
+    laws: &[JointLaw],
+    springs: &SpringParams,
+    params: &OpenCloseParams,
+) {
+    let h = params.hysteresis;
+    for (c, law) in contacts.iter_mut().zip(laws) {
+        c.predicted_state = None;
+        let (Some(s1), Some(s0)) = (c.last_slip, c.prior_slip) else {
+            continue;
+        };
+        let limit = shear_limit(c, law, c.normal_force);
+        match (c.state, params.stick_predict, params.slip_predict) {
+            (ContactState::Sliding { dir }, Some(g), _) => {
+                let slip = s1 + g * (s1 - s0);
+                // `update_state`'s re-sticking test, on the predicted slip.
+                if limit > 0.0 && slip * dir < -(h * limit / springs.shear + springs.gap_tolerance)
+                {
+                    c.predicted_state = Some(ContactState::Locked);
+                }
+            }
+            // Bed joints only (normal more than `light_state_tilt` above horizontal): on the
+            // head joints too it added more re-stickings and later onsets than it removed.
+            (ContactState::Locked, _, Some(g))
+                if c.n.y.abs() > params.light_state_tilt.sin() + 1e-12 =>
+            {
+                let s = c.s0 + s1 + g * (s1 - s0);
+                // `update_state`'s onset-of-slip test, on the predicted shear displacement.
+                if (springs.shear * s).abs()
+                    > limit * (1.0 + h) + springs.shear * springs.gap_tolerance
+                {
+                    c.predicted_state = Some(ContactState::Sliding { dir: s.signum() });
+                }
+            }
+            _ => {}
         }
     }
 }
@@ -351,12 +429,16 @@ impl Default for OpenCloseParams {
 /// The friction normal's prediction at a step start (`OpenCloseParams::friction_predict`):
 /// call once per step, before its first open–close loop (a refused attempt's retry must not
 /// extrapolate again). Each contact's converged normal force is remembered for the next step;
-/// a sliding contact closed at both step starts gets the extrapolated force, N, as
+/// a sliding contact (or one `predict_stick_slip` starts sliding) closed at both step starts
+/// gets the extrapolated force, N, as
 /// `Contact::predicted_friction_normal`, which `iterate` starts from where the rule applies.
 pub fn predict_friction_normals(contacts: &mut [Contact], gain: f64) {
     for c in contacts {
         let n1 = c.state.is_closed().then(|| c.normal_force.max(0.0));
-        c.predicted_friction_normal = match (c.state, n1, c.prior_normal_force) {
+        // A contact the stick–slip prediction starts in another state (`predict_stick_slip`,
+        // called before) is predicted in that state.
+        let state = c.predicted_state.unwrap_or(c.state);
+        c.predicted_friction_normal = match (state, n1, c.prior_normal_force) {
             (ContactState::Sliding { .. }, Some(n1), Some(n0)) => {
                 Some((n1 + gain * (n1 - n0)).max(0.0))
             }
@@ -410,6 +492,10 @@ pub struct ChangeCounts {
     pub cycle_kept_locked: u64,
     /// Steps that converged only in the iterations `cycle_extra` adds beyond `max_iterations`.
     pub cycle_extra_steps: u64,
+    /// Contacts the stick–slip prediction (`OpenCloseParams::stick_predict`, `slip_predict`)
+    /// started in another state: `[0]` started locked (predicted re-sticking), `[1]` started
+    /// sliding (predicted onset of slip); each `[held, changed]` after the first solve.
+    pub predicted: [[u64; 2]; 2],
 }
 
 /// Names of the kinds of [`ChangeCounts::by_kind`].
@@ -453,6 +539,8 @@ impl OpenCloseParams {
             // The reference loop cuts Δt where it does not converge (§18, §25).
             cycle_flips: 0,
             friction_predict: None,
+            stick_predict: None,
+            slip_predict: None,
             ..Self::default()
         }
     }
@@ -546,6 +634,9 @@ pub struct OpenCloseScratch {
     light: Vec<(usize, LightChange)>,
     /// Scratch for grouping contacts by interface.
     pairs: Vec<(usize, usize, usize)>,
+    /// Contacts the stick–slip prediction started in another state this loop, with that
+    /// state (diagnostics: `ChangeCounts::predicted`).
+    predicted: Vec<(usize, ContactState)>,
     /// Per interface, in `interface` numbering: its blocks (lower index first) and its first
     /// contact. Built with `interface` once per step: the stone rule's passes over interfaces.
     interfaces: Vec<(usize, usize, usize)>,
@@ -789,6 +880,30 @@ pub fn iterate(
             }
         }
     }
+    scratch.predicted.clear();
+    for (k, ((c, law), &many)) in contacts
+        .iter_mut()
+        .zip(laws)
+        .zip(&scratch.many_stones)
+        .enumerate()
+    {
+        // The stick–slip prediction, on the same stones, on the step's first attempt only
+        // (`take`: a retry after a cut starts where the refused attempt ended).
+        let Some(state) = c.predicted_state.take() else {
+            continue;
+        };
+        if many && c.state.is_closed() && !frictionless(c, law) {
+            if let (ContactState::Locked, ContactState::Sliding { .. }) = (c.state, state) {
+                // Its friction from the friction normal's prediction (applied above), else
+                // from the last normal force, as the loop's own onset of slip.
+                if params.friction_predict.is_none() || c.predicted_friction_normal.is_none() {
+                    c.friction_normal = c.normal_force.max(0.0);
+                }
+            }
+            c.state = state;
+            scratch.predicted.push((k, state));
+        }
+    }
     let block_force: &[f64] = block_force;
     // One contact's update at an iterate: the pass after the solve, the pass again at the
     // undamped solution, and the local rounds' passes.
@@ -911,6 +1026,13 @@ pub fn iterate(
                     changed += 1;
                     last_changed = Some(k);
                 }
+            }
+        }
+        if it == 1 {
+            for &(k, state) in &scratch.predicted {
+                let slid = matches!(state, ContactState::Sliding { .. }) as usize;
+                let changed = state_changed(state, contacts[k].state) as usize;
+                counts.predicted[slid][changed] += 1;
             }
         }
         if changed == 0 && damped {
