@@ -1,0 +1,169 @@
+//! Where a PGA search's run spends its steps: one run of a scene file under a record scaled to
+//! a PGA, with the search's options (`stop_when` the criterion `toppled:BLOCK` decided,
+//! `end_when_still`), and one line per window of simulated time (`--window`, s, default 1):
+//! wall time, steps, Δt cuts by refusal (unconverged loop, displacement limit, overshot
+//! contact, accuracy bound: impact / local error), open–close solves, impacts, located steps,
+//! the smallest Δt, the watched block's rotation, and the blocks in motion (speed above
+//! `--moving` m/s, default 0.05; the fastest named). docs/pga.md, "The wall's search at its
+//! threshold (session 41)":
+//! `cargo run --release --example wall_threshold -- SCENE RECORD PGA_M_S2 BLOCK [--window S]`.
+use ashlar::analysis::pga::{evaluate_with_summary, Combine, Criterion};
+use ashlar::analysis::run::{run, RunOptions, Tracker};
+use ashlar::contact::Mobility;
+use ashlar::simulation::Simulation;
+use std::sync::Mutex;
+use std::time::Instant;
+
+/// Counters at the start of the current window.
+struct Window {
+    start: f64,
+    wall: f64,
+    steps: u64,
+    cuts: u64,
+    refusals: [u64; 4],
+    solves: u64,
+    impacts: u64,
+    located: u64,
+    taken_unconverged: u64,
+    min_dt: f64,
+    max_moving: usize,
+}
+
+impl Window {
+    fn at(sim: &Simulation, wall: f64) -> Self {
+        let s = sim.stats();
+        Self {
+            start: sim.time(),
+            wall,
+            steps: s.steps,
+            cuts: s.time_step_cuts,
+            refusals: sim.refusals(),
+            solves: s.open_close_iterations,
+            impacts: s.impacts,
+            located: s.located_steps,
+            taken_unconverged: s.unconverged_taken,
+            min_dt: f64::INFINITY,
+            max_moving: 0,
+        }
+    }
+}
+
+fn arg(name: &str) -> Option<String> {
+    let a: Vec<String> = std::env::args().collect();
+    a.iter()
+        .position(|x| x == name)
+        .and_then(|i| a.get(i + 1).cloned())
+}
+
+fn main() {
+    let a: Vec<String> = std::env::args().collect();
+    let (scene_path, record, pga, block) = (&a[1], &a[2], &a[3], &a[4]);
+    let window: f64 = arg("--window").map_or(1.0, |v| v.parse().expect("--window"));
+    let moving: f64 = arg("--moving").map_or(0.05, |v| v.parse().expect("--moving"));
+    let pga: f64 = pga.parse().expect("PGA, m/s²");
+    let text = std::fs::read_to_string(scene_path).expect("scene file");
+    let scene = ashlar::scene::parse_scene(&text).expect("scene");
+    let motion = ashlar::motion::load_path(std::path::Path::new(record)).expect("record (.at2, …)");
+    let watched = scene
+        .block_index(block)
+        .expect("BLOCK: a block id of the scene");
+    let criterion = Criterion::parse(&format!("toppled:{block}")).expect("criterion");
+    if std::env::args().any(|x| x == "--verdict-only") {
+        // The search's own entry point, for the verdict and the summary alone.
+        let (failed, s) = evaluate_with_summary(
+            &scene,
+            &motion,
+            std::slice::from_ref(&criterion),
+            Combine::All,
+            pga,
+            None,
+        )
+        .expect("run");
+        println!("verdict failed={failed}; {:?}", s.stopped_reason);
+        return;
+    }
+    let gm = motion.scaled_to_pga(pga);
+    let t0 = Instant::now();
+    let state: Mutex<Option<Window>> = Mutex::new(None);
+    let hook = |sim: &Simulation| {
+        let mut w = state.lock().expect("lock");
+        let wall = t0.elapsed().as_secs_f64();
+        let win = w.get_or_insert_with(|| Window::at(sim, wall));
+        win.min_dt = win.min_dt.min(sim.dt());
+        let mut n_moving = 0;
+        let mut fastest = (0.0f64, usize::MAX);
+        for b in 0..sim.geoms().len() {
+            if sim.mobility()[b] != Mobility::Free || sim.retired()[b] {
+                continue;
+            }
+            let v = sim.block_velocity(b);
+            let speed = v[0].hypot(v[1]);
+            if speed > moving {
+                n_moving += 1;
+            }
+            if speed > fastest.0 {
+                fastest = (speed, b);
+            }
+        }
+        win.max_moving = win.max_moving.max(n_moving);
+        if sim.time() >= win.start + window - 1e-9 {
+            let s = sim.stats();
+            let r = sim.refusals();
+            let g = &sim.geoms()[watched];
+            let d = g.centroid - g.initial_centroid;
+            println!(
+                "t {:6.2}–{:6.2} s | wall {:7.1} s (+{:6.1}) | steps {:5} cuts {:4} [unconv {:4} moved {:3} overshot {:3} accuracy {:4}] | solves/step {:5.2} | floor-taken {:3} | impacts {:4} located {:4} | min dt {:.2e} | {} rot {:+7.2}° d ({:+.3},{:+.3}) m | moving>{moving} m/s: max {} (fastest {} {:.3} m/s)",
+                win.start,
+                sim.time(),
+                wall,
+                wall - win.wall,
+                s.steps - win.steps,
+                s.time_step_cuts - win.cuts,
+                r[0] - win.refusals[0],
+                r[1] - win.refusals[1],
+                r[2] - win.refusals[2],
+                r[3] - win.refusals[3],
+                (s.open_close_iterations - win.solves) as f64 / (s.steps - win.steps).max(1) as f64,
+                s.unconverged_taken - win.taken_unconverged,
+                s.impacts - win.impacts,
+                s.located_steps - win.located,
+                win.min_dt,
+                block,
+                g.rotation.to_degrees(),
+                d.x,
+                d.y,
+                win.max_moving,
+                if fastest.1 == usize::MAX {
+                    "-".to_string()
+                } else {
+                    sim.scene().blocks[fastest.1].id.clone()
+                },
+                fastest.0,
+            );
+            *w = Some(Window::at(sim, wall));
+        }
+        false
+    };
+    let decided = |tr: &Tracker| {
+        tr.index_of(block)
+            .is_some_and(|k| tr.final_rotation[k].abs() > std::f64::consts::FRAC_PI_3)
+    };
+    let opts = RunOptions {
+        stop_when: Some(&decided),
+        no_trajectory: true,
+        end_when_still: true,
+        engine_at_rest: Some(&hook),
+        ..Default::default()
+    };
+    let out = run(&scene, &gm, &opts).expect("run");
+    let s = &out.summary;
+    let b = s.blocks.iter().find(|b| &b.id == block).expect("block");
+    println!(
+        "end: {:?}; wall {:.1} s; {:?}; {} final rotation {:.2}° (toppled: > 30°)",
+        s.stopped_reason,
+        t0.elapsed().as_secs_f64(),
+        s.diagnostics,
+        block,
+        b.final_rotation.to_degrees()
+    );
+}
