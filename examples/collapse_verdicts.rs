@@ -31,12 +31,9 @@ const FALLEN: f64 = std::f64::consts::FRAC_PI_3;
 /// |rotation| of the verdict `toppled` (docs/format.md, 30°).
 const TOPPLED: f64 = std::f64::consts::FRAC_PI_6;
 
-fn arg(name: &str) -> Option<String> {
-    let a: Vec<String> = std::env::args().collect();
-    a.iter()
-        .position(|x| x == name)
-        .and_then(|i| a.get(i + 1).cloned())
-}
+#[path = "support/args.rs"]
+mod args;
+use args::arg;
 
 fn main() {
     let scene_path = arg("--scene").expect("--scene FILE");

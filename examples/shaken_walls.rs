@@ -63,12 +63,9 @@ use ashlar::solve::open_close::CHANGE_KINDS;
 use ashlar::solve::{SparseOrdering, SupernodeRelax};
 use std::time::Instant;
 
-fn arg(name: &str) -> Option<String> {
-    let args: Vec<String> = std::env::args().collect();
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1).cloned())
-}
+#[path = "support/args.rs"]
+mod args;
+use args::arg;
 
 /// Courses and whole blocks a course of a wall of about `n` stones: √n × √n, as
 /// `examples/engine_scaling.rs` (100 → 105 stones, 400 → 410, 1600 → 1620, 6400 → 6440).

@@ -48,12 +48,9 @@ impl Window {
     }
 }
 
-fn arg(name: &str) -> Option<String> {
-    let a: Vec<String> = std::env::args().collect();
-    a.iter()
-        .position(|x| x == name)
-        .and_then(|i| a.get(i + 1).cloned())
-}
+#[path = "support/args.rs"]
+mod args;
+use args::arg;
 
 fn main() {
     let a: Vec<String> = std::env::args().collect();
