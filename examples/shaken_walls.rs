@@ -45,7 +45,8 @@
 //!
 //! `--stick-predict` and `--slip-predict` set the stick–slip prediction's gains
 //! (`OpenCloseParams::stick_predict`, `slip_predict`, docs/contact-solve.md §32; `off` turns it
-//! off); `--first-kinds` prints, for the measured steps, the sets of change kinds the first
+//! off); `--gap-predict GAIN|off` the head joints' gap prediction (`OpenCloseParams::gap_predict`,
+//! §33; off by default); `--first-kinds` prints, for the measured steps, the sets of change kinds the first
 //! solve of a step found and the steps and solves each set cost.
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
@@ -719,6 +720,11 @@ fn main() {
                 params.open_close.stick_predict =
                     (v != "off").then(|| v.parse().expect("--stick-predict: a gain or off"));
             }
+            // The gap prediction (`OpenCloseParams::gap_predict`, §33): the gain, or `off`.
+            if let Some(v) = arg("--gap-predict") {
+                params.open_close.gap_predict =
+                    (v != "off").then(|| v.parse().expect("--gap-predict: a gain or off"));
+            }
             if let Some(v) = arg("--slip-predict") {
                 params.open_close.slip_predict =
                     (v != "off").then(|| v.parse().expect("--slip-predict: a gain or off"));
@@ -1003,6 +1009,13 @@ fn main() {
                     ch.predicted[0][0],
                     ch.predicted[1][0] + ch.predicted[1][1],
                     ch.predicted[1][0]
+                );
+                eprintln!(
+                    "  gap prediction: started open {} (held after the first solve {}), started closed {} (held {})",
+                    ch.predicted[2][0] + ch.predicted[2][1],
+                    ch.predicted[2][0],
+                    ch.predicted[3][0] + ch.predicted[3][1],
+                    ch.predicted[3][0]
                 );
             }
         }

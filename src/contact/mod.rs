@@ -142,6 +142,11 @@ pub struct Contact {
     /// (`OpenCloseParams::stick_predict`, `slip_predict`).
     pub last_slip: Option<f64>,
     pub prior_slip: Option<f64>,
+    /// Change of the normal gap over the last accepted step (the converged `gap` − `g0`, m,
+    /// positive opening), and the same of the step before. Set once a step by `finish_step`,
+    /// read by the gap prediction (`OpenCloseParams::gap_predict`).
+    pub last_gap_change: Option<f64>,
+    pub prior_gap_change: Option<f64>,
     /// The state the stick–slip prediction starts this step's loop from (`Locked` for a
     /// sliding contact predicted to re-stick, `Sliding` for a locked one predicted to slip),
     /// set at the step start and taken by the loop's first attempt.
@@ -272,6 +277,8 @@ impl ContactSet {
                             predicted_friction_normal: old.predicted_friction_normal,
                             last_slip: old.last_slip,
                             prior_slip: old.prior_slip,
+                            last_gap_change: old.last_gap_change,
+                            prior_gap_change: old.prior_gap_change,
                             predicted_state: old.predicted_state,
                             slide_offset: old.slide_offset,
                             closed_within_last_step: old.closed_within_last_step,
@@ -382,6 +389,8 @@ fn new_contact(cand: &Candidate) -> Contact {
         predicted_friction_normal: None,
         last_slip: None,
         prior_slip: None,
+        last_gap_change: None,
+        prior_gap_change: None,
         predicted_state: None,
         start_normal_force: 0.0,
         release_factor: 1.0,

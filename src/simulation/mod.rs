@@ -123,9 +123,17 @@ impl Simulation {
         // slip as a sliding one.
         let oc = &self.params.open_close;
         if self.state.scene.control.contact_solver == ContactSolver::Penalty
-            && (oc.stick_predict.is_some() || oc.slip_predict.is_some())
+            && (oc.stick_predict.is_some() || oc.slip_predict.is_some() || oc.gap_predict.is_some())
         {
             open_close::predict_stick_slip(
+                &mut self.state.contacts.contacts,
+                &self.state.laws,
+                &self.stepper.springs,
+                oc,
+            );
+            // After the stick–slip prediction: a head joint predicted to open or close starts
+            // in that state whatever its slip predicted.
+            open_close::predict_gaps(
                 &mut self.state.contacts.contacts,
                 &self.state.laws,
                 &self.stepper.springs,
@@ -619,6 +627,106 @@ mod tests {
         };
         predict_stick_slip(&mut cs, laws, &springs, &off);
         assert!(cs.iter().all(|c| c.predicted_state.is_none()));
+    }
+
+    /// The gap prediction (`OpenCloseParams::gap_predict`) against its closed form: the gap
+    /// change over the step is extrapolated, Δ = Δ₁ + g·(Δ₁ − Δ₀), and the loop's own tests
+    /// decide on the predicted gap g₀ + Δ: a closed head joint starts open when it exceeds the
+    /// length tolerance (no bond), an open one starts locked when it is below −tolerance.
+    /// Contacts of a 4 × 5 wall after one step at rest, gaps and histories set by hand in
+    /// units of the wall's own tolerance; each case at least a factor 2 from its threshold
+    /// (a test of the decision, not of the rounding at the boundary).
+    #[test]
+    fn the_gap_prediction_extrapolates_the_last_two_gap_changes() {
+        use crate::contact::ContactState::{Locked, Open, Sliding};
+        use crate::solve::open_close::{predict_gaps, OpenCloseParams};
+        let scene = crate::scene::validate(&crate::presets::wall(4, 5)).expect("wall scene");
+        let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
+        sim.step(1.0).expect("a step at rest");
+        let springs = sim.stepper.springs;
+        let laws = &sim.state.laws[..8];
+        let mut cs: Vec<_> = sim.state.contacts.contacts[..8].to_vec();
+        let tol = springs.gap_tolerance;
+        assert!(tol > 0.0);
+        let params = OpenCloseParams {
+            gap_predict: Some(1.0),
+            ..OpenCloseParams::default()
+        };
+        // (state, g₀, Δ₁, Δ₀, the mark before, the expected mark), lengths in tolerances.
+        let cases = [
+            // Closed, opening faster: Δ = 1 + (1 + 2) = 4, gap 3 > 1 → open.
+            (Locked, -1.0, Some(1.0), Some(-2.0), None, Some(Open)),
+            // Closed, opening steadily from deep: Δ = 2, gap −2 → as it is.
+            (Locked, -4.0, Some(1.0), Some(0.0), None, None),
+            // Sliding, opening at 2 a step from 0: gap 2 → open, over the stick–slip mark.
+            (
+                Sliding { dir: 1.0 },
+                0.0,
+                Some(2.0),
+                Some(2.0),
+                Some(Locked),
+                Some(Open),
+            ),
+            // Open, closing faster: Δ = −2 + (−2 + 1) = −3, gap −2 < −1 → closed, locked.
+            (Open, 1.0, Some(-2.0), Some(-1.0), None, Some(Locked)),
+            // Open, closing steadily from afar: Δ = −2, gap 2 → as it is.
+            (Open, 4.0, Some(-1.0), Some(0.0), None, None),
+            // Open, no history of the step before: nothing predicted.
+            (Open, 1.0, Some(-2.0), None, None, None),
+            // Closed and staying so: the stick–slip mark is kept.
+            (
+                Locked,
+                -4.0,
+                Some(0.0),
+                Some(0.0),
+                Some(Sliding { dir: 1.0 }),
+                Some(Sliding { dir: 1.0 }),
+            ),
+            // Closed, opening slowly: Δ = 1, gap −1 → as it is.
+            (Locked, -2.0, Some(1.0), Some(1.0), None, None),
+        ];
+        let set = |cs: &mut [crate::contact::Contact]| {
+            for (c, &(state, g0, d1, d0, mark, _)) in cs.iter_mut().zip(&cases) {
+                // A head joint (the rule acts on head joints only).
+                c.n = nalgebra::Vector2::new(1.0, 0.0);
+                c.bonded = false;
+                c.state = state;
+                c.g0 = g0 * tol;
+                c.last_gap_change = d1.map(|d| d * tol);
+                c.prior_gap_change = d0.map(|d| d * tol);
+                c.predicted_state = mark;
+            }
+        };
+        set(&mut cs);
+        predict_gaps(&mut cs, laws, &springs, &params);
+        for (k, (c, case)) in cs.iter().zip(&cases).enumerate() {
+            assert_eq!(c.predicted_state, case.5, "case {k}");
+        }
+        // Gain 0 (the gap extrapolated from the last two step ends): case 0's Δ = 1, gap 0 →
+        // as it is; case 2's Δ = 2, gap 2 → open.
+        set(&mut cs);
+        let g0 = OpenCloseParams {
+            gap_predict: Some(0.0),
+            ..params
+        };
+        predict_gaps(&mut cs, laws, &springs, &g0);
+        assert_eq!(cs[0].predicted_state, None);
+        assert_eq!(cs[2].predicted_state, Some(Open));
+        // A bed joint (normal vertical) as case 0: not predicted.
+        set(&mut cs);
+        cs[0].n = nalgebra::Vector2::new(0.0, 1.0);
+        predict_gaps(&mut cs, laws, &springs, &params);
+        assert_eq!(cs[0].predicted_state, None);
+        // Off: every mark as it was.
+        set(&mut cs);
+        let off = OpenCloseParams {
+            gap_predict: None,
+            ..params
+        };
+        predict_gaps(&mut cs, laws, &springs, &off);
+        for (c, case) in cs.iter().zip(&cases) {
+            assert_eq!(c.predicted_state, case.4);
+        }
     }
 
     /// The open–close loop's kept-matrix rule (docs/contact-solve.md §19): when no contact's

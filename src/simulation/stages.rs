@@ -326,6 +326,9 @@ impl Simulation {
             // The step's converged slip, for the stick–slip prediction of the next steps.
             c.prior_slip = c.last_slip;
             c.last_slip = c.state.is_closed().then_some(c.slip);
+            // And its converged gap change, for the gap prediction (`gap_predict`).
+            c.prior_gap_change = c.last_gap_change;
+            c.last_gap_change = Some(c.gap - c.g0);
             match c.state {
                 ContactState::Open => c.bonded = false,
                 ContactState::Sliding { dir } => {

@@ -335,6 +335,21 @@ pub struct OpenCloseParams {
     /// `stick_predict`: 2.05 → 1.96 on the strong part, 1.56 → 1.53 over the whole record,
     /// docs/contact-solve.md §32).
     pub slip_predict: Option<f64>,
+    /// Predict a head joint's opening or closing at the step start: its gap change over this
+    /// step is extrapolated from the last two steps' converged gap changes Δ₁ (the last
+    /// step's) and Δ₀ (the one before), Δ = Δ₁ + g·(Δ₁ − Δ₀) with g this gain (0 = the gap
+    /// itself extrapolated linearly from the last two step ends, 1 = its change extrapolated
+    /// linearly, as `stick_predict` does the slip), and the loop's own test is applied to the
+    /// predicted gap g₀ + Δ (m): a closed joint whose predicted gap exceeds the opening
+    /// threshold (tensile allowance + length tolerance) starts the loop open, an open one
+    /// whose predicted gap is below −length tolerance starts it closed (locked). Only the
+    /// loop's starting guess moves, the convergence test and every tolerance are unchanged.
+    /// Same restrictions as `stick_predict` (the stones the stone settle rule takes, the
+    /// step's first attempt), and head joints only (normal within `light_state_tilt` of
+    /// horizontal): the head joints' openings and closings are what the first solve still
+    /// finds on the shaken wall (docs/contact-solve.md §32, §33). The gain assumes equal
+    /// steps. `None` = off, the default (session 41: measured in §33, not adopted).
+    pub gap_predict: Option<f64>,
 }
 
 impl Default for OpenCloseParams {
@@ -376,6 +391,7 @@ impl Default for OpenCloseParams {
             friction_predict: Some(1.0),
             stick_predict: Some(1.0),
             slip_predict: Some(1.0),
+            gap_predict: None,
         }
     }
 }
@@ -422,6 +438,45 @@ pub fn predict_stick_slip(
                 }
             }
             _ => {}
+        }
+    }
+}
+
+/// The gap prediction at a step start (`OpenCloseParams::gap_predict`): call once per step,
+/// after `predict_stick_slip` (which clears the marks) and after the contacts are linearized
+/// (it reads the step-start gap `g0`). Sets `Contact::predicted_state` of a closed head joint
+/// predicted to open (`Open`) or an open one predicted to close (`Locked`), from the gap
+/// changes of the last two accepted steps; leaves every other mark as it is.
+pub fn predict_gaps(
+    contacts: &mut [Contact],
+    laws: &[JointLaw],
+    springs: &SpringParams,
+    params: &OpenCloseParams,
+) {
+    let Some(gain) = params.gap_predict else {
+        return;
+    };
+    for (c, law) in contacts.iter_mut().zip(laws) {
+        // Head joints only (normal within `light_state_tilt` of horizontal).
+        if c.n.y.abs() > params.light_state_tilt.sin() + 1e-12 {
+            continue;
+        }
+        let (Some(d1), Some(d0)) = (c.last_gap_change, c.prior_gap_change) else {
+            continue;
+        };
+        let gap = c.g0 + d1 + gain * (d1 - d0);
+        // `update_state`'s opening and closing tests, on the predicted gap.
+        if c.state.is_closed() {
+            let allowance = if c.bonded {
+                law.tensile_strength * c.length / springs.normal
+            } else {
+                0.0
+            };
+            if gap > allowance + springs.gap_tolerance {
+                c.predicted_state = Some(ContactState::Open);
+            }
+        } else if gap <= -springs.gap_tolerance {
+            c.predicted_state = Some(ContactState::Locked);
         }
     }
 }
@@ -494,8 +549,10 @@ pub struct ChangeCounts {
     pub cycle_extra_steps: u64,
     /// Contacts the stick–slip prediction (`OpenCloseParams::stick_predict`, `slip_predict`)
     /// started in another state: `[0]` started locked (predicted re-sticking), `[1]` started
-    /// sliding (predicted onset of slip); each `[held, changed]` after the first solve.
-    pub predicted: [[u64; 2]; 2],
+    /// sliding (predicted onset of slip); and the gap prediction (`gap_predict`): `[2]`
+    /// started open (predicted opening), `[3]` started closed (predicted closing); each
+    /// `[held, changed]` after the first solve.
+    pub predicted: [[u64; 2]; 4],
 }
 
 /// Names of the kinds of [`ChangeCounts::by_kind`].
@@ -541,6 +598,7 @@ impl OpenCloseParams {
             friction_predict: None,
             stick_predict: None,
             slip_predict: None,
+            gap_predict: None,
             ..Self::default()
         }
     }
@@ -636,7 +694,8 @@ pub struct OpenCloseScratch {
     pairs: Vec<(usize, usize, usize)>,
     /// Contacts the stick–slip prediction started in another state this loop, with that
     /// state (diagnostics: `ChangeCounts::predicted`).
-    predicted: Vec<(usize, ContactState)>,
+    /// (contact, predicted state, slot of `ChangeCounts::predicted`).
+    predicted: Vec<(usize, ContactState, usize)>,
     /// Per interface, in `interface` numbering: its blocks (lower index first) and its first
     /// contact. Built with `interface` once per step: the stone rule's passes over interfaces.
     interfaces: Vec<(usize, usize, usize)>,
@@ -892,7 +951,16 @@ pub fn iterate(
         let Some(state) = c.predicted_state.take() else {
             continue;
         };
-        if many && c.state.is_closed() && !frictionless(c, law) {
+        // The stick–slip prediction marks closed contacts Locked or Sliding; the gap
+        // prediction closed ones Open and open ones Locked.
+        let slot = match (c.state, state) {
+            (ContactState::Open, ContactState::Open) => continue,
+            (_, ContactState::Open) => 2,
+            (ContactState::Open, _) => 3,
+            (_, ContactState::Sliding { .. }) => 1,
+            _ => 0,
+        };
+        if many && (slot == 2 || !frictionless(c, law)) {
             if let (ContactState::Locked, ContactState::Sliding { .. }) = (c.state, state) {
                 // Its friction from the friction normal's prediction (applied above), else
                 // from the last normal force, as the loop's own onset of slip.
@@ -901,7 +969,7 @@ pub fn iterate(
                 }
             }
             c.state = state;
-            scratch.predicted.push((k, state));
+            scratch.predicted.push((k, state, slot));
         }
     }
     let block_force: &[f64] = block_force;
@@ -1029,10 +1097,9 @@ pub fn iterate(
             }
         }
         if it == 1 {
-            for &(k, state) in &scratch.predicted {
-                let slid = matches!(state, ContactState::Sliding { .. }) as usize;
+            for &(k, state, slot) in &scratch.predicted {
                 let changed = state_changed(state, contacts[k].state) as usize;
-                counts.predicted[slid][changed] += 1;
+                counts.predicted[slot][changed] += 1;
             }
         }
         if changed == 0 && damped {
