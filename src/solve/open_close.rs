@@ -348,10 +348,11 @@ pub struct OpenCloseParams {
     /// step's first attempt), and head joints only (normal within `light_state_tilt` of
     /// horizontal): the head joints' openings and closings are what the first solve still
     /// finds on the shaken wall (docs/contact-solve.md §32, §33). The gain assumes equal
-    /// steps. `None` = off, the default (session 41: measured in §33, not adopted; on the
-    /// shaken 410-stone wall g = 0 takes the whole 20 s record from 1.53 to 1.41 solves a step
-    /// and the 1620-stone wall's strong part from 3.68 to 3.63, where g = 1 made the latter
-    /// 3.93 with one more cut: if adopted, 0).
+    /// steps. `None` = off. Default `Some(0.0)` (session 41, §33): on the shaken 410-stone
+    /// wall g = 0 takes the whole 20 s record from 1.53 to 1.41 solves a step (#21's ≤ 1.5) and
+    /// the 1620-stone wall's strong part from 3.68 to 3.63, where g = 1 made the latter 3.93
+    /// with one more cut; 0 is the gap extrapolated linearly from the last two step ends,
+    /// which needs no assumption on how its change varies.
     pub gap_predict: Option<f64>,
 }
 
@@ -394,7 +395,7 @@ impl Default for OpenCloseParams {
             friction_predict: Some(1.0),
             stick_predict: Some(1.0),
             slip_predict: Some(1.0),
-            gap_predict: None,
+            gap_predict: Some(0.0),
         }
     }
 }
