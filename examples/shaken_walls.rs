@@ -705,30 +705,26 @@ fn main() {
                 let deg: f64 = v.parse().expect("--cycle-tilt");
                 params.open_close.cycle_tilt = deg.to_radians();
             }
+            // The predictions at a step start, each an extrapolation gain (1 = linear) or `off`:
+            // the friction normal's (`OpenCloseParams::friction_predict`, §30), the stick–slip
+            // (`stick_predict`, `slip_predict`, §32), the head joints' gaps (`gap_predict`, §33).
+            let oc = &mut params.open_close;
+            for (name, knob) in [
+                ("--friction-predict", &mut oc.friction_predict),
+                ("--stick-predict", &mut oc.stick_predict),
+                ("--slip-predict", &mut oc.slip_predict),
+                ("--gap-predict", &mut oc.gap_predict),
+            ] {
+                if let Some(v) = arg(name) {
+                    *knob = (v != "off").then(|| {
+                        v.parse()
+                            .unwrap_or_else(|_| panic!("{name}: a gain or off"))
+                    });
+                }
+            }
             // `--closing F [--closing-floor R]`: the next Δt is limited so that a contact
             // closing within a step approaches by at most F of its elastic range W/k_n,
             // never below R × Δt (`SimParams::closing`, §22).
-            // The friction normal's prediction (`OpenCloseParams::friction_predict`, §30):
-            // the extrapolation gain (1 = linear), or `off`.
-            if let Some(v) = arg("--friction-predict") {
-                params.open_close.friction_predict =
-                    (v != "off").then(|| v.parse().expect("--friction-predict: a gain or off"));
-            }
-            // The stick–slip prediction (`OpenCloseParams::stick_predict`, `slip_predict`,
-            // §32): the slip extrapolation's gain (1 = linear), or `off`.
-            if let Some(v) = arg("--stick-predict") {
-                params.open_close.stick_predict =
-                    (v != "off").then(|| v.parse().expect("--stick-predict: a gain or off"));
-            }
-            // The gap prediction (`OpenCloseParams::gap_predict`, §33): the gain, or `off`.
-            if let Some(v) = arg("--gap-predict") {
-                params.open_close.gap_predict =
-                    (v != "off").then(|| v.parse().expect("--gap-predict: a gain or off"));
-            }
-            if let Some(v) = arg("--slip-predict") {
-                params.open_close.slip_predict =
-                    (v != "off").then(|| v.parse().expect("--slip-predict: a gain or off"));
-            }
             if let Some(v) = arg("--closing") {
                 params.closing.elastic_fraction = Some(v.parse().expect("--closing"));
             }

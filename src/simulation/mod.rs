@@ -482,6 +482,15 @@ mod tests {
         }
     }
 
+    /// A 4 × 5 wall of the presets after one step at rest: contacts detected, linearized and
+    /// converged, the fixture of the unit tests below that set states and histories by hand.
+    fn wall_after_a_step_at_rest() -> Simulation {
+        let scene = crate::scene::validate(&crate::presets::wall(4, 5)).expect("wall scene");
+        let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
+        sim.step(1.0).expect("a step at rest");
+        sim
+    }
+
     /// The friction normal's prediction (`OpenCloseParams::friction_predict`) against its
     /// closed form: a sliding contact closed at both step starts is predicted
     /// max(0, N₁ + g·(N₁ − N₀)); without a remembered force, or not sliding, nothing; an open
@@ -491,9 +500,7 @@ mod tests {
     fn the_friction_normal_prediction_extrapolates_the_last_two_steps() {
         use crate::contact::ContactState;
         use crate::solve::open_close::predict_friction_normals;
-        let scene = crate::scene::validate(&crate::presets::wall(4, 5)).expect("wall scene");
-        let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
-        sim.step(1.0).expect("a step at rest");
+        let sim = wall_after_a_step_at_rest();
         let mut cs: Vec<_> = sim.state.contacts.contacts[..4].to_vec();
         let sliding = ContactState::Sliding { dir: 1.0 };
         let states = [sliding, sliding, ContactState::Open, ContactState::Locked];
@@ -537,9 +544,7 @@ mod tests {
         use crate::assembly::contact_springs::shear_limit;
         use crate::contact::ContactState::{Locked, Open, Sliding};
         use crate::solve::open_close::{predict_stick_slip, OpenCloseParams};
-        let scene = crate::scene::validate(&crate::presets::wall(4, 5)).expect("wall scene");
-        let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
-        sim.step(1.0).expect("a step at rest");
+        let sim = wall_after_a_step_at_rest();
         let springs = sim.stepper.springs;
         let laws = &sim.state.laws[..8];
         let mut cs: Vec<_> = sim.state.contacts.contacts[..8].to_vec();
@@ -640,9 +645,7 @@ mod tests {
     fn the_gap_prediction_extrapolates_the_last_two_gap_changes() {
         use crate::contact::ContactState::{Locked, Open, Sliding};
         use crate::solve::open_close::{predict_gaps, OpenCloseParams};
-        let scene = crate::scene::validate(&crate::presets::wall(4, 5)).expect("wall scene");
-        let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
-        sim.step(1.0).expect("a step at rest");
+        let sim = wall_after_a_step_at_rest();
         let springs = sim.stepper.springs;
         let laws = &sim.state.laws[..8];
         let mut cs: Vec<_> = sim.state.contacts.contacts[..8].to_vec();
@@ -740,9 +743,7 @@ mod tests {
     fn the_rhs_only_reassembly_gives_the_full_assemblys_system_to_the_bit() {
         use crate::assembly::contact_springs::{add_contact_loads, add_contacts, spring_key};
         use crate::contact::ContactState;
-        let scene = crate::scene::validate(&crate::presets::wall(4, 5)).expect("wall scene");
-        let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
-        sim.step(1.0).expect("a step at rest");
+        let mut sim = wall_after_a_step_at_rest();
         let mut held = sim.state.contacts.contacts.clone();
         for (k, c) in held.iter_mut().enumerate() {
             match k % 5 {

@@ -430,9 +430,7 @@ pub fn predict_stick_slip(
             }
             // Bed joints only (normal more than `light_state_tilt` above horizontal): on the
             // head joints too it added more re-stickings and later onsets than it removed.
-            (ContactState::Locked, _, Some(g))
-                if c.n.y.abs() > params.light_state_tilt.sin() + 1e-12 =>
-            {
+            (ContactState::Locked, _, Some(g)) if !params.head_by_tilt(&c.n) => {
                 let s = c.s0 + s1 + g * (s1 - s0);
                 // `update_state`'s onset-of-slip test, on the predicted shear displacement.
                 if (springs.shear * s).abs()
@@ -462,7 +460,7 @@ pub fn predict_gaps(
     };
     for (c, law) in contacts.iter_mut().zip(laws) {
         // Head joints only (normal within `light_state_tilt` of horizontal).
-        if c.n.y.abs() > params.light_state_tilt.sin() + 1e-12 {
+        if !params.head_by_tilt(&c.n) {
             continue;
         }
         let (Some(d1), Some(d0)) = (c.last_gap_change, c.prior_gap_change) else {
@@ -589,6 +587,14 @@ impl ChangeCounts {
 }
 
 impl OpenCloseParams {
+    /// Whether a contact of unit normal `n` is a head joint by the light rule's tilt: its
+    /// normal within `light_state_tilt` of horizontal (the 1e-12 absorbs the rounding of a
+    /// normal at exactly the tilt). The light rule, the stick–slip and gap predictions and the
+    /// stone rule's state bound ask the same.
+    pub fn head_by_tilt(&self, n: &nalgebra::Vector2<f64>) -> bool {
+        n.y.abs() <= self.light_state_tilt.sin() + 1e-12
+    }
+
     /// The loop as it was before docs/contact-solve.md (for the reference runs there).
     pub fn legacy() -> Self {
         Self {
@@ -1682,7 +1688,7 @@ fn update_state(
             <= params.light_load * floor_scale;
         // A head joint by the light rule's tilt (`light_state_tilt`); the stone rule's state
         // bound below asks the same.
-        let head_by_tilt = c.n.y.abs() <= params.light_state_tilt.sin() + 1e-12;
+        let head_by_tilt = params.head_by_tilt(&c.n);
         if params.light_state_changes
             && head_by_tilt
             && params.force_tolerance > 0.0
