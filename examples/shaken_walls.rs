@@ -29,7 +29,7 @@
 //!  [--unconverged-floor R] [--floor-hold on|off] [--floor-penetration F]
 //!  [--floor-iterations N] [--min-located R] [--growth G] [--impact-cluster on|off]
 //!  [--friction-predict GAIN|off] [--stick-predict GAIN|off] [--slip-predict GAIN|off]
-//!  [--first-kinds]`
+//!  [--gap-predict GAIN|off] [--head-slip-predict GAIN|off] [--first-kinds]`
 //!
 //! `--wall-set`, `--record`/`--pga`, `--window S` (a line of counters every S simulated
 //! seconds) and the knobs `--unconverged-floor`, `--min-located`, `--growth` are the wall shaken
@@ -46,7 +46,8 @@
 //! `--stick-predict` and `--slip-predict` set the stick–slip prediction's gains
 //! (`OpenCloseParams::stick_predict`, `slip_predict`, docs/contact-solve.md §32; `off` turns it
 //! off); `--gap-predict GAIN|off` the head joints' gap prediction (`OpenCloseParams::gap_predict`,
-//! §33; off by default); `--first-kinds` prints, for the measured steps, the sets of change kinds the first
+//! §33); `--head-slip-predict GAIN|off` the head joints' onset of slip
+//! (`OpenCloseParams::head_slip_predict`, §34; off by default); `--first-kinds` prints, for the measured steps, the sets of change kinds the first
 //! solve of a step found and the steps and solves each set cost.
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
@@ -714,6 +715,7 @@ fn main() {
                 ("--stick-predict", &mut oc.stick_predict),
                 ("--slip-predict", &mut oc.slip_predict),
                 ("--gap-predict", &mut oc.gap_predict),
+                ("--head-slip-predict", &mut oc.head_slip_predict),
             ] {
                 if let Some(v) = arg(name) {
                     *knob = (v != "off").then(|| {
@@ -1012,6 +1014,11 @@ fn main() {
                     ch.predicted[2][0],
                     ch.predicted[3][0] + ch.predicted[3][1],
                     ch.predicted[3][0]
+                );
+                eprintln!(
+                    "  head onset prediction: started sliding {} (held {})",
+                    ch.predicted[4][0] + ch.predicted[4][1],
+                    ch.predicted[4][0]
                 );
             }
         }

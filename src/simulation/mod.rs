@@ -123,7 +123,10 @@ impl Simulation {
         // slip as a sliding one.
         let oc = &self.params.open_close;
         if self.state.scene.control.contact_solver == ContactSolver::Penalty
-            && (oc.stick_predict.is_some() || oc.slip_predict.is_some() || oc.gap_predict.is_some())
+            && (oc.stick_predict.is_some()
+                || oc.slip_predict.is_some()
+                || oc.gap_predict.is_some()
+                || oc.head_slip_predict.is_some())
         {
             open_close::predict_stick_slip(
                 &mut self.state.contacts.contacts,
@@ -628,6 +631,129 @@ mod tests {
         let off = OpenCloseParams {
             stick_predict: None,
             slip_predict: None,
+            ..params
+        };
+        predict_stick_slip(&mut cs, laws, &springs, &off);
+        assert!(cs.iter().all(|c| c.predicted_state.is_none()));
+    }
+
+    /// The head joints' onset prediction (`OpenCloseParams::head_slip_predict`) against its
+    /// closed form: a locked head joint whose gap is predicted to stay closed (g₀ + Δ₁ at the
+    /// gap rule's gain 0, not above the length tolerance) starts sliding, in the direction of
+    /// s₀ + σ with σ = σ₁ + g·(σ₁ − σ₀), when |s₀ + σ| exceeds the onset threshold
+    /// (limit·(1 + h) + k_s·tol)/k_s of the Coulomb limit of the *predicted* normal force
+    /// −k_n·(g₀ + Δ₁), not of the last one. Contacts of a 4 × 5 wall after one step at rest,
+    /// every length in units of the wall's own tolerance; each decision at least a factor 2
+    /// from its threshold (a test of the decision, not of the rounding at the boundary).
+    #[test]
+    fn the_head_onset_prediction_uses_the_predicted_normal_force() {
+        use crate::assembly::contact_springs::shear_limit;
+        use crate::contact::ContactState::{Locked, Sliding};
+        use crate::solve::open_close::{predict_stick_slip, OpenCloseParams};
+        let sim = wall_after_a_step_at_rest();
+        let springs = sim.stepper.springs;
+        let laws = &sim.state.laws[..8];
+        let mut cs: Vec<_> = sim.state.contacts.contacts[..8].to_vec();
+        let tol = springs.gap_tolerance;
+        let params = OpenCloseParams {
+            stick_predict: None,
+            slip_predict: None,
+            head_slip_predict: Some(1.0),
+            gap_predict: Some(0.0),
+            ..OpenCloseParams::default()
+        };
+        let h = params.hysteresis;
+        assert!(laws.iter().all(|l| *l == laws[0]));
+        // The onset threshold on the shear displacement (m) at a normal force N.
+        let onset = |n: f64| {
+            (shear_limit(&cs[0], &laws[0], n) * (1.0 + h) + springs.shear * tol) / springs.shear
+        };
+        // A compressed head joint: predicted gap −10 tol, so N = 10·k_n·tol; its threshold must
+        // be well above the unloaded one for the cases below to tell the two forces apart.
+        let loaded = 10.0 * springs.normal * tol;
+        let (hi, lo) = (onset(loaded), onset(0.0));
+        assert!(hi > 5.0 * lo, "thresholds {hi:e} {lo:e}");
+        // (last normal force N, g₀, Δ₁, Δ₀, σ₁, σ₀): the expected start. s₀ = 0.
+        let cases = [
+            // Predicted N = loaded, loading at 0.6·hi a step from rest: s = 1.2·hi → slides.
+            (
+                loaded,
+                -9.0,
+                Some(-1.0),
+                Some(0.0),
+                0.6 * hi,
+                0.0,
+                Some(Sliding { dir: 1.0 }),
+            ),
+            // The same at 0.4·hi: s = 0.8·hi → stays as it is.
+            (loaded, -9.0, Some(-1.0), Some(0.0), 0.4 * hi, 0.0, None),
+            // Last N = 0 (its threshold lo) but predicted N = loaded: s = 0.5·hi ≫ lo → as it
+            // is (the last force's limit would make it slide).
+            (0.0, -9.0, Some(-1.0), Some(5.0), 0.25 * hi, 0.0, None),
+            // Last N = loaded but predicted unloaded (gap 0): s = −2·lo, below −lo → slides
+            // backward (the last force's limit, hi > 5·lo, would keep it).
+            (
+                loaded,
+                -1.0,
+                Some(1.0),
+                Some(-3.0),
+                -lo,
+                0.0,
+                Some(Sliding { dir: -1.0 }),
+            ),
+            // Predicted to open (gap 2 tol > tol): the gap rule's, not this one's.
+            (0.0, 1.0, Some(1.0), Some(1.0), 10.0 * hi, 0.0, None),
+            // No gap history: nothing.
+            (loaded, -9.0, Some(-1.0), None, 10.0 * hi, 0.0, None),
+            // Steady loading at 1.2·hi a step (σ₀ = σ₁): s = 1.2·hi → slides.
+            (
+                loaded,
+                -9.0,
+                Some(-1.0),
+                Some(-1.0),
+                1.2 * hi,
+                1.2 * hi,
+                Some(Sliding { dir: 1.0 }),
+            ),
+            // Slowing from 2·hi to 1.2·hi a step: s = 0.4·hi → as it is.
+            (
+                loaded,
+                -9.0,
+                Some(-1.0),
+                Some(-1.0),
+                1.2 * hi,
+                2.0 * hi,
+                None,
+            ),
+        ];
+        let set = |cs: &mut [crate::contact::Contact]| {
+            for (c, &(n, g0, d1, d0, s1, s0, _)) in cs.iter_mut().zip(&cases) {
+                c.n = nalgebra::Vector2::new(1.0, 0.0);
+                c.bonded = false;
+                c.state = Locked;
+                c.normal_force = n;
+                c.s0 = 0.0;
+                c.g0 = g0 * tol;
+                c.last_gap_change = d1.map(|d| d * tol);
+                c.prior_gap_change = d0.map(|d| d * tol);
+                c.last_slip = Some(s1);
+                c.prior_slip = Some(s0);
+            }
+        };
+        set(&mut cs);
+        predict_stick_slip(&mut cs, laws, &springs, &params);
+        for (k, (c, case)) in cs.iter().zip(&cases).enumerate() {
+            assert_eq!(c.predicted_state, case.6, "case {k}");
+        }
+        // A bed joint (normal vertical) as case 0: not this rule's (`slip_predict` is off).
+        set(&mut cs);
+        cs[0].n = nalgebra::Vector2::new(0.0, 1.0);
+        predict_stick_slip(&mut cs, laws, &springs, &params);
+        assert_eq!(cs[0].predicted_state, None);
+        // Off: nothing predicted.
+        set(&mut cs);
+        let off = OpenCloseParams {
+            head_slip_predict: None,
             ..params
         };
         predict_stick_slip(&mut cs, laws, &springs, &off);

@@ -354,6 +354,23 @@ pub struct OpenCloseParams {
     /// with one more cut; 0 is the gap extrapolated linearly from the last two step ends,
     /// which needs no assumption on how its change varies.
     pub gap_predict: Option<f64>,
+    /// Predict a locked **head** joint's onset of slip at the step start (`slip_predict` does
+    /// bed joints): the slip over the step is extrapolated as `slip_predict` does it,
+    /// σ = σ₁ + g·(σ₁ − σ₀) with g this gain, and the joint starts the loop sliding in the
+    /// direction of s₀ + σ when its gap is predicted to stay closed (the `gap_predict`
+    /// extrapolation, its gain or 0 when that rule is off) and the spring would carry more than
+    /// the loop's slip threshold against the Coulomb limit of the predicted normal force
+    /// (−k_n × the predicted gap). Same restrictions as `slip_predict` (the stones the stone
+    /// settle rule takes, the step's first attempt, only the starting guess moves).
+    /// `None` = off. Default off (session 42, docs/contact-solve.md §34): g = 1 takes the
+    /// shaken 410-stone wall's record strong part from 1.92 to 1.85 solves a step, the whole
+    /// 20 s record from 1.41 to 1.39 and the 1 Hz sine from 1.12 to 1.10, but the 3 m/s² 2 Hz
+    /// sine from 3.00 to 3.42 and the 1620-stone wall from 3.63 (0 cuts) to 3.89 (2 cuts): a
+    /// joint started sliding holds at the first solve and sheds its shear onto its neighbours,
+    /// which then slip or re-stick. The limit of the *last* normal force (§32's test on every
+    /// joint) was worse (strong part 2.29): it starts sliding twice as many joints that stay
+    /// locked.
+    pub head_slip_predict: Option<f64>,
 }
 
 impl Default for OpenCloseParams {
@@ -396,6 +413,7 @@ impl Default for OpenCloseParams {
             stick_predict: Some(1.0),
             slip_predict: Some(1.0),
             gap_predict: Some(0.0),
+            head_slip_predict: None,
         }
     }
 }
@@ -439,9 +457,61 @@ pub fn predict_stick_slip(
                     c.predicted_state = Some(ContactState::Sliding { dir: s.signum() });
                 }
             }
+            // Head joints (`head_slip_predict`): against the limit of the predicted normal
+            // force, when the gap is predicted to stay closed.
+            (ContactState::Locked, _, _) if params.head_by_tilt(&c.n) => {
+                let Some(g) = params.head_slip_predict else {
+                    continue;
+                };
+                let Some(limit) = head_onset_limit(c, law, springs, params) else {
+                    continue;
+                };
+                let s = c.s0 + s1 + g * (s1 - s0);
+                if (springs.shear * s).abs()
+                    > limit * (1.0 + h) + springs.shear * springs.gap_tolerance
+                {
+                    c.predicted_state = Some(ContactState::Sliding { dir: s.signum() });
+                }
+            }
             _ => {}
         }
     }
+}
+
+/// The gap a contact is predicted to end this step with (`gap_predict`'s extrapolation at
+/// gain `gain`), m, if it has the history of the last two steps.
+fn predicted_gap(c: &Contact, gain: f64) -> Option<f64> {
+    let (Some(d1), Some(d0)) = (c.last_gap_change, c.prior_gap_change) else {
+        return None;
+    };
+    Some(c.g0 + d1 + gain * (d1 - d0))
+}
+
+/// A closed contact's opening threshold (`update_state`'s): the bond's tensile allowance plus
+/// the length tolerance, m.
+fn opening_gap(c: &Contact, law: &JointLaw, springs: &SpringParams) -> f64 {
+    let allowance = if c.bonded {
+        law.tensile_strength * c.length / springs.normal
+    } else {
+        0.0
+    };
+    allowance + springs.gap_tolerance
+}
+
+/// The Coulomb limit against which `head_slip_predict` tests a locked head joint, N: that of
+/// the normal force its predicted gap gives (−k_n × gap, 0 when not compressed), `None` when
+/// the gap is predicted to open (the gap prediction decides that joint) or has no history.
+fn head_onset_limit(
+    c: &Contact,
+    law: &JointLaw,
+    springs: &SpringParams,
+    params: &OpenCloseParams,
+) -> Option<f64> {
+    let gap = predicted_gap(c, params.gap_predict.unwrap_or(0.0))?;
+    if gap > opening_gap(c, law, springs) {
+        return None;
+    }
+    Some(shear_limit(c, law, -springs.normal * gap))
 }
 
 /// The gap prediction at a step start (`OpenCloseParams::gap_predict`): call once per step,
@@ -463,18 +533,12 @@ pub fn predict_gaps(
         if !params.head_by_tilt(&c.n) {
             continue;
         }
-        let (Some(d1), Some(d0)) = (c.last_gap_change, c.prior_gap_change) else {
+        let Some(gap) = predicted_gap(c, gain) else {
             continue;
         };
-        let gap = c.g0 + d1 + gain * (d1 - d0);
         // `update_state`'s opening and closing tests, on the predicted gap.
         if c.state.is_closed() {
-            let allowance = if c.bonded {
-                law.tensile_strength * c.length / springs.normal
-            } else {
-                0.0
-            };
-            if gap > allowance + springs.gap_tolerance {
+            if gap > opening_gap(c, law, springs) {
                 c.predicted_state = Some(ContactState::Open);
             }
         } else if gap <= -springs.gap_tolerance {
@@ -553,8 +617,9 @@ pub struct ChangeCounts {
     /// started in another state: `[0]` started locked (predicted re-sticking), `[1]` started
     /// sliding (predicted onset of slip); and the gap prediction (`gap_predict`): `[2]`
     /// started open (predicted opening), `[3]` started closed (predicted closing); each
-    /// `[held, changed]` after the first solve.
-    pub predicted: [[u64; 2]; 4],
+    /// `[held, changed]` after the first solve; `[4]` the head joints started sliding
+    /// (`head_slip_predict`; `[1]` counts the bed joints).
+    pub predicted: [[u64; 2]; 5],
 }
 
 /// Names of the kinds of [`ChangeCounts::by_kind`].
@@ -609,6 +674,7 @@ impl OpenCloseParams {
             stick_predict: None,
             slip_predict: None,
             gap_predict: None,
+            head_slip_predict: None,
             ..Self::default()
         }
     }
@@ -967,6 +1033,7 @@ pub fn iterate(
             (ContactState::Open, ContactState::Open) => continue,
             (_, ContactState::Open) => 2,
             (ContactState::Open, _) => 3,
+            (_, ContactState::Sliding { .. }) if params.head_by_tilt(&c.n) => 4,
             (_, ContactState::Sliding { .. }) => 1,
             _ => 0,
         };
