@@ -22,7 +22,7 @@
 //!  [--cycle-tilt DEG]
 //!  [--time-step DT] [--closing F]
 //!  [--closing-floor R]
-//!  [--light-interface on|off] [--simplicial] [--ordering scalar|block-amd|dissection|coordinates]
+//!  [--light-interface on|off] [--simplicial] [--triangular faer|repacked] [--ordering scalar|block-amd|dissection|coordinates]
 //!  [--relax faer|none|wide] [--dissection-leaf N] [--start-check K] [--start-check-audit]
 //!  [--digest] [--no-settle] [--settle-max S] [--lead-in S] [--motions …,sine3]
 //!  [--wall-set length=12,height=6,openings=0] [--record FILE] [--pga G] [--window S]
@@ -39,6 +39,8 @@
 //! reused-factor solve, default 2; 0 = the exact test at every start), `--start-check-audit`
 //! counts the accepted starts the exact test rejects (`SparseParams::start_check_audit`);
 //! `--simplicial` turns off faer's supernodal factorization (`SparseParams::supernodal`);
+//! `--triangular` chooses the triangular solves (`SparseParams::triangular`: faer's, or the
+//! repacked copy of its factor, docs/contact-solve.md §35);
 //! `--ordering`, `--relax` and `--dissection-leaf` choose its ordering and supernode
 //! amalgamation (`SparseParams::ordering`, `relax`, `dissection_leaf`);
 //! `--digest` prints a hash of every vertex and velocity at the end (bit-identity checks).
@@ -62,7 +64,7 @@ use ashlar::scene::generate::WallParams;
 use ashlar::scene::{validate, BlockModel};
 use ashlar::simulation::{SimParams, Simulation};
 use ashlar::solve::open_close::CHANGE_KINDS;
-use ashlar::solve::{SparseOrdering, SupernodeRelax};
+use ashlar::solve::{SparseOrdering, SupernodeRelax, TriangularSolve};
 use std::time::Instant;
 
 #[path = "support/args.rs"]
@@ -790,6 +792,13 @@ fn main() {
             }
             if std::env::args().any(|a| a == "--simplicial") {
                 params.solver.sparse.supernodal = false;
+            }
+            // `--triangular faer|repacked` (`SparseParams::triangular`, §35).
+            match arg("--triangular").as_deref() {
+                Some("repacked") => params.solver.sparse.triangular = TriangularSolve::Repacked,
+                Some("faer") => params.solver.sparse.triangular = TriangularSolve::Faer,
+                None => {}
+                Some(t) => panic!("--triangular {t}: faer or repacked"),
             }
             // `--ordering block-amd|dissection`, `--relax none|wide`, `--dissection-leaf N`
             // (`SparseParams`, docs/contact-solve.md §20).

@@ -7,10 +7,12 @@ mod dense_cholesky;
 mod dissection;
 pub mod dual;
 pub mod open_close;
+mod repacked;
 mod sparse_cholesky;
 
 pub use sparse_cholesky::{
-    FactorCost, ReuseTable, SparseOrdering, SparseParams, SupernodeRelax, REUSE_TABLE_LEN,
+    FactorCost, ReuseTable, SparseOrdering, SparseParams, SupernodeRelax, TriangularSolve,
+    REUSE_TABLE_LEN,
 };
 
 use crate::assembly::{BlockSystem, Dofs};
@@ -88,6 +90,8 @@ pub struct SparseCounts {
     /// Declined after the eigen-decomposition (rank above the bound), and Σ support³.
     pub low_rank_declined_rank: u64,
     pub low_rank_declined_cube: f64,
+    /// Copies of the factor made for [`TriangularSolve::Repacked`] (one per factor solved).
+    pub repacks: u64,
 }
 
 impl LinearSolver {
@@ -114,6 +118,7 @@ impl LinearSolver {
             low_rank_failed: self.sparse.low_rank_failed,
             low_rank_declined_rank: self.sparse.low_rank_declined_rank,
             low_rank_declined_cube: self.sparse.low_rank_declined_cube,
+            repacks: self.sparse.repack_count,
         }
     }
 
