@@ -10,8 +10,8 @@
 //!
 //! - inner equations, λ fixed: F(v) = M(v − v⁻) − Hᵀp(v) = 0 with pₙ = max(0, zₙ),
 //!   zₙ = λₙ + ρₙ(target − ġₙ(v)), and pₜ = clamp(zₜ, ±μpₙ), zₜ = λₜ − ρₜṡ(v); F is piecewise
-//!   linear in v, solved by semismooth Newton (Jacobian M + Σ_active ρₙhₙhₙᵀ + Σ_stick ρₜhₜhₜᵀ
-//!   + Σ_slide σμρₙhₜhₙᵀ, a sparse LU (faer) a step; nonsingular whatever the redundancy of the
+//!   linear in v, solved by semismooth Newton (Jacobian M + Σ_active ρₙhₙhₙᵀ + Σ_stick
+//!   ρₜhₜhₜᵀ + Σ_slide σμρₙhₜhₙᵀ, a sparse LU (faer) a step; nonsingular whatever the redundancy of the
 //!   contacts: four corners meeting at a node of an aligned stack make the Delassus matrix
 //!   H M⁻¹ Hᵀ singular, M + ρHᵀH never is), Armijo backtracking on θ = ½FᵀM⁻¹F;
 //! - outer: λ ← p(v) (the proximal point iteration on the impulses), then v = v⁻ + M⁻¹Hᵀλ
