@@ -131,6 +131,10 @@ fn time_run(solver: &str, cli: &Cli) -> Result<(f64, Simulation), String> {
     if let Some(r) = cli.locate_speed_ratio {
         params.impact.locate_speed_ratio = r;
     }
+    if let Some(cap) = cli.cluster_cap {
+        params.impact.cluster_max_blocks = cap;
+    }
+    params.impact.polish |= cli.polish;
     params.solver.sparse.ordering = match cli.ordering.as_str() {
         "block-amd" => SparseOrdering::BlockAmd,
         "dissection" => SparseOrdering::BlockDissection,
@@ -249,6 +253,13 @@ struct Cli {
     /// Diagnosis: locate only impacts faster than R × the settling threshold (`ImpactParams::locate_speed_ratio`).
     #[arg(long, value_name = "R", value_parser = positive)]
     locate_speed_ratio: Option<f64>,
+    /// Largest component joined to an impact (`ImpactParams::cluster_max_blocks`; a huge
+    /// number lifts the cap).
+    #[arg(long, value_name = "N")]
+    cluster_cap: Option<usize>,
+    /// Finish unconverged impulse solves with the polish (`ImpactParams::polish`, off by default).
+    #[arg(long)]
+    polish: bool,
     /// The sparse factorization's ordering (`SparseParams::ordering`): faer's minimum degree
     /// on the unknowns (`scalar`, the default), on the blocks (`block-amd`), or nested
     /// dissection of the blocks by level sets (`dissection`) or straight cuts (`coordinates`).
@@ -335,9 +346,12 @@ fn main() -> std::process::ExitCode {
             sim.stats().dual_loose_residual,
         );
         println!(
-            "         profile: {:?}; impacting contacts {}",
+            "         profile: {:?}; impacting contacts {}; impulse solves polished {}, unconverged {} (largest residual/scale {:.2e})",
             sim.profile(),
-            sim.stats().impacts
+            sim.stats().impacts,
+            sim.stats().impact_polished,
+            sim.stats().impact_unconverged,
+            sim.stats().impact_residual_ratio,
         );
         let (c, w) = (sim.solver_counts(), SimParams::default().solver.sparse);
         println!(

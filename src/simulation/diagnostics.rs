@@ -53,6 +53,15 @@ pub struct Stats {
     pub unconverged_floor_refused: u64,
     /// Steps the impact law's event location ended early (before a predicted impact).
     pub located_steps: u64,
+    /// Impulse solves (steps with an impact) the projected Gauss–Seidel left above
+    /// `ImpactParams::residual_tolerance` and the polish finished (`ImpactParams::polish`).
+    pub impact_polished: u64,
+    /// Impulse solves that ended above `ImpactParams::residual_tolerance` (after the polish
+    /// if on): the velocities after such an impact are not the impact law's.
+    pub impact_unconverged: u64,
+    /// Largest end residual of an impulse solve relative to its speed scale
+    /// (`assembly::restitution::ImpulseReport`), 0 if none.
+    pub impact_residual_ratio: f64,
 }
 
 impl Simulation {

@@ -439,6 +439,11 @@ impl Simulation {
         self.stepper.stats
     }
 
+    /// How the last step's impulse solve went (all zero if the step had no impact).
+    pub fn impact_report(&self) -> crate::assembly::restitution::ImpulseReport {
+        self.stepper.impact_scratch.report()
+    }
+
     /// Wall time per stage, accumulated over the steps.
     pub fn profile(&self) -> StepProfile {
         self.stepper.profile

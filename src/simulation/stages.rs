@@ -2,9 +2,11 @@
 //! detect contacts (contact), Newton's impact law at the step start (assembly::restitution),
 //! assemble (assembly), solve by open–close or the dual solver (solve), integrate and the
 //! step's bookkeeping (integrate). Whether a solved step is accepted is `control.rs`.
-use super::{SimError, Simulation};
+use super::{SimError, Simulation, Stats};
 use crate::assembly::contact_springs::JointLaw;
-use crate::assembly::restitution::{apply_impacts, hand_over_weight, located_step, ImpactInput};
+use crate::assembly::restitution::{
+    apply_impacts, hand_over_weight, located_step, ImpactInput, ImpulseReport,
+};
 use crate::assembly::BodyLoads;
 use crate::contact::{ContactState, Mobility};
 use crate::integrate;
@@ -112,6 +114,12 @@ impl Simulation {
             &mut self.stepper.impact_scratch,
         );
         self.stepper.stats.impacts += n as u64;
+        if n > 0 {
+            count_impulse_solve(
+                &mut self.stepper.stats,
+                self.stepper.impact_scratch.report(),
+            );
+        }
         let hand_over = n > 0 && self.params.impact.hand_over_weight;
         if hand_over {
             hand_over_weight(
@@ -383,5 +391,17 @@ impl Simulation {
                 self.stepper.dt = self.stepper.dt.min(sized);
             }
         }
+    }
+}
+
+/// An impulse solve's counters (`Stats::impact_polished`, `impact_unconverged`,
+/// `impact_residual_ratio`).
+fn count_impulse_solve(stats: &mut Stats, report: ImpulseReport) {
+    stats.impact_polished += u64::from(report.polish_iterations > 0);
+    stats.impact_unconverged += u64::from(!report.converged);
+    if report.scale > 0.0 {
+        stats.impact_residual_ratio = stats
+            .impact_residual_ratio
+            .max(report.residual / report.scale);
     }
 }

@@ -1,0 +1,193 @@
+//! An e = 0 landing on a stack, as tests/regression/regression_impact_cluster_size.rs runs it:
+//! how the impulse solve went (sweeps, residuals, the polish) and what the landing left.
+//!
+//! Scene: `presets::aligned_stack(columns, rows)` (0.4 × 0.2 m blocks in a fixed U) with rigid
+//! blocks, φ = 30°, the penalty solver, Δt = 1 ms, and a 0.4 × 0.2 m lander 5 cm above the top
+//! middle block thrown down at 1 m/s (it lands at ≈ 1.41 m/s, ≈ 198 J/m); `--bond` offsets
+//! every other course by half a block (half blocks at its ends: a running-bond stack).
+//! Reference: an e = 0 landing on a stack resting on a rigid floor leaves everything at rest.
+//!
+//! Run: `cargo run --release --example impact_landing -- --stacks 4x4,8x4,8x8,7x9,5x13`
+//! (`--cap N` for `ImpactParams::cluster_max_blocks`, `--no-polish` for the sweeps alone (the
+//! engine's default; the example turns `ImpactParams::polish` on otherwise),
+//! `--pair` for `cluster: false`, `--sweeps N` for `max_sweeps`, `--penalty`, `--outer`,
+//! `--newton`, `--tolerance` for the polish's knobs, `--after S` for the seconds
+//! watched after the landing, `--bond` for the running bond). Per stack it prints the
+//! landing step's impulse solve (contacts, blocks, sweeps and whether they stopped on their
+//! own criterion, the residual after them and at the end relative to the speed scale, the
+//! polish's outer iterations and Newton steps), the kinetic energy before and after the
+//! landing's step, Δt cuts and steps in the `--after` seconds, and the polish/unconverged
+//! counters over the run.
+use ashlar::motion::GroundMotion;
+use ashlar::presets::{aligned_stack, rect, scene_json};
+use ashlar::scene::parse_scene;
+use ashlar::simulation::{SimParams, Simulation};
+use clap::Parser;
+use serde_json::{json, Value};
+use std::time::Instant;
+
+const W: f64 = 0.4;
+const H: f64 = 0.2;
+const DROP: f64 = 0.05;
+
+#[derive(Parser)]
+struct Args {
+    /// Stacks as COLUMNSxROWS, comma-separated.
+    #[arg(long, default_value = "4x4,8x4,8x8,7x9,5x13")]
+    stacks: String,
+    /// `ImpactParams::cluster_max_blocks` (default: the engine's).
+    #[arg(long)]
+    cap: Option<usize>,
+    /// The sweeps alone (`ImpactParams::polish` false, the default; without this flag the
+    /// example turns the polish on).
+    #[arg(long)]
+    no_polish: bool,
+    /// `ImpactParams::cluster` false (the pair law).
+    #[arg(long)]
+    pair: bool,
+    /// `ImpactParams::max_sweeps`.
+    #[arg(long)]
+    sweeps: Option<usize>,
+    /// `ImpactParams::polish_penalty`.
+    #[arg(long)]
+    penalty: Option<f64>,
+    /// `ImpactParams::polish_iterations`.
+    #[arg(long)]
+    outer: Option<usize>,
+    /// `ImpactParams::polish_newton_steps`.
+    #[arg(long)]
+    newton: Option<usize>,
+    /// `ImpactParams::residual_tolerance`.
+    #[arg(long)]
+    tolerance: Option<f64>,
+    /// Seconds watched after the landing's step.
+    #[arg(long, default_value_t = 0.01)]
+    after: f64,
+    /// Every other course offset by half a block.
+    #[arg(long)]
+    bond: bool,
+}
+
+/// A running-bond stack in the aligned stack's U: odd courses start and end with a half block.
+fn bond_stack(columns: usize, rows: usize) -> Value {
+    let (width, height) = (columns as f64 * W, rows as f64 * H);
+    let mut blocks = vec![
+        json!({ "id": "floor", "material": "stone", "fixed": true, "vertices": rect(-1.0, -1.0, width + 1.0, 0.0) }),
+        json!({ "id": "left", "material": "stone", "fixed": true, "vertices": rect(-1.0, 0.0, 0.0, height + 1.0) }),
+        json!({ "id": "right", "material": "stone", "fixed": true, "vertices": rect(width, 0.0, width + 1.0, height + 1.0) }),
+    ];
+    for r in 0..rows {
+        let y0 = r as f64 * H;
+        let mut edges = vec![0.0];
+        let mut x = if r % 2 == 1 { 0.5 * W } else { W };
+        while x < width - 1e-9 {
+            edges.push(x);
+            x += W;
+        }
+        edges.push(width);
+        for (c, e) in edges.windows(2).enumerate() {
+            blocks.push(json!({ "id": format!("b{r}_{c}"), "material": "stone",
+                                "vertices": rect(e[0], y0, e[1], y0 + H) }));
+        }
+    }
+    scene_json(json!(blocks), 0.0, json!({ "time_step": 1e-3 }))
+}
+
+fn scene(columns: usize, rows: usize, bond: bool) -> Value {
+    let mut v = if bond {
+        bond_stack(columns, rows)
+    } else {
+        aligned_stack(columns, rows)
+    };
+    let blocks = v["blocks"].as_array_mut().expect("blocks");
+    for b in blocks.iter_mut().filter(|b| b.get("fixed").is_none()) {
+        b["block_model"] = json!("rigid");
+    }
+    let (x0, top) = ((columns / 2) as f64 * W, rows as f64 * H);
+    blocks.push(
+        json!({ "id": "lander", "material": "stone", "block_model": "rigid",
+                        "vertices": rect(x0, top + DROP, x0 + W, top + DROP + H) }),
+    );
+    v["joints"]["j"]["friction_angle"] = json!(30.0);
+    v["control"]["contact_solver"] = json!("penalty");
+    v["initial"] = json!([{ "block": "lander", "velocity": [0.0, -1.0] }]);
+    v
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args = Args::parse();
+    println!("stack | free blocks | contacts in solve | blocks in solve | sweeps (stopped) | sweeps residual/scale | polish outer/Newton | end residual/scale | KE before -> after (J/m) | cuts | steps after | polished/unconverged solves | CPU s");
+    for spec in args.stacks.split(',') {
+        let (c, r) = spec
+            .split_once('x')
+            .ok_or_else(|| format!("stack {spec:?} is not COLUMNSxROWS"))?;
+        let (columns, rows): (usize, usize) = (c.trim().parse()?, r.trim().parse()?);
+        let scene = parse_scene(&scene(columns, rows, args.bond).to_string())?;
+        let free = scene
+            .blocks
+            .iter()
+            .filter(|b| matches!(b.kind, ashlar::scene::BlockKind::Free(_)))
+            .count()
+            - 1;
+        let mut params = SimParams::default();
+        if let Some(cap) = args.cap {
+            params.impact.cluster_max_blocks = cap;
+        }
+        if let Some(n) = args.sweeps {
+            params.impact.max_sweeps = n;
+        }
+        params.impact.polish = !args.no_polish;
+        if let Some(p) = args.penalty {
+            params.impact.polish_penalty = p;
+        }
+        if let Some(n) = args.newton {
+            params.impact.polish_newton_steps = n;
+        }
+        if let Some(t) = args.tolerance {
+            params.impact.residual_tolerance = t;
+        }
+        if let Some(n) = args.outer {
+            params.impact.polish_iterations = n;
+        }
+        params.impact.cluster = !args.pair;
+        let clock = Instant::now();
+        let mut s = Simulation::new(&scene, &GroundMotion::none(), params);
+        let (mut before, mut cuts_before) = (0.0, 0);
+        while s.stats().impacts == 0 {
+            if s.time() > 0.1 {
+                return Err("no landing by 0.1 s".into());
+            }
+            before = s.energy().kinetic;
+            cuts_before = s.stats().time_step_cuts;
+            s.step(1.0)?;
+        }
+        let report = s.impact_report();
+        let after = s.energy().kinetic;
+        let (t, steps) = (s.time(), s.stats().steps);
+        while s.time() < t + args.after - 1e-12 {
+            s.step(t + args.after - s.time())?;
+        }
+        let st = s.stats();
+        let ratio = |x: f64| x / report.scale.max(f64::MIN_POSITIVE);
+        println!(
+            "{columns}x{rows}{} | {free} | {} | {} | {} ({}) | {:.2e} | {}/{} | {:.2e} | {:.1} -> {:.3e} | {} | {} | {}/{} | {:.2}",
+            if args.bond { " bond" } else { "" },
+            report.contacts,
+            report.blocks,
+            report.sweeps,
+            if report.sweeps_stopped { "stopped" } else { "cap" },
+            ratio(report.sweeps_residual),
+            report.polish_iterations,
+            report.newton_steps,
+            ratio(report.residual),
+            before,
+            after,
+            st.time_step_cuts - cuts_before,
+            st.steps - steps,
+            st.impact_polished,
+            st.impact_unconverged,
+            clock.elapsed().as_secs_f64(),
+        );
+    }
+    Ok(())
+}
