@@ -499,6 +499,48 @@ mod tests {
         sim
     }
 
+    /// `ChangeCounts::last_kind` counts the changes left after the last iteration of every
+    /// loop that stopped unconverged: each such loop ends with at least one change asking for
+    /// a solve, so their sum is at least the loops refused as unconverged (`refusals()[0]`, a
+    /// counter of its own). A 4 × 5 wall shaken at 1 g with the loop held to 2 iterations,
+    /// 50 steps (or to a step that fails after its cuts), the cycle rule on as
+    /// by default, so the loop's last iteration (2) is not `iteration_limit` (12): before the
+    /// count was taken at the loop's end it was 0 here.
+    #[test]
+    fn a_failing_loop_leaves_its_last_changes_counted() {
+        let scene = crate::scene::validate(&crate::presets::wall(4, 5)).expect("wall scene");
+        let mut params = SimParams::default();
+        params.open_close.max_iterations = 2;
+        assert!(params.open_close.iteration_limit() > 2, "the cycle rule on");
+        // Shaken hard (1 g at 5 Hz), so its contacts keep changing state.
+        let shake = GroundMotion::horizontal(crate::motion::Signal::Sine {
+            amplitude: 9.81,
+            frequency: 5.0,
+        });
+        let mut sim = Simulation::new(&scene, &shake, params);
+        // Cut or not down to its limit, a step's loops are counted as they end.
+        for _ in 0..50 {
+            if sim.step(1.0).is_err() {
+                break;
+            }
+        }
+        let refused = sim.refusals()[0];
+        let ch = sim.changes();
+        let last: u64 = ch.last_kind.iter().flatten().sum();
+        assert!(refused > 0, "the loop must fail at 2 iterations");
+        assert!(
+            last >= refused,
+            "{last} changes left for {refused} failing loops"
+        );
+        assert_eq!(ch.last_force.iter().sum::<u64>(), last);
+        for (k, (l, all)) in ch.last_kind.iter().zip(&ch.by_kind).enumerate() {
+            assert!(
+                l[0] <= all[0] && l[1] <= all[1],
+                "kind {k}: {l:?} of {all:?}"
+            );
+        }
+    }
+
     /// The friction normal's prediction (`OpenCloseParams::friction_predict`) against its
     /// closed form: a sliding contact closed at both step starts is predicted
     /// max(0, N₁ + g·(N₁ − N₀)); without a remembered force, or not sliding, nothing; an open

@@ -584,8 +584,10 @@ pub struct ChangeCounts {
     /// closed contact F = k·|g|, for a stick–slip change the Coulomb limit, for a friction
     /// update μ·|ΔN|.
     pub by_force: [u64; 9],
-    /// The changes seen after the last iteration a step allows (`max_iterations`), whose step is
-    /// then refused: `[kind][orientation]` as `by_kind`, and by force decade as `by_force`.
+    /// The changes seen after the iteration at which a step's loop stopped unconverged (its
+    /// last: `max_iterations`, the floor's cap, or `iteration_limit` when the cycle rule gave
+    /// the step its extra iterations), whose step is then refused or, at the floor, taken:
+    /// `[kind][orientation]` as `by_kind`, and by force decade as `by_force`.
     pub last_kind: [[u64; 2]; 7],
     pub last_force: [u64; 9],
     /// Changes let through by the settle rule (`OpenCloseParams::settle_tolerance`).
@@ -634,7 +636,7 @@ pub const CHANGE_KINDS: [&str; 7] = [
 ];
 
 impl ChangeCounts {
-    fn record(&mut self, kind: usize, head: bool, iteration: usize, last: bool, force: f64) {
+    fn record(&mut self, kind: usize, head: bool, iteration: usize, force: f64) {
         self.by_kind[kind][head as usize] += 1;
         self.by_iteration[(iteration - 1).min(11)] += 1;
         self.by_kind_iteration[kind][head as usize][(iteration - 1).min(11)] += 1;
@@ -644,9 +646,20 @@ impl ChangeCounts {
             0
         };
         self.by_force[d] += 1;
-        if last {
-            self.last_kind[kind][head as usize] += 1;
-            self.last_force[d] += 1;
+    }
+
+    /// The iteration's changes (those recorded since `kinds`, `forces` were read at its
+    /// start) as the changes of a loop's last, unconverged iteration. Counted at the loop's
+    /// end because which iteration is the last is known only then (the cycle rule's
+    /// closings in this very iteration may give the step its extra iterations).
+    fn record_last(&mut self, kinds: &[[u64; 2]; 7], forces: &[u64; 9]) {
+        for ((last, now), before) in self.last_kind.iter_mut().zip(&self.by_kind).zip(kinds) {
+            for ((l, n), b) in last.iter_mut().zip(now).zip(before) {
+                *l += n - b;
+            }
+        }
+        for ((l, n), b) in self.last_force.iter_mut().zip(&self.by_force).zip(forces) {
+            *l += n - b;
         }
     }
 }
@@ -1119,6 +1132,8 @@ pub fn iterate(
             }
         }
         let mut changed = 0;
+        // This iteration's changes, counted as a failing loop's last if it is (`record_last`).
+        let (kinds_before, forces_before) = (counts.by_kind, counts.by_force);
         // Whether a contact changed state or load (the friction map changed: Anderson's
         // history no longer applies).
         let mut structural = false;
@@ -1167,7 +1182,7 @@ pub fn iterate(
                     // As in `update_state`: the settle rule still applies.
                     counts.settled += 1;
                 } else {
-                    counts.record(change.kind, change.head, it, it == limit, change.force);
+                    counts.record(change.kind, change.head, it, change.force);
                     changed += 1;
                     last_changed = Some(k);
                 }
@@ -1236,6 +1251,7 @@ pub fn iterate(
             );
         }
         if it >= last {
+            counts.record_last(&kinds_before, &forces_before);
             return Ok(OpenClose::NotConverged {
                 iterations: it,
                 contact: last_changed,
@@ -1791,13 +1807,7 @@ fn update_state(
             counts.settled += 1;
             return Update::Quiet;
         }
-        counts.record(
-            kind,
-            head,
-            iteration,
-            iteration == params.iteration_limit(),
-            force,
-        );
+        counts.record(kind, head, iteration, force);
     }
     Update::Changed
 }
