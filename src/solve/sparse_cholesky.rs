@@ -324,9 +324,10 @@ pub struct SparseParams {
     pub low_rank_max_rank: usize,
     /// Who solves the triangular-solve pairs of a factor (after a factorization, and each
     /// preconditioning of the conjugate gradients); faer factors either way.
-    /// Default `Faer` (the results of every session before 42 bit for bit); `Repacked` costs
-    /// 16 % fewer instructions in these solves on the shaken 410-stone wall, its copies
-    /// included, and moves results by round-off (docs/contact-solve.md §35).
+    /// Default `Repacked` (since session 42): 16 % fewer instructions in these solves on the
+    /// shaken 410-stone wall, its copies included, 10–15 % less wall time a step (sine and
+    /// 3 m/s² sine), every suite passing with it; it moves results by round-off only
+    /// (docs/contact-solve.md §35). `Faer`: the results of every session before 42 bit for bit.
     pub triangular: TriangularSolve,
 }
 
@@ -335,11 +336,11 @@ pub struct SparseParams {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum TriangularSolve {
     /// faer's supernodal solve (a dense triangular solve and a matrix product a supernode).
-    #[default]
     Faer,
-    /// A copy of faer's supernodal factor made once per factorization, each supernode's rows
+    /// The default. A copy of faer's supernodal factor made once per factorization, each supernode's rows
     /// below its diagonal block row-major, solved by loops unrolled on the supernode's width
     /// (`solve::repacked`). A simplicial factor is still solved by faer.
+    #[default]
     Repacked,
 }
 
@@ -412,7 +413,7 @@ impl Default for SparseParams {
             dissection_leaf: 8,
             low_rank_max_rank: 0,
             relax: SupernodeRelax::Faer,
-            triangular: TriangularSolve::Faer,
+            triangular: TriangularSolve::Repacked,
         }
     }
 }
