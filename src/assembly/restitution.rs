@@ -53,8 +53,14 @@ mod polish;
 /// Knobs of the impact solve. Each default says why.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ImpactParams {
-    /// Projected Gauss–Seidel sweeps at most: an impact involves a handful of contacts (2–8 for
-    /// a block on a block), converged in tens of sweeps; 200 bounds a pathological case.
+    /// Projected Gauss–Seidel sweeps at most: 200 bounds the cost of one impact. The sweeps
+    /// seldom stop on [`tolerance`](Self::tolerance): session 42 found every solve of the
+    /// pair law on 4-block impacts running all 200 (ending at 0.5–3e-7 of the landing speed on
+    /// the stacks measured, far below what the step after them resolves), and
+    /// joined stacks of 16 blocks or more stopping well above it; each solve's residual is
+    /// reported (`ImpulseReport`, `Stats::impact_unconverged`), and
+    /// [`polish`](Self::polish) finishes the ones left above
+    /// [`residual_tolerance`](Self::residual_tolerance).
     pub max_sweeps: usize,
     /// Stop when no impulse changes by more than this fraction of the largest impulse: 1e-12 is
     /// round-off for the velocities that follow.
