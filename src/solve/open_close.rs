@@ -441,8 +441,7 @@ pub fn predict_stick_slip(
             (ContactState::Sliding { dir }, Some(g), _) => {
                 let slip = s1 + g * (s1 - s0);
                 // `update_state`'s re-sticking test, on the predicted slip.
-                if limit > 0.0 && slip * dir < -(h * limit / springs.shear + springs.gap_tolerance)
-                {
+                if limit > 0.0 && resticks(slip, dir, limit, h, springs) {
                     c.predicted_state = Some(ContactState::Locked);
                 }
             }
@@ -451,9 +450,7 @@ pub fn predict_stick_slip(
             (ContactState::Locked, _, Some(g)) if !params.head_by_tilt(&c.n) => {
                 let s = c.s0 + s1 + g * (s1 - s0);
                 // `update_state`'s onset-of-slip test, on the predicted shear displacement.
-                if (springs.shear * s).abs()
-                    > limit * (1.0 + h) + springs.shear * springs.gap_tolerance
-                {
+                if slips(springs.shear * s, limit, h, springs) {
                     c.predicted_state = Some(ContactState::Sliding { dir: s.signum() });
                 }
             }
@@ -467,9 +464,7 @@ pub fn predict_stick_slip(
                     continue;
                 };
                 let s = c.s0 + s1 + g * (s1 - s0);
-                if (springs.shear * s).abs()
-                    > limit * (1.0 + h) + springs.shear * springs.gap_tolerance
-                {
+                if slips(springs.shear * s, limit, h, springs) {
                     c.predicted_state = Some(ContactState::Sliding { dir: s.signum() });
                 }
             }
@@ -487,8 +482,8 @@ fn predicted_gap(c: &Contact, gain: f64) -> Option<f64> {
     Some(c.g0 + d1 + gain * (d1 - d0))
 }
 
-/// A closed contact's opening threshold (`update_state`'s): the bond's tensile allowance plus
-/// the length tolerance, m.
+/// A closed contact's opening threshold (`update_state`'s): the bond's tensile allowance (a
+/// bonded joint holds tension up to its tensile strength) plus the length tolerance, m.
 fn opening_gap(c: &Contact, law: &JointLaw, springs: &SpringParams) -> f64 {
     let allowance = if c.bonded {
         law.tensile_strength * c.length / springs.normal
@@ -496,6 +491,21 @@ fn opening_gap(c: &Contact, law: &JointLaw, springs: &SpringParams) -> f64 {
         0.0
     };
     allowance + springs.gap_tolerance
+}
+
+/// `update_state`'s onset-of-slip test: a locked spring carrying the shear force `shear` (N,
+/// either sign) slips when it exceeds the Coulomb `limit` by the hysteresis `h` and by the
+/// length tolerance's force too (joints with no normal load, limit ≈ 0, would otherwise slip
+/// on round-off shear).
+fn slips(shear: f64, limit: f64, h: f64, springs: &SpringParams) -> bool {
+    shear.abs() > limit * (1.0 + h) + springs.shear * springs.gap_tolerance
+}
+
+/// `update_state`'s re-sticking test: a contact sliding in direction `dir` (±1) re-sticks
+/// when its slip `slip` (m) runs back against `dir` by more than the hysteresis' elastic
+/// slip and the length tolerance.
+fn resticks(slip: f64, dir: f64, limit: f64, h: f64, springs: &SpringParams) -> bool {
+    slip * dir < -(h * limit / springs.shear + springs.gap_tolerance)
 }
 
 /// The Coulomb limit against which `head_slip_predict` tests a locked head joint, N: that of
@@ -1600,19 +1610,13 @@ fn update_state(
     };
     c.gap = g;
     c.slip = s - c.s0;
-    // A bonded joint holds tension up to its tensile strength.
-    let tension_allowance = if c.bonded {
-        law.tensile_strength * c.length / springs.normal
-    } else {
-        0.0
-    };
     let old = c.state;
-    let opening_gap = if old.is_closed() {
-        tension_allowance + springs.gap_tolerance
+    let threshold = if old.is_closed() {
+        opening_gap(c, law, springs)
     } else {
         -springs.gap_tolerance
     };
-    let new = if g > opening_gap {
+    let new = if g > threshold {
         c.normal_force = 0.0;
         c.shear_force = 0.0;
         ContactState::Open
@@ -1649,10 +1653,7 @@ fn update_state(
             ContactState::Locked => {
                 let f = -springs.shear * s;
                 c.shear_force = f;
-                // Slip needs the shear displacement to exceed the elastic limit by more than
-                // the length tolerance too: joints with no normal load (limit ≈ 0) would
-                // otherwise slip on round-off shear.
-                if f.abs() > limit * (1.0 + h) + springs.shear * springs.gap_tolerance {
+                if slips(f, limit, h, springs) {
                     ContactState::Sliding { dir: s.signum() }
                 } else {
                     ContactState::Locked
@@ -1669,7 +1670,7 @@ fn update_state(
                     ContactState::Sliding {
                         dir: if c.slip != 0.0 { c.slip.signum() } else { dir },
                     }
-                } else if c.slip * dir < -(h * limit / springs.shear + springs.gap_tolerance) {
+                } else if resticks(c.slip, dir, limit, h, springs) {
                     ContactState::Locked
                 } else {
                     ContactState::Sliding { dir }
