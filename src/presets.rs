@@ -528,6 +528,30 @@ mod tests {
         parse_scene(&incline(20.0, 30.0, json!({})).0.to_string()).expect("incline");
     }
 
+    /// The running-bond stack fills the aligned stack's U: its stones' areas sum to the U's
+    /// width × height (to round-off), every odd course has one block more, with a half block
+    /// at each end, and the thrown block exists. Checked to fail with the odd courses starting
+    /// on a whole block (the count fails first).
+    #[test]
+    fn the_running_bond_stack_fills_the_aligned_stacks_u() {
+        let (columns, rows) = (5, 3);
+        let v = running_bond_stack(columns, rows);
+        parse_scene(&v.to_string()).expect("running-bond stack");
+        let blocks = v["blocks"].as_array().expect("blocks");
+        let stones: Vec<&Value> = blocks.iter().filter(|b| b.get("fixed").is_none()).collect();
+        assert_eq!(stones.len(), 5 + 6 + 5);
+        let width = |b: &Value| {
+            let x = |k: usize| b["vertices"][k][0].as_f64().expect("x");
+            x(1) - x(0)
+        };
+        let area: f64 = stones.iter().map(|b| width(b) * 0.2).sum();
+        assert!((area - columns as f64 * 0.4 * rows as f64 * 0.2).abs() < 1e-12);
+        let find = |id: &str| stones.iter().find(|b| b["id"] == id).expect(id);
+        assert!((width(find("b1_0")) - 0.2).abs() < 1e-12);
+        assert!((width(find("b1_5")) - 0.2).abs() < 1e-12);
+        assert!(find(v["initial"][0]["block"].as_str().expect("thrown block"))["id"] == "b2_2");
+    }
+
     #[test]
     fn the_plinth_column_is_the_service_tests_scene() {
         let v = plinth_column_json(3.0);

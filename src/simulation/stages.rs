@@ -1,7 +1,8 @@
 //! Simulation › stages: the stages `Simulation::step` calls in the order of the algorithm:
 //! detect contacts (contact), Newton's impact law at the step start (its impulse problem from
-//! assembly::restitution, solved by solve::impulse, the velocities back), assemble (assembly), solve by open–close or the dual solver (solve), integrate and the
-//! step's bookkeeping (integrate). Whether a solved step is accepted is `control.rs`.
+//! assembly::restitution, solved by solve::impulse, the velocities back), assemble
+//! (assembly), solve by open–close or the dual solver (solve), integrate and the step's
+//! bookkeeping (integrate). Whether a solved step is accepted is `control.rs`.
 use super::{SimError, Simulation, Stats};
 use crate::assembly::contact_springs::JointLaw;
 use crate::assembly::restitution::{
