@@ -33,7 +33,14 @@
 //!   unknowns (u0, v0, r0: the impact law is a rigid-body law; strain rates are kept) make
 //!   ġ⁺ = −e·ġ⁻ at impacting contacts (ġ⁺ ≥ −e·ġ⁻ where pₙ = 0) and ġ⁺ ≥ min(ġ⁻, 0) at the
 //!   closed ones, and stop slip (ṡ⁺ = 0) within the friction cone; projected Gauss–Seidel on
-//!   this small set.
+//!   this small set, then optionally a direct polish ([`ImpactParams::polish`]).
+//!
+//! The law is three calls, which `Simulation::impacts` makes in order: [`assemble_impacts`]
+//! finds the impacts and writes their rows on the joined blocks' rigid-body velocities
+//! ([`ImpulseProblem`]), `solve::impulse` solves them (the sweeps and the polish), and
+//! [`apply_impulses`] writes the velocities after the impulses back. Why split: the impulse
+//! solve is a solve, and its polish's sparse LU is faer's, which lives behind `solve`;
+//! `assembly` sits before `solve` in the flow and cannot call it (docs/architecture.md).
 //!
 //! Momentum is conserved (the impulses act equal and opposite on the two blocks; fixed blocks
 //! take the rest). Free blocks joined to the impact's blocks by closed contacts, transitively,
@@ -48,8 +55,6 @@ use crate::contact::Contact;
 use crate::geometry::{BlockGeometry, Vec6};
 use nalgebra::{Matrix3, Vector3};
 
-mod polish;
-
 /// Knobs of the impact solve. Each default says why.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ImpactParams {
@@ -58,7 +63,7 @@ pub struct ImpactParams {
     /// pair law on 4-block impacts running all 200 (ending at 0.5–3e-7 of the landing speed on
     /// the stacks measured, far below what the step after them resolves), and
     /// joined stacks of 16 blocks or more stopping well above it; each solve's residual is
-    /// reported (`ImpulseReport`, `Stats::impact_unconverged`), and
+    /// reported (`solve::impulse::ImpulseReport`, `Stats::impact_unconverged`), and
     /// [`polish`](Self::polish) finishes the ones left above
     /// [`residual_tolerance`](Self::residual_tolerance).
     pub max_sweeps: usize,
@@ -97,7 +102,7 @@ pub struct ImpactParams {
     /// own step only (the law before the split, for diagnosis).
     pub split_before: bool,
     /// An impacting contact still open by g0 that does not bounce clear of it leaves at
-    /// −2 g0/Δt and lands at the step's end (the hover closed, see `apply_impacts`); `false`
+    /// −2 g0/Δt and lands at the step's end (the hover closed, see `assemble_impacts`); `false`
     /// gives it −e ġ⁻ (for diagnosis).
     pub close_hover: bool,
     /// Location (the split step, the closed hover, grouped landings) only for impacts
@@ -312,7 +317,8 @@ pub struct ImpactInput<'a> {
 }
 
 /// The impact law's per-contact results of one step, kept across steps so that its vectors
-/// are reused. Filled by [`apply_impacts`], read by [`located_step`].
+/// are reused. Filled by [`assemble_impacts`] and [`apply_impulses`], read by
+/// [`located_step`].
 #[derive(Debug, Default, Clone)]
 pub struct ImpactScratch {
     /// Per contact: its impact time ([`impact_time`]) at the velocities after this step's
@@ -326,13 +332,15 @@ pub struct ImpactScratch {
     landing: Vec<bool>,
     /// Per contact: whether it takes part in the impulse set.
     impacting: Vec<bool>,
-    /// Per free block: whether an impacting contact touches it (its velocity may change).
-    involved: Vec<bool>,
+    /// The impulse problem [`assemble_impacts`] writes for `solve::impulse`.
+    problem: ImpulseProblem,
     /// [`hand_over_weight`]'s buffers and its moves.
     hand_over: HandOver,
     /// Per free block: it rests on a pivot carrying its weight, every contact with a fixed or
     /// driven block ([`ImpactParams::hand_over_below`]; empty when that is `None`).
     pivoted: Vec<bool>,
+    /// Whether `pivoted` holds this step's flags ([`Pivoted`]).
+    pivoted_ready: bool,
     /// Per contact: a pivot landing the hand-over takes ([`ImpactParams::hand_over_below`]).
     taken: Vec<bool>,
     /// [`join_clusters`]'s union–find: per free block, its parent (a root is its own).
@@ -343,37 +351,6 @@ pub struct ImpactScratch {
     /// [`join_clusters`]: per free block, the number of free blocks of its component if it is
     /// a root.
     size: Vec<usize>,
-    /// How the last impulse solve went (zero when the last call had no impact).
-    report: ImpulseReport,
-    /// The polish's buffers ([`ImpactParams::polish`]).
-    polish: polish::PolishScratch,
-}
-
-/// How one impulse solve went: what the diagnostics count (`Stats::impact_unconverged`,
-/// `Stats::impact_polished`) and the measurements read (`Simulation::impact_report`).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct ImpulseReport {
-    /// Contacts in the solve (impacting and closed ones of the joined blocks).
-    pub contacts: usize,
-    /// Free blocks taking impulses.
-    pub blocks: usize,
-    /// Projected Gauss–Seidel sweeps done, and whether they stopped on their own criterion
-    /// ([`ImpactParams::tolerance`]) before [`ImpactParams::max_sweeps`].
-    pub sweeps: usize,
-    pub sweeps_stopped: bool,
-    /// The speed scale of the solve (largest |ġ| before the impulses or |target| over its
-    /// rows), m/s.
-    pub scale: f64,
-    /// Complementarity residual after the sweeps and at the end, m/s (the natural map,
-    /// [`ImpactParams::residual_tolerance`]).
-    pub sweeps_residual: f64,
-    pub residual: f64,
-    /// Outer iterations and Newton steps (sparse LU factorizations) of the polish; 0 when
-    /// it did not run.
-    pub polish_iterations: usize,
-    pub newton_steps: usize,
-    /// The end residual is within `residual_tolerance` × `scale`.
-    pub converged: bool,
 }
 
 impl ImpactScratch {
@@ -383,9 +360,10 @@ impl ImpactScratch {
         &self.hand_over.moves
     }
 
-    /// How the last [`apply_impacts`] call's impulse solve went (all zero if it had none).
-    pub fn report(&self) -> ImpulseReport {
-        self.report
+    /// The impulse problem of the last [`assemble_impacts`], for `solve::impulse`, which
+    /// leaves the impulses in its rows and the velocities after them in its `v`.
+    pub fn problem_mut(&mut self) -> &mut ImpulseProblem {
+        &mut self.problem
     }
 }
 
@@ -403,33 +381,53 @@ struct HandOver {
     moves: Vec<(usize, Vector3<f64>)>,
 }
 
-/// One contact in the impact solve: its rows on the two blocks' rigid-body unknowns.
-struct Row {
-    /// Free-block indices (None: fixed or driven).
-    fi: Option<usize>,
-    fj: Option<usize>,
-    /// Normal and tangential rows on block i (vertex) and j (edge), rigid-body part
-    /// ([`Contact::rows`], signed: ġ = n_fixed + ni·vᵢ + nj·vⱼ).
-    ni: Vector3<f64>,
-    nj: Vector3<f64>,
-    ti: Vector3<f64>,
-    tj: Vector3<f64>,
-    /// Constant part of the rates from immobile blocks.
-    n_fixed: f64,
-    t_fixed: f64,
-    /// Lowest allowed normal gap rate after the impact, m/s.
-    target: f64,
-    mu: f64,
-    /// Inverse effective masses of the normal and tangential rows.
-    wn: f64,
-    wt: f64,
-    pn: f64,
-    pt: f64,
+/// An impact's impulse problem, written by [`assemble_impacts`], solved by `solve::impulse`
+/// (impulses into `rows`, velocities into `v`), read back by [`apply_impulses`]. Kept in
+/// [`ImpactScratch`] so that its vectors are reused.
+#[derive(Debug, Default, Clone)]
+pub struct ImpulseProblem {
+    /// The contacts in the solve: the impacting ones and the closed ones of the joined blocks.
+    pub rows: Vec<ImpulseRow>,
+    /// Per free block: inverse rigid-body mass about the centroid (zero if not involved).
+    pub inv_mass: Vec<Matrix3<f64>>,
+    /// Per free block: whether it takes impulses (an impacting contact touches it, or with
+    /// [`ImpactParams::cluster`] it is joined to one that does).
+    pub involved: Vec<bool>,
+    /// Per free block: rigid-body velocity (u0, v0, r0; m/s, rad/s), before the impulses as
+    /// written, after them once solved.
+    pub v: Vec<Vector3<f64>>,
 }
 
-impl Row {
+/// One contact in the impact solve: its rows on the two blocks' rigid-body unknowns.
+#[derive(Debug, Clone)]
+pub struct ImpulseRow {
+    /// Free-block indices (None: fixed or driven).
+    pub fi: Option<usize>,
+    pub fj: Option<usize>,
+    /// Normal and tangential rows on block i (vertex) and j (edge), rigid-body part
+    /// ([`Contact::rows`], signed: ġ = n_fixed + ni·vᵢ + nj·vⱼ).
+    pub ni: Vector3<f64>,
+    pub nj: Vector3<f64>,
+    pub ti: Vector3<f64>,
+    pub tj: Vector3<f64>,
+    /// Constant part of the rates from immobile blocks, m/s.
+    pub n_fixed: f64,
+    pub t_fixed: f64,
+    /// Lowest allowed normal gap rate after the impact, m/s.
+    pub target: f64,
+    /// tan φ of the contact's joint.
+    pub mu: f64,
+    /// Inverse effective masses of the normal and tangential rows.
+    pub wn: f64,
+    pub wt: f64,
+    /// Normal and tangential impulses, N·s.
+    pub pn: f64,
+    pub pt: f64,
+}
+
+impl ImpulseRow {
     /// The normal (`normal`) or tangential gap rate at the rigid-body velocities `v`, m/s.
-    fn rate(&self, v: &[Vector3<f64>], normal: bool) -> f64 {
+    pub fn rate(&self, v: &[Vector3<f64>], normal: bool) -> f64 {
         let (gi, gj, c) = if normal {
             (&self.ni, &self.nj, self.n_fixed)
         } else {
@@ -446,7 +444,7 @@ impl Row {
     }
 
     /// Apply the impulse increment `dp` (N·s) of the normal or tangential row to `v`.
-    fn push(&self, inv_mass: &[Matrix3<f64>], v: &mut [Vector3<f64>], dp: f64, normal: bool) {
+    pub fn push(&self, inv_mass: &[Matrix3<f64>], v: &mut [Vector3<f64>], dp: f64, normal: bool) {
         let (gi, gj) = if normal {
             (&self.ni, &self.nj)
         } else {
@@ -459,29 +457,6 @@ impl Row {
             v[f] += inv_mass[f] * gj * dp;
         }
     }
-
-    /// The row's complementarity residual at `v` with its impulses, m/s: the natural map of
-    /// the normal condition, |min(pₙ·wₙ, ġ⁺ − target)|, and of the friction law the sweeps
-    /// solve, |pₜ − clamp(pₜ − ṡ⁺/wₜ, ±μpₙ)|·wₜ; the larger.
-    fn residual(&self, v: &[Vector3<f64>]) -> f64 {
-        let mut r: f64 = 0.0;
-        if self.wn > 0.0 {
-            r = (self.pn * self.wn)
-                .min(self.rate(v, true) - self.target)
-                .abs();
-        }
-        if self.wt > 0.0 {
-            let limit = self.mu * self.pn.max(0.0);
-            let free = self.pt - self.rate(v, false) / self.wt;
-            r = r.max((self.pt - free.clamp(-limit, limit)).abs() * self.wt);
-        }
-        r
-    }
-}
-
-/// The largest residual of `rows` at `v` ([`Row::residual`]), m/s.
-fn residual(rows: &[Row], v: &[Vector3<f64>]) -> f64 {
-    rows.iter().map(|r| r.residual(v)).fold(0.0, f64::max)
 }
 
 fn rigid(v: &Vec6) -> Vector3<f64> {
@@ -537,7 +512,8 @@ fn pivot_landing(
         && pivoted.get(block, input, contacts, params)
 }
 
-/// [`find_pivoted`]'s flags, computed at their first use in a call of [`apply_impacts`]: only
+/// [`find_pivoted`]'s flags, computed at their first use in a step's [`assemble_impacts`] or
+/// [`apply_impulses`] (`ready` is kept in [`ImpactScratch`] between the two): only
 /// [`pivot_landing`] reads them, for a contact approaching slower than the hand-over's
 /// threshold, and on most steps none does (the two scans over every contact were +0.86 % of
 /// the shaken 410-stone wall's instructions, where the hand-over never acts:
@@ -545,7 +521,7 @@ fn pivot_landing(
 /// velocities the impulses change, so computing them later gives the same flags.
 struct Pivoted<'v> {
     flags: &'v mut Vec<bool>,
-    ready: bool,
+    ready: &'v mut bool,
 }
 
 impl Pivoted<'_> {
@@ -556,9 +532,9 @@ impl Pivoted<'_> {
         contacts: &[Contact],
         params: &ImpactParams,
     ) -> bool {
-        if !self.ready {
+        if !*self.ready {
             find_pivoted(input, contacts, params, self.flags);
-            self.ready = true;
+            *self.ready = true;
         }
         self.flags.get(block).copied().unwrap_or(false)
     }
@@ -739,7 +715,7 @@ fn impact_time(
 
 /// The first impact after the window at the step start ([`ImpactParams::window`]), s from the
 /// step start, if one falls within the next two steps, from the impact times `scratch` holds
-/// (filled by [`apply_impacts`] for these contacts and states). Contacts flagged landing (they
+/// (filled by [`assemble_impacts`] and [`apply_impulses`] for these contacts and states). Contacts flagged landing (they
 /// joined this step's impact) are skipped: they land at the step's end.
 fn next_impact(
     input: &ImpactInput,
@@ -773,7 +749,8 @@ fn next_impact(
 /// took part of the impact (−0.125 %). Split, the step before the impact is ≥ ½ Δt and as long
 /// as the one before it.
 ///
-/// `scratch` is the one [`apply_impacts`] filled for the same input, contacts and (updated)
+/// `scratch` is the one [`assemble_impacts`] and [`apply_impulses`] filled for the same input,
+/// contacts and (updated)
 /// states.
 pub fn located_step(
     input: &ImpactInput,
@@ -796,52 +773,17 @@ pub fn located_step(
     }
 }
 
-/// Projected Gauss–Seidel on `rows` from their impulses, changing `v` (rigid-body velocities
-/// per free block): at most `max_sweeps` sweeps, stopping when no impulse changes by more than
-/// `tolerance` × the largest. Returns the sweeps done and whether that criterion stopped them.
-fn sweeps(
-    rows: &mut [Row],
-    inv_mass: &[Matrix3<f64>],
-    v: &mut [Vector3<f64>],
-    params: &ImpactParams,
-) -> (usize, bool) {
-    for sweep in 0..params.max_sweeps {
-        let mut change: f64 = 0.0;
-        let mut largest: f64 = 0.0;
-        for r in rows.iter_mut() {
-            if r.wn > 0.0 {
-                let pn = (r.pn + (r.target - r.rate(v, true)) / r.wn).max(0.0);
-                let dp = pn - r.pn;
-                r.push(inv_mass, v, dp, true);
-                change = change.max(dp.abs());
-                r.pn = pn;
-            }
-            if r.wt > 0.0 {
-                let limit = r.mu * r.pn;
-                let pt = (r.pt - r.rate(v, false) / r.wt).clamp(-limit, limit);
-                let dp = pt - r.pt;
-                r.push(inv_mass, v, dp, false);
-                change = change.max(dp.abs());
-                r.pt = pt;
-            }
-            largest = largest.max(r.pn.abs()).max(r.pt.abs());
-        }
-        if change <= params.tolerance * largest {
-            return (sweep + 1, true);
-        }
-    }
-    (params.max_sweeps, false)
-}
-
-/// Apply the impacts of the step about to be taken to `states` (velocities at the step start).
-/// Returns the number of impacting contacts (0: nothing changed). `scratch` is filled with,
-/// per contact, whether it joined the impact from later in the step
-/// ([`ImpactParams::group_landings`]) and its impact time at the velocities after the
-/// impulses; pass it to [`located_step`].
-pub fn apply_impacts(
+/// Find the impacts of the step about to be taken at `states` (velocities at the step start)
+/// and write their impulse problem into `scratch` ([`ImpactScratch::problem_mut`]). Returns the
+/// number of impacting contacts; 0: there is nothing to solve, no velocity changes, and
+/// `scratch` already holds what [`located_step`] needs. Otherwise solve the problem
+/// (`solve::impulse`) and call [`apply_impulses`]. `scratch` is filled with, per contact,
+/// whether it joined the impact from later in the step ([`ImpactParams::group_landings`]) and
+/// its impact time at `states`.
+pub fn assemble_impacts(
     input: &ImpactInput,
     contacts: &[Contact],
-    states: &mut [BlockState],
+    states: &[BlockState],
     params: &ImpactParams,
     scratch: &mut ImpactScratch,
 ) -> usize {
@@ -850,20 +792,25 @@ pub fn apply_impacts(
         times,
         landing,
         impacting,
-        involved,
+        problem:
+            ImpulseProblem {
+                rows,
+                inv_mass,
+                involved,
+                v,
+            },
         pivoted,
+        pivoted_ready,
         taken,
         parent,
         hit,
         size,
-        report: last_report,
-        polish,
         ..
     } = scratch;
-    *last_report = ImpulseReport::default();
+    *pivoted_ready = false;
     let mut pivoted = Pivoted {
         flags: pivoted,
-        ready: false,
+        ready: pivoted_ready,
     };
     landing.clear();
     landing.resize(contacts.len(), false);
@@ -940,17 +887,16 @@ pub fn apply_impacts(
     }
     let involved: &[bool] = involved;
     // Inverse rigid-body mass per involved free block (diagonal about the centroid).
-    let inv_mass: Vec<Matrix3<f64>> = (0..dofs.block_of.len())
-        .map(|f| {
-            if !involved[f] {
-                return Matrix3::zeros();
-            }
-            let m = input.geoms[dofs.block_of[f]].mass_matrix(input.densities[f]);
-            let rigid = m.fixed_view::<3, 3>(0, 0).clone_owned();
-            rigid.try_inverse().unwrap_or_else(Matrix3::zeros)
-        })
-        .collect();
-    let mut rows = Vec::new();
+    inv_mass.clear();
+    inv_mass.extend((0..dofs.block_of.len()).map(|f| {
+        if !involved[f] {
+            return Matrix3::zeros();
+        }
+        let m = input.geoms[dofs.block_of[f]].mass_matrix(input.densities[f]);
+        let rigid = m.fixed_view::<3, 3>(0, 0).clone_owned();
+        rigid.try_inverse().unwrap_or_else(Matrix3::zeros)
+    }));
+    rows.clear();
     for (k, c) in contacts.iter().enumerate() {
         let free = |b: usize| dofs.free_index[b].filter(|&f| involved[f]);
         let (fi, fj) = (free(c.vertex_block), free(c.edge_block));
@@ -1012,7 +958,7 @@ pub fn apply_impacts(
             }
             w
         };
-        rows.push(Row {
+        rows.push(ImpulseRow {
             fi,
             fj,
             n_fixed: fixed_part(&on_i.normal, &on_j.normal),
@@ -1029,33 +975,35 @@ pub fn apply_impacts(
             pt: 0.0,
         });
     }
-    // Rigid-body velocities being changed, per free block.
-    let mut v: Vec<Vector3<f64>> = states.iter().map(|s| rigid(&s.vel)).collect();
-    let scale = rows
-        .iter()
-        .map(|r| r.rate(&v, true).abs().max(r.target.abs()))
-        .fold(0.0, f64::max);
-    let mut report = ImpulseReport {
-        contacts: rows.len(),
-        blocks: involved.iter().filter(|&&i| i).count(),
-        scale,
-        ..Default::default()
+    // Rigid-body velocities the impulses change, per free block.
+    v.clear();
+    v.extend(states.iter().map(|s| rigid(&s.vel)));
+    count
+}
+
+/// Write the velocities after the impulses (`solve::impulse` left them in the problem of
+/// [`assemble_impacts`]) into `states`, and evaluate again the impact times of the contacts
+/// whose blocks took impulses; `scratch` is then ready for [`located_step`].
+pub fn apply_impulses(
+    input: &ImpactInput,
+    contacts: &[Contact],
+    states: &mut [BlockState],
+    params: &ImpactParams,
+    scratch: &mut ImpactScratch,
+) {
+    let dofs = input.dofs;
+    let ImpactScratch {
+        times,
+        problem: ImpulseProblem { involved, v, .. },
+        pivoted,
+        pivoted_ready,
+        ..
+    } = scratch;
+    // The flags of this step's `assemble_impacts`, if it computed them.
+    let mut pivoted = Pivoted {
+        flags: pivoted,
+        ready: pivoted_ready,
     };
-    if params.polish {
-        polish.keep_start(&v);
-    }
-    (report.sweeps, report.sweeps_stopped) = sweeps(&mut rows, &inv_mass, &mut v, params);
-    report.sweeps_residual = residual(&rows, &v);
-    report.residual = report.sweeps_residual;
-    let tolerance = params.residual_tolerance * scale;
-    if params.polish && report.residual > tolerance {
-        let outcome = polish.run(&mut rows, &inv_mass, involved, &mut v, params, tolerance);
-        report.polish_iterations = outcome.iterations;
-        report.newton_steps = outcome.newton_steps;
-        report.residual = residual(&rows, &v);
-    }
-    report.converged = report.residual <= tolerance;
-    *last_report = report;
     for (f, st) in states.iter_mut().enumerate() {
         if involved[f] {
             st.vel[0] = v[f][0];
@@ -1071,11 +1019,10 @@ pub fn apply_impacts(
             *t = impact_time(input, contacts, c, states, params, &mut pivoted);
         }
     }
-    count
 }
 
 /// The rigid moves that hand the weight over at this step's impacts
-/// ([`ImpactParams::hand_over_weight`]), from the `scratch` and velocities [`apply_impacts`]
+/// ([`ImpactParams::hand_over_weight`]), from the `scratch` and velocities [`apply_impulses`]
 /// left; read them with [`ImpactScratch::moves`]. Per involved free block whose contacts all
 /// have a fixed or driven block on the other side: the *released* contacts (closed,
 /// penetrating at the step start, not impacting, separating at the velocities after the
@@ -1095,7 +1042,7 @@ pub fn hand_over_weight(
     let dofs = input.dofs;
     let ImpactScratch {
         impacting,
-        involved,
+        problem: ImpulseProblem { involved, .. },
         hand_over,
         taken,
         ..

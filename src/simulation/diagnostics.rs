@@ -13,6 +13,10 @@ use std::time::Duration;
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StepProfile {
     pub detect: Duration,
+    /// Newton's impact law at the step start, its impulse solve included.
+    pub impacts: Duration,
+    /// The impulse solve alone (`solve::impulse`: the sweeps and the polish).
+    pub impulse_solve: Duration,
     pub assemble: Duration,
     pub solve: Duration,
     pub integrate: Duration,
@@ -60,7 +64,7 @@ pub struct Stats {
     /// if on): the velocities after such an impact are not the impact law's.
     pub impact_unconverged: u64,
     /// Largest end residual of an impulse solve relative to its speed scale
-    /// (`assembly::restitution::ImpulseReport`), 0 if none.
+    /// (`solve::impulse::ImpulseReport`), 0 if none.
     pub impact_residual_ratio: f64,
 }
 

@@ -440,8 +440,8 @@ impl Simulation {
     }
 
     /// How the last step's impulse solve went (all zero if the step had no impact).
-    pub fn impact_report(&self) -> crate::assembly::restitution::ImpulseReport {
-        self.stepper.impact_scratch.report()
+    pub fn impact_report(&self) -> crate::solve::impulse::ImpulseReport {
+        self.stepper.impulse_report
     }
 
     /// Wall time per stage, accumulated over the steps.

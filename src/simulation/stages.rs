@@ -1,17 +1,19 @@
 //! Simulation › stages: the stages `Simulation::step` calls in the order of the algorithm:
-//! detect contacts (contact), Newton's impact law at the step start (assembly::restitution),
-//! assemble (assembly), solve by open–close or the dual solver (solve), integrate and the
-//! step's bookkeeping (integrate). Whether a solved step is accepted is `control.rs`.
+//! detect contacts (contact), Newton's impact law at the step start (its impulse problem from
+//! assembly::restitution, solved by solve::impulse, the velocities back), assemble
+//! (assembly), solve by open–close or the dual solver (solve), integrate and the step's
+//! bookkeeping (integrate). Whether a solved step is accepted is `control.rs`.
 use super::{SimError, Simulation, Stats};
 use crate::assembly::contact_springs::JointLaw;
 use crate::assembly::restitution::{
-    apply_impacts, hand_over_weight, located_step, ImpactInput, ImpulseReport,
+    apply_impulses, assemble_impacts, hand_over_weight, located_step, ImpactInput,
 };
 use crate::assembly::BodyLoads;
 use crate::contact::{ContactState, Mobility};
 use crate::integrate;
 use crate::scene::Excitation;
 use crate::solve::dual::{DualInput, DualOutcome};
+use crate::solve::impulse::ImpulseReport;
 use crate::solve::open_close::{self, OpenClose, OpenCloseParams};
 use std::time::Instant;
 
@@ -78,8 +80,12 @@ impl Simulation {
     /// Newton's impact law (`control.restitution`) at the contacts at their impact at the step
     /// start: the step then starts from the velocities after the impact. Returns the step to
     /// take: `dt`, or shorter so that it ends just before the next impact (event location,
-    /// `ImpactParams::window`; not a cut: the next step is `dt` again).
+    /// `ImpactParams::window`; not a cut: the next step is `dt` again). In order: the impacts'
+    /// impulse problem (`assemble_impacts`), its solve (`solve::impulse`, timed apart into
+    /// `StepProfile::impulse_solve`), the velocities after it (`apply_impulses`), the
+    /// hand-over's moves and the located step; the whole into `StepProfile::impacts`.
     pub(super) fn impacts(&mut self, e: f64, dt: f64) -> f64 {
+        let t = Instant::now();
         // The per-block and per-contact inputs are refilled in the stepper's vectors (kept
         // across steps, no allocation a step).
         let state = &self.state;
@@ -106,19 +112,31 @@ impl Simulation {
             nominal_dt: self.state.scene.control.time_step,
             gravity: self.state.scene.gravity,
         };
-        let n = apply_impacts(
+        let n = assemble_impacts(
             &input,
             &self.state.contacts.contacts,
-            &mut self.state.states,
+            &self.state.states,
             &self.params.impact,
             &mut self.stepper.impact_scratch,
         );
         self.stepper.stats.impacts += n as u64;
+        self.stepper.impulse_report = ImpulseReport::default();
         if n > 0 {
-            count_impulse_solve(
-                &mut self.stepper.stats,
-                self.stepper.impact_scratch.report(),
+            let ts = Instant::now();
+            let report = self.stepper.impulse.solve(
+                self.stepper.impact_scratch.problem_mut(),
+                &self.params.impact,
             );
+            self.stepper.profile.impulse_solve += ts.elapsed();
+            apply_impulses(
+                &input,
+                &self.state.contacts.contacts,
+                &mut self.state.states,
+                &self.params.impact,
+                &mut self.stepper.impact_scratch,
+            );
+            count_impulse_solve(&mut self.stepper.stats, report);
+            self.stepper.impulse_report = report;
         }
         let hand_over = n > 0 && self.params.impact.hand_over_weight;
         if hand_over {
@@ -142,6 +160,7 @@ impl Simulation {
                 self.state.move_rigidly(f, d);
             }
         }
+        self.stepper.profile.impacts += t.elapsed();
         step
     }
 

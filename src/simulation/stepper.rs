@@ -9,6 +9,7 @@ use crate::assembly::contact_springs::SpringParams;
 use crate::assembly::restitution::ImpactScratch;
 use crate::assembly::{BlockSystem, Newmark};
 use crate::solve::dual::{DualOutcome, DualSolver};
+use crate::solve::impulse::{ImpulseReport, ImpulseSolver};
 use crate::solve::open_close;
 use crate::solve::LinearSolver;
 
@@ -44,6 +45,10 @@ pub(super) struct Stepper {
     pub(super) rocking_accel: Vec<f64>,
     /// The impact law's per-contact results (impact times, landings), kept across steps.
     pub(super) impact_scratch: ImpactScratch,
+    /// The impact law's impulse solve and its buffers.
+    pub(super) impulse: ImpulseSolver,
+    /// How the last step's impulse solve went (zero if the step had no impact).
+    pub(super) impulse_report: ImpulseReport,
     /// Per block: velocity (vx, vy, ω; m/s, rad/s) of blocks without unknowns, the impact
     /// law's input, refilled each step.
     pub(super) impact_immobile: Vec<[f64; 3]>,
@@ -98,6 +103,8 @@ impl Stepper {
             omega_scale: vec![0.0; state.dofs.block_of.len()],
             rocking_accel: vec![0.0; state.dofs.block_of.len()],
             impact_scratch: ImpactScratch::default(),
+            impulse: ImpulseSolver::default(),
+            impulse_report: ImpulseReport::default(),
             impact_immobile: Vec::new(),
             impact_friction: Vec::new(),
             last_closing: (0, 0.0),

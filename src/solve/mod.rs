@@ -1,11 +1,14 @@
-//! Solve: the linear solver for the assembled block system, and Shi's open–close iteration.
-//! Fifth stage of the flow (after `assembly`, before `integrate`). All factorizations live
-//! behind [`LinearSolver`]: a dense Cholesky for small systems, faer's sparse Cholesky with a
-//! reused symbolic factorization for large ones.
+//! Solve: the linear solver for the assembled block system, Shi's open–close iteration, the
+//! dual contact solver and the impact law's impulse solve ([`impulse`]). Fifth stage of the
+//! flow (after `assembly`, before `integrate`). Every use of faer is in this module: the
+//! step's factorizations behind [`LinearSolver`] (a dense Cholesky for small systems, faer's
+//! sparse Cholesky with a reused symbolic factorization for large ones), and the impulse
+//! polish's sparse LU (`impulse/polish.rs`).
 mod anderson;
 mod dense_cholesky;
 mod dissection;
 pub mod dual;
+pub mod impulse;
 pub mod open_close;
 mod repacked;
 mod sparse_cholesky;

@@ -33,8 +33,9 @@ const DURATION: f64 = 12.0;
 /// thousand times below the first rule's failure.
 pub(crate) const PEAK_BOUND: f64 = 0.10;
 
+/// `presets::rocking_colonnade` (Friuli at 0.3 g) run with the open–close loop `oc`.
 pub(crate) fn colonnade(oc: OpenCloseParams) -> Summary {
-    ashlar::presets::rocking_colonnade_run(oc, DURATION).expect("colonnade run")
+    colonnade_at(oc, 0.3)
 }
 
 /// The stronger shaking of the checks that need it: Friuli scaled to 0.4 g, g. Why: with the
@@ -43,7 +44,8 @@ pub(crate) fn colonnade(oc: OpenCloseParams) -> Summary {
 /// (docs/energy-after-record.md, "The cluster as the default (session 40)").
 pub(crate) const STRONG_PGA: f64 = 0.4;
 
-/// `colonnade` under Friuli scaled to `pga` g instead of 0.3 g (same scene, same 12 s).
+/// The colonnade under Friuli scaled to `pga` g (same scene, same 12 s), run as `ashlar run`
+/// runs it (`analysis::run::run`, no trajectory) with the open–close loop `oc`: its summary.
 pub(crate) fn colonnade_at(oc: OpenCloseParams, pga: f64) -> Summary {
     let (scene, _) = ashlar::presets::rocking_colonnade(DURATION).expect("colonnade");
     let gm = ashlar::presets::record("friuli-1976-tolmezzo-000.at2")

@@ -2,7 +2,7 @@
 //! that did not converge with a direct solve, so that an impact joined to a large component
 //! (a stack, a pile) ends at the impact law's solution, not wherever 200 sweeps left it.
 //!
-//! The law is the sweeps' own (`apply_impacts`): per row, pₙ ≥ 0, ġ⁺ ≥ target, pₙ(ġ⁺ − target)
+//! The law is the sweeps' own (`sweeps`): per row, pₙ ≥ 0, ġ⁺ ≥ target, pₙ(ġ⁺ − target)
 //! = 0, and pₜ = clamp(pₜ − ṡ⁺/wₜ, ±μpₙ) (stick within the cone, slide against the slip at its
 //! bound), with v⁺ = v⁻ + M⁻¹Hᵀp on the joined blocks' rigid-body unknowns. Method: the
 //! augmented Lagrangian of that law in the velocities (Alart–Curnier's form), warm-started
@@ -23,7 +23,8 @@
 //! The friction bound moves with pₙ(v) inside the Newton step: lagged at μλₙ (a symmetric
 //! Jacobian), a sliding contact's bound drifted by μ·Δλₙ an outer iteration and the polish
 //! stalled at 5e-4 m/s on the 4 × 4 stack (measured).
-use super::{residual, ImpactParams, Row};
+use super::residual;
+use crate::assembly::restitution::{ImpactParams, ImpulseRow};
 use faer::linalg::solvers::SolveCore;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Conj, MatMut};
@@ -80,7 +81,12 @@ const SLIP_DOWN: u8 = 8;
 
 /// One row's impulses at `v` for the multipliers `lambda`: (pₙ, pₜ) and its active-set bits.
 /// The friction bound is μ·pₙ(v), not μ·λₙ (see the module's header).
-fn impulses(r: &Row, lambda: (f64, f64), v: &[Vector3<f64>], penalty: f64) -> (f64, f64, u8) {
+fn impulses(
+    r: &ImpulseRow,
+    lambda: (f64, f64),
+    v: &[Vector3<f64>],
+    penalty: f64,
+) -> (f64, f64, u8) {
     let (mut pn, mut pt, mut bits) = (0.0, 0.0, 0);
     if r.wn > 0.0 {
         let z = lambda.0 + penalty / r.wn * (r.target - r.rate(v, true));
@@ -117,7 +123,7 @@ impl PolishScratch {
     /// residual is not smaller.
     pub(super) fn run(
         &mut self,
-        rows: &mut [Row],
+        rows: &mut [ImpulseRow],
         inv_mass: &[Matrix3<f64>],
         involved: &[bool],
         v: &mut [Vector3<f64>],
@@ -186,7 +192,7 @@ impl PolishScratch {
     }
 
     /// v = v⁻ + M⁻¹Hᵀp for the rows' impulses: the momentum balance, exact by construction.
-    fn balance(&self, rows: &[Row], inv_mass: &[Matrix3<f64>], v: &mut [Vector3<f64>]) {
+    fn balance(&self, rows: &[ImpulseRow], inv_mass: &[Matrix3<f64>], v: &mut [Vector3<f64>]) {
         for &f in &self.blocks {
             v[f] = self.start[f];
         }
@@ -198,7 +204,7 @@ impl PolishScratch {
 
     /// The merit θ(v) = ½ Σ Fᵀ M⁻¹ F of the inner equations F(v) = M(v − v⁻) − Hᵀp(v) (into
     /// `gradient` as a side effect), J/m.
-    fn merit(&mut self, rows: &[Row], v: &[Vector3<f64>], penalty: f64) -> f64 {
+    fn merit(&mut self, rows: &[ImpulseRow], v: &[Vector3<f64>], penalty: f64) -> f64 {
         self.force(rows, v, penalty, false);
         self.merit_of_gradient()
     }
@@ -208,7 +214,7 @@ impl PolishScratch {
     /// iterate).
     fn minimise(
         &mut self,
-        rows: &[Row],
+        rows: &[ImpulseRow],
         v: &mut [Vector3<f64>],
         params: &ImpactParams,
         tolerance: f64,
@@ -276,7 +282,7 @@ impl PolishScratch {
     /// F(v) = M(v − v⁻) − Hᵀp(v) into `gradient`; with `jacobian`, also its Jacobian's blocks
     /// and the active pattern (into `pattern`): M + Σ_active ρₙhₙhₙᵀ + Σ_stick ρₜhₜhₜᵀ +
     /// Σ_slide σμρₙhₜhₙᵀ (the bound μpₙ(v) moves with the normal impulse; not symmetric).
-    fn force(&mut self, rows: &[Row], v: &[Vector3<f64>], penalty: f64, jacobian: bool) {
+    fn force(&mut self, rows: &[ImpulseRow], v: &[Vector3<f64>], penalty: f64, jacobian: bool) {
         let n = self.blocks.len();
         if jacobian {
             self.diag.clear();
