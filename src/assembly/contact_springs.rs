@@ -140,6 +140,11 @@ fn assemble<const MATRIX: bool>(
         let fj = dofs.free_index[c.edge_block];
         let slot = sys.contact_slots[k];
         let (g0, s0) = constants(c, prescribed);
+        if c.state == ContactState::Locked && (fi.is_none() || fi != fj) {
+            // Both springs in one pass over the contact's blocks (docs/contact-solve.md §37).
+            add_locked::<MATRIX>(sys, dofs, (fi, fj, slot), c, springs, (g0, s0));
+            continue;
+        }
         add_spring::<MATRIX>(
             sys,
             dofs,
@@ -206,6 +211,94 @@ fn add_spring<const MATRIX: bool>(
     }
 }
 
+/// A locked contact's normal spring (gradients `e`, stiffness `springs.normal`, measure
+/// constant g0) and shear spring (`f`, `springs.shear`, s0), as [`add_spring`] twice (normal,
+/// then shear) but in one pass: each entry of a block and of the right-hand side takes the
+/// normal spring's term, then the shear spring's, the same operations in the same order, so
+/// the system is the same to the bit. Only for a contact whose two blocks are distinct (`fi !=
+/// fj`), so that no entry is touched by both blocks' terms in between.
+#[inline]
+fn add_locked<const MATRIX: bool>(
+    sys: &mut BlockSystem,
+    dofs: &Dofs,
+    (fi, fj, slot): (Option<usize>, Option<usize>, Option<CouplingSlot>),
+    c: &Contact,
+    springs: &SpringParams,
+    (g0, s0): (f64, f64),
+) {
+    let (kn, ks) = (springs.normal, springs.shear);
+    let rigid = |f: usize| dofs.ndof[f] == 3;
+    if let Some(i) = fi {
+        if MATRIX {
+            rank_two(
+                &mut sys.diag[i],
+                [kn, ks],
+                [&c.e_i, &c.f_i],
+                [&c.e_i, &c.f_i],
+                rigid(i),
+            );
+        }
+        let r = &mut sys.rhs[i];
+        *r -= c.e_i * (kn * g0);
+        *r -= c.f_i * (ks * s0);
+    }
+    if let Some(j) = fj {
+        if MATRIX {
+            rank_two(
+                &mut sys.diag[j],
+                [kn, ks],
+                [&c.e_j, &c.f_j],
+                [&c.e_j, &c.f_j],
+                rigid(j),
+            );
+        }
+        let r = &mut sys.rhs[j];
+        *r += c.e_j * (kn * g0);
+        *r += c.f_j * (ks * s0);
+    }
+    if !MATRIX {
+        return;
+    }
+    if let (Some(i), Some(j), Some(slot)) = (fi, fj, slot) {
+        let both_rigid = rigid(i) && rigid(j);
+        let off = &mut sys.off[slot.slot];
+        let (row, col) = if slot.vertex_is_row {
+            ([&c.e_i, &c.f_i], [&c.e_j, &c.f_j])
+        } else {
+            ([&c.e_j, &c.f_j], [&c.e_i, &c.f_i])
+        };
+        rank_two(off, [-kn, -ks], row, col, both_rigid);
+    }
+}
+
+/// `m += k₀·x₀·y₀ᵀ`, then `m += k₁·x₁·y₁ᵀ`, entry by entry ([`rank_one`] twice, fused).
+#[inline]
+fn rank_two(m: &mut Mat6, k: [f64; 2], x: [&Vec6; 2], y: [&Vec6; 2], rigid: bool) {
+    if rigid {
+        rank_two_n::<3>(m, k, x, y);
+    } else {
+        rank_two_n::<6>(m, k, x, y);
+    }
+}
+
+#[inline(always)]
+fn rank_two_n<const N: usize>(m: &mut Mat6, k: [f64; 2], x: [&Vec6; 2], y: [&Vec6; 2]) {
+    let m = m.as_mut_slice();
+    let (x0, y0, x1, y1) = (
+        x[0].as_slice(),
+        y[0].as_slice(),
+        x[1].as_slice(),
+        y[1].as_slice(),
+    );
+    for c in 0..N {
+        for r in 0..N {
+            let e = &mut m[6 * c + r];
+            *e += (x0[r] * y0[c]) * k[0];
+            *e += (x1[r] * y1[c]) * k[1];
+        }
+    }
+}
+
 /// `m += k·x·yᵀ`, on the leading 3×3 part only when both blocks are rigid (the solver reads
 /// only the leading ndof × ndof part of each block, and the rigid case is 4× cheaper). Each
 /// entry is rounded as (x_r·y_c)·k, as a full outer product scaled by k would be.
@@ -228,6 +321,55 @@ fn rank_one_n<const N: usize>(m: &mut Mat6, k: f64, x: &Vec6, y: &Vec6) {
         for r in 0..N {
             // Column-major, as nalgebra stores a 6×6 matrix.
             m[6 * c + r] += (x[r] * y[c]) * k;
+        }
+    }
+}
+
+/// [`add_contacts`] as before session 43: a locked contact's normal spring, then its shear
+/// spring, each by [`add_spring`] (the reference of the fused assembly's bit-identity test).
+#[cfg(test)]
+pub(crate) fn add_contacts_unfused(
+    sys: &mut BlockSystem,
+    dofs: &Dofs,
+    contacts: &[Contact],
+    laws: &[JointLaw],
+    springs: &SpringParams,
+    prescribed: &[Prescribed],
+) {
+    for (k, (c, law)) in contacts.iter().zip(laws).enumerate() {
+        if !c.state.is_closed() {
+            let l = release_load(c, springs);
+            if l != 0.0 {
+                if let Some(i) = dofs.free_index[c.vertex_block] {
+                    sys.rhs[i] += c.e_i * l;
+                }
+                if let Some(j) = dofs.free_index[c.edge_block] {
+                    sys.rhs[j] -= c.e_j * l;
+                }
+            }
+            continue;
+        }
+        let blocks = (
+            dofs.free_index[c.vertex_block],
+            dofs.free_index[c.edge_block],
+            sys.contact_slots[k],
+        );
+        let (g0, s0) = constants(c, prescribed);
+        add_spring::<true>(sys, dofs, blocks, &c.e_i, &c.e_j, springs.normal, g0);
+        match c.state {
+            ContactState::Locked => {
+                add_spring::<true>(sys, dofs, blocks, &c.f_i, &c.f_j, springs.shear, s0)
+            }
+            ContactState::Sliding { dir } => {
+                let f = dir * shear_limit(c, law, c.friction_normal);
+                if let Some(a) = blocks.0 {
+                    sys.rhs[a] -= c.f_i * f;
+                }
+                if let Some(b) = blocks.1 {
+                    sys.rhs[b] += c.f_j * f;
+                }
+            }
+            ContactState::Open => {}
         }
     }
 }

@@ -977,4 +977,62 @@ mod tests {
             "rhs-only re-assembly differs from the full one"
         );
     }
+
+    /// The locked contacts' fused spring assembly (`add_contacts`, docs/contact-solve.md §37)
+    /// gives the system of the unfused one (a normal then a shear `add_spring` a contact, the
+    /// assembly before session 43) to the bit: tolerance 0, since the fusion only keeps each
+    /// entry's two terms together and claims the same operations in the same order. On 4 × 5
+    /// walls after one step at rest, rigid and with every other block deformable (3 × 3, 6 × 6
+    /// and mixed blocks), a fifth of the contacts made sliding and a fifth open, so every
+    /// state occurs and most contacts are locked.
+    #[test]
+    fn the_fused_locked_springs_give_the_unfused_system_to_the_bit() {
+        use crate::assembly::contact_springs::{add_contacts, add_contacts_unfused};
+        use crate::contact::ContactState;
+        for mixed in [false, true] {
+            let mut spec = crate::presets::wall(4, 5);
+            if mixed {
+                for (k, b) in spec.blocks.iter_mut().enumerate() {
+                    if k % 2 == 1 {
+                        b.block_model = Some(crate::scene::BlockModel::Deformable);
+                    }
+                }
+            }
+            let scene = crate::scene::validate(&spec).expect("wall scene");
+            let mut sim = Simulation::new(&scene, &GroundMotion::none(), SimParams::default());
+            sim.step(1.0).expect("a step at rest");
+            let mut cs = sim.state.contacts.contacts.clone();
+            for (k, c) in cs.iter_mut().enumerate() {
+                match k % 5 {
+                    0 => c.state = ContactState::Sliding { dir: 1.0 },
+                    1 => c.state = ContactState::Open,
+                    _ => c.state = ContactState::Locked,
+                }
+                // Shear constants of both signs, away from the converged ones.
+                c.s0 += 1e-6 * (k % 3) as f64 - 1e-6;
+            }
+            let st = &sim.state;
+            let sys = &mut sim.stepper.system;
+            let springs = sim.stepper.springs;
+            let deformable = st.dofs.ndof.iter().filter(|&&n| n == 6).count();
+            assert_eq!(deformable > 0, mixed, "block models as asked");
+            let mut assemble = |fused: bool| {
+                sys.reset_to_blocks();
+                let add = if fused {
+                    add_contacts
+                } else {
+                    add_contacts_unfused
+                };
+                add(sys, &st.dofs, &cs, &st.laws, &springs, &st.prescribed);
+                let mut b = Vec::new();
+                for m in sys.diag.iter().chain(&sys.off) {
+                    b.extend(m.iter().map(|v| v.to_bits()));
+                }
+                b.extend(sys.rhs.iter().flat_map(|r| r.iter().map(|v| v.to_bits())));
+                b
+            };
+            let (unfused, fused) = (assemble(false), assemble(true));
+            assert!(fused == unfused, "fused assembly differs (mixed {mixed})");
+        }
+    }
 }

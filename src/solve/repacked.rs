@@ -37,8 +37,9 @@ pub(super) struct Repacked {
     /// Permuted unknown k is the system's unknown `fwd[k]` (empty: no permutation).
     fwd: Vec<usize>,
     nodes: Vec<Node>,
-    /// Row indices (permuted order) of the rows below each supernode.
-    row_idx: Vec<usize>,
+    /// Row indices (permuted order) of the rows below each supernode; `u32` (half the memory
+    /// traffic of `usize`; `build` declines a factor of more than `u32::MAX` unknowns).
+    row_idx: Vec<u32>,
     /// Each supernode's w × w diagonal block, row-major, strictly lower part used.
     diag: Vec<f64>,
     /// Reciprocal of each column's diagonal entry, in column order.
@@ -69,6 +70,9 @@ impl Repacked {
             return false;
         };
         let n = symbolic.nrows();
+        if u32::try_from(n).is_err() {
+            return false;
+        }
         self.n = n;
         self.fwd.clear();
         if let Some(perm) = symbolic.perm() {
@@ -100,7 +104,7 @@ impl Repacked {
                 diag: self.diag.len(),
                 below: self.below.len(),
             });
-            self.row_idx.extend_from_slice(pattern);
+            self.row_idx.extend(pattern.iter().map(|&i| i as u32));
             for i in 0..w {
                 self.diag.extend((0..w).map(|j| block[j * ld + i]));
                 self.inv_diag.push(1.0 / block[i * ld + i]);
@@ -168,7 +172,7 @@ impl Repacked {
     }
 
     /// The node's slices: row indices, diagonal block, reciprocal diagonal, rows below.
-    fn parts(&self, node: &Node) -> (&[usize], &[f64], &[f64], &[f64]) {
+    fn parts(&self, node: &Node) -> (&[u32], &[f64], &[f64], &[f64]) {
         let (w, r) = (node.width, node.rows_end - node.rows);
         (
             &self.row_idx[node.rows..node.rows_end],
@@ -195,12 +199,26 @@ impl Repacked {
             t[i] = s * inv[i];
         }
         *top = t;
-        for (&i, l) in rows.iter().zip(below.chunks_exact(W)) {
+        // Two rows a pass (their sums are independent: each is the one-row loop's sum, in its
+        // order), so the loop's own counting and the supernode's unknowns serve both.
+        let (rows2, below2) = (rows.chunks_exact(2), below.chunks_exact(2 * W));
+        let (row1, below1) = (rows2.remainder(), below2.remainder());
+        for (i, l) in rows2.zip(below2) {
+            let (la, lb) = l.split_at(W);
+            let (mut sa, mut sb) = (0.0, 0.0);
+            for j in 0..W {
+                sa += la[j] * t[j];
+                sb += lb[j] * t[j];
+            }
+            y[i[0] as usize] -= sa;
+            y[i[1] as usize] -= sb;
+        }
+        for (&i, l) in row1.iter().zip(below1.chunks_exact(W)) {
             let mut s = 0.0;
             for j in 0..W {
                 s += l[j] * t[j];
             }
-            y[i] -= s;
+            y[i as usize] -= s;
         }
     }
 
@@ -212,8 +230,20 @@ impl Repacked {
         let mut t: [f64; W] = y[node.start..node.start + W]
             .try_into()
             .expect("supernode width");
-        for (&i, l) in rows.iter().zip(below.chunks_exact(W)) {
-            let v = y[i];
+        // Two rows a pass: each unknown takes row a's update, then row b's, as one row a
+        // pass would (the rows' unknowns are read before any is written: they lie below).
+        let (rows2, below2) = (rows.chunks_exact(2), below.chunks_exact(2 * W));
+        let (row1, below1) = (rows2.remainder(), below2.remainder());
+        for (i, l) in rows2.zip(below2) {
+            let (la, lb) = l.split_at(W);
+            let (va, vb) = (y[i[0] as usize], y[i[1] as usize]);
+            for j in 0..W {
+                t[j] -= la[j] * va;
+                t[j] -= lb[j] * vb;
+            }
+        }
+        for (&i, l) in row1.iter().zip(below1.chunks_exact(W)) {
+            let v = y[i as usize];
             for j in 0..W {
                 t[j] -= l[j] * v;
             }
@@ -241,8 +271,15 @@ impl Repacked {
         let t = &*t;
         // The rows below come after the supernode's own columns (L is lower triangular).
         let base = node.start + w;
-        for (&i, l) in rows.iter().zip(below.chunks_exact(w)) {
-            tail[i - base] -= dot(l, t);
+        let (rows2, below2) = (rows.chunks_exact(2), below.chunks_exact(2 * w));
+        let (row1, below1) = (rows2.remainder(), below2.remainder());
+        for (i, l) in rows2.zip(below2) {
+            let (sa, sb) = dot2(l.split_at(w), t);
+            tail[i[0] as usize - base] -= sa;
+            tail[i[1] as usize - base] -= sb;
+        }
+        for (&i, l) in row1.iter().zip(below1.chunks_exact(w)) {
+            tail[i as usize - base] -= dot(l, t);
         }
     }
 
@@ -253,8 +290,18 @@ impl Repacked {
         let (head, tail) = y.split_at_mut(node.start + w);
         let t = &mut head[node.start..];
         let base = node.start + w;
-        for (&i, l) in rows.iter().zip(below.chunks_exact(w)) {
-            let v = tail[i - base];
+        let (rows2, below2) = (rows.chunks_exact(2), below.chunks_exact(2 * w));
+        let (row1, below1) = (rows2.remainder(), below2.remainder());
+        for (i, l) in rows2.zip(below2) {
+            let (la, lb) = l.split_at(w);
+            let (va, vb) = (tail[i[0] as usize - base], tail[i[1] as usize - base]);
+            for ((tj, a), b) in t.iter_mut().zip(la).zip(lb) {
+                *tj -= a * va;
+                *tj -= b * vb;
+            }
+        }
+        for (&i, l) in row1.iter().zip(below1.chunks_exact(w)) {
+            let v = tail[i as usize - base];
             for (tj, lj) in t.iter_mut().zip(l) {
                 *tj -= lj * v;
             }
@@ -268,6 +315,78 @@ impl Repacked {
                 *tk -= l * ti;
             }
         }
+    }
+
+    /// `solve` as before session 43, one row below a supernode a pass (the reference of the
+    /// two-rows kernels' bit-identity test, `sparse_cholesky`'s tests).
+    #[cfg(test)]
+    pub(super) fn solve_by_rows(&mut self, x: &mut [f64]) {
+        let mut work = std::mem::take(&mut self.work);
+        let y: &mut [f64] = if self.fwd.is_empty() {
+            x
+        } else {
+            for (w, &f) in work.iter_mut().zip(&self.fwd) {
+                *w = x[f];
+            }
+            &mut work
+        };
+        for node in &self.nodes {
+            let (rows, diag, inv, below) = self.parts(node);
+            let w = node.width;
+            let (head, tail) = y.split_at_mut(node.start + w);
+            let t = &mut head[node.start..];
+            for i in 0..w {
+                let s = if w > MAX_UNROLLED {
+                    t[i] - dot(&diag[i * w..i * w + i], &t[..i])
+                } else {
+                    let mut s = t[i];
+                    for j in 0..i {
+                        s -= diag[i * w + j] * t[j];
+                    }
+                    s
+                };
+                t[i] = s * inv[i];
+            }
+            let base = node.start + w;
+            for (&i, l) in rows.iter().zip(below.chunks_exact(w)) {
+                let s = if w > MAX_UNROLLED {
+                    dot(l, t)
+                } else {
+                    let mut s = 0.0;
+                    for j in 0..w {
+                        s += l[j] * t[j];
+                    }
+                    s
+                };
+                tail[i as usize - base] -= s;
+            }
+        }
+        for node in self.nodes.iter().rev() {
+            let (rows, diag, inv, below) = self.parts(node);
+            let w = node.width;
+            let (head, tail) = y.split_at_mut(node.start + w);
+            let t = &mut head[node.start..];
+            let base = node.start + w;
+            for (&i, l) in rows.iter().zip(below.chunks_exact(w)) {
+                let v = tail[i as usize - base];
+                for j in 0..w {
+                    t[j] -= l[j] * v;
+                }
+            }
+            for i in (0..w).rev() {
+                t[i] *= inv[i];
+                let ti = t[i];
+                for k in 0..i {
+                    t[k] -= diag[i * w + k] * ti;
+                }
+            }
+        }
+        if !self.fwd.is_empty() {
+            for (w, &f) in work.iter().zip(&self.fwd) {
+                x[f] = *w;
+            }
+        }
+        self.work = work;
     }
 
     /// Supernode widths of the copy (for tests and diagnostics): count per width 1..=
@@ -298,4 +417,25 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
         s += x * y;
     }
     s
+}
+
+/// [`dot`] of two rows `a` and `b` with the same `t`, each sum in `dot`'s order (so each is
+/// `dot`'s to the bit), `t` loaded once for both.
+fn dot2((a, b): (&[f64], &[f64]), t: &[f64]) -> (f64, f64) {
+    let (a4, b4, t4) = (a.chunks_exact(4), b.chunks_exact(4), t.chunks_exact(4));
+    let (ra, rb, rt) = (a4.remainder(), b4.remainder(), t4.remainder());
+    let (mut acc_a, mut acc_b) = ([0.0; 4], [0.0; 4]);
+    for ((x, y), z) in a4.zip(b4).zip(t4) {
+        for k in 0..4 {
+            acc_a[k] += x[k] * z[k];
+            acc_b[k] += y[k] * z[k];
+        }
+    }
+    let mut sa = (acc_a[0] + acc_a[2]) + (acc_a[1] + acc_a[3]);
+    let mut sb = (acc_b[0] + acc_b[2]) + (acc_b[1] + acc_b[3]);
+    for ((x, y), z) in ra.iter().zip(rb).zip(rt) {
+        sa += x * z;
+        sb += y * z;
+    }
+    (sa, sb)
 }

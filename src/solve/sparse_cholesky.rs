@@ -1996,4 +1996,65 @@ mod tests {
             }
         }
     }
+
+    /// The two-rows kernels of the repacked solve (session 43, docs/contact-solve.md §37) give
+    /// the one-row kernels' solution (`Repacked::solve_by_rows`, the solve of session 42) to
+    /// the bit: tolerance 0, since each row's sum and each unknown's updates keep their order.
+    /// On the rigid grids under every ordering and amalgamation and on the mixed grid; every
+    /// kernel width (1 to 8 and the general loop) must occur.
+    #[test]
+    fn two_rows_a_pass_equal_one_row_a_pass_to_the_bit() {
+        let mut widths = [0; super::super::repacked::MAX_UNROLLED + 1];
+        let mut check = |sys: &BlockSystem, dofs: &Dofs, params: SparseParams| {
+            let mut chol = SparseCholesky::default();
+            chol.rebuild_pattern(sys, dofs, &params).expect("pattern");
+            chol.fill_values(sys, dofs, false);
+            chol.factorize(sys, dofs).expect("positive definite");
+            chol.triangular = TriangularSolve::Repacked;
+            assert!(chol.ensure_repacked(), "a supernodal factor, repacked");
+            let b = full_rhs(dofs.n);
+            let (mut pairs, mut rows) = (b.clone(), b);
+            chol.repacked.solve(&mut pairs);
+            chol.repacked.solve_by_rows(&mut rows);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert!(
+                bits(&pairs) == bits(&rows),
+                "{:?} {:?} n {}: two rows a pass differ from one",
+                params.ordering,
+                params.relax,
+                dofs.n
+            );
+            for (a, b) in widths.iter_mut().zip(chol.repacked.width_counts()) {
+                *a += b;
+            }
+        };
+        let (sys, dofs) = grid_system(150, 10);
+        check(&sys, &dofs, SparseParams::default());
+        let (sys, dofs) = grid_system(1200, 30);
+        for ordering in [
+            SparseOrdering::ScalarAmd,
+            SparseOrdering::BlockAmd,
+            SparseOrdering::BlockDissection,
+            SparseOrdering::BlockCoordinates,
+        ] {
+            for relax in [
+                SupernodeRelax::Faer,
+                SupernodeRelax::None,
+                SupernodeRelax::Wide,
+            ] {
+                let params = SparseParams {
+                    ordering,
+                    relax,
+                    ..Default::default()
+                };
+                check(&sys, &dofs, params);
+            }
+        }
+        let (sys, dofs) = mixed_grid(300, 12);
+        check(&sys, &dofs, SparseParams::default());
+        assert!(
+            widths.iter().all(|&w| w > 0),
+            "every kernel width exercised: {widths:?}"
+        );
+    }
 }
