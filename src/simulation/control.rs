@@ -146,6 +146,22 @@ impl Simulation {
     /// acceleration about its pivot when it turns on one closed contact, m·g·|x_c − x_p| / I_p
     /// (rad/s²; I_p the moment of inertia about the pivot p). Below the floor the block is no
     /// longer rocking and the rocking control forgets it.
+    /// Marks the blocks whose rotation rate changed sign between the last two step ends
+    /// (`Stepper::spin_reversed`, read by `OpenCloseParams::head_slip_spin`); call once a step,
+    /// at its start. A block with no unknowns never turns.
+    pub(super) fn note_spin_reversals(&mut self) {
+        let n = self.state.geoms.len();
+        let st = &mut self.stepper;
+        st.spin_prior.resize(n, 0.0);
+        st.spin_reversed.clear();
+        st.spin_reversed.resize(n, false);
+        for (f, &b) in self.state.dofs.block_of.iter().enumerate() {
+            let w = self.state.states[f].vel[2];
+            st.spin_reversed[b] = w * st.spin_prior[b] < 0.0;
+            st.spin_prior[b] = w;
+        }
+    }
+
     pub(super) fn update_rocking(&mut self, dt: f64) {
         if self.params.rocking_velocity_change.is_none() {
             return;
