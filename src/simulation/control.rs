@@ -141,11 +141,6 @@ impl Simulation {
         bound
     }
 
-    /// After an accepted step: each free block's recent peak angular speed Ω (decaying over
-    /// `rocking_speed_memory`) and, while Ω is above `rocking_speed_floor`, gravity's angular
-    /// acceleration about its pivot when it turns on one closed contact, m·g·|x_c − x_p| / I_p
-    /// (rad/s²; I_p the moment of inertia about the pivot p). Below the floor the block is no
-    /// longer rocking and the rocking control forgets it.
     /// Marks the blocks whose rotation rate changed sign between the last two step ends
     /// (`Stepper::spin_reversed`, read by `OpenCloseParams::head_slip_spin`); call once a step,
     /// at its start. A block with no unknowns never turns.
@@ -162,6 +157,11 @@ impl Simulation {
         }
     }
 
+    /// After an accepted step: each free block's recent peak angular speed Ω (decaying over
+    /// `rocking_speed_memory`) and, while Ω is above `rocking_speed_floor`, gravity's angular
+    /// acceleration about its pivot when it turns on one closed contact, m·g·|x_c − x_p| / I_p
+    /// (rad/s²; I_p the moment of inertia about the pivot p). Below the floor the block is no
+    /// longer rocking and the rocking control forgets it.
     pub(super) fn update_rocking(&mut self, dt: f64) {
         if self.params.rocking_velocity_change.is_none() {
             return;
