@@ -29,7 +29,8 @@
 //!  [--unconverged-floor R] [--floor-hold on|off] [--floor-penetration F]
 //!  [--floor-iterations N] [--min-located R] [--growth G] [--impact-cluster on|off]
 //!  [--friction-predict GAIN|off] [--stick-predict GAIN|off] [--slip-predict GAIN|off]
-//!  [--gap-predict GAIN|off] [--head-slip-predict GAIN|off] [--first-kinds]`
+//!  [--gap-predict GAIN|off] [--head-slip-predict GAIN|off] [--head-slip-margin M]
+//!  [--head-slip-guard steady,shear,spin,calm] [--first-kinds]`
 //!
 //! `--wall-set`, `--record`/`--pga`, `--window S` (a line of counters every S simulated
 //! seconds) and the knobs `--unconverged-floor`, `--min-located`, `--growth` are the wall shaken
@@ -49,7 +50,8 @@
 //! (`OpenCloseParams::stick_predict`, `slip_predict`, docs/contact-solve.md §32; `off` turns it
 //! off); `--gap-predict GAIN|off` the head joints' gap prediction (`OpenCloseParams::gap_predict`,
 //! §33); `--head-slip-predict GAIN|off` the head joints' onset of slip
-//! (`OpenCloseParams::head_slip_predict`, §34; off by default); `--first-kinds` prints, for the measured steps, the sets of change kinds the first
+//! (`OpenCloseParams::head_slip_predict`, §34; off by default), `--head-slip-margin M` its
+//! threshold's factor and `--head-slip-guard` its rocking guards (§36); `--first-kinds` prints, for the measured steps, the sets of change kinds the first
 //! solve of a step found and the steps and solves each set cost.
 //!
 //! `--anderson 0` turns off the Anderson acceleration of the friction fixed point (the plain
@@ -724,6 +726,24 @@ fn main() {
                         v.parse()
                             .unwrap_or_else(|_| panic!("{name}: a gain or off"))
                     });
+                }
+            }
+            // `--head-slip-margin M`, `--head-slip-guard steady,shear,spin`: the head onset
+            // prediction's margin and rocking guards (`OpenCloseParams::head_slip_margin`,
+            // `head_slip_steady`, `head_slip_shear_sign`, `head_slip_spin`, `head_slip_calm`, §36).
+            if let Some(v) = arg("--head-slip-margin") {
+                oc.head_slip_margin = v.parse().expect("--head-slip-margin");
+            }
+            if let Some(v) = arg("--head-slip-guard") {
+                for g in v.split(',') {
+                    match g {
+                        "steady" => oc.head_slip_steady = true,
+                        "shear" => oc.head_slip_shear_sign = true,
+                        "spin" => oc.head_slip_spin = true,
+                        "calm" => oc.head_slip_calm = true,
+                        "none" => {}
+                        _ => panic!("--head-slip-guard: steady, shear, spin, calm or none"),
+                    }
                 }
             }
             // `--closing F [--closing-floor R]`: the next Δt is limited so that a contact

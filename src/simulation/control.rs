@@ -141,6 +141,22 @@ impl Simulation {
         bound
     }
 
+    /// Marks the blocks whose rotation rate changed sign between the last two step ends
+    /// (`Stepper::spin_reversed`, read by `OpenCloseParams::head_slip_spin`); call once a step,
+    /// at its start. A block with no unknowns never turns.
+    pub(super) fn note_spin_reversals(&mut self) {
+        let n = self.state.geoms.len();
+        let st = &mut self.stepper;
+        st.spin_prior.resize(n, 0.0);
+        st.spin_reversed.clear();
+        st.spin_reversed.resize(n, false);
+        for (f, &b) in self.state.dofs.block_of.iter().enumerate() {
+            let w = self.state.states[f].vel[2];
+            st.spin_reversed[b] = w * st.spin_prior[b] < 0.0;
+            st.spin_prior[b] = w;
+        }
+    }
+
     /// After an accepted step: each free block's recent peak angular speed Ω (decaying over
     /// `rocking_speed_memory`) and, while Ω is above `rocking_speed_floor`, gravity's angular
     /// acceleration about its pivot when it turns on one closed contact, m·g·|x_c − x_p| / I_p

@@ -128,11 +128,16 @@ impl Simulation {
                 || oc.gap_predict.is_some()
                 || oc.head_slip_predict.is_some())
         {
+            if oc.head_slip_spin {
+                self.note_spin_reversals();
+            }
+            let oc = &self.params.open_close;
             open_close::predict_stick_slip(
                 &mut self.state.contacts.contacts,
                 &self.state.laws,
                 &self.stepper.springs,
                 oc,
+                &self.stepper.spin_reversed,
             );
             // After the stick–slip prediction: a head joint predicted to open or close starts
             // in that state whatever its slip predicted.
@@ -666,13 +671,13 @@ mod tests {
             c.prior_slip = s0;
             c.predicted_state = Some(Open);
         }
-        predict_stick_slip(&mut cs, laws, &springs, &params);
+        predict_stick_slip(&mut cs, laws, &springs, &params, &[]);
         for (k, (c, case)) in cs.iter().zip(&cases).enumerate() {
             assert_eq!(c.predicted_state, case.3, "case {k}");
         }
         // A head joint (normal horizontal) loading as case 4: not predicted to slip.
         cs[4].n = nalgebra::Vector2::new(1.0, 0.0);
-        predict_stick_slip(&mut cs, laws, &springs, &params);
+        predict_stick_slip(&mut cs, laws, &springs, &params, &[]);
         assert_eq!(cs[4].predicted_state, None);
         // Off: nothing predicted (and the stale mark cleared).
         let off = OpenCloseParams {
@@ -680,7 +685,7 @@ mod tests {
             slip_predict: None,
             ..params
         };
-        predict_stick_slip(&mut cs, laws, &springs, &off);
+        predict_stick_slip(&mut cs, laws, &springs, &off, &[]);
         assert!(cs.iter().all(|c| c.predicted_state.is_none()));
     }
 
@@ -788,14 +793,14 @@ mod tests {
             }
         };
         set(&mut cs);
-        predict_stick_slip(&mut cs, laws, &springs, &params);
+        predict_stick_slip(&mut cs, laws, &springs, &params, &[]);
         for (k, (c, case)) in cs.iter().zip(&cases).enumerate() {
             assert_eq!(c.predicted_state, case.6, "case {k}");
         }
         // A bed joint (normal vertical) as case 0: not this rule's (`slip_predict` is off).
         set(&mut cs);
         cs[0].n = nalgebra::Vector2::new(0.0, 1.0);
-        predict_stick_slip(&mut cs, laws, &springs, &params);
+        predict_stick_slip(&mut cs, laws, &springs, &params, &[]);
         assert_eq!(cs[0].predicted_state, None);
         // Off: nothing predicted.
         set(&mut cs);
@@ -803,8 +808,135 @@ mod tests {
             head_slip_predict: None,
             ..params
         };
-        predict_stick_slip(&mut cs, laws, &springs, &off);
+        predict_stick_slip(&mut cs, laws, &springs, &off, &[]);
         assert!(cs.iter().all(|c| c.predicted_state.is_none()));
+    }
+
+    /// The head onset prediction's margin and rocking guards (`OpenCloseParams::
+    /// head_slip_margin`, `head_slip_steady`, `head_slip_shear_sign`, `head_slip_spin`,
+    /// `head_slip_calm`)
+    /// against their closed forms. Every case is a locked head joint predicted closed at the
+    /// same compressed gap (so one Coulomb limit L, onset threshold on the shear displacement
+    /// θ(m) = (m·L·(1 + h) + k_s·tol)/k_s at margin m), s = s₀ + σ₁ + (σ₁ − σ₀) at gain 1; each
+    /// decision at least a factor 1.25 from its threshold. Without a guard every case but the
+    /// margin's "stays" slides (the guards, not the threshold, decide).
+    #[test]
+    fn the_head_onset_guards_keep_rocking_joints_out() {
+        use crate::assembly::contact_springs::shear_limit;
+        use crate::contact::ContactState::{Locked, Sliding};
+        use crate::solve::open_close::{predict_stick_slip, OpenCloseParams};
+        let mut sim = wall_after_a_step_at_rest();
+        let springs = sim.stepper.springs;
+        let laws = &sim.state.laws[..8].to_vec();
+        let mut cs: Vec<_> = sim.state.contacts.contacts[..8].to_vec();
+        let tol = springs.gap_tolerance;
+        let base = OpenCloseParams {
+            stick_predict: None,
+            slip_predict: None,
+            head_slip_predict: Some(1.0),
+            gap_predict: Some(0.0),
+            ..OpenCloseParams::default()
+        };
+        let h = base.hysteresis;
+        assert!(laws.iter().all(|l| *l == laws[0]));
+        // Predicted gap −10 tol (g₀ = −9 tol, Δ₁ = −tol): N = 10·k_n·tol.
+        let limit = shear_limit(&cs[0], &laws[0], 10.0 * springs.normal * tol);
+        let onset = |m: f64| (m * limit * (1.0 + h) + springs.shear * tol) / springs.shear;
+        let hi = onset(1.0);
+        assert!(
+            onset(2.0) > 1.9 * hi,
+            "the margin must dominate the tolerance"
+        );
+        // (s₀, σ₁, σ₀), in units of hi.
+        let set = |cs: &mut [crate::contact::Contact], s: (f64, f64, f64)| {
+            for c in cs.iter_mut() {
+                c.n = nalgebra::Vector2::new(1.0, 0.0);
+                c.bonded = false;
+                c.state = Locked;
+                c.normal_force = 0.0;
+                c.g0 = -9.0 * tol;
+                c.last_gap_change = Some(-tol);
+                c.prior_gap_change = Some(0.0);
+                c.s0 = s.0 * hi;
+                c.last_slip = Some(s.1 * hi);
+                c.prior_slip = Some(s.2 * hi);
+                c.flips = 0;
+            }
+        };
+        let slide = Some(Sliding { dir: 1.0 });
+        // (s₀, σ₁, σ₀), the rule's parameters, the expected start.
+        let steady = OpenCloseParams {
+            head_slip_steady: true,
+            ..base
+        };
+        let shear_sign = OpenCloseParams {
+            head_slip_shear_sign: true,
+            ..base
+        };
+        let margin = OpenCloseParams {
+            head_slip_margin: 2.0,
+            ..base
+        };
+        let cases = [
+            // Margin 2: s = 1.5·hi slides at margin 1, stays below θ(2) ≈ 2·hi; s = 3·hi slides.
+            ((0.0, 0.75, 0.0), base, slide),
+            ((0.0, 0.75, 0.0), margin, None),
+            ((0.0, 1.5, 0.0), margin, slide),
+            // The last two slips of opposite signs: s = 2.6·hi, guarded; same signs: 2.2·hi.
+            ((0.0, 1.2, -0.2), base, slide),
+            ((0.0, 1.2, -0.2), steady, None),
+            ((0.0, 1.2, 0.2), steady, slide),
+            // The shear displacement changed sign over the last step (s₀ − σ₁ = −0.5·hi
+            // against s₀ = 0.1·hi): s = 1.3·hi, guarded; it kept its sign (0.1·hi): 1.9·hi.
+            ((0.1, 0.6, 0.0), base, slide),
+            ((0.1, 0.6, 0.0), shear_sign, None),
+            ((0.7, 0.6, 0.0), shear_sign, slide),
+        ];
+        for (k, (s, params, expected)) in cases.iter().enumerate() {
+            set(&mut cs, *s);
+            predict_stick_slip(&mut cs[..1], laws, &springs, params, &[]);
+            assert_eq!(cs[0].predicted_state, *expected, "case {k}");
+        }
+        // A joint whose state changed in the last step's loop (it slipped and re-stuck:
+        // 2 flips) is left to the loop; one that did not change slides.
+        let calm = OpenCloseParams {
+            head_slip_calm: true,
+            ..base
+        };
+        for (flips, expected) in [(2, None), (0, slide)] {
+            set(&mut cs, (0.0, 1.2, 0.2));
+            cs[0].flips = flips;
+            predict_stick_slip(&mut cs[..1], laws, &springs, &calm, &[]);
+            assert_eq!(cs[0].predicted_state, expected, "{flips} flips");
+        }
+        // A stone whose rotation rate changed sign: the joints it takes part in are guarded,
+        // a joint between two other stones is not. The flags come from the simulation's own
+        // bookkeeping: ω = +1 then −1 rad/s at two step starts.
+        let (b, f) = [cs[0].vertex_block, cs[0].edge_block]
+            .into_iter()
+            .find_map(|b| sim.state.dofs.free_index[b].map(|f| (b, f)))
+            .expect("a free stone");
+        for w in [1.0, -1.0] {
+            sim.state.states[f].vel[2] = w;
+            sim.note_spin_reversals();
+        }
+        let reversed = &sim.stepper.spin_reversed;
+        assert!(reversed[b] && reversed.iter().filter(|&&r| r).count() == 1);
+        let other = cs
+            .iter()
+            .position(|c| c.vertex_block != b && c.edge_block != b)
+            .expect("a joint between two other stones");
+        let spin = OpenCloseParams {
+            head_slip_spin: true,
+            ..base
+        };
+        set(&mut cs, (0.0, 1.2, 0.2));
+        predict_stick_slip(&mut cs, laws, &springs, &spin, reversed);
+        assert_eq!(cs[0].predicted_state, None, "a rocking stone's joint");
+        assert_eq!(cs[other].predicted_state, slide, "another joint");
+        set(&mut cs, (0.0, 1.2, 0.2));
+        predict_stick_slip(&mut cs, laws, &springs, &base, reversed);
+        assert_eq!(cs[0].predicted_state, slide, "the guard off");
     }
 
     /// The gap prediction (`OpenCloseParams::gap_predict`) against its closed form: the gap

@@ -64,6 +64,11 @@ pub(super) struct Stepper {
     /// The deepest penetration of a closed contact that a converged step has left so far, m:
     /// the floor's penetration bound (`SimParams::unconverged_floor_penetration`).
     pub(super) converged_penetration: f64,
+    /// Per block: its rotation rate at the last step's start, rad/s, and whether the rate
+    /// changed sign between the last two step ends (`OpenCloseParams::head_slip_spin`; filled
+    /// only with that rule on).
+    pub(super) spin_prior: Vec<f64>,
+    pub(super) spin_reversed: Vec<bool>,
 }
 
 impl Stepper {
@@ -110,6 +115,8 @@ impl Stepper {
             last_closing: (0, 0.0),
             taken_unconverged: false,
             converged_penetration: 0.0,
+            spin_prior: Vec::new(),
+            spin_reversed: Vec::new(),
         }
     }
 }

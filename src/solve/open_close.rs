@@ -371,6 +371,34 @@ pub struct OpenCloseParams {
     /// joint) was worse (strong part 2.29): it starts sliding twice as many joints that stay
     /// locked.
     pub head_slip_predict: Option<f64>,
+    /// Factor on the Coulomb limit in `head_slip_predict`'s test: a locked head joint is
+    /// started sliding only when |k_s·(s₀ + σ)| > margin·limit·(1 + h) + k_s·tolerance.
+    /// 1 = the loop's own onset test. Only read with `head_slip_predict` on. Default 1 (§34's
+    /// rule). Measured (docs/contact-solve.md §36, 410-stone wall, g = 1): 1.1 keeps the
+    /// 3 m/s² sine at 3.00 solves a step (3.42 at 1) and takes the whole 20 s record to 1.38
+    /// (1.41 with the rule off), but the 1620-stone wall keeps 2 cuts (3.72 solves a step
+    /// against 3.63 and 0 cuts off), so the rule stays off.
+    pub head_slip_margin: f64,
+    /// Keep `head_slip_predict` off a joint whose last two slips (σ₁, σ₀) have opposite signs:
+    /// its shear reverses (the stones rock), which a linear extrapolation cannot see coming.
+    /// Default off: with it the 3 m/s² sine stays at 3.42 solves a step and the 1620-stone wall
+    /// keeps its 2 cuts (§36): under that sine 336 of the 341 onsets the rule would predict
+    /// have no reversal.
+    pub head_slip_steady: bool,
+    /// Keep `head_slip_predict` off a joint whose shear displacement changed sign over the last
+    /// step (s₀ and s₀ − σ₁ of opposite signs). Default off: the 3 m/s² sine stays at 3.42
+    /// solves a step, the 1620-stone wall keeps its 2 cuts (§36).
+    pub head_slip_shear_sign: bool,
+    /// Keep `head_slip_predict` off a joint one of whose stones' rotation rate changed sign
+    /// between the last two step ends (the stone rocks; `Simulation` keeps the rates). Default
+    /// off: the record's strong part 1.85 → 1.82 solves a step, but the 3 m/s² sine stays at
+    /// 3.42 (§36).
+    pub head_slip_spin: bool,
+    /// Keep `head_slip_predict` off a joint whose state changed within the last step's loop
+    /// (`Contact::flips` > 0 at the step start: it slipped and re-stuck, or closed): a joint
+    /// that cycled, or that the rule started sliding and the loop re-locked, is left to the
+    /// loop. Default off: the 3 m/s² sine 3.42 → 3.44 solves a step (§36).
+    pub head_slip_calm: bool,
 }
 
 impl Default for OpenCloseParams {
@@ -414,6 +442,11 @@ impl Default for OpenCloseParams {
             slip_predict: Some(1.0),
             gap_predict: Some(0.0),
             head_slip_predict: None,
+            head_slip_margin: 1.0,
+            head_slip_steady: false,
+            head_slip_shear_sign: false,
+            head_slip_spin: false,
+            head_slip_calm: false,
         }
     }
 }
@@ -424,11 +457,14 @@ impl Default for OpenCloseParams {
 /// Sets `Contact::predicted_state` of a sliding contact predicted to re-stick (`Locked`) or a
 /// locked one predicted to slip (`Sliding`), from the slips of the last two accepted steps;
 /// clears it everywhere else. `iterate` starts from it where the rule applies.
+/// `spin_reversed` (per block, may be empty) tells whether a block's rotation rate changed sign
+/// between the last two step ends (`OpenCloseParams::head_slip_spin`).
 pub fn predict_stick_slip(
     contacts: &mut [Contact],
     laws: &[JointLaw],
     springs: &SpringParams,
     params: &OpenCloseParams,
+    spin_reversed: &[bool],
 ) {
     let h = params.hysteresis;
     for (c, law) in contacts.iter_mut().zip(laws) {
@@ -460,17 +496,43 @@ pub fn predict_stick_slip(
                 let Some(g) = params.head_slip_predict else {
                     continue;
                 };
+                if head_slip_guarded(c, s1, s0, params, spin_reversed) {
+                    continue;
+                }
                 let Some(limit) = head_onset_limit(c, law, springs, params) else {
                     continue;
                 };
                 let s = c.s0 + s1 + g * (s1 - s0);
-                if slips(springs.shear * s, limit, h, springs) {
+                if slips(
+                    springs.shear * s,
+                    params.head_slip_margin * limit,
+                    h,
+                    springs,
+                ) {
                     c.predicted_state = Some(ContactState::Sliding { dir: s.signum() });
                 }
             }
             _ => {}
         }
     }
+}
+
+/// Whether one of the rocking guards of `head_slip_predict` keeps the rule off a head joint
+/// with last slips `s1`, `s0` (m): its slip reversed (`head_slip_steady`), its shear
+/// displacement changed sign (`head_slip_shear_sign`), a stone's rotation rate did
+/// (`head_slip_spin`), or its state changed in the last step's loop (`head_slip_calm`).
+fn head_slip_guarded(
+    c: &Contact,
+    s1: f64,
+    s0: f64,
+    params: &OpenCloseParams,
+    spin_reversed: &[bool],
+) -> bool {
+    let spun = |b: usize| spin_reversed.get(b).copied().unwrap_or(false);
+    (params.head_slip_calm && c.flips > 0)
+        || (params.head_slip_steady && s1 * s0 < 0.0)
+        || (params.head_slip_shear_sign && c.s0 * (c.s0 - s1) < 0.0)
+        || (params.head_slip_spin && (spun(c.vertex_block) || spun(c.edge_block)))
 }
 
 /// The gap a contact is predicted to end this step with (`gap_predict`'s extrapolation at
