@@ -4,6 +4,10 @@
 walls in the same invocation; prints both s/step and their ratio.
 
 Usage: python3 scripts/pymunk_wall.py [--sizes 100,400] [--steps 300] [--motions rest,sine,sine3]
+       [--pymunk-only]
+
+`--pymunk-only` skips the ashlar side (for timing the two whole processes side by side, e.g.
+`farm-bench --vs 'python3 scripts/pymunk_wall.py --pymunk-only …' -- target/release/examples/shaken_walls …`).
 
 The script creates a virtual environment in target/pymunk-venv and installs pymunk 7.3.0 from
 the Python package index into it (once), then re-runs itself inside it. The ashlar side is
@@ -113,7 +117,7 @@ def main():
     for m in motions:
         if m not in ("rest", "sine", "sine3"):
             sys.exit(f"--motions: {m!r} (pymunk side supports rest, sine, sine3)")
-    ash = run_ashlar(sizes, motions, steps)
+    ash = {} if "--pymunk-only" in sys.argv else run_ashlar(sizes, motions, steps)
     print("| stones | motion | steps | ashlar s/step | linear solves/step | pymunk s/step (10 iterations) | ashlar / pymunk |")
     print("|---|---|---|---|---|---|---|")
     for n in sizes:
