@@ -1,8 +1,8 @@
 //! An e = 0 landing on a stack, as tests/regression/regression_impact_cluster_size.rs runs it:
 //! how the impulse solve went (sweeps, residuals, the polish) and what the landing left.
 //!
-//! Scene: `presets::aligned_stack(columns, rows)` (0.4 × 0.2 m blocks in a fixed U) with rigid
-//! blocks, φ = 30°, the penalty solver, Δt = 1 ms, and a 0.4 × 0.2 m lander 5 cm above the top
+//! Scene: `presets::stack_with_lander(columns, rows, bond, 0.05)`: `presets::aligned_stack`
+//! (0.4 × 0.2 m blocks in a fixed U) with rigid blocks, φ = 30°, the penalty solver, Δt = 1 ms, and a 0.4 × 0.2 m lander 5 cm above the top
 //! middle block thrown down at 1 m/s (it lands at ≈ 1.41 m/s, ≈ 198 J/m); `--bond` takes
 //! `presets::running_bond_stack` (every other course offset by half a block, half blocks at
 //! its ends). The regression test puts its lander before the stack's blocks, this example
@@ -23,15 +23,13 @@
 //! landing's step, Δt cuts and steps in the `--after` seconds, and the polish/unconverged
 //! counters over the run.
 use ashlar::motion::GroundMotion;
-use ashlar::presets::{aligned_stack, rect, running_bond_stack};
+use ashlar::presets::stack_with_lander;
 use ashlar::scene::parse_scene;
 use ashlar::simulation::{SimParams, Simulation};
 use clap::Parser;
-use serde_json::{json, Value};
 use std::time::Instant;
 
-const W: f64 = 0.4;
-const H: f64 = 0.2;
+/// Height of the lander's bottom above the stack's top at the start, m.
 const DROP: f64 = 0.05;
 
 #[derive(Parser)]
@@ -72,27 +70,6 @@ struct Args {
     bond: bool,
 }
 
-fn scene(columns: usize, rows: usize, bond: bool) -> Value {
-    let mut v = if bond {
-        running_bond_stack(columns, rows)
-    } else {
-        aligned_stack(columns, rows)
-    };
-    let blocks = v["blocks"].as_array_mut().expect("blocks");
-    for b in blocks.iter_mut().filter(|b| b.get("fixed").is_none()) {
-        b["block_model"] = json!("rigid");
-    }
-    let (x0, top) = ((columns / 2) as f64 * W, rows as f64 * H);
-    blocks.push(
-        json!({ "id": "lander", "material": "stone", "block_model": "rigid",
-                        "vertices": rect(x0, top + DROP, x0 + W, top + DROP + H) }),
-    );
-    v["joints"]["j"]["friction_angle"] = json!(30.0);
-    v["control"]["contact_solver"] = json!("penalty");
-    v["initial"] = json!([{ "block": "lander", "velocity": [0.0, -1.0] }]);
-    v
-}
-
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::parse();
     println!("stack | free blocks | contacts in solve | blocks in solve | sweeps (stopped) | sweeps residual/scale | polish outer/Newton | end residual/scale | KE before -> after (J/m) | cuts | steps after | polished/unconverged solves | CPU s");
@@ -101,7 +78,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .split_once('x')
             .ok_or_else(|| format!("stack {spec:?} is not COLUMNSxROWS"))?;
         let (columns, rows): (usize, usize) = (c.trim().parse()?, r.trim().parse()?);
-        let scene = parse_scene(&scene(columns, rows, args.bond).to_string())?;
+        let scene = parse_scene(&stack_with_lander(columns, rows, args.bond, DROP).to_string())?;
         let free = scene
             .blocks
             .iter()

@@ -350,6 +350,35 @@ pub fn running_bond_stack(columns: usize, rows: usize) -> Value {
     v
 }
 
+/// A landing on a stack: [`aligned_stack`] (or, with `bond`, [`running_bond_stack`]) of
+/// `columns × rows` rigid blocks, φ = 30°, `contact_solver: "penalty"`, its blocks at rest,
+/// and a rigid 0.4 × 0.2 m `lander` (last in `blocks`) with its bottom `drop` m above the top
+/// middle block, thrown down at 1 m/s: the scene of `examples/impact_landing.rs` and of the
+/// impact cluster's regression test.
+pub fn stack_with_lander(columns: usize, rows: usize, bond: bool, drop: f64) -> Value {
+    let (w, h) = (0.4, 0.2);
+    let mut v = if bond {
+        running_bond_stack(columns, rows)
+    } else {
+        aligned_stack(columns, rows)
+    };
+    let blocks = v["blocks"]
+        .as_array_mut()
+        .expect("aligned_stack has blocks");
+    for b in blocks.iter_mut().filter(|b| b.get("fixed").is_none()) {
+        b["block_model"] = json!("rigid");
+    }
+    let (x0, top) = ((columns / 2) as f64 * w, rows as f64 * h);
+    blocks.push(
+        json!({ "id": "lander", "material": "stone", "block_model": "rigid",
+                        "vertices": rect(x0, top + drop, x0 + w, top + drop + h) }),
+    );
+    v["joints"]["j"]["friction_angle"] = json!(30.0);
+    v["control"]["contact_solver"] = json!("penalty");
+    v["initial"] = json!([{ "block": "lander", "velocity": [0.0, -1.0] }]);
+    v
+}
+
 /// `examples/column.json`, the repository's example column (0.4 × 1.2 m, rigid, φ = 40°, on a
 /// 2 m plinth, Δt = 1 ms), as the file's text: the file is the preset, so the golden digests
 /// (tests/record) and every test that runs "the example column" read the same bytes.

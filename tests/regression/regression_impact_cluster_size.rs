@@ -56,7 +56,6 @@ use crate::common::*;
 use ashlar::motion::GroundMotion;
 use ashlar::simulation::{SimParams, Simulation};
 use ashlar::solve::impulse::ImpulseReport;
-use serde_json::json;
 
 /// Block width and height of the stack and of the lander, m.
 const BLOCK: (f64, f64) = (0.4, 0.2);
@@ -70,19 +69,18 @@ const LEFT_OVER: f64 = 1e-5;
 /// Most steps in the `AFTER` seconds after the landing: twice `AFTER` / Δt.
 const MAX_STEPS_AFTER: u64 = 20;
 
-/// `presets::aligned_stack` (`columns × rows` aligned blocks `b{row}_{column}` in a fixed U)
-/// with rigid blocks, φ = 30° and the penalty solver, its top middle block at rest and
-/// `lander` above that block moving down at 1 m/s.
+/// `presets::stack_with_lander` on `presets::aligned_stack` (`columns × rows` aligned blocks
+/// `b{row}_{column}` in a fixed U): rigid blocks, φ = 30° and the penalty solver, its top
+/// middle block at rest and `lander` `DROP` above that block moving down at 1 m/s; checked to
+/// be made of `BLOCK`s.
 fn stack_with_lander(columns: usize, rows: usize) -> serde_json::Value {
     let (w, h) = BLOCK;
-    let mut v = ashlar::presets::aligned_stack(columns, rows);
-    let blocks = v["blocks"].as_array_mut().expect("blocks");
-    for b in blocks.iter_mut().filter(|b| b.get("fixed").is_none()) {
-        b["block_model"] = json!("rigid");
-    }
+    let v = ashlar::presets::stack_with_lander(columns, rows, false, DROP);
     let (x0, top) = ((columns / 2) as f64 * w, rows as f64 * h);
     // The block landed on, its top right corner at (x0 + w, top) up to round-off.
-    let corner = blocks
+    let corner = v["blocks"]
+        .as_array()
+        .expect("blocks")
         .iter()
         .find(|b| b["id"] == format!("b{}_{}", rows - 1, columns / 2))
         .map(|b| (b["vertices"][2][0].as_f64(), b["vertices"][2][1].as_f64()));
@@ -91,13 +89,6 @@ fn stack_with_lander(columns: usize, rows: usize) -> serde_json::Value {
         corner.is_some_and(|(x, y)| near(x, x0 + w) && near(y, top)),
         "the preset's blocks are not BLOCK: {corner:?}"
     );
-    blocks.push(
-        json!({ "id": "lander", "material": "stone", "block_model": "rigid",
-                        "vertices": rect(x0, top + DROP, x0 + w, top + DROP + h) }),
-    );
-    v["joints"]["j"]["friction_angle"] = json!(30.0);
-    v["control"]["contact_solver"] = json!("penalty");
-    v["initial"] = json!([{ "block": "lander", "velocity": [0.0, -1.0] }]);
     v
 }
 
@@ -261,16 +252,14 @@ const LEFT_OVER_JOINED: f64 = 1e-8;
 /// vertex–vertex. Its blocks follow the U and the lander, in the order this test was measured
 /// in (examples/impact_landing.rs puts the lander last, which moves the polish's iterations).
 fn bond_with_lander(columns: usize, rows: usize) -> serde_json::Value {
-    let mut v = stack_with_lander(columns, rows);
-    let bond = ashlar::presets::running_bond_stack(columns, rows);
-    let stones = bond["blocks"].as_array().expect("blocks").iter();
+    let mut v = ashlar::presets::stack_with_lander(columns, rows, true, DROP);
     let blocks = v["blocks"].as_array_mut().expect("blocks");
-    blocks.retain(|b| b.get("fixed").is_some() || b["id"] == "lander");
-    blocks.extend(stones.filter(|b| b.get("fixed").is_none()).map(|b| {
-        let mut b = b.clone();
-        b["block_model"] = json!("rigid");
-        b
-    }));
+    let lander = blocks.pop().expect("the preset's lander is last");
+    let fixed = blocks
+        .iter()
+        .take_while(|b| b.get("fixed").is_some())
+        .count();
+    blocks.insert(fixed, lander);
     v
 }
 
